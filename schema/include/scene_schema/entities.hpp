@@ -1,0 +1,128 @@
+#pragma once
+
+/// The entity file: the contract between cloud-analysis (writer) and scene-render (reader).
+/// The format is specified in schema/entities.schema.json and docs/format.md.
+
+#include <cstdint>
+#include <filesystem>
+#include <optional>
+#include <stdexcept>
+#include <string>
+#include <string_view>
+#include <vector>
+
+#include <nlohmann/json.hpp>
+
+namespace scene_schema {
+
+/// Major.minor.patch of the format this library writes; files with another major are refused.
+inline constexpr const char* kSchemaVersion = "1.0.0";
+inline constexpr int kSchemaMajor = 1;
+
+/// The only coordinate convention of version 1: KITTI's rectified left camera.
+inline constexpr const char* kConventionKittiCamera = "kitti_camera";
+
+/// A validation or read failure, located by a JSON pointer into the document.
+class SchemaError : public std::runtime_error {
+public:
+    SchemaError(std::string pointer, std::string rule);
+    /// JSON pointer of the offending value ("" for the whole document).
+    const std::string& pointer() const { return pointer_; }
+    /// The rule broken, e.g. "must be > 0".
+    const std::string& rule() const { return rule_; }
+
+private:
+    std::string pointer_;
+    std::string rule_;
+};
+
+/// Pinhole intrinsics of the rectified left camera that saw the frame (optional in the file).
+struct CameraIntrinsics {
+    int width_px = 0;         ///< image width in pixels
+    int height_px = 0;        ///< image height in pixels
+    double fx_px = 0.0;       ///< focal length along x in pixels
+    double fy_px = 0.0;       ///< focal length along y in pixels
+    double cx_px = 0.0;       ///< principal point x in pixels
+    double cy_px = 0.0;       ///< principal point y in pixels
+    double baseline_m = 0.0;  ///< stereo baseline in metres (0 when unknown)
+};
+
+/// What the coordinates refer to.
+struct Frame {
+    std::string id;                                   ///< image pair or scene id
+    std::string convention = kConventionKittiCamera;  ///< coordinate convention
+    std::optional<CameraIntrinsics> camera;           ///< intrinsics, when known
+    nlohmann::json extra = nlohmann::json::object();  ///< unknown members, kept verbatim
+};
+
+/// One object or stuff extent: an upright box in the camera frame.
+struct Entity {
+    std::string id;                    ///< unique within the file
+    std::string class_name;            ///< e.g. "car", "road"
+    int class_id = 0;                  ///< numeric class id of the palette in use
+    double x = 0.0;                    ///< box centre, metres, right
+    double y = 0.0;                    ///< box centre, metres, down
+    double z = 0.0;                    ///< box centre, metres, forward
+    double theta = 0.0;                ///< yaw about +y in radians (KITTI rotation_y)
+    double W = 1.0;                    ///< width across the heading, metres, > 0
+    double H = 1.0;                    ///< height along y, metres, > 0
+    double L = 1.0;                    ///< length along the heading, metres, > 0
+    std::int64_t point_count = 0;      ///< cloud points that support the entity, >= 0
+    double confidence = 1.0;           ///< 0..1
+    std::optional<std::string> method; ///< extractor that made it
+    nlohmann::json extra = nlohmann::json::object();  ///< unknown members, kept verbatim
+};
+
+/// A whole entity file.
+struct EntityDocument {
+    std::string schema_version = kSchemaVersion;
+    Frame frame;
+    std::optional<nlohmann::json> source;  ///< free-form provenance object
+    std::vector<Entity> entities;
+    nlohmann::json extra = nlohmann::json::object();  ///< unknown top-level members
+};
+
+/// One broken rule, as reported by validate().
+struct ValidationIssue {
+    std::string pointer;  ///< JSON pointer, e.g. "/entities/3/W"
+    std::string rule;     ///< e.g. "must be > 0"
+    /// "/entities/3/W: must be > 0"
+    std::string message() const;
+};
+
+/// Every rule the document breaks, in document order (empty when valid).
+std::vector<ValidationIssue> validate(const nlohmann::json& document);
+
+/// Validates and converts; throws SchemaError with the first issue.
+EntityDocument from_json(const nlohmann::json& document);
+
+/// Converts back; unknown members in `extra` are written back verbatim.
+nlohmann::json to_json(const EntityDocument& document);
+
+/// Validates the in-memory document (sizes, ids...) exactly as a reader would.
+void check(const EntityDocument& document);
+
+/// Parses text; a syntax error becomes SchemaError at pointer "" with the byte offset.
+EntityDocument parse(std::string_view text);
+
+/// Canonical text: 2-space indent, sorted keys, trailing newline.
+std::string dump(const EntityDocument& document);
+
+/// Reads and validates a file; errors carry the pointer and the file name is added by the caller
+/// through ReadError.
+EntityDocument read_file(const std::filesystem::path& path);
+
+/// Validates, then writes atomically (temp file beside the target, then rename).
+void write_file(const EntityDocument& document, const std::filesystem::path& path);
+
+/// A file could not be read or parsed; what() is "<path>: <pointer>: <rule>".
+class FileError : public std::runtime_error {
+public:
+    using std::runtime_error::runtime_error;
+};
+
+/// Writes bytes to `path` atomically: a temp file in the same folder, flushed, then renamed.
+/// On failure nothing is left behind and FileError is thrown. Shared by both tools.
+void write_file_atomic(const std::filesystem::path& path, std::string_view bytes);
+
+}  // namespace scene_schema

@@ -1,0 +1,51 @@
+#!/usr/bin/env bash
+# Installs the Debian (bookworm) packages that the build, the tests and the real-client checks
+# need. Idempotent: when everything is present it changes nothing and only says so.
+# Works as root or through sudo. Set INSTALL_DEPS_DRY_RUN=1 to only list what is missing.
+set -euo pipefail
+
+packages=(
+    # toolchain
+    cmake g++ make pkg-config clang-format
+    # libraries
+    libopencv-dev libopencv-contrib-dev libpcl-dev libeigen3-dev nlohmann-json3-dev
+    libglm-dev libtinygltf-dev libstb-dev catch2 libcli11-dev
+    # headless OpenGL: GLVND EGL/OpenGL + Mesa's EGL and llvmpipe drivers
+    libegl-dev libopengl-dev libegl-mesa0 libgl1-mesa-dri
+    # real clients used by the tests: JSON Schema validator, CloudCompare, PCL tools
+    python3 python3-jsonschema python3-numpy cloudcompare pcl-tools
+    # plots for docs/performance.md
+    python3-matplotlib
+)
+
+missing=()
+for p in "${packages[@]}"; do
+    if ! dpkg-query -W -f='${Status}' "$p" 2>/dev/null | grep -q "install ok installed"; then
+        missing+=("$p")
+    fi
+done
+
+if [ ${#missing[@]} -eq 0 ]; then
+    echo "install-deps: all ${#packages[@]} packages present" >&2
+    exit 0
+fi
+
+echo "install-deps: missing: ${missing[*]}" >&2
+if [ "${INSTALL_DEPS_DRY_RUN:-0}" = 1 ]; then
+    exit 0
+fi
+
+sudo_cmd=()
+if [ "$(id -u)" -ne 0 ]; then
+    if command -v sudo >/dev/null 2>&1; then
+        sudo_cmd=(sudo)
+    else
+        echo "install-deps: error: not root and sudo is not available; install: ${missing[*]}" >&2
+        exit 1
+    fi
+fi
+
+export DEBIAN_FRONTEND=noninteractive
+"${sudo_cmd[@]}" apt-get update -qq
+"${sudo_cmd[@]}" apt-get install -y -qq --no-install-recommends "${missing[@]}" >/dev/null
+echo "install-deps: installed ${#missing[@]} packages" >&2
