@@ -20,7 +20,8 @@ namespace scene_schema {
 using nlohmann::json;
 
 SchemaError::SchemaError(std::string pointer, std::string rule)
-    : std::runtime_error(pointer + ": " + rule), pointer_(std::move(pointer)),
+    : std::runtime_error(pointer + ": " + rule),
+      pointer_(std::move(pointer)),
       rule_(std::move(rule)) {}
 
 std::string ValidationIssue::message() const { return pointer + ": " + rule; }
@@ -29,7 +30,7 @@ namespace {
 
 /// Collects issues while walking a document; `at` builds child pointers.
 class Checker {
-public:
+  public:
     std::vector<ValidationIssue> issues;
 
     void fail(const std::string& pointer, const std::string& rule) {
@@ -133,7 +134,8 @@ public:
     void camera(const json& value, const std::string& pointer) {
         if (!object(value, pointer)) return;
         for (const char* key : {"width", "height"}) {
-            if (const json* v = required(value, pointer, key)) positive_integer(*v, at(pointer, key));
+            if (const json* v = required(value, pointer, key))
+                positive_integer(*v, at(pointer, key));
         }
         for (const char* key : {"fx", "fy"}) {
             if (const json* v = required(value, pointer, key)) positive(*v, at(pointer, key));
@@ -277,8 +279,8 @@ EntityDocument from_json(const json& j) {
         entity.point_count = static_cast<std::int64_t>(e.at("point_count").get<double>());
         entity.confidence = e.at("confidence").get<double>();
         if (auto m = e.find("method"); m != e.end()) entity.method = m->get<std::string>();
-        entity.extra = without(e, {"id", "class", "class_id", "x", "y", "z", "theta", "W", "H",
-                                   "L", "point_count", "confidence", "method"});
+        entity.extra = without(e, {"id", "class", "class_id", "x", "y", "z", "theta", "W", "H", "L",
+                                   "point_count", "confidence", "method"});
         doc.entities.push_back(std::move(entity));
     }
     doc.extra = without(j, {"schema_version", "frame", "source", "entities"});
@@ -293,8 +295,12 @@ json to_json(const EntityDocument& doc) {
     f["convention"] = doc.frame.convention;
     if (doc.frame.camera) {
         const auto& c = *doc.frame.camera;
-        f["camera"] = {{"width", c.width_px}, {"height", c.height_px}, {"fx", c.fx_px},
-                       {"fy", c.fy_px},       {"cx", c.cx_px},         {"cy", c.cy_px},
+        f["camera"] = {{"width", c.width_px},
+                       {"height", c.height_px},
+                       {"fx", c.fx_px},
+                       {"fy", c.fy_px},
+                       {"cx", c.cx_px},
+                       {"cy", c.cy_px},
                        {"baseline_m", c.baseline_m}};
     }
     merge_extra(f, doc.frame.extra);
@@ -374,8 +380,8 @@ void write_file_atomic(const std::filesystem::path& path, std::string_view bytes
     std::string temp = (dir / ("." + path.filename().string() + ".tmp-XXXXXX")).string();
     const int fd = ::mkstemp(temp.data());
     if (fd < 0) {
-        throw FileError(path.string() + ": cannot create a temporary file: " +
-                        std::strerror(errno));
+        throw FileError(path.string() +
+                        ": cannot create a temporary file: " + std::strerror(errno));
     }
     auto fail = [&](const char* what) {
         const int err = errno;

@@ -1,2 +1,201 @@
 #include <catch2/catch.hpp>
-TEST_CASE("placeholder") {}
+
+#include <filesystem>
+#include <fstream>
+#include <limits>
+#include <sstream>
+
+#include <unistd.h>
+
+#include "scene_schema/entities.hpp"
+
+namespace fs = std::filesystem;
+using nlohmann::json;
+using scene_schema::EntityDocument;
+using scene_schema::SchemaError;
+
+namespace {
+
+std::string slurp(const fs::path& path) {
+    std::ifstream in(path, std::ios::binary);
+    std::ostringstream out;
+    out << in.rdbuf();
+    return out.str();
+}
+
+std::vector<fs::path> json_files_under(const fs::path& root) {
+    std::vector<fs::path> files;
+    for (const auto& entry : fs::recursive_directory_iterator(root)) {
+        if (entry.is_regular_file() && entry.path().extension() == ".json") {
+            files.push_back(entry.path());
+        }
+    }
+    std::sort(files.begin(), files.end());
+    return files;
+}
+
+/// A scratch folder unique to the running test, removed at the end.
+struct ScratchDir {
+    fs::path path;
+    ScratchDir() {
+        path =
+            fs::temp_directory_path() / ("stereoscene-schema-" + std::to_string(::getpid()) + "-" +
+                                         std::to_string(reinterpret_cast<std::uintptr_t>(this)));
+        fs::create_directories(path);
+    }
+    ~ScratchDir() { fs::remove_all(path); }
+};
+
+EntityDocument small_document() {
+    EntityDocument doc;
+    doc.frame.id = "unit";
+    scene_schema::Entity car;
+    car.id = "car-1";
+    car.class_name = "car";
+    car.class_id = 26;
+    car.x = 2.0;
+    car.y = 0.9;
+    car.z = 15.0;
+    car.theta = -1.5;
+    car.W = 1.8;
+    car.H = 1.5;
+    car.L = 4.2;
+    car.point_count = 1000;
+    car.confidence = 0.75;
+    car.method = "instances";
+    doc.entities.push_back(car);
+    return doc;
+}
+
+}  // namespace
+
+TEST_CASE("every JSON file under samples validates and survives a round trip unchanged",
+          "[schema]") {
+    const auto files = json_files_under(STEREOSCENE_SAMPLES_DIR);
+    REQUIRE_FALSE(files.empty());
+    for (const auto& path : files) {
+        INFO(path.string());
+        const json original = json::parse(slurp(path));
+        CHECK(scene_schema::validate(original).empty());
+        const EntityDocument doc = scene_schema::read_file(path);
+        const json round_trip = scene_schema::to_json(doc);
+        CHECK(round_trip == original);
+        // The canonical text is a fixed point of read -> write.
+        const std::string text = scene_schema::dump(doc);
+        CHECK(scene_schema::dump(scene_schema::parse(text)) == text);
+    }
+}
+
+TEST_CASE("good test documents validate, unknown members are kept verbatim", "[schema]") {
+    for (const auto& path :
+         json_files_under(fs::path(STEREOSCENE_TEST_DATA_DIR) / "schema" / "good")) {
+        INFO(path.string());
+        const json original = json::parse(slurp(path));
+        CHECK(scene_schema::to_json(scene_schema::read_file(path)) == original);
+    }
+    const auto doc = scene_schema::read_file(fs::path(STEREOSCENE_TEST_DATA_DIR) / "schema" /
+                                             "good" / "extra_fields.json");
+    CHECK(doc.extra.at("x_note").at("kept") == json::array({1, 2, 3}));
+    CHECK(doc.frame.extra.at("x_sensor") == "left");
+    CHECK(doc.entities.at(0).extra.at("x_track_id") == 17);
+    REQUIRE(doc.frame.camera.has_value());
+    CHECK(doc.frame.camera->fx_px == Approx(721.5377));
+    CHECK(doc.schema_version == "1.3.0");
+}
+
+TEST_CASE("each broken document fails with the expected JSON pointer", "[schema]") {
+    const fs::path data = fs::path(STEREOSCENE_TEST_DATA_DIR) / "schema";
+    const json expected = json::parse(slurp(data / "broken_expected.json"));
+    const auto files = json_files_under(data / "broken");
+    REQUIRE(files.size() == expected.size());
+    for (const auto& path : files) {
+        const std::string name = path.filename().string();
+        INFO(name);
+        REQUIRE(expected.contains(name));
+        const std::string pointer = expected.at(name).at("pointer");
+        try {
+            scene_schema::parse(slurp(path));
+            FAIL("parsed a broken document");
+        } catch (const SchemaError& e) {
+            CHECK(e.pointer() == pointer);
+            CHECK(std::string(e.what()) == pointer + ": " + e.rule());
+            CHECK(std::string(e.what()).find('\n') == std::string::npos);
+        }
+    }
+}
+
+TEST_CASE("validation messages name the pointer and the rule", "[schema]") {
+    json j = scene_schema::to_json(small_document());
+    j["entities"][0]["W"] = -1.0;
+    j["entities"][0].erase("confidence");
+    const auto issues = scene_schema::validate(j);
+    REQUIRE(issues.size() == 2);
+    CHECK(issues[0].message() == "/entities/0/W: must be > 0");
+    CHECK(issues[1].message() == "/entities/0/confidence: is required");
+
+    json dup = scene_schema::to_json(small_document());
+    dup["entities"].push_back(dup["entities"][0]);
+    const auto dup_issues = scene_schema::validate(dup);
+    REQUIRE(dup_issues.size() == 1);
+    CHECK(dup_issues[0].message() ==
+          "/entities/1/id: duplicate id \"car-1\" (first at /entities/0)");
+
+    json major = scene_schema::to_json(small_document());
+    major["schema_version"] = "2.1.0";
+    REQUIRE(scene_schema::validate(major).size() == 1);
+    CHECK(scene_schema::validate(major)[0].message() ==
+          "/schema_version: unsupported major version 2 (this reader reads 1.x.y)");
+}
+
+TEST_CASE("camera intrinsics are validated with their pointer", "[schema]") {
+    json j = scene_schema::to_json(small_document());
+    j["frame"]["camera"] = {{"width", 0}, {"height", 1}, {"fx", 1},
+                            {"fy", 1},    {"cx", 0},     {"cy", 0}};
+    CHECK(scene_schema::validate(j).at(0).message() == "/frame/camera/width: must be >= 1");
+}
+
+TEST_CASE("writing is atomic: the file appears whole or not at all", "[schema]") {
+    ScratchDir dir;
+    const fs::path target = dir.path / "out.json";
+    scene_schema::write_file(small_document(), target);
+    REQUIRE(fs::exists(target));
+    const std::string first = slurp(target);
+    CHECK(scene_schema::dump(scene_schema::read_file(target)) == first);
+
+    // An invalid document is refused before anything is written and the old file stays intact.
+    EntityDocument bad = small_document();
+    bad.entities[0].L = 0.0;
+    CHECK_THROWS_AS(scene_schema::write_file(bad, target), SchemaError);
+    CHECK(slurp(target) == first);
+
+    // A non-finite value (which JSON cannot hold) is refused too.
+    EntityDocument nan = small_document();
+    nan.entities[0].x = std::numeric_limits<double>::quiet_NaN();
+    CHECK_THROWS_AS(scene_schema::write_file(nan, dir.path / "nan.json"), SchemaError);
+    CHECK_FALSE(fs::exists(dir.path / "nan.json"));
+
+    // A folder that does not exist: a clear error naming the file, no stray temp files.
+    const fs::path missing = dir.path / "no-such-dir" / "out.json";
+    try {
+        scene_schema::write_file(small_document(), missing);
+        FAIL("wrote into a missing folder");
+    } catch (const scene_schema::FileError& e) {
+        CHECK(std::string(e.what()).find(missing.string()) != std::string::npos);
+    }
+    std::size_t count = 0;
+    for ([[maybe_unused]] const auto& entry : fs::directory_iterator(dir.path)) ++count;
+    CHECK(count == 1);  // only out.json
+}
+
+TEST_CASE("read errors name the file", "[schema]") {
+    const fs::path truncated =
+        fs::path(STEREOSCENE_TEST_DATA_DIR) / "schema" / "broken" / "truncated.json";
+    try {
+        scene_schema::read_file(truncated);
+        FAIL("read a truncated file");
+    } catch (const scene_schema::FileError& e) {
+        const std::string what = e.what();
+        CHECK(what.rfind(truncated.string() + ": not valid JSON", 0) == 0);
+    }
+    CHECK_THROWS_AS(scene_schema::read_file("/nonexistent/entities.json"), scene_schema::FileError);
+}

@@ -24,14 +24,14 @@ inline constexpr const char* kConventionKittiCamera = "kitti_camera";
 
 /// A validation or read failure, located by a JSON pointer into the document.
 class SchemaError : public std::runtime_error {
-public:
+  public:
     SchemaError(std::string pointer, std::string rule);
     /// JSON pointer of the offending value ("" for the whole document).
     const std::string& pointer() const { return pointer_; }
     /// The rule broken, e.g. "must be > 0".
     const std::string& rule() const { return rule_; }
 
-private:
+  private:
     std::string pointer_;
     std::string rule_;
 };
@@ -57,19 +57,19 @@ struct Frame {
 
 /// One object or stuff extent: an upright box in the camera frame.
 struct Entity {
-    std::string id;                    ///< unique within the file
-    std::string class_name;            ///< e.g. "car", "road"
-    int class_id = 0;                  ///< numeric class id of the palette in use
-    double x = 0.0;                    ///< box centre, metres, right
-    double y = 0.0;                    ///< box centre, metres, down
-    double z = 0.0;                    ///< box centre, metres, forward
-    double theta = 0.0;                ///< yaw about +y in radians (KITTI rotation_y)
-    double W = 1.0;                    ///< width across the heading, metres, > 0
-    double H = 1.0;                    ///< height along y, metres, > 0
-    double L = 1.0;                    ///< length along the heading, metres, > 0
-    std::int64_t point_count = 0;      ///< cloud points that support the entity, >= 0
-    double confidence = 1.0;           ///< 0..1
-    std::optional<std::string> method; ///< extractor that made it
+    std::string id;                     ///< unique within the file
+    std::string class_name;             ///< e.g. "car", "road"
+    int class_id = 0;                   ///< numeric class id of the palette in use
+    double x = 0.0;                     ///< box centre, metres, right
+    double y = 0.0;                     ///< box centre, metres, down
+    double z = 0.0;                     ///< box centre, metres, forward
+    double theta = 0.0;                 ///< yaw about +y in radians (KITTI rotation_y)
+    double W = 1.0;                     ///< width across the heading, metres, > 0
+    double H = 1.0;                     ///< height along y, metres, > 0
+    double L = 1.0;                     ///< length along the heading, metres, > 0
+    std::int64_t point_count = 0;       ///< cloud points that support the entity, >= 0
+    double confidence = 1.0;            ///< 0..1
+    std::optional<std::string> method;  ///< extractor that made it
     nlohmann::json extra = nlohmann::json::object();  ///< unknown members, kept verbatim
 };
 
@@ -117,7 +117,7 @@ void write_file(const EntityDocument& document, const std::filesystem::path& pat
 
 /// A file could not be read or parsed; what() is "<path>: <pointer>: <rule>".
 class FileError : public std::runtime_error {
-public:
+  public:
     using std::runtime_error::runtime_error;
 };
 
