@@ -6,7 +6,7 @@ set -euo pipefail
 
 packages=(
     # toolchain
-    cmake g++ make pkg-config clang-format
+    cmake ninja-build g++ make pkg-config clang-format
     # libraries
     libopencv-dev libopencv-contrib-dev libpcl-dev libeigen3-dev nlohmann-json3-dev
     libglm-dev libtinygltf-dev libstb-dev catch2 libcli11-dev
