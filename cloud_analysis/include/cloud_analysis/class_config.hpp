@@ -1,0 +1,55 @@
+#pragma once
+
+/// Per-class settings of the entity extractors (thing/stuff, clustering distance, minimum
+/// points, size prior), loaded from assets/classes/entity_config.json (documented in
+/// docs/entities.md).
+
+#include <filesystem>
+#include <string>
+#include <string_view>
+#include <vector>
+
+namespace cloud_analysis {
+
+/// Default location of the class config, relative to the source (or install) root.
+inline constexpr const char* kDefaultClassConfigPath = "assets/classes/entity_config.json";
+
+/// Settings of one class, keyed by its palette name.
+struct ClassSettings {
+    std::string name;                     ///< palette class name, e.g. "car"
+    bool thing = false;                   ///< countable object (instances, prior-completed boxes)
+    bool entity = true;                   ///< false: never becomes an entity (sky, void)
+    double cluster_distance_m = 0.5;      ///< clustering distance at 10 m depth, metres, > 0
+    double cluster_growth = 2.0;          ///< distance grows as (z / 10 m)^growth beyond 10 m, >= 0
+    double cluster_distance_max_m = 3.0;  ///< cap of the grown clustering distance, metres
+    int min_points = 50;                  ///< clusters with fewer points are dropped, >= 1
+    double prior_L_m = 0.0;               ///< typical length along the heading, metres (0 = none)
+    double prior_W_m = 0.0;               ///< typical width across the heading, metres (0 = none)
+    double prior_H_m = 0.0;               ///< typical height, metres (0 = none)
+    double split_factor = 1.6;            ///< split a cluster longer than split_factor * prior_L_m
+    double voxel_m = 0.0;                 ///< voxel size used before clustering, metres (0 = none)
+    int max_entities = 50;                ///< keep at most this many entities (largest first), >= 1
+    bool has_prior() const { return prior_L_m > 0.0 && prior_W_m > 0.0 && prior_H_m > 0.0; }
+    /// Throws std::invalid_argument naming the bad field.
+    void validate() const;
+};
+
+/// The whole table plus the settings used for classes it does not list.
+struct ClassConfig {
+    ClassSettings fallback;              ///< used for palette classes not listed
+    std::vector<ClassSettings> classes;  ///< explicit settings, unique names
+    /// Settings for `name` (the fallback, renamed, when not listed).
+    ClassSettings find(std::string_view name) const;
+    /// Throws std::invalid_argument naming the bad class and field.
+    void validate() const;
+};
+
+/// Reads and validates a class config JSON file; throws std::runtime_error naming the file
+/// and the bad member.
+ClassConfig load_class_config(const std::filesystem::path& path);
+
+/// Parses class config JSON text (same rules as load_class_config, `origin` names the source
+/// in error messages).
+ClassConfig parse_class_config(std::string_view text, std::string_view origin = "<text>");
+
+}  // namespace cloud_analysis

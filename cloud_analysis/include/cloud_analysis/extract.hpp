@@ -1,0 +1,35 @@
+#pragma once
+
+/// Cloud -> entities: the thesis's one-per-class extractors ("centroid", "average",
+/// "variance") and the default "instances" extractor (ground plane, per-class clustering,
+/// oriented prior-completed boxes for things, oriented extents for stuff). See docs/entities.md.
+
+#include <string>
+
+#include <scene_schema/entities.hpp>
+
+#include "cloud_analysis/class_config.hpp"
+#include "cloud_analysis/ground.hpp"
+#include "cloud_analysis/types.hpp"
+
+namespace cloud_analysis {
+
+/// Settings of extract_entities.
+struct ExtractOptions {
+    std::string method = "instances";  ///< "instances" | "centroid" | "average" | "variance"
+    ClassConfig classes;               ///< per-class settings (load_class_config)
+    GroundOptions ground;              ///< RANSAC settings of the ground plane
+    double max_range_m = 60.0;         ///< points farther than this (z) are ignored, metres
+    /// Throws std::invalid_argument naming the bad field.
+    void validate() const;
+};
+
+/// Builds the entities of a labelled cloud (ids "<class>-<n>", point_count and confidence on
+/// each; sky and void never). The caller fills frame and source. With method "instances"
+/// the ground plane, when found, is reported in document.extra["ground_plane"] (normal, d,
+/// camera_height_m, inliers). The result passes scene_schema::check().
+scene_schema::EntityDocument extract_entities(const LabeledCloud& cloud, const Palette& palette,
+                                              const StereoCamera& camera,
+                                              const ExtractOptions& options);
+
+}  // namespace cloud_analysis
