@@ -18,6 +18,7 @@ done
 if [ "$sanitize" = ON ]; then
     build_dir="$STEREOSCENE_ROOT/build-sanitize"
     build_type=RelWithDebInfo
+    # Leak checking is off: Mesa and GLVND keep allocations alive until exit by design.
     export ASAN_OPTIONS=detect_leaks=0:abort_on_error=1
     export UBSAN_OPTIONS=print_stacktrace=1:halt_on_error=1
 else
