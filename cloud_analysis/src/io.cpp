@@ -1,0 +1,144 @@
+#include "cloud_analysis/io.hpp"
+
+#include <algorithm>
+#include <cmath>
+#include <fstream>
+#include <sstream>
+#include <stdexcept>
+
+#include <opencv2/core.hpp>
+#include <opencv2/imgcodecs.hpp>
+#include <opencv2/imgproc.hpp>
+
+namespace cloud_analysis {
+namespace {
+
+cv::Mat read_raw(const std::filesystem::path& path, int flags) {
+    std::error_code ec;
+    if (!std::filesystem::is_regular_file(path, ec)) {
+        throw std::runtime_error("cannot read image: no such file (" + path.string() + ")");
+    }
+    cv::Mat m;
+    try {
+        m = cv::imread(path.string(), flags);
+    } catch (const cv::Exception& e) {
+        throw std::runtime_error("cannot decode image: " + std::string(e.what()) + " (" +
+                                 path.string() + ")");
+    }
+    if (m.empty()) {
+        throw std::runtime_error("cannot decode image: unreadable or corrupt (" + path.string() +
+                                 ")");
+    }
+    return m;
+}
+
+std::string encode(const cv::Mat& m) {
+    std::vector<std::uint8_t> bytes;
+    if (!cv::imencode(".png", m, bytes)) throw std::runtime_error("PNG encoding failed");
+    return std::string(bytes.begin(), bytes.end());
+}
+
+}  // namespace
+
+std::size_t DisparityMap::valid_count() const {
+    return static_cast<std::size_t>(
+        std::count_if(disparity_px.begin(), disparity_px.end(), [](float d) { return d > 0.0f; }));
+}
+
+ImageU8 read_image(const std::filesystem::path& path, ImageMode mode) {
+    cv::Mat m = read_raw(path, mode == ImageMode::kGrey ? cv::IMREAD_GRAYSCALE : cv::IMREAD_COLOR);
+    if (mode == ImageMode::kAsIs && m.channels() == 3) {
+        // IMREAD_COLOR turns grey files into 3 equal channels; keep them grey.
+        cv::Mat grey = read_raw(path, cv::IMREAD_UNCHANGED);
+        if (grey.channels() == 1 && grey.depth() == CV_8U) m = grey;
+    }
+    if (m.depth() != CV_8U) {
+        throw std::runtime_error("cannot use image: not 8 bits per channel (" + path.string() +
+                                 ")");
+    }
+    if (m.channels() == 3) cv::cvtColor(m, m, cv::COLOR_BGR2RGB);
+    ImageU8 out;
+    out.width_px = m.cols;
+    out.height_px = m.rows;
+    out.channels = m.channels();
+    out.data.resize(static_cast<std::size_t>(m.cols) * m.rows * m.channels());
+    cv::Mat wrap(m.rows, m.cols, m.type(), out.data.data());
+    m.copyTo(wrap);
+    return out;
+}
+
+std::string encode_png(const ImageU8& image) {
+    if (image.channels != 1 && image.channels != 3) {
+        throw std::invalid_argument("encode_png: image must have 1 or 3 channels");
+    }
+    const cv::Mat wrap(image.height_px, image.width_px, CV_8UC(image.channels),
+                       const_cast<std::uint8_t*>(image.data.data()));
+    if (image.channels == 1) return encode(wrap);
+    cv::Mat bgr;
+    cv::cvtColor(wrap, bgr, cv::COLOR_RGB2BGR);
+    return encode(bgr);
+}
+
+DisparityMap read_kitti_disparity(const std::filesystem::path& path) {
+    const cv::Mat m = read_raw(path, cv::IMREAD_UNCHANGED);
+    if (m.type() != CV_16UC1) {
+        throw std::runtime_error("cannot use disparity: not a 16-bit grey KITTI PNG (" +
+                                 path.string() + ")");
+    }
+    DisparityMap out;
+    out.width_px = m.cols;
+    out.height_px = m.rows;
+    out.disparity_px.resize(static_cast<std::size_t>(m.cols) * m.rows);
+    for (int v = 0; v < m.rows; ++v) {
+        const auto* row = m.ptr<std::uint16_t>(v);
+        float* dst = out.disparity_px.data() + static_cast<std::size_t>(v) * m.cols;
+        for (int u = 0; u < m.cols; ++u) {
+            dst[u] = row[u] == 0 ? kNoDisparity : static_cast<float>(row[u]) / 256.0f;
+        }
+    }
+    return out;
+}
+
+std::string encode_kitti_disparity_png(const DisparityMap& disparity) {
+    cv::Mat m(disparity.height_px, disparity.width_px, CV_16UC1);
+    for (int v = 0; v < m.rows; ++v) {
+        auto* row = m.ptr<std::uint16_t>(v);
+        const float* src = disparity.disparity_px.data() + static_cast<std::size_t>(v) * m.cols;
+        for (int u = 0; u < m.cols; ++u) {
+            const float d = src[u];
+            row[u] =
+                d > 0.0f
+                    ? static_cast<std::uint16_t>(std::clamp(std::lround(d * 256.0f), 1L, 65535L))
+                    : 0;
+        }
+    }
+    return encode(m);
+}
+
+std::string encode_disparity_preview_png(const DisparityMap& disparity, double max_disparity_px) {
+    double max_d = max_disparity_px;
+    if (max_d <= 0.0) {
+        for (float d : disparity.disparity_px) max_d = std::max(max_d, static_cast<double>(d));
+    }
+    const double scale = max_d > 0.0 ? 255.0 / max_d : 0.0;
+    cv::Mat m(disparity.height_px, disparity.width_px, CV_8UC1);
+    for (int v = 0; v < m.rows; ++v) {
+        auto* row = m.ptr<std::uint8_t>(v);
+        const float* src = disparity.disparity_px.data() + static_cast<std::size_t>(v) * m.cols;
+        for (int u = 0; u < m.cols; ++u) {
+            row[u] = src[u] > 0.0f ? cv::saturate_cast<std::uint8_t>(src[u] * scale) : 0;
+        }
+    }
+    return encode(m);
+}
+
+std::string read_text_file(const std::filesystem::path& path) {
+    std::ifstream in(path, std::ios::binary);
+    if (!in) throw std::runtime_error("cannot open file (" + path.string() + ")");
+    std::ostringstream buffer;
+    buffer << in.rdbuf();
+    if (in.bad()) throw std::runtime_error("cannot read file (" + path.string() + ")");
+    return buffer.str();
+}
+
+}  // namespace cloud_analysis
