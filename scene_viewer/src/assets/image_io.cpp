@@ -2,7 +2,6 @@
 
 #include <climits>
 #include <fstream>
-#include <iterator>
 #include <mutex>
 #include <stdexcept>
 
@@ -11,6 +10,17 @@
 
 namespace scene_viewer {
 namespace {
+
+/// Reads a whole file in one call, sized by seeking to its end.
+bool slurp(const std::filesystem::path& path, std::vector<unsigned char>& out) {
+    std::ifstream in(path, std::ios::binary | std::ios::ate);
+    if (!in) return false;
+    const std::streamoff size = in.tellg();
+    if (size < 0) return false;
+    out.resize(static_cast<std::size_t>(size));
+    in.seekg(0);
+    return size == 0 || static_cast<bool>(in.read(reinterpret_cast<char*>(out.data()), size));
+}
 
 void append_bytes(void* context, void* data, int size) {
     auto* out = static_cast<std::vector<unsigned char>*>(context);
@@ -75,12 +85,10 @@ ImageRgba8 decode_image_memory(const unsigned char* bytes, std::size_t size,
 }
 
 ImageRgba8 decode_image(const std::filesystem::path& path) {
-    std::ifstream in(path, std::ios::binary);
-    if (!in) {
-        throw std::runtime_error(path.string() + ": cannot open image");
+    std::vector<unsigned char> bytes;
+    if (!slurp(path, bytes)) {
+        throw std::runtime_error(path.string() + ": cannot read image");
     }
-    const std::vector<unsigned char> bytes((std::istreambuf_iterator<char>(in)),
-                                           std::istreambuf_iterator<char>());
     return decode_image_memory(bytes.data(), bytes.size(), path.string());
 }
 

@@ -21,21 +21,23 @@ struct ImageRgba8 {
 /// One drawable primitive: triangles with one material, in the model's own frame.
 struct MeshPrimitive {
     std::vector<glm::vec3> positions;
-    std::vector<glm::vec3> normals;    ///< same count as positions (computed when missing)
-    std::vector<glm::vec2> texcoords;  ///< empty or same count as positions
-    std::vector<std::uint32_t> indices;///< triangle list
-    glm::vec4 base_colour{1.0f};       ///< glTF baseColorFactor (linear RGBA)
-    int texture = -1;                  ///< index into Model::textures, or -1
-    glm::mat4 node_transform{1.0f};    ///< node hierarchy flattened into the model frame
+    std::vector<glm::vec3> normals;      ///< same count as positions (computed when missing)
+    std::vector<glm::vec2> texcoords;    ///< empty or same count as positions
+    std::vector<std::uint32_t> indices;  ///< triangle list
+    glm::vec4 base_colour{1.0f};         ///< glTF baseColorFactor (linear RGBA)
+    int texture = -1;                    ///< index into Model::textures, or -1
+    glm::mat4 node_transform{1.0f};      ///< node hierarchy flattened into the model frame
 };
 
 /// A whole model: every primitive of every node of the default scene, flattened.
 struct Model {
-    std::string name;                   ///< file name or generated name
+    std::string name;  ///< file name or generated name
     std::vector<MeshPrimitive> primitives;
     std::vector<ImageRgba8> textures;
-    glm::vec3 bounds_min{0.0f};         ///< axis-aligned bounds in the model frame
+    glm::vec3 bounds_min{0.0f};  ///< axis-aligned bounds in the model frame
     glm::vec3 bounds_max{0.0f};
+    std::vector<std::string>
+        warnings;  ///< what the loader skipped and why (e.g. a LINES primitive)
 };
 
 }  // namespace scene_viewer
