@@ -48,6 +48,9 @@ struct ClassConfig {
 /// and the bad member.
 ClassConfig load_class_config(const std::filesystem::path& path);
 
+/// The bundled config (assets/classes/entity_config.json of the source tree).
+std::filesystem::path default_class_config_path();
+
 /// Parses class config JSON text (same rules as load_class_config, `origin` names the source
 /// in error messages).
 ClassConfig parse_class_config(std::string_view text, std::string_view origin = "<text>");

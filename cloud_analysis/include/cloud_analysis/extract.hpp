@@ -5,6 +5,7 @@
 /// oriented prior-completed boxes for things, oriented extents for stuff). See docs/entities.md.
 
 #include <string>
+#include <vector>
 
 #include <scene_schema/entities.hpp>
 
@@ -20,6 +21,9 @@ struct ExtractOptions {
     ClassConfig classes;               ///< per-class settings (load_class_config)
     GroundOptions ground;              ///< RANSAC settings of the ground plane
     double max_range_m = 60.0;         ///< points farther than this (z) are ignored, metres
+    std::vector<std::string> ground_classes = {"road", "sidewalk", "parking"};  ///< plane votes
+    double outlier_margin_m = 0.5;  ///< thing points farther than near + prior diagonal +
+                                    ///< this (bird's-eye range) are stereo smear, metres
     /// Throws std::invalid_argument naming the bad field.
     void validate() const;
 };

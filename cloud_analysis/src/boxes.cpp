@@ -1,0 +1,258 @@
+#include "cloud_analysis/boxes.hpp"
+
+#include <algorithm>
+#include <cmath>
+#include <stdexcept>
+
+#include <Eigen/Geometry>
+
+namespace cloud_analysis {
+namespace {
+
+constexpr double kPi = 3.14159265358979323846;
+
+/// Orthonormal ground-aligned basis: up = plane normal, ex ~ camera x, ez ~ camera z.
+struct GroundFrame {
+    Eigen::Vector3d up{0.0, -1.0, 0.0};
+    Eigen::Vector3d ex{1.0, 0.0, 0.0};
+    Eigen::Vector3d ez{0.0, 0.0, 1.0};
+    double d = 0.0;  ///< plane offset: height(p) = up . p + d
+
+    explicit GroundFrame(const std::optional<GroundPlane>& ground) {
+        if (ground) {
+            up = ground->normal.normalized();
+            d = ground->d;
+        }
+        ex = (Eigen::Vector3d::UnitX() - up.x() * up).normalized();
+        ez = up.cross(ex);
+    }
+    Eigen::Vector2d footprint(const Eigen::Vector3d& p) const { return {ex.dot(p), ez.dot(p)}; }
+    double height(const Eigen::Vector3d& p) const { return up.dot(p) + d; }
+    Eigen::Vector3d to_camera(const Eigen::Vector2d& ab, double h) const {
+        return ab.x() * ex + ab.y() * ez + (h - d) * up;
+    }
+};
+
+/// Value at fraction q (0..1) of sorted values.
+double quantile(std::vector<double> values, double q) {
+    if (values.empty()) return 0.0;
+    const auto k = static_cast<std::size_t>(std::clamp(q, 0.0, 1.0) * (values.size() - 1) + 0.5);
+    std::nth_element(values.begin(), values.begin() + static_cast<std::ptrdiff_t>(k), values.end());
+    return values[k];
+}
+
+/// Angle in [0, pi/2) of the first rectangle axis maximising Zhang et al.'s closeness score.
+double best_lshape_angle(const std::vector<Eigen::Vector2d>& pts, double step_deg) {
+    const int steps = std::max(1, static_cast<int>(std::lround(90.0 / step_deg)));
+    double best_angle = 0.0;
+    double best_score = -1.0;
+    std::vector<double> c1(pts.size()), c2(pts.size());
+    for (int s = 0; s < steps; ++s) {
+        const double a = s * (kPi / 2.0) / steps;
+        const Eigen::Vector2d e1(std::cos(a), std::sin(a));
+        const Eigen::Vector2d e2(-std::sin(a), std::cos(a));
+        double min1 = 1e300, max1 = -1e300, min2 = 1e300, max2 = -1e300;
+        for (std::size_t i = 0; i < pts.size(); ++i) {
+            c1[i] = pts[i].dot(e1);
+            c2[i] = pts[i].dot(e2);
+            min1 = std::min(min1, c1[i]);
+            max1 = std::max(max1, c1[i]);
+            min2 = std::min(min2, c2[i]);
+            max2 = std::max(max2, c2[i]);
+        }
+        double score = 0.0;
+        for (std::size_t i = 0; i < pts.size(); ++i) {
+            const double d1 = std::min(max1 - c1[i], c1[i] - min1);
+            const double d2 = std::min(max2 - c2[i], c2[i] - min2);
+            score += 1.0 / std::max(std::min(d1, d2), 0.01);
+        }
+        if (score > best_score) {
+            best_score = score;
+            best_angle = a;
+        }
+    }
+    return best_angle;
+}
+
+/// KITTI yaw of a heading given in ground (x, z) coordinates, front/back resolved to z >= 0.
+double yaw_of(Eigen::Vector2d heading_xz) {
+    if (heading_xz.y() < 0.0 || (heading_xz.y() == 0.0 && heading_xz.x() < 0.0)) {
+        heading_xz = -heading_xz;
+    }
+    return std::atan2(-heading_xz.y(), heading_xz.x());
+}
+
+/// Interval [lo, hi] grown to `size` away from the camera (at coordinate 0 on the axis).
+void complete_away(double& lo, double& hi, double size) {
+    if (hi - lo >= size) return;
+    if (std::abs(lo) <= std::abs(hi)) {
+        hi = lo + size;
+    } else {
+        lo = hi - size;
+    }
+}
+
+Eigen::Vector3d mean_of(const std::vector<Eigen::Vector3f>& pts) {
+    Eigen::Vector3d m = Eigen::Vector3d::Zero();
+    for (const auto& p : pts) m += p.cast<double>();
+    return pts.empty() ? m : Eigen::Vector3d(m / static_cast<double>(pts.size()));
+}
+
+/// Box with theta 0 from per-axis lower and upper bounds (x -> L, y -> H, z -> W).
+OrientedBox axis_box(const Eigen::Vector3d& lo, const Eigen::Vector3d& hi) {
+    OrientedBox box;
+    box.centre_m = (lo + hi) / 2.0;
+    box.theta = 0.0;
+    box.L_m = std::max(hi.x() - lo.x(), 1e-3);
+    box.H_m = std::max(hi.y() - lo.y(), 1e-3);
+    box.W_m = std::max(hi.z() - lo.z(), 1e-3);
+    return box;
+}
+
+}  // namespace
+
+void BoxFitOptions::validate() const {
+    if (prior_L_m < 0.0) throw std::invalid_argument("box.prior_L_m: must be >= 0");
+    if (prior_W_m < 0.0) throw std::invalid_argument("box.prior_W_m: must be >= 0");
+    if (prior_H_m < 0.0) throw std::invalid_argument("box.prior_H_m: must be >= 0");
+    if (!(angle_step_deg > 0.0 && angle_step_deg <= 10.0)) {
+        throw std::invalid_argument("box.angle_step_deg: must be in (0, 10]");
+    }
+    if (!(min_extent_m > 0.0)) throw std::invalid_argument("box.min_extent_m: must be > 0");
+    if (!(trim_fraction >= 0.0 && trim_fraction < 0.2)) {
+        throw std::invalid_argument("box.trim_fraction: must be in [0, 0.2)");
+    }
+}
+
+double normalize_angle(double radians) {
+    double a = std::fmod(radians + kPi, 2.0 * kPi);
+    if (a < 0.0) a += 2.0 * kPi;
+    return a - kPi;
+}
+
+double lshape_yaw(const std::vector<Eigen::Vector2d>& xz_m, double angle_step_deg) {
+    if (xz_m.size() < 2) return 0.0;
+    const double a = best_lshape_angle(xz_m, angle_step_deg);
+    const Eigen::Vector2d e1(std::cos(a), std::sin(a));
+    const Eigen::Vector2d e2(-std::sin(a), std::cos(a));
+    double min1 = 1e300, max1 = -1e300, min2 = 1e300, max2 = -1e300;
+    for (const auto& p : xz_m) {
+        min1 = std::min(min1, p.dot(e1));
+        max1 = std::max(max1, p.dot(e1));
+        min2 = std::min(min2, p.dot(e2));
+        max2 = std::max(max2, p.dot(e2));
+    }
+    return yaw_of(max1 - min1 >= max2 - min2 ? e1 : e2);
+}
+
+OrientedBox fit_upright_box(const std::vector<Eigen::Vector3f>& points_m,
+                            const std::optional<GroundPlane>& ground,
+                            const BoxFitOptions& options) {
+    options.validate();
+    if (points_m.empty()) throw std::invalid_argument("fit_upright_box: no points");
+    const GroundFrame frame(ground);
+    std::vector<Eigen::Vector2d> ab;
+    std::vector<double> heights;
+    ab.reserve(points_m.size());
+    heights.reserve(points_m.size());
+    for (const auto& p : points_m) {
+        const Eigen::Vector3d q = p.cast<double>();
+        ab.push_back(frame.footprint(q));
+        heights.push_back(frame.height(q));
+    }
+    const double angle = best_lshape_angle(ab, options.angle_step_deg);
+    Eigen::Vector2d e1(std::cos(angle), std::sin(angle));
+    Eigen::Vector2d e2(-std::sin(angle), std::cos(angle));
+    std::vector<double> c1, c2;
+    c1.reserve(ab.size());
+    c2.reserve(ab.size());
+    for (const auto& p : ab) {
+        c1.push_back(p.dot(e1));
+        c2.push_back(p.dot(e2));
+    }
+    const double t = options.trim_fraction;
+    double lo1 = quantile(c1, t), hi1 = quantile(c1, 1.0 - t);
+    double lo2 = quantile(c2, t), hi2 = quantile(c2, 1.0 - t);
+
+    // Axis 1 becomes the length axis; swap when axis 2 should be.
+    bool swap = (hi2 - lo2) > (hi1 - lo1);
+    if (options.prior_L_m > 0.0 && options.prior_W_m > 0.0) {
+        const double longest = std::max(hi1 - lo1, hi2 - lo2);
+        if (longest <= 1.3 * options.prior_W_m) {
+            // Only a short face is seen: it is most likely the rear or front, so the length
+            // runs along the viewing ray.
+            const Eigen::Vector2d centre = ((lo1 + hi1) / 2.0) * e1 + ((lo2 + hi2) / 2.0) * e2;
+            const Eigen::Vector2d ray = centre.normalized();
+            swap = std::abs(ray.dot(e2)) > std::abs(ray.dot(e1));
+        }
+    }
+    if (swap) {
+        std::swap(e1, e2);
+        std::swap(lo1, lo2);
+        std::swap(hi1, hi2);
+    }
+    // Coordinates along each axis are relative to the camera (at 0), so complete_away grows
+    // the box away from it.
+    if (options.prior_L_m > 0.0) complete_away(lo1, hi1, options.prior_L_m);
+    if (options.prior_W_m > 0.0) complete_away(lo2, hi2, options.prior_W_m);
+
+    double top = quantile(heights, 1.0 - t);
+    double bottom = ground && options.rest_on_ground ? 0.0 : quantile(heights, t);
+    if (top - bottom < options.min_extent_m) top = bottom + options.min_extent_m;
+
+    OrientedBox box;
+    box.L_m = std::max(hi1 - lo1, options.min_extent_m);
+    box.W_m = std::max(hi2 - lo2, options.min_extent_m);
+    box.H_m = top - bottom;
+    const Eigen::Vector2d centre_ab = ((lo1 + hi1) / 2.0) * e1 + ((lo2 + hi2) / 2.0) * e2;
+    box.centre_m = frame.to_camera(centre_ab, (top + bottom) / 2.0);
+    // Heading in camera coordinates, projected on the camera's x-z plane.
+    const Eigen::Vector3d heading = e1.x() * frame.ex + e1.y() * frame.ez;
+    box.theta = yaw_of(Eigen::Vector2d(heading.x(), heading.z()));
+    return box;
+}
+
+OrientedBox centroid_box(const std::vector<Eigen::Vector3f>& points_m,
+                         const Eigen::Vector3d& size_LHW_m) {
+    OrientedBox box;
+    box.centre_m = mean_of(points_m);
+    box.L_m = size_LHW_m.x();
+    box.H_m = size_LHW_m.y();
+    box.W_m = size_LHW_m.z();
+    return box;
+}
+
+OrientedBox average_box(const std::vector<Eigen::Vector3f>& points_m) {
+    const Eigen::Vector3d c = mean_of(points_m);
+    Eigen::Vector3d sum_pos = Eigen::Vector3d::Zero(), sum_neg = Eigen::Vector3d::Zero();
+    Eigen::Vector3d n_pos = Eigen::Vector3d::Zero(), n_neg = Eigen::Vector3d::Zero();
+    for (const auto& p : points_m) {
+        const Eigen::Vector3d o = p.cast<double>() - c;
+        for (int k = 0; k < 3; ++k) {
+            if (o[k] >= 0.0) {
+                sum_pos[k] += o[k];
+                n_pos[k] += 1.0;
+            } else {
+                sum_neg[k] -= o[k];
+                n_neg[k] += 1.0;
+            }
+        }
+    }
+    Eigen::Vector3d lo = c, hi = c;
+    for (int k = 0; k < 3; ++k) {
+        if (n_pos[k] > 0.0) hi[k] += 2.0 * sum_pos[k] / n_pos[k];
+        if (n_neg[k] > 0.0) lo[k] -= 2.0 * sum_neg[k] / n_neg[k];
+    }
+    return axis_box(lo, hi);
+}
+
+OrientedBox variance_box(const std::vector<Eigen::Vector3f>& points_m) {
+    const Eigen::Vector3d c = mean_of(points_m);
+    Eigen::Vector3d var = Eigen::Vector3d::Zero();
+    for (const auto& p : points_m) var += (p.cast<double>() - c).cwiseAbs2();
+    if (!points_m.empty()) var /= static_cast<double>(points_m.size());
+    const Eigen::Vector3d half = std::sqrt(3.0) * var.cwiseSqrt();
+    return axis_box(c - half, c + half);
+}
+
+}  // namespace cloud_analysis

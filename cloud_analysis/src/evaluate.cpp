@@ -1,0 +1,225 @@
+#include "cloud_analysis/evaluate.hpp"
+
+#include <algorithm>
+#include <cmath>
+#include <map>
+#include <stdexcept>
+
+#include <opencv2/core.hpp>
+#include <opencv2/imgcodecs.hpp>
+
+#include "cloud_analysis/io.hpp"
+#include "cloud_analysis/semantic.hpp"
+
+namespace cloud_analysis {
+namespace {
+
+cv::Mat read_u16(const std::filesystem::path& path) {
+    std::error_code ec;
+    if (!std::filesystem::is_regular_file(path, ec)) {
+        throw std::runtime_error("cannot read image: no such file (" + path.string() + ")");
+    }
+    cv::Mat m;
+    try {
+        m = cv::imread(path.string(), cv::IMREAD_UNCHANGED);
+    } catch (const cv::Exception& e) {
+        throw std::runtime_error("cannot decode image: " + std::string(e.what()) + " (" +
+                                 path.string() + ")");
+    }
+    if (m.empty()) {
+        throw std::runtime_error("cannot decode image: unreadable or corrupt (" + path.string() +
+                                 ")");
+    }
+    if (m.type() != CV_16UC1) {
+        throw std::runtime_error("not a 16-bit single-channel PNG (" + path.string() + ")");
+    }
+    return m;
+}
+
+/// Pixel (u, v) with disparity d to the camera frame (rectified pinhole, Q of Hartley &
+/// Zisserman / OpenCV stereoRectify).
+Eigen::Vector3f reproject_pixel(const StereoCamera& cam, int u, int v, double d) {
+    const double doffs = cam.cx_right_px != 0.0 ? cam.cx_px - cam.cx_right_px : 0.0;
+    const double z = cam.fx_px * cam.baseline_m / (d - doffs);
+    return {static_cast<float>((u - cam.cx_px) * z / cam.fx_px),
+            static_cast<float>((v - cam.cy_px) * z / cam.fy_px), static_cast<float>(z)};
+}
+
+void check_camera(const StereoCamera& cam) {
+    if (!(cam.fx_px > 0.0 && cam.fy_px > 0.0))
+        throw std::invalid_argument("camera: fx/fy must be > 0");
+    if (!(cam.baseline_m > 0.0)) throw std::invalid_argument("camera: baseline_m must be > 0");
+}
+
+}  // namespace
+
+double GtCar::range_m() const { return std::hypot(centroid_m.x(), centroid_m.z()); }
+
+void CarMatchOptions::validate() const {
+    if (car_class.empty()) throw std::invalid_argument("car_class: must not be empty");
+    if (!(footprint_margin_m >= 0.0))
+        throw std::invalid_argument("footprint_margin_m: must be >= 0");
+    if (!(min_inside_fraction > 0.0 && min_inside_fraction <= 1.0)) {
+        throw std::invalid_argument("min_inside_fraction: must be in (0, 1]");
+    }
+    if (!(max_footprint_area_m2 > 0.0))
+        throw std::invalid_argument("max_footprint_area_m2: must be > 0");
+    if (!(max_range_m > 0.0)) throw std::invalid_argument("max_range_m: must be > 0");
+}
+
+double CarEvaluation::recall() const {
+    return gt_owed == 0 ? 1.0 : static_cast<double>(gt_owed_matched) / static_cast<double>(gt_owed);
+}
+
+double CarEvaluation::precision() const {
+    return entities_in_range == 0
+               ? 1.0
+               : static_cast<double>(entities_matched) / static_cast<double>(entities_in_range);
+}
+
+double CarEvaluation::mean_centre_distance_m() const {
+    if (matches.empty()) return 0.0;
+    double sum = 0.0;
+    for (const auto& m : matches) sum += m.centre_distance_m;
+    return sum / static_cast<double>(matches.size());
+}
+
+double footprint_inside_fraction(const scene_schema::Entity& entity,
+                                 const std::vector<Eigen::Vector3f>& points_m, double margin_m) {
+    if (points_m.empty()) return 0.0;
+    // Heading (cos t, -sin t) and its normal in the (x, z) plane.
+    const double c = std::cos(entity.theta), s = std::sin(entity.theta);
+    const double half_l = entity.L / 2.0 + margin_m, half_w = entity.W / 2.0 + margin_m;
+    std::size_t inside = 0;
+    for (const auto& p : points_m) {
+        const double dx = double{p.x()} - entity.x, dz = double{p.z()} - entity.z;
+        const double along = dx * c - dz * s;
+        const double across = dx * s + dz * c;
+        if (std::abs(along) <= half_l && std::abs(across) <= half_w) ++inside;
+    }
+    return static_cast<double>(inside) / static_cast<double>(points_m.size());
+}
+
+CarEvaluation evaluate_cars(const std::vector<scene_schema::Entity>& entities,
+                            const std::vector<GtCar>& gt_cars, const CarMatchOptions& options) {
+    options.validate();
+    CarEvaluation result;
+    std::vector<std::size_t> cars;
+    for (std::size_t i = 0; i < entities.size(); ++i) {
+        const auto& e = entities[i];
+        if (e.class_name != options.car_class) continue;
+        cars.push_back(i);
+        if (std::hypot(e.x, e.z) <= options.max_range_m) ++result.entities_in_range;
+    }
+    // Candidate pairs that satisfy the footprint rule, best inside fraction first.
+    std::vector<CarMatch> candidates;
+    for (std::size_t i : cars) {
+        const auto& e = entities[i];
+        const double area =
+            (e.L + 2.0 * options.footprint_margin_m) * (e.W + 2.0 * options.footprint_margin_m);
+        if (area > options.max_footprint_area_m2) continue;
+        for (std::size_t g = 0; g < gt_cars.size(); ++g) {
+            const double f =
+                footprint_inside_fraction(e, gt_cars[g].points_m, options.footprint_margin_m);
+            if (f < options.min_inside_fraction) continue;
+            CarMatch m;
+            m.entity = i;
+            m.gt = g;
+            m.inside_fraction = f;
+            m.centre_distance_m =
+                std::hypot(e.x - gt_cars[g].centroid_m.x(), e.z - gt_cars[g].centroid_m.z());
+            candidates.push_back(m);
+        }
+    }
+    std::stable_sort(candidates.begin(), candidates.end(), [](const auto& a, const auto& b) {
+        return a.inside_fraction > b.inside_fraction;
+    });
+    std::vector<char> entity_used(entities.size(), 0), gt_used(gt_cars.size(), 0);
+    for (const auto& m : candidates) {
+        if (entity_used[m.entity] || gt_used[m.gt]) continue;
+        entity_used[m.entity] = 1;
+        gt_used[m.gt] = 1;
+        result.matches.push_back(m);
+    }
+    for (std::size_t g = 0; g < gt_cars.size(); ++g) {
+        const auto& car = gt_cars[g];
+        if (car.range_m() > options.max_range_m || car.pixel_count < options.min_gt_pixels)
+            continue;
+        ++result.gt_owed;
+        if (gt_used[g]) ++result.gt_owed_matched;
+    }
+    for (std::size_t i : cars) {
+        const auto& e = entities[i];
+        if (std::hypot(e.x, e.z) <= options.max_range_m && entity_used[i])
+            ++result.entities_matched;
+    }
+    return result;
+}
+
+std::vector<GtCar> load_gt_cars(const std::filesystem::path& instance_png,
+                                const std::filesystem::path& disparity_png,
+                                const StereoCamera& camera, int car_label_id) {
+    check_camera(camera);
+    const cv::Mat instance = read_u16(instance_png);
+    const cv::Mat disparity = read_u16(disparity_png);
+    if (instance.size() != disparity.size()) {
+        throw std::runtime_error("instance image is " + std::to_string(instance.cols) + "x" +
+                                 std::to_string(instance.rows) + " but the GT disparity is " +
+                                 std::to_string(disparity.cols) + "x" +
+                                 std::to_string(disparity.rows) + " (" + instance_png.string() +
+                                 ")");
+    }
+    std::map<int, GtCar> by_instance;
+    for (int v = 0; v < instance.rows; ++v) {
+        for (int u = 0; u < instance.cols; ++u) {
+            const int value = instance.at<std::uint16_t>(v, u);
+            if ((value >> 8) != car_label_id) continue;
+            GtCar& car = by_instance[value & 0xff];
+            car.instance = value & 0xff;
+            const int d16 = disparity.at<std::uint16_t>(v, u);
+            if (d16 == 0) continue;
+            car.points_m.push_back(reproject_pixel(camera, u, v, d16 / 256.0));
+        }
+    }
+    std::vector<GtCar> cars;
+    for (auto& [id, car] : by_instance) {
+        car.pixel_count = car.points_m.size();
+        if (car.points_m.empty()) continue;
+        Eigen::Vector3d sum = Eigen::Vector3d::Zero();
+        for (const auto& p : car.points_m) sum += p.cast<double>();
+        car.centroid_m = sum / static_cast<double>(car.points_m.size());
+        cars.push_back(std::move(car));
+    }
+    return cars;
+}
+
+LabeledCloud cloud_from_gt_disparity(const std::filesystem::path& disparity_png,
+                                     const std::filesystem::path& semantic_png,
+                                     const Palette& palette, const StereoCamera& camera) {
+    check_camera(camera);
+    const DisparityMap disparity = read_kitti_disparity(disparity_png);
+    const ImageU8 semantic = read_image(semantic_png, ImageMode::kColour);
+    if (semantic.width_px != disparity.width_px || semantic.height_px != disparity.height_px) {
+        throw std::runtime_error("semantic image size differs from the disparity's (" +
+                                 semantic_png.string() + ")");
+    }
+    const ClassImage classes = classify_pixels(semantic, palette);
+    LabeledCloud cloud;
+    cloud.width_px = disparity.width_px;
+    cloud.height_px = disparity.height_px;
+    for (int v = 0; v < disparity.height_px; ++v) {
+        for (int u = 0; u < disparity.width_px; ++u) {
+            const std::size_t i = static_cast<std::size_t>(v) * disparity.width_px + u;
+            const float d = disparity.disparity_px[i];
+            if (!(d > 0.0f)) continue;
+            cloud.xyz_m.push_back(reproject_pixel(camera, u, v, d));
+            const std::uint8_t* rgb = semantic.at(u, v);
+            cloud.colour.push_back({rgb[0], rgb[1], rgb[2]});
+            cloud.class_index.push_back(classes.class_index[i]);
+            cloud.pixel.push_back(static_cast<std::uint32_t>(i));
+        }
+    }
+    return cloud;
+}
+
+}  // namespace cloud_analysis
