@@ -126,7 +126,9 @@ std::string encode_disparity_preview_png(const DisparityMap& disparity, double m
         auto* row = m.ptr<std::uint8_t>(v);
         const float* src = disparity.disparity_px.data() + static_cast<std::size_t>(v) * m.cols;
         for (int u = 0; u < m.cols; ++u) {
-            row[u] = src[u] > 0.0f ? cv::saturate_cast<std::uint8_t>(src[u] * scale) : 0;
+            row[u] = src[u] > 0.0f
+                         ? cv::saturate_cast<std::uint8_t>(static_cast<double>(src[u]) * scale)
+                         : 0;
         }
     }
     return encode(m);

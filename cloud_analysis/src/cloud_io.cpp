@@ -1,0 +1,169 @@
+#include "cloud_analysis/cloud_io.hpp"
+
+#include <charconv>
+#include <cmath>
+#include <cstring>
+#include <stdexcept>
+
+namespace cloud_analysis {
+namespace {
+
+static_assert(__BYTE_ORDER__ == __ORDER_LITTLE_ENDIAN__,
+              "the binary PCD and PLY writers assume a little-endian host");
+
+std::int32_t class_id(const Palette& palette, std::uint16_t index) {
+    return index == kVoidClass || index >= palette.classes.size()
+               ? kVoidClassId
+               : static_cast<std::int32_t>(palette.classes[index].id);
+}
+
+/// Writes v with 3 decimals (millimetres) at p; returns the end. Fixed point: no locale, no
+/// exponent, |v| < 2^53 / 1000.
+char* put_fixed3(char* p, float value) {
+    long long milli = std::llround(static_cast<double>(value) * 1000.0);
+    if (milli < 0) {
+        *p++ = '-';
+        milli = -milli;
+    }
+    p = std::to_chars(p, p + 24, milli / 1000).ptr;
+    const int frac = static_cast<int>(milli % 1000);
+    *p++ = '.';
+    *p++ = static_cast<char>('0' + frac / 100);
+    *p++ = static_cast<char>('0' + (frac / 10) % 10);
+    *p++ = static_cast<char>('0' + frac % 10);
+    return p;
+}
+
+char* put_int(char* p, long long value) { return std::to_chars(p, p + 24, value).ptr; }
+
+template <typename T>
+char* put_raw(char* p, T value) {
+    std::memcpy(p, &value, sizeof(T));
+    return p + sizeof(T);
+}
+
+}  // namespace
+
+CloudFormat cloud_format_from_path(const std::filesystem::path& path) {
+    const std::string ext = path.extension().string();
+    if (ext == ".xyz" || ext == ".txt") return CloudFormat::kXyz;
+    if (ext == ".pcd") return CloudFormat::kPcd;
+    if (ext == ".ply") return CloudFormat::kPly;
+    throw std::invalid_argument("unknown cloud extension '" + ext + "' (want .xyz, .pcd, .ply)");
+}
+
+std::string format_xyz(const LabeledCloud& cloud, const Palette& palette) {
+    static constexpr char kHeader[] = "//X Y Z R G B Class Intensity\n";
+    std::string out;
+    // Worst case per line: 3 coordinates of 24 chars, 3 colours, class, intensity, separators.
+    out.resize(sizeof(kHeader) + cloud.size() * 120);
+    char* p = out.data();
+    std::memcpy(p, kHeader, sizeof(kHeader) - 1);
+    p += sizeof(kHeader) - 1;
+    for (std::size_t i = 0; i < cloud.size(); ++i) {
+        const auto& xyz = cloud.xyz_m[i];
+        const auto& c = cloud.colour[i];
+        p = put_fixed3(p, xyz.x());
+        *p++ = ' ';
+        p = put_fixed3(p, xyz.y());
+        *p++ = ' ';
+        p = put_fixed3(p, xyz.z());
+        for (int k = 0; k < 3; ++k) {
+            *p++ = ' ';
+            p = put_int(p, c[static_cast<std::size_t>(k)]);
+        }
+        *p++ = ' ';
+        p = put_int(p, class_id(palette, cloud.class_index[i]));
+        *p++ = ' ';
+        // Rec. 601 luma, the grey value the thesis wrote.
+        p = put_int(p, (299 * c[0] + 587 * c[1] + 114 * c[2] + 500) / 1000);
+        *p++ = '\n';
+    }
+    out.resize(static_cast<std::size_t>(p - out.data()));
+    return out;
+}
+
+std::string format_pcd(const LabeledCloud& cloud, const Palette& palette) {
+    const std::string n = std::to_string(cloud.size());
+    std::string out =
+        "# .PCD v0.7 - Point Cloud Data file format\n"
+        "VERSION 0.7\n"
+        "FIELDS x y z rgb label\n"
+        "SIZE 4 4 4 4 4\n"
+        "TYPE F F F F U\n"
+        "COUNT 1 1 1 1 1\n"
+        "WIDTH " +
+        n +
+        "\n"
+        "HEIGHT 1\n"
+        "VIEWPOINT 0 0 0 1 0 0 0\n"
+        "POINTS " +
+        n +
+        "\n"
+        "DATA binary\n";
+    const std::size_t header = out.size();
+    out.resize(header + cloud.size() * 20);
+    char* p = out.data() + header;
+    for (std::size_t i = 0; i < cloud.size(); ++i) {
+        const auto& xyz = cloud.xyz_m[i];
+        const auto& c = cloud.colour[i];
+        p = put_raw(p, xyz.x());
+        p = put_raw(p, xyz.y());
+        p = put_raw(p, xyz.z());
+        // PCL's PointXYZRGB layout: 0x00RRGGBB stored in the bytes of a float field.
+        p = put_raw(p, (std::uint32_t{c[0]} << 16) | (std::uint32_t{c[1]} << 8) | c[2]);
+        p = put_raw(p, static_cast<std::uint32_t>(class_id(palette, cloud.class_index[i])));
+    }
+    return out;
+}
+
+std::string format_ply(const LabeledCloud& cloud, const Palette& palette) {
+    std::string out =
+        "ply\n"
+        "format binary_little_endian 1.0\n"
+        "comment stereoscene cloud-analysis: rectified left camera, x right, y down, z forward, "
+        "metres\n"
+        "comment palette " +
+        palette.name +
+        "\n"
+        "element vertex " +
+        std::to_string(cloud.size()) +
+        "\n"
+        "property float x\n"
+        "property float y\n"
+        "property float z\n"
+        "property uchar red\n"
+        "property uchar green\n"
+        "property uchar blue\n"
+        "property int scalar_class\n"
+        "end_header\n";
+    const std::size_t header = out.size();
+    out.resize(header + cloud.size() * 19);
+    char* p = out.data() + header;
+    for (std::size_t i = 0; i < cloud.size(); ++i) {
+        const auto& xyz = cloud.xyz_m[i];
+        const auto& c = cloud.colour[i];
+        p = put_raw(p, xyz.x());
+        p = put_raw(p, xyz.y());
+        p = put_raw(p, xyz.z());
+        p = put_raw(p, c[0]);
+        p = put_raw(p, c[1]);
+        p = put_raw(p, c[2]);
+        p = put_raw(p, class_id(palette, cloud.class_index[i]));
+    }
+    return out;
+}
+
+std::string format_cloud(const LabeledCloud& cloud, const Palette& palette, CloudFormat format) {
+    switch (format) {
+        case CloudFormat::kXyz:
+            return format_xyz(cloud, palette);
+        case CloudFormat::kPcd:
+            return format_pcd(cloud, palette);
+        case CloudFormat::kPly:
+            return format_ply(cloud, palette);
+    }
+    throw std::invalid_argument("unknown cloud format");
+}
+
+}  // namespace cloud_analysis

@@ -1,0 +1,173 @@
+#include "cloud_analysis/disparity.hpp"
+
+#include <cmath>
+#include <stdexcept>
+
+#include <opencv2/calib3d.hpp>
+#include <opencv2/core.hpp>
+#include <opencv2/imgproc.hpp>
+#include <opencv2/ximgproc/disparity_filter.hpp>
+
+namespace cloud_analysis {
+namespace {
+
+[[noreturn]] void bad(const std::string& field, const std::string& rule) {
+    throw std::invalid_argument(field + ": " + rule);
+}
+
+int sgbm_mode(const std::string& mode) {
+    if (mode == "sgbm") return cv::StereoSGBM::MODE_SGBM;
+    if (mode == "hh") return cv::StereoSGBM::MODE_HH;
+    if (mode == "sgbm_3way") return cv::StereoSGBM::MODE_SGBM_3WAY;
+    if (mode == "hh4") return cv::StereoSGBM::MODE_HH4;
+    bad("mode", "must be sgbm, hh, sgbm_3way or hh4");
+}
+
+cv::Mat to_matcher_input(const ImageU8& img, bool colour) {
+    const cv::Mat wrap(img.height_px, img.width_px, CV_8UC(img.channels),
+                       const_cast<std::uint8_t*>(img.data.data()));
+    cv::Mat out;
+    if (img.channels == 3 && !colour) {
+        cv::cvtColor(wrap, out, cv::COLOR_RGB2GRAY);
+    } else {
+        out = wrap;
+    }
+    return out;
+}
+
+}  // namespace
+
+void DisparityOptions::validate() const {
+    if (num_disparities <= 0 || num_disparities % 16 != 0) {
+        bad("num_disparities", "must be a positive multiple of 16");
+    }
+    if (block_size < 1 || block_size % 2 == 0 || block_size > 31) {
+        bad("block_size", "must be odd, 1..31");
+    }
+    if (p1 < 0) bad("p1", "must be >= 0");
+    if (p2 < 0) bad("p2", "must be >= 0");
+    if (p1 > 0 && p2 > 0 && p2 <= p1) bad("p2", "must be > p1");
+    if (pre_filter_cap < 1 || pre_filter_cap > 63) bad("pre_filter_cap", "must be 1..63");
+    if (uniqueness_ratio < 0 || uniqueness_ratio > 100) bad("uniqueness_ratio", "must be 0..100");
+    if (speckle_window_size < 0) bad("speckle_window_size", "must be >= 0");
+    if (speckle_range < 0) bad("speckle_range", "must be >= 0");
+    sgbm_mode(mode);
+    if (!(lr_max_diff_px >= 0.0)) bad("lr_max_diff_px", "must be >= 0");
+    if (!(wls_lambda > 0.0)) bad("wls_lambda", "must be > 0");
+    if (!(wls_sigma_colour > 0.0)) bad("wls_sigma_colour", "must be > 0");
+}
+
+DisparityOptions opencv_sample_disparity_options() {
+    DisparityOptions o;
+    o.min_disparity = 0;
+    o.num_disparities = 128;
+    o.block_size = 3;
+    o.p1 = 8 * 3 * 3 * 3;
+    o.p2 = 32 * 3 * 3 * 3;
+    o.disp12_max_diff = 1;
+    o.pre_filter_cap = 63;
+    o.uniqueness_ratio = 10;
+    o.speckle_window_size = 100;
+    o.speckle_range = 32;
+    o.mode = "sgbm";
+    o.colour = true;
+    return o;
+}
+
+DisparityMap compute_disparity(const ImageU8& left, const ImageU8& right,
+                               const DisparityOptions& options) {
+    options.validate();
+    if (left.width_px != right.width_px || left.height_px != right.height_px) {
+        throw std::invalid_argument("left and right images differ in size");
+    }
+    if (left.channels != right.channels) {
+        throw std::invalid_argument("left and right images differ in channel count");
+    }
+    if (left.empty()) throw std::invalid_argument("empty images");
+    const cv::Mat l = to_matcher_input(left, options.colour);
+    const cv::Mat r = to_matcher_input(right, options.colour);
+    const int cn = l.channels();
+    const int area = options.block_size * options.block_size;
+    const int p1 = options.p1 > 0 ? options.p1 : 8 * cn * area;
+    const int p2 = options.p2 > 0 ? options.p2 : 32 * cn * area;
+    cv::Ptr<cv::StereoSGBM> sgbm = cv::StereoSGBM::create(
+        options.min_disparity, options.num_disparities, options.block_size, p1,
+        std::max(p2, p1 + 1), options.disp12_max_diff, options.pre_filter_cap,
+        options.uniqueness_ratio, options.speckle_window_size, options.speckle_range,
+        sgbm_mode(options.mode));
+
+    cv::Mat raw_left;  // CV_16S, disparity * 16
+    sgbm->compute(l, r, raw_left);
+    cv::Mat raw_right;
+    if (options.lr_check || options.wls) {
+        cv::Ptr<cv::StereoMatcher> right_matcher = cv::ximgproc::createRightMatcher(sgbm);
+        right_matcher->compute(r, l, raw_right);  // negative disparities of the right image
+    }
+    const int invalid_raw = (options.min_disparity - 1) * 16;
+    if (options.wls) {
+        cv::Ptr<cv::ximgproc::DisparityWLSFilter> wls =
+            cv::ximgproc::createDisparityWLSFilter(sgbm);
+        wls->setLambda(options.wls_lambda);
+        wls->setSigmaColor(options.wls_sigma_colour);
+        cv::Mat filtered;
+        wls->filter(raw_left, l, filtered, raw_right);
+        raw_left = filtered;
+    }
+
+    DisparityMap out;
+    out.width_px = left.width_px;
+    out.height_px = left.height_px;
+    out.disparity_px.assign(static_cast<std::size_t>(out.width_px) * out.height_px, kNoDisparity);
+    for (int v = 0; v < raw_left.rows; ++v) {
+        const auto* row = raw_left.ptr<std::int16_t>(v);
+        const std::int16_t* row_r = options.lr_check ? raw_right.ptr<std::int16_t>(v) : nullptr;
+        float* dst = out.disparity_px.data() + static_cast<std::size_t>(v) * out.width_px;
+        for (int u = 0; u < raw_left.cols; ++u) {
+            if (row[u] <= invalid_raw || row[u] <= 0) continue;
+            const float d = static_cast<float>(row[u]) / 16.0f;
+            if (row_r != nullptr) {
+                const int ur = static_cast<int>(std::lround(static_cast<float>(u) - d));
+                if (ur < 0) continue;
+                const float dr = -static_cast<float>(row_r[ur]) / 16.0f;
+                if (!(dr > 0.0f) || std::abs(dr - d) > static_cast<float>(options.lr_max_diff_px)) {
+                    continue;
+                }
+            }
+            dst[u] = d;
+        }
+    }
+    return out;
+}
+
+DisparityScore score_disparity(const DisparityMap& estimate, const DisparityMap& ground_truth) {
+    if (estimate.width_px != ground_truth.width_px ||
+        estimate.height_px != ground_truth.height_px) {
+        throw std::invalid_argument("estimate and ground truth differ in size");
+    }
+    DisparityScore s;
+    std::size_t outliers_valid = 0;
+    double abs_sum = 0.0;
+    for (std::size_t i = 0; i < ground_truth.disparity_px.size(); ++i) {
+        const float gt = ground_truth.disparity_px[i];
+        if (!(gt > 0.0f)) continue;
+        ++s.gt_pixels;
+        const float est = estimate.disparity_px[i];
+        if (!(est > 0.0f)) continue;
+        ++s.est_pixels;
+        const double err = std::abs(static_cast<double>(est) - static_cast<double>(gt));
+        abs_sum += err;
+        if (err > 3.0 && err > 0.05 * static_cast<double>(gt)) ++outliers_valid;
+    }
+    const std::size_t outliers_all = outliers_valid + (s.gt_pixels - s.est_pixels);
+    if (s.gt_pixels > 0) {
+        s.d1_all = static_cast<double>(outliers_all) / static_cast<double>(s.gt_pixels);
+        s.density = static_cast<double>(s.est_pixels) / static_cast<double>(s.gt_pixels);
+    }
+    if (s.est_pixels > 0) {
+        s.d1_valid = static_cast<double>(outliers_valid) / static_cast<double>(s.est_pixels);
+        s.epe_px = abs_sum / static_cast<double>(s.est_pixels);
+    }
+    return s;
+}
+
+}  // namespace cloud_analysis
