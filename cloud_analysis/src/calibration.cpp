@@ -137,7 +137,29 @@ Calibration kitti_raw(const Fields& f, const std::string& origin, const Calibrat
     Calibration calib;
     calib.format = "kitti_raw";
     const auto P_l = matrix34(need(f, "P_rect_" + l, 12, origin));
-    const auto P_r = matrix34(need(f, "P_rect_" + r, 12, origin));
+    Eigen::Matrix<double, 3, 4> P_r;
+    if (f.count("P_rect_" + r)) {
+        P_r = matrix34(need(f, "P_rect_" + r, 12, origin));
+    } else {
+        // Some calib_cam_to_cam.txt copies lack P_rect_03. The rig's extrinsics still give the
+        // baseline: camera centre C_x = -R_0x^T T_0x in camera 0, rotated into rectified
+        // camera 0 by R_rect_00; the baseline is the x offset of the two centres.
+        for (const auto& key : {"R_" + l, "T_" + l, "R_" + r, "T_" + r, std::string("R_rect_00")}) {
+            if (!f.count(key))
+                fail(origin, "P_rect_" + r, "missing (and no " + key + " to derive it)");
+        }
+        const auto centre = [&](const std::string& id) -> Eigen::Vector3d {
+            const Eigen::Matrix3d R = matrix33(need(f, "R_" + id, 9, origin));
+            const auto& t = need(f, "T_" + id, 3, origin);
+            return -R.transpose() * Eigen::Vector3d(t[0], t[1], t[2]);
+        };
+        const Eigen::Matrix3d R_rect0 = matrix33(need(f, "R_rect_00", 9, origin));
+        const double baseline_m = (R_rect0 * (centre(r) - centre(l))).x();
+        P_r = P_l;
+        P_r(0, 3) = P_l(0, 3) - P_l(0, 0) * baseline_m;
+        calib.note = "P_rect_" + r + " missing: baseline " + std::to_string(baseline_m) +
+                     " m derived from R_" + l + "/T_" + l + "/R_" + r + "/T_" + r;
+    }
     calib.camera = from_projections(P_l, P_r, "P_rect_" + l, "P_rect_" + r, origin);
     if (f.count("S_rect_" + l)) {
         const auto& s = need(f, "S_rect_" + l, 2, origin);

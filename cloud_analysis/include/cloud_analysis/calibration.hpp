@@ -39,6 +39,7 @@ struct RawCamera {
 struct Calibration {
     std::string format;                 ///< "kitti_raw", "kitti_object", "yaml" or "json"
     std::string source;                 ///< file it came from
+    std::string note;                   ///< how a missing value was derived (empty when none was)
     StereoCamera camera;                ///< rectified rig; width/height 0 when the file has no size
     std::optional<RawCamera> raw_left;  ///< present when the file can rectify raw input
     std::optional<RawCamera> raw_right;  ///< idem
