@@ -1,12 +1,374 @@
-// scene-render: renders entity files headless (see docs/cli.md).
+// scene-render: renders entity files headless (see docs/cli.md). Parses, validates every input,
+// then calls the scene_viewer library; the only error boundary of the tool.
+#include <cstdio>
+#include <iostream>
+#include <optional>
+#include <sstream>
+#include <stdexcept>
+#include <string>
+#include <vector>
+
 #include <CLI/CLI.hpp>
 
-int main(int argc, char** argv) {
-    CLI::App app{"scene-render: render entity files headless"};
+#include "scene_schema/entities.hpp"
+#include "scene_viewer/assets/class_table.hpp"
+#include "scene_viewer/assets/image_io.hpp"
+#include "scene_viewer/figure/grid_figure.hpp"
+#include "scene_viewer/gfx/gl_device.hpp"
+#include "scene_viewer/platform/headless_context.hpp"
+#include "scene_viewer/render/benchmark.hpp"
+#include "scene_viewer/render/image.hpp"
+#include "scene_viewer/render/scene_renderer.hpp"
+
+namespace {
+
+using namespace scene_viewer;
+
+/// A failure with the parts of the one-line message and the exit code.
+struct Failure {
+    std::string what;
+    std::string detail;
+    std::string where;
+    int code = 1;
+};
+
+[[noreturn]] void usage(const std::string& detail, const std::string& flag) {
+    throw Failure{"bad usage", detail, flag, 2};
+}
+
+/// View, size, shading and model flags shared by the single render and the grid figure.
+struct ViewArgs {
+    std::string view = "camera";
+    std::string size;
+    std::string eye;
+    std::string target;
+    std::optional<float> fov_deg;
+    std::string shading = "lit";
+    int msaa = 4;
+    bool no_grid = false;
+    bool no_ego = false;
+    bool boxes = false;
+    std::string classes;
+    std::string cloud;
+    float point_size = 2.0f;
+};
+
+void add_view_options(CLI::App& app, ViewArgs& a) {
+    app.add_option("--view", a.view, "camera | chase | bev | free")->capture_default_str();
+    app.add_option("--size", a.size,
+                   "image size WxH in pixels (default: the frame's camera size, else 1242x375)");
+    app.add_option("--eye", a.eye, "free/chase view: eye x,y,z in metres (KITTI camera frame)");
+    app.add_option("--target", a.target, "free/chase view: look-at point x,y,z in metres");
+    app.add_option("--fov", a.fov_deg, "free/chase view: vertical field of view in degrees");
+    app.add_option("--shading", a.shading, "lit | semantic")->capture_default_str();
+    app.add_option("--msaa", a.msaa, "lit shading: multisample count, 0 = off")
+        ->capture_default_str();
+    app.add_flag("--no-grid", a.no_grid, "bev view: no metre grid");
+    app.add_flag("--no-ego", a.no_ego, "chase/bev/free views: do not draw the ego car");
+    app.add_flag("--boxes", a.boxes, "draw every entity as a box (no glTF models)");
+    app.add_option("--classes", a.classes,
+                   "class table (default: assets/classes/render_classes.json)");
+    app.add_option("--cloud", a.cloud, "point cloud overlay (.ply, .pcd, .xyz)");
+    app.add_option("--point-size", a.point_size, "point cloud overlay: point size in pixels")
+        ->capture_default_str();
+}
+
+glm::vec3 parse_vec3(const std::string& text, const std::string& flag) {
+    std::stringstream ss(text);
+    glm::vec3 v(0.0f);
+    char comma = 0;
+    if (!(ss >> v.x >> comma) || comma != ',' || !(ss >> v.y >> comma) || comma != ',' ||
+        !(ss >> v.z) || !(ss >> std::ws).eof()) {
+        usage("expected x,y,z in metres, got '" + text + "'", flag);
+    }
+    return v;
+}
+
+std::pair<int, int> parse_size(const std::string& text) {
+    std::stringstream ss(text);
+    long long w = 0, h = 0;
+    char x = 0;
+    if (!(ss >> w >> x >> h) || (x != 'x' && x != 'X') || !(ss >> std::ws).eof()) {
+        usage("expected WxH, got '" + text + "'", "--size");
+    }
+    if (w < 1 || h < 1 || w > kMaxImageSide || h > kMaxImageSide) {
+        usage("each side must be in 1.." + std::to_string(kMaxImageSide) + ", got '" + text + "'",
+              "--size");
+    }
+    return {static_cast<int>(w), static_cast<int>(h)};
+}
+
+scene_schema::EntityDocument read_entities(const std::string& path) {
+    std::ifstream in(path, std::ios::binary);
+    if (!in) throw Failure{"cannot read entity file", std::strerror(errno), path};
+    std::stringstream buffer;
+    buffer << in.rdbuf();
+    try {
+        return scene_schema::parse(buffer.str());
+    } catch (const scene_schema::SchemaError& e) {
+        const std::string pointer = e.pointer().empty() ? "(document)" : e.pointer();
+        throw Failure{"invalid entity file", pointer + ": " + e.rule(), path};
+    }
+}
+
+/// Render options from the flags; the camera view and default size come from `document`.
+RenderOptions render_options(const ViewArgs& a, const scene_schema::EntityDocument& document) {
+    RenderOptions o;
+    try {
+        o.view.kind = parse_view_kind(a.view);
+    } catch (const std::invalid_argument& e) {
+        usage(e.what(), "--view");
+    }
+    if (o.view.kind == ViewKind::chase) o.view = chase_view();
+    try {
+        o.shading = parse_shading(a.shading);
+    } catch (const std::invalid_argument& e) {
+        usage(e.what(), "--shading");
+    }
+    if (!a.size.empty()) {
+        std::tie(o.width_px, o.height_px) = parse_size(a.size);
+    } else if (document.frame.camera) {
+        o.width_px = document.frame.camera->width_px;
+        o.height_px = document.frame.camera->height_px;
+    }
+    const bool posed = o.view.kind == ViewKind::free || o.view.kind == ViewKind::chase;
+    if ((!a.eye.empty() || !a.target.empty() || a.fov_deg) && !posed) {
+        usage("needs --view free or chase", !a.eye.empty()      ? "--eye"
+                                            : !a.target.empty() ? "--target"
+                                                                : "--fov");
+    }
+    if (!a.eye.empty()) o.view.eye_kitti = parse_vec3(a.eye, "--eye");
+    if (!a.target.empty()) o.view.target_kitti = parse_vec3(a.target, "--target");
+    if (a.fov_deg) o.view.fov_y_deg = *a.fov_deg;
+    o.msaa_samples = a.msaa;
+    o.grid = !a.no_grid;
+    o.ego = !a.no_ego;
+    o.point_size_px = a.point_size;
+    try {
+        o.validate();
+    } catch (const std::invalid_argument& e) {
+        usage(e.what(), "--msaa/--fov/--eye/--target/--point-size");
+    }
+    return o;
+}
+
+std::optional<PointCloud> read_cloud(const ViewArgs& a) {
+    if (a.cloud.empty()) return std::nullopt;
+    try {
+        return read_point_cloud(a.cloud);
+    } catch (const std::exception& e) {
+        throw Failure{"cannot read point cloud", e.what(), "--cloud"};
+    }
+}
+
+std::optional<ClassTable> read_classes(const ViewArgs& a) {
+    if (a.boxes) return std::nullopt;
+    const std::filesystem::path path =
+        a.classes.empty() ? default_class_table_path() : std::filesystem::path(a.classes);
+    try {
+        return load_class_table(path);
+    } catch (const std::exception& e) {
+        throw Failure{"cannot read class table", e.what(),
+                      a.classes.empty() ? path.string() : "--classes"};
+    }
+}
+
+/// The GL context, device and renderer, made after every input was validated.
+struct Gpu {
+    HeadlessContext context;
+    std::unique_ptr<Device> device = make_gl_device();
+    SceneRenderer renderer{*device};
+};
+
+std::unique_ptr<Gpu> start_gpu(const std::optional<ClassTable>& classes) {
+    std::unique_ptr<Gpu> gpu;
+    try {
+        gpu = std::make_unique<Gpu>();
+    } catch (const std::exception& e) {
+        throw Failure{"cannot start headless OpenGL", e.what(), "EGL"};
+    }
+    if (classes) {
+        try {
+            use_class_models(gpu->renderer, *classes);
+        } catch (const std::exception& e) {
+            throw Failure{"cannot load class model", e.what(), classes->source.string()};
+        }
+    }
+    return gpu;
+}
+
+void write_output(const std::string& path, const ImageRgba8& image) {
+    try {
+        write_png(path, image, 1);
+    } catch (const std::exception& e) {
+        throw Failure{"cannot write image", e.what(), path};
+    }
+}
+
+int print_info() {
+    try {
+        HeadlessContext context;
+        const GlInfo info = context.info();
+        std::cout << "GL vendor:   " << info.vendor << "\nGL renderer: " << info.renderer
+                  << "\nGL version:  " << info.version << "\nEGL platform: " << info.egl_platform
+                  << "\n";
+    } catch (const std::exception& e) {
+        throw Failure{"cannot start headless OpenGL", e.what(), "EGL"};
+    }
+    return 0;
+}
+
+int run(int argc, char** argv) {
+    CLI::App app{"scene-render: renders entity files (KITTI camera frame) headless with OpenGL"};
+    app.set_version_flag("--version", "scene-render 0.1.0");
+    app.require_subcommand(0, 1);
+
+    std::string input, output, background;
+    float opacity = 0.6f;
+    bool info = false;
+    ViewArgs view;
+    app.add_option("input", input, "entity file (JSON, schema 1.x)");
+    app.add_option("-o,--output", output, "output PNG, '-' for stdout");
+    app.add_option("--background", background,
+                   "camera view: lay the render over this image (e.g. the left image)");
+    app.add_option("--opacity", opacity, "--background: opacity of the render, 0..1")
+        ->capture_default_str();
+    app.add_flag("--info", info, "print the GL vendor, renderer and version, then exit");
+    add_view_options(app, view);
+
+    CLI::App* grid = app.add_subcommand("grid", "render several entity files into a labelled grid");
+    std::vector<std::string> grid_inputs, grid_labels;
+    std::string grid_output;
+    int grid_columns = 0;
+    ViewArgs grid_view;
+    grid->add_option("--inputs", grid_inputs, "entity files")->required();
+    grid->add_option("--labels", grid_labels, "one label per input (default: file names)");
+    grid->add_option("-o,--output", grid_output, "output PNG, '-' for stdout")->required();
+    grid->add_option("--columns", grid_columns, "tiles per row (default: square-ish)");
+    add_view_options(*grid, grid_view);
+
+    CLI::App* bench = app.add_subcommand("bench", "time frames of a synthetic street scene");
+    BenchmarkOptions bench_options;
+    std::string bench_size = "1280x720", bench_shading = "lit";
+    int bench_msaa = 4;
+    bool bench_boxes = false;
+    bench->add_option("--frames", bench_options.frames, "timed frames")->capture_default_str();
+    bench->add_option("--entities", bench_options.entity_count, "cars in the scene")
+        ->capture_default_str();
+    bench->add_option("--size", bench_size, "image size WxH")->capture_default_str();
+    bench->add_option("--shading", bench_shading, "lit | semantic")->capture_default_str();
+    bench->add_option("--msaa", bench_msaa, "multisample count (lit)")->capture_default_str();
+    bench->add_option("--zlib", bench_options.zlib_level, "PNG zlib level 0..9")
+        ->capture_default_str();
+    bench->add_flag("--boxes", bench_boxes, "draw boxes instead of glTF models");
+
     try {
         app.parse(argc, argv);
     } catch (const CLI::ParseError& e) {
         return app.exit(e) == 0 ? 0 : 2;
     }
+
+    if (info) return print_info();
+
+    if (*bench) {
+        RenderOptions o;
+        std::tie(o.width_px, o.height_px) = parse_size(bench_size);
+        try {
+            o.shading = parse_shading(bench_shading);
+            bench_options.validate();
+        } catch (const std::invalid_argument& e) {
+            usage(e.what(), "bench");
+        }
+        o.msaa_samples = bench_msaa;
+        ViewArgs classes_args;
+        classes_args.boxes = bench_boxes;
+        const auto classes = read_classes(classes_args);
+        auto gpu = start_gpu(classes);
+        const auto document = make_benchmark_document(bench_options.entity_count);
+        const BenchmarkResult r = run_benchmark(gpu->renderer, document, o, bench_options);
+        const GlInfo gl = gpu->context.info();
+        std::printf("renderer   %s\n", gl.renderer.c_str());
+        std::printf(
+            "scene      %d entities + road/sidewalks, %zu triangles, %dx%d, %s, msaa %d, "
+            "%s\n",
+            bench_options.entity_count, r.triangles, o.width_px, o.height_px, bench_shading.c_str(),
+            o.shading == Shading::lit ? bench_msaa : 0, bench_boxes ? "boxes" : "glTF models");
+        std::printf("%-28s %10s\n", "measure", "value");
+        std::printf("%-28s %10.2f\n", "frame + readback, ms (mean)", r.frame_ms);
+        std::printf("%-28s %10.2f\n", "frame + readback, ms (min)", r.frame_ms_min);
+        std::printf("%-28s %10.1f\n", "frames per second", r.fps);
+        std::printf("%-28s %10.2f\n", "PNG encode, ms (zlib level)", r.png_ms);
+        std::printf("%-28s %10zu\n", "PNG bytes", r.png_bytes);
+        std::printf("%-28s %10d\n", "frames timed", r.frames);
+        return 0;
+    }
+
+    if (*grid) {
+        if (!grid_labels.empty() && grid_labels.size() != grid_inputs.size()) {
+            usage(std::to_string(grid_labels.size()) + " labels for " +
+                      std::to_string(grid_inputs.size()) + " inputs",
+                  "--labels");
+        }
+        std::vector<scene_schema::EntityDocument> documents;
+        for (const auto& path : grid_inputs) documents.push_back(read_entities(path));
+        RenderOptions options = render_options(grid_view, documents.front());
+        const auto cloud = read_cloud(grid_view);
+        const auto classes = read_classes(grid_view);
+        if (grid_labels.empty()) {
+            for (const auto& path : grid_inputs) {
+                grid_labels.push_back(std::filesystem::path(path).stem().string());
+            }
+        }
+        auto gpu = start_gpu(classes);
+        std::vector<ImageRgba8> tiles;
+        for (const auto& document : documents) {
+            tiles.push_back(gpu->renderer.render(document, cloud ? &*cloud : nullptr, options));
+        }
+        GridFigureOptions figure;
+        figure.columns = grid_columns;
+        write_output(grid_output, compose_grid(tiles, grid_labels, figure));
+        return 0;
+    }
+
+    if (input.empty()) usage("an entity file is required", "input");
+    if (output.empty()) usage("an output path is required", "--output");
+    const auto document = read_entities(input);
+    RenderOptions options = render_options(view, document);
+    if (!(opacity >= 0.0f && opacity <= 1.0f)) usage("must be in 0..1", "--opacity");
+    std::optional<ImageRgba8> background_image;
+    if (!background.empty()) {
+        if (options.view.kind != ViewKind::camera) usage("needs --view camera", "--background");
+        try {
+            background_image = decode_image(background);
+        } catch (const std::exception& e) {
+            throw Failure{"cannot read background image", e.what(), "--background"};
+        }
+        options.keep_alpha = true;
+    }
+    const auto cloud = read_cloud(view);
+    const auto classes = read_classes(view);
+
+    auto gpu = start_gpu(classes);
+    ImageRgba8 image = gpu->renderer.render(document, cloud ? &*cloud : nullptr, options);
+    if (background_image) {
+        composite_over(image, resize_nearest(*background_image, image.width, image.height),
+                       opacity);
+    }
+    write_output(output, image);
     return 0;
+}
+
+}  // namespace
+
+int main(int argc, char** argv) {
+    try {
+        return run(argc, argv);
+    } catch (const Failure& f) {
+        std::cerr << "scene-render: error: " << f.what << ": " << f.detail << " (" << f.where
+                  << ")\n";
+        return f.code;
+    } catch (const std::exception& e) {
+        std::cerr << "scene-render: error: rendering failed: " << e.what() << " (scene-render)\n";
+        return 1;
+    }
 }

@@ -1,0 +1,87 @@
+#pragma once
+
+/// Renders entity documents: builds the ECS world from a document, runs the systems in their
+/// fixed order (build -> transforms -> camera -> render) and reads the image back. One renderer
+/// keeps its device, uploaded models and world across frames, so a process renders many frames.
+
+#include <memory>
+#include <string>
+
+#include "scene_schema/entities.hpp"
+#include "scene_viewer/assets/model.hpp"
+#include "scene_viewer/ecs/world.hpp"
+#include "scene_viewer/gfx/device.hpp"
+#include "scene_viewer/render/model_library.hpp"
+#include "scene_viewer/render/palette.hpp"
+#include "scene_viewer/render/point_cloud.hpp"
+#include "scene_viewer/views/views.hpp"
+
+namespace scene_viewer {
+
+enum class Shading {
+    lit,       ///< directional + ambient light, class colours, MSAA
+    semantic,  ///< exact palette colours, no lighting, no MSAA (pixel-checkable)
+};
+
+/// "lit" / "semantic" -> Shading; throws std::invalid_argument otherwise.
+Shading parse_shading(const std::string& name);
+
+/// Largest accepted image side, pixels.
+inline constexpr int kMaxImageSide = 16384;
+
+struct RenderOptions {
+    int width_px = 1242;             ///< image width, pixels, 1..kMaxImageSide
+    int height_px = 375;             ///< image height, pixels, 1..kMaxImageSide
+    ViewSpec view;                   ///< camera; camera-view intrinsics come from the file
+    bool fit_bev = true;             ///< bev: frame every entity (ignores bev_* of view)
+    Shading shading = Shading::lit;  ///< lit or semantic
+    int msaa_samples = 4;            ///< lit: multisample count (0 = off); semantic: unused
+    bool grid = true;                ///< bev: draw a 1 m ground grid (10 m lines darker)
+    bool ego = true;                 ///< chase/bev/free: draw the ego car at the camera
+    float point_size_px = 2.0f;      ///< point cloud overlay: point size, pixels
+    bool keep_alpha = false;         ///< keep alpha 0 where nothing was drawn (compositing)
+    /// Throws std::invalid_argument naming the bad field.
+    void validate() const;
+};
+
+/// Colours that are not classes: background of lit and semantic renders, ego car.
+inline constexpr Rgb8 kLitBackground{205, 215, 228};
+inline constexpr Rgb8 kSemanticBackground{0, 0, 0};
+inline constexpr Rgb8 kLitEgoColour{230, 230, 235};
+
+class SceneRenderer {
+  public:
+    /// Uses `device` (which must outlive the renderer); uploads the box model.
+    explicit SceneRenderer(Device& device);
+
+    /// Draws entities of `class_name` with `model` (fitted to each box) instead of a box.
+    void set_class_model(const std::string& class_name, const Model& model);
+
+    /// Builds the world for a document (and an optional cloud overlay): the build system.
+    void load(const scene_schema::EntityDocument& document, const PointCloud* cloud,
+              const RenderOptions& options);
+
+    /// Runs transforms -> camera -> render on the loaded world and reads the image back.
+    ImageRgba8 render_frame();
+
+    /// load() then render_frame().
+    ImageRgba8 render(const scene_schema::EntityDocument& document, const PointCloud* cloud,
+                      const RenderOptions& options);
+
+    const World& world() const { return world_; }
+    const ModelLibrary& models() const { return models_; }
+
+  private:
+    Device* device_;
+    ModelLibrary models_;
+    World world_;
+    RenderOptions options_;
+};
+
+struct ClassTable;
+
+/// Loads the glTF model of every class of `table` that names one and hands it to `renderer`;
+/// returns how many were loaded. Throws the loader's "<file>: <reason>" error.
+std::size_t use_class_models(SceneRenderer& renderer, const ClassTable& table);
+
+}  // namespace scene_viewer

@@ -1,0 +1,353 @@
+#include "scene_viewer/gfx/gl_device.hpp"
+
+#include <algorithm>
+#include <stdexcept>
+#include <string>
+#include <unordered_map>
+
+#define GL_GLEXT_PROTOTYPES
+#include <GL/gl.h>
+#include <GL/glext.h>
+#include <glm/gtc/type_ptr.hpp>
+
+namespace scene_viewer {
+
+namespace {
+
+constexpr const char* kVertexShader = R"(#version 450 core
+layout(location = 0) in vec3 a_position;
+layout(location = 1) in vec3 a_normal;
+layout(location = 2) in vec4 a_colour;
+layout(location = 3) in vec2 a_texcoord;
+uniform mat4 u_model;
+uniform mat4 u_view_projection;
+uniform mat3 u_normal_matrix;
+uniform float u_point_size;
+out vec3 v_normal;
+out vec4 v_colour;
+out vec2 v_texcoord;
+void main() {
+    gl_Position = u_view_projection * (u_model * vec4(a_position, 1.0));
+    gl_PointSize = u_point_size;
+    v_normal = u_normal_matrix * a_normal;
+    v_colour = a_colour;
+    v_texcoord = a_texcoord;
+}
+)";
+
+constexpr const char* kFragmentShader = R"(#version 450 core
+in vec3 v_normal;
+in vec4 v_colour;
+in vec2 v_texcoord;
+uniform vec4 u_colour;
+uniform int u_lit;
+uniform int u_vertex_colour;
+uniform int u_textured;
+uniform sampler2D u_texture;
+uniform vec3 u_light_direction;
+uniform float u_ambient;
+out vec4 o_colour;
+void main() {
+    vec4 c = u_colour;
+    if (u_vertex_colour != 0) c *= v_colour;
+    if (u_textured != 0) c *= texture(u_texture, v_texcoord);
+    if (u_lit != 0) {
+        vec3 n = normalize(v_normal);
+        if (!gl_FrontFacing) n = -n;
+        float diffuse = max(dot(n, u_light_direction), 0.0);
+        c.rgb *= u_ambient + (1.0 - u_ambient) * diffuse;
+    }
+    o_colour = c;
+}
+)";
+
+GLuint compile(GLenum type, const char* source) {
+    const GLuint shader = glCreateShader(type);
+    glShaderSource(shader, 1, &source, nullptr);
+    glCompileShader(shader);
+    GLint ok = 0;
+    glGetShaderiv(shader, GL_COMPILE_STATUS, &ok);
+    if (!ok) {
+        char log[2048] = {};
+        glGetShaderInfoLog(shader, sizeof log, nullptr, log);
+        glDeleteShader(shader);
+        throw std::runtime_error(std::string("GL shader compile failed: ") + log);
+    }
+    return shader;
+}
+
+struct GpuMesh {
+    GLuint vao = 0;
+    GLuint buffers[5] = {};  // positions, normals, colours, texcoords, indices
+    GLenum mode = GL_TRIANGLES;
+    GLsizei count = 0;
+    bool indexed = false;
+};
+
+class GlDevice final : public Device {
+  public:
+    GlDevice() {
+        const GLuint vs = compile(GL_VERTEX_SHADER, kVertexShader);
+        const GLuint fs = compile(GL_FRAGMENT_SHADER, kFragmentShader);
+        program_ = glCreateProgram();
+        glAttachShader(program_, vs);
+        glAttachShader(program_, fs);
+        glLinkProgram(program_);
+        glDeleteShader(vs);
+        glDeleteShader(fs);
+        GLint ok = 0;
+        glGetProgramiv(program_, GL_LINK_STATUS, &ok);
+        if (!ok) {
+            char log[2048] = {};
+            glGetProgramInfoLog(program_, sizeof log, nullptr, log);
+            throw std::runtime_error(std::string("GL program link failed: ") + log);
+        }
+        for (const char* name : {"u_model", "u_view_projection", "u_normal_matrix", "u_point_size",
+                                 "u_colour", "u_lit", "u_vertex_colour", "u_textured", "u_texture",
+                                 "u_light_direction", "u_ambient"}) {
+            uniforms_[name] = glGetUniformLocation(program_, name);
+        }
+        glEnable(GL_PROGRAM_POINT_SIZE);
+    }
+
+    ~GlDevice() override {
+        for (auto& [id, mesh] : meshes_) release(mesh);
+        for (auto& [id, tex] : textures_) glDeleteTextures(1, &tex);
+        release_targets();
+        glDeleteProgram(program_);
+    }
+
+    GlDevice(const GlDevice&) = delete;
+    GlDevice& operator=(const GlDevice&) = delete;
+
+    MeshHandle create_mesh(const MeshData& data) override {
+        const std::size_t n = data.positions.size();
+        auto check = [&](std::size_t size, const char* what) {
+            if (size != 0 && size != n)
+                throw std::invalid_argument(std::string("mesh ") + what +
+                                            " count differs from the position count");
+        };
+        check(data.normals.size(), "normal");
+        check(data.colours.size(), "colour");
+        check(data.texcoords.size(), "texcoord");
+        for (std::uint32_t i : data.indices) {
+            if (i >= n) throw std::invalid_argument("mesh index out of range");
+        }
+        GpuMesh mesh;
+        glCreateVertexArrays(1, &mesh.vao);
+        glCreateBuffers(5, mesh.buffers);
+        auto attribute = [&](int slot, const void* bytes, std::size_t size, int components,
+                             const float* constant) {
+            if (size > 0) {
+                glNamedBufferStorage(mesh.buffers[slot], static_cast<GLsizeiptr>(size), bytes, 0);
+                glVertexArrayVertexBuffer(mesh.vao, static_cast<GLuint>(slot), mesh.buffers[slot],
+                                          0, static_cast<GLsizei>(components * sizeof(float)));
+                glVertexArrayAttribFormat(mesh.vao, static_cast<GLuint>(slot), components, GL_FLOAT,
+                                          GL_FALSE, 0);
+                glVertexArrayAttribBinding(mesh.vao, static_cast<GLuint>(slot),
+                                           static_cast<GLuint>(slot));
+                glEnableVertexArrayAttrib(mesh.vao, static_cast<GLuint>(slot));
+            } else {
+                glDisableVertexArrayAttrib(mesh.vao, static_cast<GLuint>(slot));
+                glVertexAttrib4fv(static_cast<GLuint>(slot), constant);
+            }
+        };
+        attribute(0, data.positions.data(), n * sizeof(glm::vec3), 3, nullptr);
+        const float up[4] = {0, 1, 0, 0}, white[4] = {1, 1, 1, 1}, zero[4] = {0, 0, 0, 0};
+        attribute(1, data.normals.data(), data.normals.size() * sizeof(glm::vec3), 3, up);
+        attribute(2, data.colours.data(), data.colours.size() * sizeof(glm::vec4), 4, white);
+        attribute(3, data.texcoords.data(), data.texcoords.size() * sizeof(glm::vec2), 2, zero);
+        if (!data.indices.empty()) {
+            glNamedBufferStorage(mesh.buffers[4], static_cast<GLsizeiptr>(data.indices.size() * 4),
+                                 data.indices.data(), 0);
+            glVertexArrayElementBuffer(mesh.vao, mesh.buffers[4]);
+            mesh.indexed = true;
+            mesh.count = static_cast<GLsizei>(data.indices.size());
+        } else {
+            mesh.count = static_cast<GLsizei>(n);
+        }
+        mesh.mode = data.topology == Topology::triangles ? GL_TRIANGLES
+                    : data.topology == Topology::lines   ? GL_LINES
+                                                         : GL_POINTS;
+        const std::uint32_t id = next_id_++;
+        meshes_[id] = mesh;
+        return MeshHandle{id};
+    }
+
+    TextureHandle create_texture(const ImageRgba8& image) override {
+        if (image.width <= 0 || image.height <= 0 ||
+            image.pixels.size() != static_cast<std::size_t>(image.width) * image.height * 4) {
+            throw std::invalid_argument("texture size does not match its pixel data");
+        }
+        GLuint tex = 0;
+        glCreateTextures(GL_TEXTURE_2D, 1, &tex);
+        glTextureStorage2D(tex, 1, GL_RGBA8, image.width, image.height);
+        glTextureSubImage2D(tex, 0, 0, 0, image.width, image.height, GL_RGBA, GL_UNSIGNED_BYTE,
+                            image.pixels.data());
+        glTextureParameteri(tex, GL_TEXTURE_MIN_FILTER, GL_LINEAR);
+        glTextureParameteri(tex, GL_TEXTURE_MAG_FILTER, GL_LINEAR);
+        const std::uint32_t id = next_id_++;
+        textures_[id] = tex;
+        return TextureHandle{id};
+    }
+
+    void destroy_mesh(MeshHandle handle) override {
+        auto it = meshes_.find(handle.id);
+        if (it == meshes_.end()) return;
+        release(it->second);
+        meshes_.erase(it);
+    }
+
+    void begin_frame(const FrameSetup& setup) override {
+        if (setup.width_px <= 0 || setup.height_px <= 0)
+            throw std::invalid_argument("frame size must be positive");
+        const int samples = setup.msaa_samples > 1 ? setup.msaa_samples : 0;
+        if (setup.width_px != width_ || setup.height_px != height_ || samples != samples_) {
+            release_targets();
+            create_targets(setup.width_px, setup.height_px, samples);
+        }
+        glBindFramebuffer(GL_FRAMEBUFFER, samples_ > 0 ? msaa_fbo_ : resolve_fbo_);
+        glViewport(0, 0, width_, height_);
+        if (samples_ > 0) {
+            glEnable(GL_MULTISAMPLE);
+        } else {
+            glDisable(GL_MULTISAMPLE);
+        }
+        glClearColor(setup.clear_colour.r, setup.clear_colour.g, setup.clear_colour.b,
+                     setup.clear_colour.a);
+        glClearDepth(1.0);
+        glClear(GL_COLOR_BUFFER_BIT | GL_DEPTH_BUFFER_BIT);
+        glEnable(GL_DEPTH_TEST);
+        glDepthFunc(GL_LEQUAL);
+        glDisable(GL_CULL_FACE);
+        glDisable(GL_BLEND);
+        glUseProgram(program_);
+        const glm::vec3 light = glm::normalize(setup.light_direction);
+        glUniform3fv(uniforms_["u_light_direction"], 1, glm::value_ptr(light));
+        glUniform1f(uniforms_["u_ambient"], setup.ambient);
+        glUniform1i(uniforms_["u_texture"], 0);
+    }
+
+    void draw(const DrawCall& call) override {
+        auto it = meshes_.find(call.mesh.id);
+        if (it == meshes_.end()) throw std::invalid_argument("draw of an unknown mesh handle");
+        const GpuMesh& mesh = it->second;
+        if (call.depth_test) {
+            glEnable(GL_DEPTH_TEST);
+        } else {
+            glDisable(GL_DEPTH_TEST);
+        }
+        const glm::mat3 normal_matrix = glm::transpose(glm::inverse(glm::mat3(call.model)));
+        glUniformMatrix4fv(uniforms_["u_model"], 1, GL_FALSE, glm::value_ptr(call.model));
+        glUniformMatrix4fv(uniforms_["u_view_projection"], 1, GL_FALSE,
+                           glm::value_ptr(call.view_projection));
+        glUniformMatrix3fv(uniforms_["u_normal_matrix"], 1, GL_FALSE,
+                           glm::value_ptr(normal_matrix));
+        glUniform4fv(uniforms_["u_colour"], 1, glm::value_ptr(call.colour));
+        glUniform1i(uniforms_["u_lit"], call.lit ? 1 : 0);
+        glUniform1i(uniforms_["u_vertex_colour"], call.vertex_colour ? 1 : 0);
+        glUniform1f(uniforms_["u_point_size"], call.point_size_px);
+        auto tex = textures_.find(call.texture.id);
+        const bool textured = tex != textures_.end();
+        glUniform1i(uniforms_["u_textured"], textured ? 1 : 0);
+        if (textured) glBindTextureUnit(0, tex->second);
+        glBindVertexArray(mesh.vao);
+        if (mesh.indexed) {
+            glDrawElements(mesh.mode, mesh.count, GL_UNSIGNED_INT, nullptr);
+        } else {
+            glDrawArrays(mesh.mode, 0, mesh.count);
+        }
+    }
+
+    void end_frame() override {
+        if (samples_ > 0) {
+            glBlitNamedFramebuffer(msaa_fbo_, resolve_fbo_, 0, 0, width_, height_, 0, 0, width_,
+                                   height_, GL_COLOR_BUFFER_BIT, GL_NEAREST);
+        }
+        const GLenum err = glGetError();
+        if (err != GL_NO_ERROR) throw std::runtime_error("GL error " + std::to_string(err));
+    }
+
+    ImageRgba8 read_pixels() override {
+        ImageRgba8 image;
+        image.width = width_;
+        image.height = height_;
+        const std::size_t row = static_cast<std::size_t>(width_) * 4;
+        image.pixels.resize(row * height_);
+        glBindFramebuffer(GL_READ_FRAMEBUFFER, resolve_fbo_);
+        glPixelStorei(GL_PACK_ALIGNMENT, 1);
+        glReadPixels(0, 0, width_, height_, GL_RGBA, GL_UNSIGNED_BYTE, image.pixels.data());
+        // GL rows run bottom to top; images run top to bottom.
+        for (int y = 0; y < height_ / 2; ++y) {
+            std::swap_ranges(
+                image.pixels.begin() + static_cast<std::ptrdiff_t>(y * row),
+                image.pixels.begin() + static_cast<std::ptrdiff_t>((y + 1) * row),
+                image.pixels.begin() + static_cast<std::ptrdiff_t>((height_ - 1 - y) * row));
+        }
+        return image;
+    }
+
+  private:
+    static void release(GpuMesh& mesh) {
+        glDeleteBuffers(5, mesh.buffers);
+        glDeleteVertexArrays(1, &mesh.vao);
+    }
+
+    void create_targets(int width, int height, int samples) {
+        width_ = width;
+        height_ = height;
+        samples_ = samples;
+        glCreateRenderbuffers(2, resolve_rb_);
+        glNamedRenderbufferStorage(resolve_rb_[0], GL_RGBA8, width, height);
+        glNamedRenderbufferStorage(resolve_rb_[1], GL_DEPTH_COMPONENT24, width, height);
+        glCreateFramebuffers(1, &resolve_fbo_);
+        glNamedFramebufferRenderbuffer(resolve_fbo_, GL_COLOR_ATTACHMENT0, GL_RENDERBUFFER,
+                                       resolve_rb_[0]);
+        glNamedFramebufferRenderbuffer(resolve_fbo_, GL_DEPTH_ATTACHMENT, GL_RENDERBUFFER,
+                                       resolve_rb_[1]);
+        check_complete(resolve_fbo_);
+        if (samples > 0) {
+            glCreateRenderbuffers(2, msaa_rb_);
+            glNamedRenderbufferStorageMultisample(msaa_rb_[0], samples, GL_RGBA8, width, height);
+            glNamedRenderbufferStorageMultisample(msaa_rb_[1], samples, GL_DEPTH_COMPONENT24, width,
+                                                  height);
+            glCreateFramebuffers(1, &msaa_fbo_);
+            glNamedFramebufferRenderbuffer(msaa_fbo_, GL_COLOR_ATTACHMENT0, GL_RENDERBUFFER,
+                                           msaa_rb_[0]);
+            glNamedFramebufferRenderbuffer(msaa_fbo_, GL_DEPTH_ATTACHMENT, GL_RENDERBUFFER,
+                                           msaa_rb_[1]);
+            check_complete(msaa_fbo_);
+        }
+    }
+
+    static void check_complete(GLuint fbo) {
+        const GLenum status = glCheckNamedFramebufferStatus(fbo, GL_FRAMEBUFFER);
+        if (status != GL_FRAMEBUFFER_COMPLETE)
+            throw std::runtime_error("GL framebuffer incomplete: status " + std::to_string(status));
+    }
+
+    void release_targets() {
+        if (resolve_fbo_ != 0) glDeleteFramebuffers(1, &resolve_fbo_);
+        if (msaa_fbo_ != 0) glDeleteFramebuffers(1, &msaa_fbo_);
+        glDeleteRenderbuffers(2, resolve_rb_);
+        glDeleteRenderbuffers(2, msaa_rb_);
+        resolve_fbo_ = msaa_fbo_ = 0;
+        resolve_rb_[0] = resolve_rb_[1] = msaa_rb_[0] = msaa_rb_[1] = 0;
+        width_ = height_ = samples_ = 0;
+    }
+
+    GLuint program_ = 0;
+    std::unordered_map<std::string, GLint> uniforms_;
+    std::unordered_map<std::uint32_t, GpuMesh> meshes_;
+    std::unordered_map<std::uint32_t, GLuint> textures_;
+    std::uint32_t next_id_ = 1;
+    GLuint resolve_fbo_ = 0, msaa_fbo_ = 0;
+    GLuint resolve_rb_[2] = {}, msaa_rb_[2] = {};
+    int width_ = 0, height_ = 0, samples_ = 0;
+};
+
+}  // namespace
+
+std::unique_ptr<Device> make_gl_device() { return std::make_unique<GlDevice>(); }
+
+}  // namespace scene_viewer

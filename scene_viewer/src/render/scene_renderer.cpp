@@ -1,0 +1,79 @@
+#include "scene_viewer/render/scene_renderer.hpp"
+
+#include <stdexcept>
+
+#include "scene_viewer/assets/class_table.hpp"
+#include "scene_viewer/assets/gltf_loader.hpp"
+#include "scene_viewer/systems/build_scene_system.hpp"
+#include "scene_viewer/systems/camera_system.hpp"
+#include "scene_viewer/systems/render_system.hpp"
+#include "scene_viewer/systems/transform_system.hpp"
+
+namespace scene_viewer {
+
+Shading parse_shading(const std::string& name) {
+    if (name == "lit") return Shading::lit;
+    if (name == "semantic") return Shading::semantic;
+    throw std::invalid_argument("unknown shading '" + name + "' (lit, semantic)");
+}
+
+void RenderOptions::validate() const {
+    if (width_px < 1 || width_px > kMaxImageSide)
+        throw std::invalid_argument("width_px must be in 1.." + std::to_string(kMaxImageSide));
+    if (height_px < 1 || height_px > kMaxImageSide)
+        throw std::invalid_argument("height_px must be in 1.." + std::to_string(kMaxImageSide));
+    if (msaa_samples < 0 || msaa_samples > 16)
+        throw std::invalid_argument("msaa_samples must be in 0..16");
+    if (!(point_size_px >= 1.0f && point_size_px <= 64.0f))
+        throw std::invalid_argument("point_size_px must be in 1..64");
+    view.validate();
+}
+
+SceneRenderer::SceneRenderer(Device& device) : device_(&device), models_(device) {
+    models_.put("box", unit_box_mesh());
+}
+
+void SceneRenderer::set_class_model(const std::string& class_name, const Model& model) {
+    models_.put("class:" + class_name, model);
+}
+
+void SceneRenderer::load(const scene_schema::EntityDocument& document, const PointCloud* cloud,
+                         const RenderOptions& options) {
+    options.validate();
+    options_ = options;
+    build_scene(world_, document, cloud, options_, models_);
+}
+
+ImageRgba8 SceneRenderer::render_frame() {
+    update_world_matrices(world_);
+    update_cameras(world_);
+    FrameSetup setup;
+    const bool lit = options_.shading == Shading::lit;
+    const Rgb8 bg = lit ? kLitBackground : kSemanticBackground;
+    setup.clear_colour = {bg[0] / 255.0f, bg[1] / 255.0f, bg[2] / 255.0f, 0.0f};
+    setup.msaa_samples = lit ? options_.msaa_samples : 0;
+    render_world(world_, models_, *device_, setup);
+    ImageRgba8 image = device_->read_pixels();
+    if (!options_.keep_alpha) {
+        for (std::size_t i = 3; i < image.pixels.size(); i += 4) image.pixels[i] = 255;
+    }
+    return image;
+}
+
+ImageRgba8 SceneRenderer::render(const scene_schema::EntityDocument& document,
+                                 const PointCloud* cloud, const RenderOptions& options) {
+    load(document, cloud, options);
+    return render_frame();
+}
+
+std::size_t use_class_models(SceneRenderer& renderer, const ClassTable& table) {
+    std::size_t loaded = 0;
+    for (const RenderClass& c : table.classes) {
+        if (c.model.empty() || c.kind == RenderKind::Ground) continue;
+        renderer.set_class_model(c.name, load_model(c.model));
+        ++loaded;
+    }
+    return loaded;
+}
+
+}  // namespace scene_viewer

@@ -1,0 +1,178 @@
+#include "scene_viewer/systems/build_scene_system.hpp"
+
+#include <algorithm>
+#include <cmath>
+
+#include "scene_viewer/render/coordinates.hpp"
+#include "scene_viewer/render/palette.hpp"
+#include "scene_viewer/render/scene_renderer.hpp"
+
+namespace scene_viewer {
+
+namespace {
+
+glm::vec4 to_colour(const Rgb8& c) { return {c[0] / 255.0f, c[1] / 255.0f, c[2] / 255.0f, 1.0f}; }
+
+/// Largest height of a ground patch, metres: roads are drawn as thin slabs.
+constexpr double kMaxGroundPatchHeight = 0.1;
+/// Height of the KITTI camera above the road when the file has no ground class, metres.
+constexpr float kDefaultCameraHeight = 1.65f;
+
+/// 1 m grid lines over [x0, x1] x [z0, z1] at height y (KITTI), every 10th line darker.
+MeshData grid_mesh(float x0, float x1, float z0, float z1, float y) {
+    MeshData m;
+    m.topology = Topology::lines;
+    const glm::vec4 minor(0.55f, 0.55f, 0.58f, 1.0f), major(0.25f, 0.25f, 0.28f, 1.0f);
+    for (int x = static_cast<int>(std::floor(x0)); x <= static_cast<int>(std::ceil(x1)); ++x) {
+        const glm::vec4 c = x % 10 == 0 ? major : minor;
+        m.positions.insert(m.positions.end(), {{x, y, z0}, {x, y, z1}});
+        m.colours.insert(m.colours.end(), {c, c});
+    }
+    for (int z = static_cast<int>(std::floor(z0)); z <= static_cast<int>(std::ceil(z1)); ++z) {
+        const glm::vec4 c = z % 10 == 0 ? major : minor;
+        m.positions.insert(m.positions.end(), {{x0, y, z}, {x1, y, z}});
+        m.colours.insert(m.colours.end(), {c, c});
+    }
+    return m;
+}
+
+MeshData cloud_mesh(const PointCloud& cloud, Shading shading) {
+    MeshData m;
+    m.topology = Topology::points;
+    m.positions = cloud.positions_kitti;
+    m.colours.reserve(cloud.size());
+    for (std::size_t i = 0; i < cloud.size(); ++i) {
+        Rgb8 c{200, 200, 200};
+        if (shading == Shading::semantic && !cloud.class_ids.empty()) {
+            c = class_colour(cloud.class_ids[i], "");
+        } else if (!cloud.colours.empty()) {
+            c = cloud.colours[i];
+        } else if (!cloud.class_ids.empty()) {
+            c = class_colour(cloud.class_ids[i], "");
+        }
+        m.colours.push_back(to_colour(c));
+    }
+    return m;
+}
+
+}  // namespace
+
+void build_scene(World& world, const scene_schema::EntityDocument& document,
+                 const PointCloud* cloud, const RenderOptions& options, ModelLibrary& models) {
+    world.clear();
+    const bool lit = options.shading == Shading::lit;
+    const std::uint32_t box = *models.find("box");
+    float ground_top_y = kDefaultCameraHeight;
+    bool has_ground = false;
+
+    for (std::size_t i = 0; i < document.entities.size(); ++i) {
+        const auto& src = document.entities[i];
+        const EntityId e = world.create();
+        const bool ground = is_ground_class(src.class_id, src.class_name);
+        Transform t;
+        t.centre_kitti = {src.x, src.y, src.z};
+        t.theta_rad = src.theta;
+        const double h = ground ? std::min(src.H, kMaxGroundPatchHeight) : src.H;
+        t.size_whl = {src.W, h, src.L};
+        // A ground patch lies on the box's bottom face (KITTI y grows downwards).
+        if (ground) t.centre_kitti.y = static_cast<float>(src.y + 0.5 * src.H - 0.5 * h);
+        world.transforms.set(e, t);
+        if (ground) {
+            const float top = t.centre_kitti.y - static_cast<float>(0.5 * h);
+            ground_top_y = has_ground ? std::min(ground_top_y, top) : top;
+            has_ground = true;
+        }
+
+        MeshRef mesh{box, glm::mat4(1.0f), true};
+        bool own_colours = false;
+        if (!ground) {
+            if (auto m = models.find("class:" + src.class_name)) {
+                const UploadedModel& model = models.at(*m);
+                mesh =
+                    MeshRef{*m, fit_bounds_to_unit_cube(model.bounds_min, model.bounds_max), true};
+                own_colours = true;
+            }
+        }
+        world.meshes.set(e, mesh);
+        Material material;
+        // Lit models keep their own material colours; boxes and semantic renders use the class.
+        material.colour = lit && own_colours
+                              ? glm::vec4(1.0f)
+                              : to_colour(class_colour(src.class_id, src.class_name));
+        material.lit = lit;
+        world.materials.set(e, material);
+        world.sources.set(e, SourceEntity{static_cast<std::int32_t>(i), src.id, src.class_id});
+    }
+
+    const ViewKind kind = options.view.kind;
+    if (options.ego && kind != ViewKind::camera) {
+        // The ego car under the camera: KITTI's camera sits 1.65 m above the road, about 1 m
+        // ahead of the car's centre.
+        const EntityId e = world.create();
+        const float car_h = 1.5f;
+        world.transforms.set(
+            e,
+            Transform{{0.0f, ground_top_y - 0.5f * car_h, -1.0f}, -M_PI / 2, {1.8f, car_h, 4.4f}});
+        MeshRef mesh{box, glm::mat4(1.0f), true};
+        glm::vec4 lit_colour = to_colour(kLitEgoColour);
+        if (auto m = models.find("class:car")) {
+            const UploadedModel& model = models.at(*m);
+            mesh = MeshRef{*m, fit_bounds_to_unit_cube(model.bounds_min, model.bounds_max), true};
+            lit_colour = glm::vec4(1.0f);
+        }
+        world.meshes.set(e, mesh);
+        Material material;
+        material.colour = lit ? lit_colour : to_colour(class_colour(26, "car"));
+        material.lit = lit;
+        world.materials.set(e, material);
+        world.sources.set(e, SourceEntity{-1, "ego", 26});
+    }
+
+    Camera camera;
+    camera.width_px = options.width_px;
+    camera.height_px = options.height_px;
+    camera.spec = options.view;
+    if (kind == ViewKind::camera && !camera.spec.intrinsics) {
+        camera.spec.intrinsics = document.frame.camera;
+    }
+    if (kind == ViewKind::bev && options.fit_bev) {
+        const ViewSpec fitted = bev_view_fitting(
+            document, static_cast<float>(options.width_px) / static_cast<float>(options.height_px));
+        camera.spec.bev_centre_xz = fitted.bev_centre_xz;
+        camera.spec.bev_half_height_m = fitted.bev_half_height_m;
+    }
+    const EntityId camera_entity = world.create();
+    world.cameras.set(camera_entity, camera);
+    world.sources.set(camera_entity, SourceEntity{-1, "camera", 0});
+
+    if (kind == ViewKind::bev && options.grid) {
+        const float aspect =
+            static_cast<float>(options.width_px) / static_cast<float>(options.height_px);
+        const float hh = camera.spec.bev_half_height_m, hw = hh * aspect;
+        const glm::vec2 c = camera.spec.bev_centre_xz;
+        // Just above the highest ground patch: visible on the road, hidden under objects.
+        const std::uint32_t grid = models.put(
+            "grid", grid_mesh(c.x - hw, c.x + hw, c.y - hh, c.y + hh, ground_top_y - 0.01f));
+        const EntityId e = world.create();
+        world.meshes.set(e, MeshRef{grid, glm::mat4(1.0f), false});
+        Material material;
+        material.lit = false;
+        material.vertex_colour = true;
+        world.materials.set(e, material);
+        world.sources.set(e, SourceEntity{-1, "grid", 0});
+    }
+
+    if (cloud != nullptr && cloud->size() > 0) {
+        const std::uint32_t points = models.put("cloud", cloud_mesh(*cloud, options.shading));
+        const EntityId e = world.create();
+        world.meshes.set(e, MeshRef{points, glm::mat4(1.0f), false});
+        Material material;
+        material.lit = false;
+        material.vertex_colour = true;
+        material.point_size_px = options.point_size_px;
+        world.materials.set(e, material);
+        world.sources.set(e, SourceEntity{-1, "cloud", 0});
+    }
+}
+
+}  // namespace scene_viewer
