@@ -56,29 +56,30 @@ Voxels voxelize(const std::vector<Eigen::Vector3f>& pts, double voxel_m) {
     return v;
 }
 
-double quantile(std::vector<double> values, double q) {
-    if (values.empty()) return 0.0;
-    const auto k = static_cast<std::size_t>(std::clamp(q, 0.0, 1.0) * (values.size() - 1) + 0.5);
-    std::nth_element(values.begin(), values.begin() + static_cast<std::ptrdiff_t>(k), values.end());
-    return values[k];
-}
-
-/// Drops stereo smear behind a thing (bird's-eye range beyond the near face + the prior's
-/// diagonal) and points implausibly high above or below the ground.
+/// Drops stereo smear behind a thing: per viewing direction (0.5 degree azimuth bins), points
+/// farther (bird's-eye range) than the nearest one plus the prior's diagonal plus a margin;
+/// and points implausibly high above or below the ground.
 std::vector<Eigen::Vector3f> drop_outliers(const std::vector<Eigen::Vector3f>& pts,
                                            const ClassSettings& s,
                                            const std::optional<GroundPlane>& ground,
                                            double margin_m) {
     if (!s.has_prior() || pts.size() < 10) return pts;
-    std::vector<double> range;
-    range.reserve(pts.size());
-    for (const auto& p : pts) range.push_back(std::hypot(double{p.x()}, double{p.z()}));
-    const double near = quantile(range, 0.05);
-    const double far = near + std::hypot(s.prior_L_m, s.prior_W_m) + margin_m;
+    constexpr double kBinRad = 0.5 * 3.14159265358979323846 / 180.0;
+    std::vector<double> range(pts.size());
+    std::vector<long> bin(pts.size());
+    std::unordered_map<long, double> nearest;
+    for (std::size_t i = 0; i < pts.size(); ++i) {
+        const double x = pts[i].x(), z = pts[i].z();
+        range[i] = std::hypot(x, z);
+        bin[i] = std::lround(std::atan2(x, z) / kBinRad);
+        auto [it, inserted] = nearest.emplace(bin[i], range[i]);
+        if (!inserted) it->second = std::min(it->second, range[i]);
+    }
+    const double depth = std::hypot(s.prior_L_m, s.prior_W_m) + margin_m;
     std::vector<Eigen::Vector3f> kept;
     kept.reserve(pts.size());
     for (std::size_t i = 0; i < pts.size(); ++i) {
-        if (range[i] > far) continue;
+        if (range[i] > nearest[bin[i]] + depth) continue;
         if (ground) {
             const double h = ground->height(pts[i].cast<double>());
             if (h < -0.5 || h > 1.5 * s.prior_H_m + 0.5) continue;

@@ -1,0 +1,147 @@
+#include <cmath>
+
+#include <catch2/catch.hpp>
+
+#include "cloud_analysis/boxes.hpp"
+
+using namespace cloud_analysis;
+
+namespace {
+
+constexpr double kPi = 3.14159265358979323846;
+
+/// Points on the vertical faces of an upright box standing on y = ground_y, centre (x, z),
+/// yaw t (heading (cos t, 0, -sin t)); only faces turned to the camera when visible_only.
+std::vector<Eigen::Vector3f> box_faces(double x, double z, double t, double L, double W, double H,
+                                       double ground_y, bool visible_only) {
+    const Eigen::Vector3d c(x, ground_y - H / 2.0, z);
+    const Eigen::Vector3d h(std::cos(t), 0.0, -std::sin(t));
+    const Eigen::Vector3d s(std::sin(t), 0.0, std::cos(t));
+    std::vector<Eigen::Vector3f> pts;
+    struct Face {
+        Eigen::Vector3d normal, along;
+        double offset, half;
+    };
+    const Face faces[] = {{h, s, L / 2.0, W / 2.0},
+                          {-h, s, L / 2.0, W / 2.0},
+                          {s, h, W / 2.0, L / 2.0},
+                          {-s, h, W / 2.0, L / 2.0}};
+    for (const Face& f : faces) {
+        const Eigen::Vector3d centre = c + f.offset * f.normal;
+        if (visible_only && f.normal.dot(-centre) <= 0.0) continue;
+        for (double a = -f.half; a <= f.half + 1e-9; a += 0.05) {
+            for (double y = -H / 2.0; y <= H / 2.0 + 1e-9; y += 0.05) {
+                pts.push_back((centre + a * f.along + Eigen::Vector3d(0.0, y, 0.0)).cast<float>());
+            }
+        }
+    }
+    return pts;
+}
+
+/// Difference of two yaws modulo pi (front and back of a box look alike).
+double yaw_error_mod_pi(double a, double b) {
+    double d = std::fmod(std::abs(a - b), kPi);
+    return std::min(d, kPi - d);
+}
+
+GroundPlane flat_ground(double camera_height_m) {
+    GroundPlane g;
+    g.normal = Eigen::Vector3d(0.0, -1.0, 0.0);
+    g.d = camera_height_m;
+    return g;
+}
+
+}  // namespace
+
+TEST_CASE("a box of points at a known yaw gives that yaw (mod pi) and its size", "[boxes]") {
+    for (double t : {0.0, -0.3, -1.2, -kPi / 2.0, -2.5, 0.7, 2.0}) {
+        const auto pts = box_faces(-3.0, 15.0, t, 4.0, 1.8, 1.5, 1.65, false);
+        const OrientedBox box = fit_upright_box(pts, flat_ground(1.65), BoxFitOptions{});
+        INFO("true yaw " << t << ", fitted " << box.theta);
+        CHECK(yaw_error_mod_pi(box.theta, t) < 0.03);
+        // The documented convention: the heading points away from the camera, theta in [-pi, 0].
+        CHECK(box.theta <= 1e-9);
+        CHECK(box.theta >= -kPi - 1e-9);
+        CHECK(box.L_m == Approx(4.0).margin(0.15));
+        CHECK(box.W_m == Approx(1.8).margin(0.15));
+        CHECK(box.H_m == Approx(1.5).margin(0.1));
+        CHECK(box.centre_m.x() == Approx(-3.0).margin(0.1));
+        CHECK(box.centre_m.y() == Approx(1.65 - 0.75).margin(0.1));
+        CHECK(box.centre_m.z() == Approx(15.0).margin(0.1));
+    }
+}
+
+TEST_CASE("lshape_yaw finds the long side's heading of a rectangle outline", "[boxes]") {
+    std::vector<Eigen::Vector2d> xz;
+    const double t = -0.6;
+    const Eigen::Vector2d h(std::cos(t), -std::sin(t)), s(std::sin(t), std::cos(t));
+    for (double a = -2.0; a <= 2.0; a += 0.05) {
+        xz.push_back(Eigen::Vector2d(0.0, 10.0) + a * h - 0.9 * s);
+    }
+    for (double b = -0.9; b <= 0.9; b += 0.05) {
+        xz.push_back(Eigen::Vector2d(0.0, 10.0) - 2.0 * h + b * s);
+    }
+    CHECK(yaw_error_mod_pi(lshape_yaw(xz, 0.5), t) < 0.02);
+}
+
+TEST_CASE("a car seen on two sides is completed with the prior away from the camera", "[boxes]") {
+    // Car ahead-left, parked along the road: only its rear and right side are visible.
+    const double t = -kPi / 2.0 + 0.1;
+    const auto pts = box_faces(-4.0, 14.0, t, 4.2, 1.8, 1.5, 1.65, true);
+    BoxFitOptions o;
+    o.prior_L_m = 4.2;
+    o.prior_W_m = 1.8;
+    o.prior_H_m = 1.5;
+    const OrientedBox box = fit_upright_box(pts, flat_ground(1.65), o);
+    CHECK(yaw_error_mod_pi(box.theta, t) < 0.05);
+    CHECK(box.L_m == Approx(4.2).margin(0.15));
+    CHECK(box.W_m == Approx(1.8).margin(0.15));
+    CHECK(box.centre_m.x() == Approx(-4.0).margin(0.2));
+    CHECK(box.centre_m.z() == Approx(14.0).margin(0.2));
+}
+
+TEST_CASE("only the rear of a car visible still gives a car-sized box behind it", "[boxes]") {
+    // A car straight ahead heading along +z: the camera sees only its rear face.
+    const auto all = box_faces(0.0, 12.0, -kPi / 2.0, 4.2, 1.8, 1.5, 1.65, false);
+    std::vector<Eigen::Vector3f> rear;
+    for (const auto& p : all) {
+        if (p.z() < 12.0f - 2.05f) rear.push_back(p);
+    }
+    REQUIRE(rear.size() > 10);
+    BoxFitOptions o;
+    o.prior_L_m = 4.2;
+    o.prior_W_m = 1.8;
+    const OrientedBox box = fit_upright_box(rear, flat_ground(1.65), o);
+    CHECK(yaw_error_mod_pi(box.theta, -kPi / 2.0) < 0.05);
+    CHECK(box.L_m == Approx(4.2).margin(0.05));
+    CHECK(box.centre_m.z() == Approx(12.0).margin(0.15));
+}
+
+TEST_CASE("the thesis extractors on a uniform box give its centre and size", "[boxes]") {
+    std::vector<Eigen::Vector3f> pts;
+    // Uniform grid over x in [0, 2], y in [1, 2], z in [1, 5]: centre (1, 1.5, 3), size 2 x 1 x 4.
+    for (double x = 0.0; x <= 2.0 + 1e-9; x += 0.05) {
+        for (double y = 1.0; y <= 2.0 + 1e-9; y += 0.05) {
+            for (double z = 1.0; z <= 5.0 + 1e-9; z += 0.05) pts.emplace_back(x, y, z);
+        }
+    }
+    const Eigen::Vector3d centre(1.0, 1.5, 3.0);
+    for (const OrientedBox& box : {average_box(pts), variance_box(pts)}) {
+        CHECK((box.centre_m - centre).norm() < 0.05);  // a grid is not quite continuous
+        CHECK(box.theta == 0.0);
+        CHECK(box.L_m == Approx(2.0).epsilon(0.06));  // along x
+        CHECK(box.H_m == Approx(1.0).epsilon(0.06));  // along y
+        CHECK(box.W_m == Approx(4.0).epsilon(0.06));  // along z
+    }
+    const OrientedBox c = centroid_box(pts, Eigen::Vector3d(4.2, 1.5, 1.8));
+    CHECK((c.centre_m - centre).norm() < 1e-6);
+    CHECK(c.L_m == 4.2);
+    CHECK(c.H_m == 1.5);
+    CHECK(c.W_m == 1.8);
+}
+
+TEST_CASE("angles are wrapped to [-pi, pi]", "[boxes]") {
+    CHECK(normalize_angle(3.0 * kPi / 2.0) == Approx(-kPi / 2.0));
+    CHECK(normalize_angle(-3.0 * kPi / 2.0) == Approx(kPi / 2.0));
+    CHECK(normalize_angle(0.5) == Approx(0.5));
+}

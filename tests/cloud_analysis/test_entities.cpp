@@ -1,0 +1,168 @@
+#include <cmath>
+
+#include <catch2/catch.hpp>
+
+#include "cloud_analysis/extract.hpp"
+#include "cloud_analysis/semantic.hpp"
+
+using namespace cloud_analysis;
+
+namespace {
+
+constexpr double kPi = 3.14159265358979323846;
+
+/// A tiny palette: road, sky, car (thing).
+Palette test_palette() {
+    Palette p;
+    p.name = "test";
+    p.classes = {{"road", 7, false, {128, 64, 128}},
+                 {"sky", 23, false, {70, 130, 180}},
+                 {"car", 26, true, {0, 0, 142}}};
+    return p;
+}
+
+void add_point(LabeledCloud& cloud, const Eigen::Vector3f& p, std::uint16_t cls) {
+    cloud.xyz_m.push_back(p);
+    cloud.colour.push_back({0, 0, 0});
+    cloud.class_index.push_back(cls);
+    cloud.pixel.push_back(static_cast<std::uint32_t>(cloud.pixel.size()));
+}
+
+/// Rear and right side of a car heading along +z, standing on y = 1.65.
+void add_car(LabeledCloud& cloud, float x, float z) {
+    for (float y = 1.65f - 1.5f; y <= 1.65f; y += 0.05f) {
+        for (float a = -0.9f; a <= 0.9f; a += 0.05f) add_point(cloud, {x + a, y, z - 2.1f}, 2);
+        for (float b = -2.1f; b <= 2.1f; b += 0.05f) {
+            add_point(cloud, {x + (x < 0 ? 0.9f : -0.9f), y, z + b}, 2);
+        }
+    }
+}
+
+/// Road y = 1.65 from z 3 to 40, x -6..6, and a sky patch far away.
+LabeledCloud test_scene() {
+    LabeledCloud cloud;
+    for (float x = -6.0f; x <= 6.0f; x += 0.25f) {
+        for (float z = 3.0f; z <= 40.0f; z += 0.25f) add_point(cloud, {x, 1.65f, z}, 0);
+    }
+    for (float x = -5.0f; x <= 5.0f; x += 0.5f) add_point(cloud, {x, -10.0f, 50.0f}, 1);
+    add_car(cloud, -3.5f, 12.0f);
+    add_car(cloud, 3.5f, 20.0f);
+    return cloud;
+}
+
+ExtractOptions options_with_bundled_config(const std::string& method) {
+    ExtractOptions o;
+    o.method = method;
+    o.classes = load_class_config(std::string(STEREOSCENE_SOURCE_DIR) +
+                                  "/assets/classes/entity_config.json");
+    return o;
+}
+
+}  // namespace
+
+TEST_CASE("the bundled class config loads with the documented car prior", "[entities]") {
+    const ClassConfig c = load_class_config(std::string(STEREOSCENE_SOURCE_DIR) +
+                                            "/assets/classes/entity_config.json");
+    const ClassSettings car = c.find("car");
+    CHECK(car.thing);
+    CHECK(car.prior_L_m == 4.2);
+    CHECK(car.prior_W_m == 1.8);
+    CHECK(car.prior_H_m == 1.5);
+    CHECK_FALSE(c.find("sky").entity);
+    CHECK(c.find("some class nobody listed").name == "some class nobody listed");
+    CHECK(default_class_config_path().filename() == "entity_config.json");
+}
+
+TEST_CASE("a malformed class config names the bad member", "[entities]") {
+    CHECK_THROWS_WITH(parse_class_config(R"({"classes": [{"name": "car", "min_points": 0}]})", "x"),
+                      Catch::Contains("min_points"));
+    CHECK_THROWS_WITH(parse_class_config(R"({"classes": [{"name": "car", "prior_L": 4}]})", "x"),
+                      Catch::Contains("/classes/0/prior_L: unknown member"));
+    CHECK_THROWS_WITH(parse_class_config(R"({"classes": [{"thing": true}]})", "x"),
+                      Catch::Contains("/classes/0/name"));
+    CHECK_THROWS_WITH(parse_class_config("{", "cfg.json"), Catch::Contains("cfg.json"));
+}
+
+TEST_CASE("instances: two cars become two oriented car entities on the fitted road", "[entities]") {
+    const auto doc = extract_entities(test_scene(), test_palette(), StereoCamera{},
+                                      options_with_bundled_config("instances"));
+    std::vector<scene_schema::Entity> cars;
+    int roads = 0;
+    for (const auto& e : doc.entities) {
+        CHECK(e.class_name != "sky");
+        CHECK(e.point_count > 0);
+        CHECK(e.confidence > 0.0);
+        CHECK(e.confidence <= 1.0);
+        if (e.class_name == "car") cars.push_back(e);
+        if (e.class_name == "road") ++roads;
+    }
+    CHECK(roads == 1);
+    REQUIRE(cars.size() == 2);
+    std::sort(cars.begin(), cars.end(), [](const auto& a, const auto& b) { return a.z < b.z; });
+    CHECK(cars[0].x == Approx(-3.5).margin(0.15));
+    CHECK(cars[0].z == Approx(12.0).margin(0.15));
+    CHECK(cars[1].x == Approx(3.5).margin(0.15));
+    CHECK(cars[1].z == Approx(20.0).margin(0.15));
+    for (const auto& c : cars) {
+        CHECK(c.theta == Approx(-kPi / 2.0).margin(0.05));
+        CHECK(c.L == Approx(4.2).margin(0.15));
+        CHECK(c.W == Approx(1.8).margin(0.15));
+        CHECK(c.y == Approx(1.65 - 0.75).margin(0.1));
+        CHECK(c.id.rfind("car-", 0) == 0);
+    }
+    REQUIRE(doc.extra.contains("ground_plane"));
+    CHECK(doc.extra["ground_plane"]["camera_height_m"].get<double>() == Approx(1.65).margin(0.02));
+    scene_schema::EntityDocument full = doc;
+    full.frame.id = "test";
+    CHECK_NOTHROW(scene_schema::check(full));
+}
+
+TEST_CASE("a parked row merged into one blob is split into car-sized boxes", "[entities]") {
+    LabeledCloud cloud;
+    for (float x = -6.0f; x <= 6.0f; x += 0.25f) {
+        for (float z = 3.0f; z <= 40.0f; z += 0.25f) add_point(cloud, {x, 1.65f, z}, 0);
+    }
+    // Three touching cars along z (bumper to bumper), seen from their right side only.
+    for (float y = 0.15f; y <= 1.65f; y += 0.05f) {
+        for (float z = 10.0f; z <= 22.6f; z += 0.05f) add_point(cloud, {-4.0f, y, z}, 2);
+    }
+    const auto doc = extract_entities(cloud, test_palette(), StereoCamera{},
+                                      options_with_bundled_config("instances"));
+    int cars = 0;
+    for (const auto& e : doc.entities) {
+        if (e.class_name != "car") continue;
+        ++cars;
+        CHECK(e.L < 5.5);
+        CHECK(e.theta == Approx(-kPi / 2.0).margin(0.05));
+    }
+    CHECK(cars == 3);
+}
+
+TEST_CASE("the thesis extractors make one entity per class", "[entities]") {
+    for (const char* method : {"centroid", "average", "variance"}) {
+        const auto doc = extract_entities(test_scene(), test_palette(), StereoCamera{},
+                                          options_with_bundled_config(method));
+        int cars = 0;
+        for (const auto& e : doc.entities) {
+            CHECK(e.class_name != "sky");
+            CHECK(e.theta == 0.0);
+            CHECK(e.method == std::string(method));
+            if (e.class_name == "car") {
+                ++cars;
+                CHECK(e.id == "car-1");
+                // The mean of both cars lies between them.
+                CHECK(e.x == Approx(0.0).margin(0.5));
+            }
+        }
+        CHECK(cars == 1);
+    }
+}
+
+TEST_CASE("extract options name the bad field", "[entities]") {
+    ExtractOptions o;
+    o.method = "magic";
+    CHECK_THROWS_WITH(o.validate(), Catch::Contains("method"));
+    o.method = "instances";
+    o.max_range_m = 0.0;
+    CHECK_THROWS_WITH(o.validate(), Catch::Contains("max_range_m"));
+}

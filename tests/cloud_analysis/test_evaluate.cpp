@@ -1,0 +1,137 @@
+#include <cmath>
+#include <filesystem>
+
+#include <catch2/catch.hpp>
+#include <opencv2/core.hpp>
+#include <opencv2/imgcodecs.hpp>
+
+#include "cloud_analysis/evaluate.hpp"
+
+using namespace cloud_analysis;
+
+namespace {
+
+constexpr double kPi = 3.14159265358979323846;
+
+scene_schema::Entity car_entity(double x, double z, double theta, double L = 4.2, double W = 1.8) {
+    scene_schema::Entity e;
+    e.id = "car-x";
+    e.class_name = "car";
+    e.class_id = 26;
+    e.x = x;
+    e.y = 0.9;
+    e.z = z;
+    e.theta = theta;
+    e.L = L;
+    e.W = W;
+    e.H = 1.5;
+    return e;
+}
+
+/// A GT car: n points spread along z over [z - 2, z + 2] at x, on its visible side.
+GtCar gt_car(int instance, double x, double z, std::size_t n) {
+    GtCar car;
+    car.instance = instance;
+    for (std::size_t i = 0; i < n; ++i) {
+        const double t = n > 1 ? static_cast<double>(i) / static_cast<double>(n - 1) : 0.5;
+        car.points_m.emplace_back(x, 1.0, z - 2.0 + 4.0 * t);
+    }
+    car.pixel_count = n;
+    car.centroid_m = Eigen::Vector3d(x, 1.0, z);
+    return car;
+}
+
+}  // namespace
+
+TEST_CASE("the footprint test uses the KITTI heading and the margin", "[evaluate]") {
+    // Heading along +z (theta = -pi/2): L runs along z, W along x.
+    const auto e = car_entity(0.0, 10.0, -kPi / 2.0);
+    const std::vector<Eigen::Vector3f> pts = {{0.0f, 1.0f, 11.9f},   // inside
+                                              {0.0f, 1.0f, 12.3f},   // inside only with margin
+                                              {1.0f, 1.0f, 10.0f},   // inside only with margin
+                                              {0.0f, 1.0f, 12.6f},   // outside
+                                              {1.4f, 1.0f, 10.0f}};  // outside
+    CHECK(footprint_inside_fraction(e, pts, 0.0) == Approx(1.0 / 5.0));
+    CHECK(footprint_inside_fraction(e, pts, 0.3) == Approx(3.0 / 5.0));
+    // The same car turned to heading +x (theta = 0): now 11.9 is outside, x = 1.4 inside.
+    const auto turned = car_entity(0.0, 10.0, 0.0);
+    CHECK(footprint_inside_fraction(turned, {{1.4f, 1.0f, 10.0f}}, 0.0) == 1.0);
+    CHECK(footprint_inside_fraction(turned, {{0.0f, 1.0f, 11.9f}}, 0.3) == 0.0);
+}
+
+TEST_CASE("matching: half the points inside matches, an offset box does not", "[evaluate]") {
+    const std::vector<GtCar> gt = {gt_car(1, -4.0, 12.0, 400)};
+    CarMatchOptions o;
+    // Box shifted 2 m along z: 2.3 m of the 4 m point run (grown by 0.3 m) is inside: 57 %.
+    auto ev = evaluate_cars({car_entity(-4.0, 14.0, -kPi / 2.0)}, gt, o);
+    CHECK(ev.recall() == 1.0);
+    CHECK(ev.precision() == 1.0);
+    REQUIRE(ev.matches.size() == 1);
+    CHECK(ev.matches[0].centre_distance_m == Approx(2.0));
+    // Shifted 3 m: 1.3 / 4 = 33 % inside, no match.
+    ev = evaluate_cars({car_entity(-4.0, 15.0, -kPi / 2.0)}, gt, o);
+    CHECK(ev.gt_owed == 1);
+    CHECK(ev.gt_owed_matched == 0);
+    CHECK(ev.entities_in_range == 1);
+    CHECK(ev.entities_matched == 0);
+}
+
+TEST_CASE("matching: one box over a whole parked row is not a car", "[evaluate]") {
+    const std::vector<GtCar> gt = {gt_car(1, -4.0, 12.0, 400), gt_car(2, -4.0, 17.0, 400)};
+    // 10 m x 1.8 m grown by 0.3 m: 10.6 * 2.4 = 25.4 m^2 > 20 m^2.
+    const auto ev =
+        evaluate_cars({car_entity(-4.0, 14.5, -kPi / 2.0, 10.0)}, gt, CarMatchOptions{});
+    CHECK(ev.gt_owed_matched == 0);
+    CHECK(ev.entities_matched == 0);
+}
+
+TEST_CASE("matching is one-to-one, range-limited, and small GT cars only count for precision",
+          "[evaluate]") {
+    const std::vector<GtCar> gt = {gt_car(1, -4.0, 12.0, 400),  // owed
+                                   gt_car(2, 4.0, 20.0, 150),   // too few pixels: not owed
+                                   gt_car(3, 4.0, 45.0, 900)};  // beyond 30 m: not owed
+    const std::vector<scene_schema::Entity> entities = {
+        car_entity(-4.0, 12.0, -kPi / 2.0),  // matches GT 1
+        car_entity(-4.0, 12.2, -kPi / 2.0),  // duplicate on GT 1: unmatched
+        car_entity(4.0, 20.0, -kPi / 2.0),   // matches GT 2 (counts for precision)
+        car_entity(4.0, 45.0, -kPi / 2.0)};  // out of range: ignored
+    const auto ev = evaluate_cars(entities, gt, CarMatchOptions{});
+    CHECK(ev.gt_owed == 1);
+    CHECK(ev.gt_owed_matched == 1);
+    CHECK(ev.entities_in_range == 3);
+    CHECK(ev.entities_matched == 2);
+    CHECK(ev.precision() == Approx(2.0 / 3.0));
+    CHECK(ev.matches.size() == 3);  // the far pair still matches, it just is not counted
+}
+
+TEST_CASE("GT cars come from the instance image's car ids and the GT disparity", "[evaluate]") {
+    const auto dir = std::filesystem::temp_directory_path() / "stereoscene_test_evaluate";
+    std::filesystem::create_directories(dir);
+    cv::Mat instance(4, 6, CV_16UC1, cv::Scalar(0));
+    cv::Mat disparity(4, 6, CV_16UC1, cv::Scalar(0));
+    // Car instance 3 (26 << 8 | 3) on columns 0-1, a person (24 << 8 | 1) on column 5.
+    for (int v = 0; v < 4; ++v) {
+        instance.at<std::uint16_t>(v, 0) = (26 << 8) | 3;
+        instance.at<std::uint16_t>(v, 1) = (26 << 8) | 3;
+        instance.at<std::uint16_t>(v, 5) = (24 << 8) | 1;
+        disparity.at<std::uint16_t>(v, 0) = 10 * 256;
+        disparity.at<std::uint16_t>(v, 5) = 10 * 256;
+    }
+    REQUIRE(cv::imwrite((dir / "instance.png").string(), instance));
+    REQUIRE(cv::imwrite((dir / "disp.png").string(), disparity));
+    StereoCamera cam;
+    cam.fx_px = cam.fy_px = 500.0;
+    cam.cx_px = cam.cx_right_px = 3.0;
+    cam.cy_px = 2.0;
+    cam.baseline_m = 0.5;
+    const auto cars = load_gt_cars(dir / "instance.png", dir / "disp.png", cam);
+    REQUIRE(cars.size() == 1);
+    CHECK(cars[0].instance == 3);
+    CHECK(cars[0].pixel_count == 4);  // column 1 has no disparity
+    // z = f B / d = 500 * 0.5 / 10 = 25 m; x = (0 - 3) * 25 / 500 = -0.15 m.
+    CHECK(cars[0].centroid_m.z() == Approx(25.0));
+    CHECK(cars[0].centroid_m.x() == Approx(-0.15));
+    CHECK_THROWS_WITH(load_gt_cars(dir / "missing.png", dir / "disp.png", cam),
+                      Catch::Contains("missing.png"));
+    std::filesystem::remove_all(dir);
+}
