@@ -13,9 +13,10 @@ bool near(const glm::vec3& a, const glm::vec3& b, float tol = 1e-5f) {
 }
 }  // namespace
 
-TEST_CASE("KITTI camera axes become OpenGL axes: right stays right, down becomes -up, forward "
-          "becomes -z",
-          "[coordinates]") {
+TEST_CASE(
+    "KITTI camera axes become OpenGL axes: right stays right, down becomes -up, forward "
+    "becomes -z",
+    "[coordinates]") {
     CHECK(near(kitti_to_gl({1, 0, 0}), {1, 0, 0}));
     CHECK(near(kitti_to_gl({0, 1, 0}), {0, -1, 0}));
     CHECK(near(kitti_to_gl({0, 0, 1}), {0, 0, -1}));
@@ -58,4 +59,34 @@ TEST_CASE("Model bounds are fitted onto the unit cube centred at the origin", "[
     const glm::mat4 fit = fit_bounds_to_unit_cube({-1, 0, -2}, {3, 2, 6});
     CHECK(near(glm::vec3(fit * glm::vec4(-1, 0, -2, 1)), {-0.5f, -0.5f, -0.5f}));
     CHECK(near(glm::vec3(fit * glm::vec4(3, 2, 6, 1)), {0.5f, 0.5f, 0.5f}));
+}
+
+#include "scene_viewer/views/views.hpp"
+
+TEST_CASE("The camera view projects a KITTI point onto the pixel the pinhole model gives",
+          "[coordinates][views]") {
+    const scene_schema::CameraIntrinsics k{1242, 375, 721.5377, 721.5377, 609.5593, 172.854, 0.54};
+    for (const glm::vec3 p : {glm::vec3(0, 0, 10), glm::vec3(2, 1, 15), glm::vec3(-5, -2, 30)}) {
+        for (const auto& [w, h] : {std::pair{1242, 375}, std::pair{621, 188}}) {
+            const glm::mat4 proj = projection_from_intrinsics(k, w, h, 0.1f, 500.0f);
+            const glm::vec4 clip = proj * glm::vec4(kitti_to_gl(p), 1.0f);
+            const glm::vec3 ndc = glm::vec3(clip) / clip.w;
+            const double nx = ndc.x, ny = ndc.y;
+            const double px = p.x, py = p.y, pz = p.z;
+            const double u = (nx + 1.0) * 0.5 * w;  // pixels from the left
+            const double v = (1.0 - ny) * 0.5 * h;  // pixels from the top
+            const double sx = static_cast<double>(w) / k.width_px;
+            const double sy = static_cast<double>(h) / k.height_px;
+            CHECK(u == Approx((k.fx_px * px / pz + k.cx_px) * sx).margin(1e-3));
+            CHECK(v == Approx((k.fy_px * py / pz + k.cy_px) * sy).margin(1e-3));
+            CHECK(ndc.z > -1.0f);
+            CHECK(ndc.z < 1.0f);
+        }
+    }
+}
+
+TEST_CASE("View names parse and unknown ones are refused", "[views]") {
+    CHECK(parse_view_kind("bev") == ViewKind::bev);
+    CHECK(parse_view_kind("free") == ViewKind::free);
+    CHECK_THROWS_AS(parse_view_kind("top"), std::invalid_argument);
 }

@@ -1,0 +1,222 @@
+#include <cmath>
+
+#include <catch2/catch.hpp>
+#include <glm/glm.hpp>
+
+#include "scene_viewer/ecs/world.hpp"
+#include "scene_viewer/gfx/null_device.hpp"
+#include "scene_viewer/render/coordinates.hpp"
+#include "scene_viewer/render/scene_renderer.hpp"
+#include "scene_viewer/systems/camera_system.hpp"
+#include "scene_viewer/systems/transform_system.hpp"
+
+using namespace scene_viewer;
+
+namespace {
+
+scene_schema::Entity entity(const std::string& cls, int id, glm::dvec3 centre, double theta,
+                            glm::dvec3 whl) {
+    scene_schema::Entity e;
+    e.id = cls + "-" + std::to_string(static_cast<int>(centre.x * 10 + centre.z));
+    e.class_name = cls;
+    e.class_id = id;
+    e.x = centre.x, e.y = centre.y, e.z = centre.z;
+    e.theta = theta;
+    e.W = whl.x, e.H = whl.y, e.L = whl.z;
+    return e;
+}
+
+scene_schema::EntityDocument one_car(double theta) {
+    scene_schema::EntityDocument doc;
+    doc.frame.id = "test";
+    doc.frame.camera = scene_schema::CameraIntrinsics{400, 200, 300, 300, 200, 100, 0.5};
+    doc.entities.push_back(entity("car", 26, {5, 1, 20}, theta, {2, 1.5, 4}));
+    return doc;
+}
+
+glm::vec3 apply(const glm::mat4& m, glm::vec3 p) { return glm::vec3(m * glm::vec4(p, 1.0f)); }
+
+bool near(glm::vec3 a, glm::vec3 b) { return glm::length(a - b) < 1e-4f; }
+
+}  // namespace
+
+TEST_CASE("Component pools store components contiguously and find them by entity", "[ecs]") {
+    World world;
+    const EntityId a = world.create(), b = world.create(), c = world.create();
+    world.transforms.set(a, Transform{{1, 2, 3}, 0.0, {1, 1, 1}});
+    world.transforms.set(c, Transform{{4, 5, 6}, 0.0, {1, 1, 1}});
+    CHECK(world.transforms.size() == 2);
+    CHECK(world.transforms.has(a));
+    CHECK_FALSE(world.transforms.has(b));
+    REQUIRE(world.transforms.get(c) != nullptr);
+    CHECK(world.transforms.get(c)->centre_kitti.z == 6.0f);
+    CHECK(world.transforms.owners() == std::vector<EntityId>{a, c});
+    world.transforms.set(a, Transform{{9, 9, 9}, 0.0, {1, 1, 1}});
+    CHECK(world.transforms.size() == 2);
+    CHECK(world.transforms.dense()[0].centre_kitti.x == 9.0f);
+    world.clear();
+    CHECK(world.entity_count() == 0);
+    CHECK(world.transforms.size() == 0);
+}
+
+TEST_CASE("An entity becomes one draw whose world matrix places, turns and scales the box",
+          "[ecs][systems]") {
+    NullDevice device;
+    SceneRenderer renderer(device);
+    RenderOptions options;
+    options.width_px = 400;
+    options.height_px = 200;
+    options.shading = Shading::semantic;
+    renderer.render(one_car(0.0), nullptr, options);
+
+    REQUIRE(device.frames_begun == 1);
+    REQUIRE(device.frames_ended == 1);
+    REQUIRE(device.draws.size() == 1);  // camera view: no ego car, no grid
+    const DrawCall& d = device.draws.front();
+    // Centre at (5, 1, 20) KITTI.
+    CHECK(near(apply(d.model, {0, 0, 0}), kitti_to_gl({5, 1, 20})));
+    // theta = 0: the front (+Z of the model) points along KITTI +x, L/2 = 2 m ahead.
+    CHECK(near(apply(d.model, {0, 0, 0.5f}), kitti_to_gl({7, 1, 20})));
+    // W = 2 across the heading (KITTI z), H = 1.5 vertical (top is KITTI y - 0.75).
+    CHECK(std::abs(glm::length(apply(d.model, {0.5f, 0, 0}) - kitti_to_gl({5, 1, 20})) - 1.0f) <
+          1e-4f);
+    CHECK(near(apply(d.model, {0, 0.5f, 0}), kitti_to_gl({5, 0.25f, 20})));
+    // Semantic shading: the exact palette colour, unlit.
+    CHECK(d.colour == glm::vec4(0, 0, 142 / 255.0f, 1));
+    CHECK_FALSE(d.lit);
+}
+
+TEST_CASE("Turning an entity by 90 degrees turns its world matrix about the vertical axis",
+          "[ecs][systems]") {
+    NullDevice device;
+    SceneRenderer renderer(device);
+    RenderOptions options;
+    renderer.render(one_car(-M_PI / 2), nullptr, options);
+    REQUIRE(device.draws.size() == 1);
+    // theta = -pi/2 heads forward (+z KITTI).
+    CHECK(near(apply(device.draws[0].model, {0, 0, 0.5f}), kitti_to_gl({5, 1, 22})));
+    CHECK(device.draws[0].lit);
+}
+
+TEST_CASE("A class model is fitted by its bounds into the entity box", "[ecs][systems]") {
+    NullDevice device;
+    SceneRenderer renderer(device);
+    Model model;
+    MeshPrimitive prim;
+    prim.positions = {{-1, 0, -3}, {1, 2, 3}, {1, 0, 3}};
+    prim.normals = {{0, 1, 0}, {0, 1, 0}, {0, 1, 0}};
+    prim.indices = {0, 1, 2};
+    model.primitives.push_back(prim);
+    model.bounds_min = {-1, 0, -3};
+    model.bounds_max = {1, 2, 3};
+    renderer.set_class_model("car", model);
+    RenderOptions options;
+    renderer.render(one_car(-M_PI / 2), nullptr, options);
+    REQUIRE(device.draws.size() == 1);
+    const glm::mat4& m = device.draws[0].model;
+    // Model-frame bounds corners land on the box corners: the box spans x 4..6, y 0.25..1.75,
+    // z 18..22 (KITTI); the model's front (+Z) points forward, its top (+Y) up (smaller y).
+    CHECK(near(apply(m, {0, 1, 3}), kitti_to_gl({5, 1, 22})));
+    CHECK(near(apply(m, {0, 2, 0}), kitti_to_gl({5, 0.25f, 20})));
+    CHECK(near(apply(m, {0, 0, 0}), kitti_to_gl({5, 1.75f, 20})));
+}
+
+TEST_CASE("Uploaded meshes are kept across frames: rendering again uploads nothing",
+          "[ecs][performance]") {
+    NullDevice device;
+    SceneRenderer renderer(device);
+    RenderOptions options;
+    const auto doc = one_car(0.0);
+    renderer.load(doc, nullptr, options);
+    renderer.render_frame();
+    const std::size_t meshes = device.meshes.size();
+    for (int i = 0; i < 5; ++i) renderer.render_frame();
+    CHECK(device.meshes.size() == meshes);
+    CHECK(device.frames_ended == 6);
+}
+
+TEST_CASE("The chase view draws the ego car and the BEV view adds a line grid", "[ecs][views]") {
+    NullDevice device;
+    SceneRenderer renderer(device);
+    RenderOptions options;
+    options.view = chase_view();
+    renderer.render(one_car(0.0), nullptr, options);
+    CHECK(device.draws.size() == 2);
+
+    options.view.kind = ViewKind::bev;
+    renderer.render(one_car(0.0), nullptr, options);
+    REQUIRE(device.draws.size() == 3);
+    bool has_lines = false;
+    for (const auto& d : device.draws) {
+        if (device.meshes.at(d.mesh.id - 1).topology == Topology::lines) has_lines = true;
+    }
+    CHECK(has_lines);
+
+    options.grid = false;
+    options.ego = false;
+    renderer.render(one_car(0.0), nullptr, options);
+    CHECK(device.draws.size() == 1);
+}
+
+TEST_CASE("Ground classes become flat patches on the bottom face of their box", "[ecs][systems]") {
+    NullDevice device;
+    SceneRenderer renderer(device);
+    scene_schema::EntityDocument doc;
+    doc.frame.id = "ground";
+    doc.entities.push_back(entity("road", 7, {0, 1.5, 20}, -M_PI / 2, {8, 0.4, 40}));
+    RenderOptions options;
+    options.view.kind = ViewKind::free;
+    options.ego = false;
+    renderer.render(doc, nullptr, options);
+    REQUIRE(device.draws.size() == 1);
+    const glm::mat4& m = device.draws[0].model;
+    // Height clamped to 0.1 m, resting on the box bottom (KITTI y = 1.7).
+    CHECK(near(apply(m, {0, -0.5f, 0}), kitti_to_gl({0, 1.7f, 20})));
+    CHECK(near(apply(m, {0, 0.5f, 0}), kitti_to_gl({0, 1.6f, 20})));
+}
+
+TEST_CASE("A point cloud becomes one points draw with per-vertex class colours in semantic mode",
+          "[ecs][cloud]") {
+    NullDevice device;
+    SceneRenderer renderer(device);
+    PointCloud cloud;
+    cloud.positions_kitti = {{0, 1, 10}, {1, 1, 10}};
+    cloud.colours = {{10, 20, 30}, {40, 50, 60}};
+    cloud.class_ids = {7, 26};
+    RenderOptions options;
+    options.shading = Shading::semantic;
+    renderer.render(one_car(0.0), &cloud, options);
+    REQUIRE(device.draws.size() == 2);
+    const DrawCall& points = device.draws[1];
+    const MeshData& mesh = device.meshes.at(points.mesh.id - 1);
+    CHECK(mesh.topology == Topology::points);
+    REQUIRE(mesh.colours.size() == 2);
+    CHECK(mesh.colours[0] == glm::vec4(128 / 255.0f, 64 / 255.0f, 128 / 255.0f, 1));
+    CHECK(mesh.colours[1] == glm::vec4(0, 0, 142 / 255.0f, 1));
+    CHECK(points.vertex_colour);
+    // Points are stored in KITTI metres; the world matrix converts them.
+    CHECK(near(apply(points.model, {0, 1, 10}), {0, -1, -10}));
+}
+
+TEST_CASE("The camera system gives the frame's camera an identity pose", "[ecs][views]") {
+    World world;
+    Camera camera;
+    camera.spec.kind = ViewKind::camera;
+    camera.spec.intrinsics = scene_schema::CameraIntrinsics{400, 200, 300, 300, 200, 100, 0.5};
+    camera.width_px = 400;
+    camera.height_px = 200;
+    world.cameras.set(world.create(), camera);
+    update_cameras(world);
+    CHECK(world.cameras.dense()[0].view == glm::mat4(1.0f));
+}
+
+TEST_CASE("Render options refuse absurd image sizes naming the field", "[ecs][options]") {
+    RenderOptions options;
+    options.width_px = 0;
+    CHECK_THROWS_WITH(options.validate(), Catch::Contains("width_px"));
+    options.width_px = 20000;
+    CHECK_THROWS_WITH(options.validate(), Catch::Contains("width_px"));
+    options.width_px = 100;
+    options.height_px = kMaxImageSide + 1;
+    CHECK_THROWS_WITH(options.validate(), Catch::Contains("height_px"));
+}
