@@ -156,9 +156,66 @@ double confidence_of(std::size_t n, const ClassSettings& s) {
     return dn / (dn + 2.0 * s.min_points);
 }
 
+/// Pixel grid of the source image, to reason about clusters in image space.
+struct PixelGrid {
+    int width_px = 0;
+    int height_px = 0;
+    bool valid() const { return width_px > 0 && height_px > 0; }
+};
+
+/// Drops "shadow" clusters: clusters of a thing class whose pixels mostly lie among the pixels
+/// of a nearer cluster of the same class (within `radius_px`). A real object behind another is
+/// occluded there and shows only beside it; interleaved pixels are wrong matches on the nearer
+/// object (dark, textureless car bodies) reprojected too far.
+std::vector<std::vector<std::size_t>> drop_shadow_clusters(
+    std::vector<std::vector<std::size_t>> clusters, const std::vector<Eigen::Vector3f>& pts,
+    const std::vector<std::uint32_t>& pixels, const PixelGrid& grid, double min_gap_m,
+    double max_shared_fraction, int radius_px) {
+    if (!grid.valid() || clusters.size() < 2) return clusters;
+    std::vector<double> mean_range(clusters.size(), 0.0);
+    for (std::size_t c = 0; c < clusters.size(); ++c) {
+        for (std::size_t i : clusters[c])
+            mean_range[c] += std::hypot(double{pts[i].x()}, double{pts[i].z()});
+        mean_range[c] /= static_cast<double>(clusters[c].size());
+    }
+    std::vector<int> owner(static_cast<std::size_t>(grid.width_px) * grid.height_px, -1);
+    for (std::size_t c = 0; c < clusters.size(); ++c) {
+        for (std::size_t i : clusters[c]) owner[pixels[i]] = static_cast<int>(c);
+    }
+    std::vector<char> keep(clusters.size(), 1);
+    for (std::size_t c = 0; c < clusters.size(); ++c) {
+        std::size_t shared = 0;
+        for (std::size_t i : clusters[c]) {
+            const int u0 = static_cast<int>(pixels[i] % grid.width_px);
+            const int v0 = static_cast<int>(pixels[i] / grid.width_px);
+            bool found = false;
+            for (int dv = -radius_px; dv <= radius_px && !found; ++dv) {
+                for (int du = -radius_px; du <= radius_px && !found; ++du) {
+                    const int u = u0 + du, v = v0 + dv;
+                    if (u < 0 || v < 0 || u >= grid.width_px || v >= grid.height_px) continue;
+                    const int o = owner[static_cast<std::size_t>(v) * grid.width_px + u];
+                    found = o >= 0 &&
+                            mean_range[static_cast<std::size_t>(o)] + min_gap_m < mean_range[c];
+                }
+            }
+            if (found) ++shared;
+        }
+        if (static_cast<double>(shared) >
+            max_shared_fraction * static_cast<double>(clusters[c].size())) {
+            keep[c] = 0;
+        }
+    }
+    std::vector<std::vector<std::size_t>> kept;
+    for (std::size_t c = 0; c < clusters.size(); ++c) {
+        if (keep[c]) kept.push_back(std::move(clusters[c]));
+    }
+    return kept;
+}
+
 std::vector<scene_schema::Entity> instances_of_class(const ClassInfo& info,
                                                      const std::vector<Eigen::Vector3f>& pts,
-                                                     const ClassSettings& s,
+                                                     const std::vector<std::uint32_t>& pixels,
+                                                     const PixelGrid& grid, const ClassSettings& s,
                                                      const std::optional<GroundPlane>& ground,
                                                      const ExtractOptions& options) {
     std::vector<scene_schema::Entity> out;
@@ -168,7 +225,19 @@ std::vector<scene_schema::Entity> instances_of_class(const ClassInfo& info,
     co.growth = s.cluster_growth;
     co.distance_max_m = s.cluster_distance_max_m;
     co.min_points = 1;
-    const auto clusters = euclidean_clusters(voxels.centroid, co);
+    std::vector<std::vector<std::size_t>> clusters;
+    for (const auto& cluster : euclidean_clusters(voxels.centroid, co)) {
+        std::vector<std::size_t> members;
+        for (std::size_t v : cluster) {
+            members.insert(members.end(), voxels.members[v].begin(), voxels.members[v].end());
+        }
+        if (members.size() >= static_cast<std::size_t>(s.min_points)) clusters.push_back(members);
+    }
+    if (s.thing && s.has_prior()) {
+        clusters = drop_shadow_clusters(std::move(clusters), pts, pixels, grid,
+                                        std::hypot(s.prior_L_m, s.prior_W_m),
+                                        options.shadow_fraction, options.shadow_radius_px);
+    }
 
     BoxFitOptions fit;
     if (s.thing && s.has_prior()) {
@@ -179,16 +248,19 @@ std::vector<scene_schema::Entity> instances_of_class(const ClassInfo& info,
     fit.rest_on_ground = s.thing;
     for (const auto& cluster : clusters) {
         std::vector<Eigen::Vector3f> members;
-        for (std::size_t v : cluster) {
-            for (std::size_t i : voxels.members[v]) members.push_back(pts[i]);
-        }
-        if (members.size() < static_cast<std::size_t>(s.min_points)) continue;
+        members.reserve(cluster.size());
+        for (std::size_t i : cluster) members.push_back(pts[i]);
         if (s.thing) members = drop_outliers(members, s, ground, options.outlier_margin_m);
         const OrientedBox first = fit_upright_box(members, ground, fit);
         for (const auto& part : split_long(members, first, s)) {
             if (part.size() < static_cast<std::size_t>(s.min_points)) continue;
             const OrientedBox box =
                 part.size() == members.size() ? first : fit_upright_box(part, ground, fit);
+            // A thing whose points all lie near the ground is mislabelled road, not an object.
+            if (s.thing && s.prior_H_m > 0.0 && ground &&
+                box.H_m < options.min_height_fraction * s.prior_H_m) {
+                continue;
+            }
             out.push_back(
                 make_entity(info, box, part.size(), confidence_of(part.size(), s), "instances"));
         }
@@ -213,6 +285,13 @@ void ExtractOptions::validate() const {
     ground.validate();
     if (!(max_range_m > 0.0)) throw std::invalid_argument("max_range_m: must be > 0");
     if (!(outlier_margin_m >= 0.0)) throw std::invalid_argument("outlier_margin_m: must be >= 0");
+    if (!(shadow_fraction > 0.0 && shadow_fraction <= 1.0)) {
+        throw std::invalid_argument("shadow_fraction: must be in (0, 1]");
+    }
+    if (shadow_radius_px < 0) throw std::invalid_argument("shadow_radius_px: must be >= 0");
+    if (!(min_height_fraction >= 0.0 && min_height_fraction < 1.0)) {
+        throw std::invalid_argument("min_height_fraction: must be in [0, 1)");
+    }
 }
 
 scene_schema::EntityDocument extract_entities(const LabeledCloud& cloud, const Palette& palette,
@@ -225,12 +304,22 @@ scene_schema::EntityDocument extract_entities(const LabeledCloud& cloud, const P
     }
     // Points per palette class, within range.
     std::vector<std::vector<Eigen::Vector3f>> per_class(palette.classes.size());
+    std::vector<std::vector<std::uint32_t>> per_class_pixels(palette.classes.size());
+    PixelGrid grid;
+    if (cloud.pixel.size() == cloud.size() && cloud.width_px > 0 && cloud.height_px > 0) {
+        grid = PixelGrid{cloud.width_px, cloud.height_px};
+        for (std::uint32_t px : cloud.pixel) {
+            if (px >= static_cast<std::uint64_t>(grid.width_px) * grid.height_px)
+                grid = PixelGrid{};
+        }
+    }
     for (std::size_t i = 0; i < cloud.size(); ++i) {
         const auto k = cloud.class_index[i];
         const auto& p = cloud.xyz_m[i];
         if (k == kVoidClass || k >= palette.classes.size()) continue;
         if (!(p.z() > 0.0f && double{p.z()} < options.max_range_m) || !p.allFinite()) continue;
         per_class[k].push_back(p);
+        per_class_pixels[k].push_back(grid.valid() ? cloud.pixel[i] : 0);
     }
 
     scene_schema::EntityDocument doc;
@@ -260,7 +349,7 @@ scene_schema::EntityDocument extract_entities(const LabeledCloud& cloud, const P
         if (!s.entity || pts.size() < static_cast<std::size_t>(s.min_points)) continue;
         std::vector<scene_schema::Entity> made;
         if (options.method == "instances") {
-            made = instances_of_class(info, pts, s, ground, options);
+            made = instances_of_class(info, pts, per_class_pixels[k], grid, s, ground, options);
         } else {
             OrientedBox box;
             if (options.method == "centroid") {

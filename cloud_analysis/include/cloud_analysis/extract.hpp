@@ -22,8 +22,14 @@ struct ExtractOptions {
     GroundOptions ground;              ///< RANSAC settings of the ground plane
     double max_range_m = 60.0;         ///< points farther than this (z) are ignored, metres
     std::vector<std::string> ground_classes = {"road", "sidewalk", "parking"};  ///< plane votes
-    double outlier_margin_m = 0.5;  ///< thing points farther than near + prior diagonal +
-                                    ///< this (bird's-eye range) are stereo smear, metres
+    double outlier_margin_m = 0.5;     ///< thing points farther than near + prior diagonal +
+                                       ///< this (bird's-eye range) are stereo smear, metres
+    double shadow_fraction = 0.5;      ///< a thing cluster with more of its pixels than this
+                                       ///< within shadow_radius_px of a nearer same-class
+                                       ///< cluster's pixels is a wrong-match shadow, (0, 1]
+    int shadow_radius_px = 2;          ///< neighbourhood of that test, pixels, >= 0
+    double min_height_fraction = 0.3;  ///< things lower than this * prior_H_m above the ground
+                                       ///< are mislabelled ground, [0, 1)
     /// Throws std::invalid_argument naming the bad field.
     void validate() const;
 };
