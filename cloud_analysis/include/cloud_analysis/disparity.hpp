@@ -18,12 +18,12 @@ namespace cloud_analysis {
 struct DisparityOptions {
     int min_disparity = 0;           ///< smallest disparity searched, px
     int num_disparities = 128;       ///< search range, px, multiple of 16
-    int block_size = 5;              ///< matching window side, px, odd, 1..11 typical
+    int block_size = 9;              ///< matching window side, px, odd, 1..11 typical
     int p1 = 0;                      ///< smoothness penalty for +-1 px changes; 0 = 8*cn*block^2
-    int p2 = 0;                      ///< penalty for larger changes, > p1; 0 = 32*cn*block^2
+    int p2 = 3200;                   ///< penalty for larger changes, > p1; 0 = 32*cn*block^2
     int disp12_max_diff = 1;         ///< SGBM internal left-right check, px; < 0 disables
-    int pre_filter_cap = 63;         ///< clip of the x-derivative prefilter, 1..63
-    int uniqueness_ratio = 10;       ///< best cost must beat the second by this margin, %
+    int pre_filter_cap = 31;         ///< clip of the x-derivative prefilter, 1..63
+    int uniqueness_ratio = 0;        ///< best cost must beat the second by this margin, %
     int speckle_window_size = 100;   ///< max size of a speckle to remove, px; 0 disables
     int speckle_range = 2;           ///< max disparity step inside a speckle, px
     std::string mode = "sgbm_3way";  ///< "sgbm" (5 paths), "hh" (8 paths), "sgbm_3way", "hh4"
