@@ -1,0 +1,246 @@
+#include <catch2/catch.hpp>
+
+#include <sys/wait.h>
+
+#include <algorithm>
+#include <cmath>
+#include <cstdlib>
+#include <filesystem>
+#include <fstream>
+#include <sstream>
+#include <string>
+
+#include <scene_schema/entities.hpp>
+
+namespace fs = std::filesystem;
+
+namespace {
+
+const fs::path kSample = fs::path(STEREOSCENE_SAMPLES_DIR) / "synthetic";
+
+struct Run {
+    int code = -1;
+    std::string out;
+    std::string err;
+};
+
+std::string slurp(const fs::path& p) {
+    std::ifstream in(p, std::ios::binary);
+    std::ostringstream s;
+    s << in.rdbuf();
+    return s.str();
+}
+
+std::string quote(const std::string& s) { return "'" + s + "'"; }
+
+/// A fresh empty folder for one test.
+fs::path scratch(const std::string& name) {
+    const fs::path dir = fs::temp_directory_path() / ("stereoscene_cli_" + name);
+    fs::remove_all(dir);
+    fs::create_directories(dir);
+    return dir;
+}
+
+/// Runs a shell command line with stdout and stderr captured in files of `dir`.
+Run run(const std::string& command, const fs::path& dir) {
+    const fs::path out = dir / "stdout.txt", err = dir / "stderr.txt";
+    const int status =
+        std::system((command + " >" + quote(out.string()) + " 2>" + quote(err.string())).c_str());
+    Run r;
+    r.code = WIFEXITED(status) ? WEXITSTATUS(status) : -1;
+    r.out = slurp(out);
+    r.err = slurp(err);
+    return r;
+}
+
+std::string tool() { return quote(CLOUD_ANALYSIS_EXE); }
+
+/// Flags naming the bundled sample's files; `semantic` and `calib` replace the sample's.
+std::string sample_inputs(fs::path semantic = kSample / "semantic.png",
+                          fs::path calib = kSample / "calib.yaml") {
+    return " --left " + quote((kSample / "left.png").string()) + " --right " +
+           quote((kSample / "right.png").string()) + " --semantic " + quote(semantic.string()) +
+           " --calib " + quote(calib.string()) + " --frame synthetic-street";
+}
+
+std::size_t count_lines(const std::string& text) {
+    return static_cast<std::size_t>(std::count(text.begin(), text.end(), '\n'));
+}
+
+/// The one file CloudCompare exported into `dir` (it names it after the input and the time).
+fs::path only_export(const fs::path& dir, const std::string& ext) {
+    fs::path found;
+    int n = 0;
+    for (const auto& e : fs::directory_iterator(dir)) {
+        if (e.path().extension() == ext) {
+            found = e.path();
+            ++n;
+        }
+    }
+    REQUIRE(n == 1);
+    return found;
+}
+
+}  // namespace
+
+TEST_CASE("cloud-analysis --help exits 0 and lists the flags", "[cli]") {
+    const auto dir = scratch("help");
+    const Run r = run(tool() + " --help", dir);
+    CHECK(r.code == 0);
+    for (const char* flag : {"--kitti-root", "--block-size", "--wls", "--xyz", "--pcd", "--ply",
+                             "--disparity-kitti", "--timings", "--entities"}) {
+        CHECK(r.out.find(flag) != std::string::npos);
+    }
+    CHECK(r.err.empty());
+    const Run v = run(tool() + " --version", dir);
+    CHECK(v.code == 0);
+    CHECK(v.out.rfind("cloud-analysis ", 0) == 0);
+}
+
+TEST_CASE("an unknown flag or a missing required input is a usage error, exit 2", "[cli]") {
+    const auto dir = scratch("usage");
+    const Run bad = run(tool() + " --no-such-flag", dir);
+    CHECK(bad.code == 2);
+    CHECK(count_lines(bad.err) == 1);
+    CHECK(bad.err.rfind("cloud-analysis: error: ", 0) == 0);
+    const Run no_left = run(tool() + " --right x.png --calib c.yaml", dir);
+    CHECK(no_left.code == 2);
+    const Run bad_value = run(tool() + sample_inputs() + " --block-size 4", dir);
+    CHECK(bad_value.code == 2);
+    CHECK(bad_value.err.find("block_size") != std::string::npos);
+}
+
+TEST_CASE("a missing input file exits 1 naming it and leaves no output file", "[cli]") {
+    const auto dir = scratch("missing");
+    const fs::path json = dir / "e.json", ply = dir / "c.ply";
+    const Run r = run(tool() + " --left " + quote((dir / "nope.png").string()) + " --right " +
+                          quote((kSample / "right.png").string()) + " --calib " +
+                          quote((kSample / "calib.yaml").string()) + " -o " + quote(json.string()) +
+                          " --ply " + quote(ply.string()),
+                      dir);
+    CHECK(r.code == 1);
+    CHECK(count_lines(r.err) == 1);
+    CHECK(r.err.find("nope.png") != std::string::npos);
+    CHECK_FALSE(fs::exists(json));
+    CHECK_FALSE(fs::exists(ply));
+}
+
+TEST_CASE("a semantic image of another size and a zero baseline fail before any output", "[cli]") {
+    const auto dir = scratch("mismatch");
+    const Run small = run(
+        tool() + " make-sample --width 320 --height 100 --out " + quote((dir / "small").string()),
+        dir);
+    REQUIRE(small.code == 0);
+    const fs::path json = dir / "e.json";
+    const Run r =
+        run(tool() + sample_inputs(dir / "small" / "semantic.png") + " -o " + quote(json.string()),
+            dir);
+    CHECK(r.code == 1);
+    CHECK(r.err.find("semantic image is 320x100") != std::string::npos);
+    CHECK_FALSE(fs::exists(json));
+
+    std::ofstream(dir / "zero.yaml") << "fx: 360\nfy: 360\ncx: 310\ncy: 86\nbaseline_m: 0\n";
+    const Run z = run(tool() + sample_inputs(kSample / "semantic.png", dir / "zero.yaml") + " -o " +
+                          quote(json.string()),
+                      dir);
+    CHECK(z.code == 1);
+    CHECK(z.err.find("baseline_m: must be > 0") != std::string::npos);
+    CHECK(z.err.find("zero.yaml") != std::string::npos);
+    CHECK_FALSE(fs::exists(json));
+}
+
+TEST_CASE("make-sample reproduces the bundled synthetic sample byte for byte", "[cli][synthetic]") {
+    const auto dir = scratch("make_sample");
+    const Run r = run(tool() + " make-sample --out " + quote(dir.string()), dir);
+    REQUIRE(r.code == 0);
+    for (const char* f : {"left.png", "right.png", "semantic.png", "disparity_gt.png", "calib.yaml",
+                          "truth.json"}) {
+        INFO(f);
+        CHECK(slurp(dir / f) == slurp(kSample / f));
+    }
+}
+
+TEST_CASE("the synthetic sample's entities lie close to its ground truth", "[cli][synthetic]") {
+    const auto dir = scratch("sample_entities");
+    const Run r = run(tool() + sample_inputs() + " -o -", dir);
+    REQUIRE(r.code == 0);
+    const scene_schema::EntityDocument got = scene_schema::parse(r.out);
+    const scene_schema::EntityDocument truth = scene_schema::read_file(kSample / "truth.json");
+    CHECK(got.frame.id == "synthetic-street");
+    REQUIRE(got.source.has_value());
+    CHECK((*got.source)["tool"] == "cloud-analysis");
+    CHECK((*got.source)["disparity"]["block_size"].is_number());
+    int cars = 0;
+    for (const auto& t : truth.entities) {
+        if (t.class_name != "car" && t.class_name != "person") continue;
+        // The third car is half hidden behind the first: its centre only needs to be near.
+        const double tolerance = t.z > 20.0 ? 2.5 : 0.5;
+        const scene_schema::Entity* best = nullptr;
+        double best_d = 1e9;
+        for (const auto& e : got.entities) {
+            if (e.class_name != t.class_name) continue;
+            const double d = std::hypot(e.x - t.x, e.z - t.z);
+            if (d < best_d) {
+                best_d = d;
+                best = &e;
+            }
+        }
+        INFO(t.id << " at x " << t.x << " z " << t.z);
+        REQUIRE(best != nullptr);
+        CHECK(best_d < tolerance);
+        CHECK(std::abs(best->y - t.y) < 0.2);
+        if (t.class_name == "car" && t.z < 20.0) {
+            ++cars;
+            const double dtheta = std::remainder(best->theta - t.theta, M_PI);
+            CHECK(std::abs(dtheta) < 0.25);
+            CHECK(best->L == Approx(t.L).margin(0.6));
+            CHECK(best->W == Approx(t.W).margin(0.6));
+        }
+    }
+    CHECK(cars == 2);
+    const auto& plane = got.extra.at("ground_plane");
+    CHECK(plane.at("camera_height_m").get<double>() == Approx(1.65).margin(0.05));
+}
+
+TEST_CASE("CloudCompare loads our .xyz and .ply with every point and PCL reads our .pcd",
+          "[cli][cloud_io]") {
+    const auto dir = scratch("clients");
+    const Run r =
+        run(tool() + sample_inputs() + " --xyz " + quote((dir / "c.xyz").string()) + " --ply " +
+                quote((dir / "c.ply").string()) + " --pcd " + quote((dir / "c.pcd").string()),
+            dir);
+    REQUIRE(r.code == 0);
+    const std::string xyz = slurp(dir / "c.xyz");
+    REQUIRE(xyz.rfind("//X Y Z R G B Class Intensity\n", 0) == 0);
+    const std::size_t points = count_lines(xyz) - 1;
+    REQUIRE(points > 10000);
+
+    for (const char* name : {"c.xyz", "c.ply"}) {
+        INFO(name);
+        const fs::path sub = scratch(std::string("clients_") + name);
+        fs::copy_file(dir / name, sub / name);
+        const Run cc = run("QT_QPA_PLATFORM=offscreen " + quote(CLOUDCOMPARE_EXE) + " -SILENT -O " +
+                               quote((sub / name).string()) + " -C_EXPORT_FMT ASC -SAVE_CLOUDS",
+                           sub);
+        REQUIRE(cc.code == 0);
+        const std::string exported = slurp(only_export(sub, ".asc"));
+        CHECK(count_lines(exported) == points);
+        // x y z r g b and the class scalar field: 7 columns.
+        const std::string first = exported.substr(0, exported.find('\n'));
+        std::istringstream cols(first);
+        int n = 0;
+        for (std::string c; cols >> c;) ++n;
+        CHECK(n == 7);
+    }
+
+    const Run pcl = run(quote(PCL_CONVERT_EXE) + " " + quote((dir / "c.pcd").string()) + " " +
+                            quote((dir / "ascii.pcd").string()) + " 0",
+                        dir);
+    REQUIRE(pcl.code == 0);
+    const std::string ascii = slurp(dir / "ascii.pcd");
+    CHECK(ascii.find("FIELDS x y z rgb label") != std::string::npos);
+    CHECK(ascii.find("POINTS " + std::to_string(points) + "\n") != std::string::npos);
+    const auto data = ascii.find("DATA ascii\n");
+    REQUIRE(data != std::string::npos);
+    CHECK(count_lines(ascii.substr(data)) - 1 == points);
+}
