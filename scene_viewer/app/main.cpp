@@ -320,6 +320,19 @@ int run(int argc, char** argv) {
         std::vector<scene_schema::EntityDocument> documents;
         for (const auto& path : grid_inputs) documents.push_back(read_entities(path));
         RenderOptions options = render_options(grid_view, documents.front());
+        // One camera for every tile: the first file's intrinsics, one BEV framing all files.
+        options.view.intrinsics = documents.front().frame.camera;
+        if (options.view.kind == ViewKind::bev) {
+            scene_schema::EntityDocument all;
+            for (const auto& d : documents) {
+                all.entities.insert(all.entities.end(), d.entities.begin(), d.entities.end());
+            }
+            const ViewSpec fitted = bev_view_fitting(
+                all, static_cast<float>(options.width_px) / static_cast<float>(options.height_px));
+            options.view.bev_centre_xz = fitted.bev_centre_xz;
+            options.view.bev_half_height_m = fitted.bev_half_height_m;
+            options.fit_bev = false;
+        }
         const auto cloud = read_cloud(grid_view);
         const auto classes = read_classes(grid_view);
         if (grid_labels.empty()) {

@@ -18,22 +18,31 @@ constexpr double kMaxGroundPatchHeight = 0.1;
 /// Height of the KITTI camera above the road when the file has no ground class, metres.
 constexpr float kDefaultCameraHeight = 1.65f;
 
-/// 1 m grid lines over [x0, x1] x [z0, z1] at height y (KITTI), every 10th line darker.
-MeshData grid_mesh(float x0, float x1, float z0, float z1, float y) {
+/// Grid lines every `step` metres over [x0, x1] x [z0, z1] at height y (KITTI); lines on
+/// multiples of 10 m are darker.
+MeshData grid_mesh(float x0, float x1, float z0, float z1, float y, int step) {
     MeshData m;
     m.topology = Topology::lines;
     const glm::vec4 minor(0.55f, 0.55f, 0.58f, 1.0f), major(0.25f, 0.25f, 0.28f, 1.0f);
-    for (int x = static_cast<int>(std::floor(x0)); x <= static_cast<int>(std::ceil(x1)); ++x) {
+    auto first = [step](float v) { return static_cast<int>(std::floor(v / step)) * step; };
+    for (int x = first(x0); x <= static_cast<int>(std::ceil(x1)); x += step) {
         const glm::vec4 c = x % 10 == 0 ? major : minor;
         m.positions.insert(m.positions.end(), {{x, y, z0}, {x, y, z1}});
         m.colours.insert(m.colours.end(), {c, c});
     }
-    for (int z = static_cast<int>(std::floor(z0)); z <= static_cast<int>(std::ceil(z1)); ++z) {
+    for (int z = first(z0); z <= static_cast<int>(std::ceil(z1)); z += step) {
         const glm::vec4 c = z % 10 == 0 ? major : minor;
         m.positions.insert(m.positions.end(), {{x0, y, z}, {x1, y, z}});
         m.colours.insert(m.colours.end(), {c, c});
     }
     return m;
+}
+
+/// Grid step in metres: 1 m while lines stay at least 6 px apart, else 5 m, else 10 m.
+int grid_step_m(float pixels_per_metre) {
+    if (pixels_per_metre >= 6.0f) return 1;
+    if (pixels_per_metre * 5.0f >= 6.0f) return 5;
+    return 10;
 }
 
 MeshData cloud_mesh(const PointCloud& cloud, Shading shading) {
@@ -151,8 +160,9 @@ void build_scene(World& world, const scene_schema::EntityDocument& document,
         const float hh = camera.spec.bev_half_height_m, hw = hh * aspect;
         const glm::vec2 c = camera.spec.bev_centre_xz;
         // Just above the highest ground patch: visible on the road, hidden under objects.
+        const int step = grid_step_m(static_cast<float>(options.height_px) / (2.0f * hh));
         const std::uint32_t grid = models.put(
-            "grid", grid_mesh(c.x - hw, c.x + hw, c.y - hh, c.y + hh, ground_top_y - 0.01f));
+            "grid", grid_mesh(c.x - hw, c.x + hw, c.y - hh, c.y + hh, ground_top_y - 0.01f, step));
         const EntityId e = world.create();
         world.meshes.set(e, MeshRef{grid, glm::mat4(1.0f), false});
         Material material;
