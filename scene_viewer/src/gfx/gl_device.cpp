@@ -102,11 +102,11 @@ class GlDevice final : public Device {
             glGetProgramInfoLog(program_, sizeof log, nullptr, log);
             throw std::runtime_error(std::string("GL program link failed: ") + log);
         }
-        for (const char* name : {"u_model", "u_view_projection", "u_normal_matrix", "u_point_size",
-                                 "u_colour", "u_lit", "u_vertex_colour", "u_textured", "u_texture",
-                                 "u_light_direction", "u_ambient"}) {
-            uniforms_[name] = glGetUniformLocation(program_, name);
-        }
+        auto at = [this](const char* name) { return glGetUniformLocation(program_, name); };
+        u_ = Uniforms{at("u_model"),           at("u_view_projection"), at("u_normal_matrix"),
+                      at("u_point_size"),      at("u_colour"),          at("u_lit"),
+                      at("u_vertex_colour"),   at("u_textured"),        at("u_texture"),
+                      at("u_light_direction"), at("u_ambient")};
         glEnable(GL_PROGRAM_POINT_SIZE);
     }
 
@@ -223,9 +223,9 @@ class GlDevice final : public Device {
         glDisable(GL_BLEND);
         glUseProgram(program_);
         const glm::vec3 light = glm::normalize(setup.light_direction);
-        glUniform3fv(uniforms_["u_light_direction"], 1, glm::value_ptr(light));
-        glUniform1f(uniforms_["u_ambient"], setup.ambient);
-        glUniform1i(uniforms_["u_texture"], 0);
+        glUniform3fv(u_.light_direction, 1, glm::value_ptr(light));
+        glUniform1f(u_.ambient, setup.ambient);
+        glUniform1i(u_.texture, 0);
     }
 
     void draw(const DrawCall& call) override {
@@ -238,18 +238,16 @@ class GlDevice final : public Device {
             glDisable(GL_DEPTH_TEST);
         }
         const glm::mat3 normal_matrix = glm::transpose(glm::inverse(glm::mat3(call.model)));
-        glUniformMatrix4fv(uniforms_["u_model"], 1, GL_FALSE, glm::value_ptr(call.model));
-        glUniformMatrix4fv(uniforms_["u_view_projection"], 1, GL_FALSE,
-                           glm::value_ptr(call.view_projection));
-        glUniformMatrix3fv(uniforms_["u_normal_matrix"], 1, GL_FALSE,
-                           glm::value_ptr(normal_matrix));
-        glUniform4fv(uniforms_["u_colour"], 1, glm::value_ptr(call.colour));
-        glUniform1i(uniforms_["u_lit"], call.lit ? 1 : 0);
-        glUniform1i(uniforms_["u_vertex_colour"], call.vertex_colour ? 1 : 0);
-        glUniform1f(uniforms_["u_point_size"], call.point_size_px);
+        glUniformMatrix4fv(u_.model, 1, GL_FALSE, glm::value_ptr(call.model));
+        glUniformMatrix4fv(u_.view_projection, 1, GL_FALSE, glm::value_ptr(call.view_projection));
+        glUniformMatrix3fv(u_.normal_matrix, 1, GL_FALSE, glm::value_ptr(normal_matrix));
+        glUniform4fv(u_.colour, 1, glm::value_ptr(call.colour));
+        glUniform1i(u_.lit, call.lit ? 1 : 0);
+        glUniform1i(u_.vertex_colour, call.vertex_colour ? 1 : 0);
+        glUniform1f(u_.point_size, call.point_size_px);
         auto tex = textures_.find(call.texture.id);
         const bool textured = tex != textures_.end();
-        glUniform1i(uniforms_["u_textured"], textured ? 1 : 0);
+        glUniform1i(u_.textured, textured ? 1 : 0);
         if (textured) glBindTextureUnit(0, tex->second);
         glBindVertexArray(mesh.vao);
         if (mesh.indexed) {
@@ -337,7 +335,12 @@ class GlDevice final : public Device {
     }
 
     GLuint program_ = 0;
-    std::unordered_map<std::string, GLint> uniforms_;
+    /// Uniform locations of the one program.
+    struct Uniforms {
+        GLint model, view_projection, normal_matrix, point_size, colour, lit, vertex_colour,
+            textured, texture, light_direction, ambient;
+    };
+    Uniforms u_{};
     std::unordered_map<std::uint32_t, GpuMesh> meshes_;
     std::unordered_map<std::uint32_t, GLuint> textures_;
     std::uint32_t next_id_ = 1;
