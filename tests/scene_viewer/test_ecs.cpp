@@ -220,3 +220,36 @@ TEST_CASE("Render options refuse absurd image sizes naming the field", "[ecs][op
     options.height_px = kMaxImageSide + 1;
     CHECK_THROWS_WITH(options.validate(), Catch::Contains("height_px"));
 }
+
+TEST_CASE("A textured model uploads its texture once and lit draws bind it", "[ecs][systems]") {
+    NullDevice device;
+    SceneRenderer renderer(device);
+    Model model;
+    MeshPrimitive prim;
+    prim.positions = {{-1, 0, -1}, {1, 0, -1}, {0, 1, 1}};
+    prim.normals = {{0, 1, 0}, {0, 1, 0}, {0, 1, 0}};
+    prim.texcoords = {{0, 0}, {1, 0}, {0.5f, 1}};
+    prim.indices = {0, 1, 2};
+    prim.texture = 0;
+    prim.base_colour = {0.5f, 0.5f, 0.5f, 1.0f};
+    model.primitives.push_back(prim);
+    model.textures.push_back(ImageRgba8{1, 1, {255, 0, 0, 255}});
+    model.bounds_min = {-1, 0, -1};
+    model.bounds_max = {1, 1, 1};
+    renderer.set_class_model("car", model);
+    CHECK(device.textures_created == 1);
+
+    RenderOptions options;
+    renderer.render(one_car(0.0), nullptr, options);
+    REQUIRE(device.draws.size() == 1);
+    CHECK(device.draws[0].texture.valid());
+    // Lit models keep their own colour: the linear base colour 0.5 encoded to sRGB (~0.735).
+    CHECK(device.draws[0].colour.r == Approx(0.7354).margin(1e-3));
+
+    options.shading = Shading::semantic;
+    renderer.render(one_car(0.0), nullptr, options);
+    REQUIRE(device.draws.size() == 1);
+    CHECK_FALSE(device.draws[0].texture.valid());
+    CHECK(device.draws[0].colour == glm::vec4(0, 0, 142 / 255.0f, 1));
+    CHECK(device.textures_created == 1);
+}

@@ -6,6 +6,7 @@
 
 #include <catch2/catch.hpp>
 
+#include "scene_viewer/assets/class_table.hpp"
 #include "scene_viewer/assets/image_io.hpp"
 #include "scene_viewer/gfx/gl_device.hpp"
 #include "scene_viewer/platform/headless_context.hpp"
@@ -71,10 +72,12 @@ struct Footprint {
     double centroid_x = 0.0, centroid_y = 0.0;
 };
 
-Footprint footprint(const ImageRgba8& image, Rgb8 colour) {
+/// Pixels of `colour` in columns [0, x_end) (default: all).
+Footprint footprint(const ImageRgba8& image, Rgb8 colour, int x_end = -1) {
     Footprint f;
+    if (x_end < 0) x_end = image.width;
     for (int y = 0; y < image.height; ++y) {
-        for (int x = 0; x < image.width; ++x) {
+        for (int x = 0; x < x_end; ++x) {
             if (rgb_at(image, x, y) != colour) continue;
             ++f.count;
             f.min_x = std::min(f.min_x, x), f.max_x = std::max(f.max_x, x);
@@ -220,4 +223,36 @@ TEST_CASE("The lit chase view of the street sample matches the golden image", "[
     }
     CHECK(sum / image.pixels.size() < 1.0);
     CHECK(differing < image.pixels.size() / 200);
+}
+
+TEST_CASE("With the project's glTF models each class keeps its semantic colour at its centre",
+          "[gl][semantic][models]") {
+    SceneRenderer renderer(gl_device());
+    const ClassTable table =
+        load_class_table(STEREOSCENE_SOURCE_DIR "/assets/classes/render_classes.json");
+    CHECK(use_class_models(renderer, table) >= 5);
+    scene_schema::EntityDocument doc;
+    doc.frame.id = "models";
+    doc.frame.camera = kCamera;
+    doc.entities = {entity("car", 26, {-3, 0.9, 15}, -M_PI / 2, {1.8, 1.5, 4.2}),
+                    entity("car", 26, {3, 0.9, 15}, 0.0, {1.8, 1.5, 4.2}),
+                    entity("building", 11, {12, -3, 40}, -M_PI / 2, {10, 12, 14})};
+    RenderOptions options;
+    options.width_px = kCamera.width_px;
+    options.height_px = kCamera.height_px;
+    options.shading = Shading::semantic;
+    const ImageRgba8 image = renderer.render(doc, nullptr, options);
+    for (const auto& e : doc.entities) {
+        const auto [u, v] = project({e.x, e.y, e.z});
+        INFO(e.class_name << " at pixel " << u << "," << v);
+        CHECK(rgb_at(image, u, v) == class_colour(e.class_id, e.class_name));
+    }
+    // The car model is not its box: its silhouette covers clearly less than the box's.
+    SceneRenderer boxes(gl_device());
+    const Footprint model_car = footprint(image, kCar, kCamera.width_px / 2);
+    const Footprint box_car =
+        footprint(boxes.render(doc, nullptr, options), kCar, kCamera.width_px / 2);
+    REQUIRE(box_car.count > 100);
+    CHECK(model_car.count < 0.95 * box_car.count);
+    CHECK(model_car.count > 0.5 * box_car.count);
 }
