@@ -126,7 +126,7 @@ void run_evaluate(const EvaluateArgs& args) {
         CarMatchOptions options;
         options.max_range_m = args.max_range_m;
         options.min_gt_pixels = static_cast<std::size_t>(args.min_gt_pixels);
-        const CarEvaluation ev = evaluate_cars(doc.entities, gt, options);
+        const CarEvaluation ev = evaluate_cars(doc.entities, gt, options, &calib.camera);
 
         nlohmann::json cars = nlohmann::json::array();
         table << "cars within " << fixed(options.max_range_m, 0)
@@ -138,15 +138,17 @@ void run_evaluate(const EvaluateArgs& args) {
             for (const auto& m : ev.matches) {
                 if (m.gt == g) match = &m;
             }
-            const bool in_range = car.range_m() <= options.max_range_m;
+            const bool no_points = car.pixel_count == 0;
+            const bool in_range = !no_points && car.range_m() <= options.max_range_m;
             const bool owed = in_range && car.pixel_count >= options.min_gt_pixels;
-            nlohmann::json row = {{"instance", car.instance},
-                                  {"pixels", car.pixel_count},
-                                  {"range_m", car.range_m()},
-                                  {"owed", owed},
-                                  {"entity", match ? doc.entities[match->entity].id : ""},
-                                  {"inside_fraction", match ? match->inside_fraction : 0.0},
-                                  {"centre_distance_m", match ? match->centre_distance_m : 0.0}};
+            nlohmann::json row = {
+                {"instance", car.instance},
+                {"pixels", car.pixel_count},
+                {"range_m", no_points ? nlohmann::json() : nlohmann::json(car.range_m())},
+                {"owed", owed},
+                {"entity", match ? doc.entities[match->entity].id : ""},
+                {"inside_fraction", match ? match->inside_fraction : 0.0},
+                {"centre_distance_m", match ? match->centre_distance_m : 0.0}};
             cars.push_back(row);
             if (!in_range) continue;
             char line[160];
@@ -161,7 +163,10 @@ void run_evaluate(const EvaluateArgs& args) {
         table << "  recall    " << ev.gt_owed_matched << "/" << ev.gt_owed << " = "
               << fixed(100.0 * ev.recall(), 1) << " %\n";
         table << "  precision " << ev.entities_matched << "/" << ev.entities_in_range << " = "
-              << fixed(100.0 * ev.precision(), 1) << " %\n";
+              << fixed(100.0 * ev.precision(), 1) << " %   (scorable: " << ev.entities_matched
+              << "/" << ev.entities_in_range - ev.entities_unscorable << " = "
+              << fixed(100.0 * ev.precision_scorable(), 1) << " %; " << ev.entities_unscorable
+              << " entities lie on GT cars without GT disparity)\n";
         table << "  mean centre distance " << fixed(ev.mean_centre_distance_m(), 2)
               << " m (entity centre to GT visible-point centroid, bird's-eye)\n";
         out["cars"] = {{"entities_file", args.entities.string()},
@@ -173,6 +178,8 @@ void run_evaluate(const EvaluateArgs& args) {
                        {"entities_matched", ev.entities_matched},
                        {"recall", ev.recall()},
                        {"precision", ev.precision()},
+                       {"entities_unscorable", ev.entities_unscorable},
+                       {"precision_scorable", ev.precision_scorable()},
                        {"mean_centre_distance_m", ev.mean_centre_distance_m()},
                        {"gt_cars", cars}};
         if (doc.extra.contains("ground_plane")) {

@@ -77,6 +77,12 @@ double CarEvaluation::precision() const {
                : static_cast<double>(entities_matched) / static_cast<double>(entities_in_range);
 }
 
+double CarEvaluation::precision_scorable() const {
+    const std::size_t scorable = entities_in_range - entities_unscorable;
+    return scorable == 0 ? 1.0
+                         : static_cast<double>(entities_matched) / static_cast<double>(scorable);
+}
+
 double CarEvaluation::mean_centre_distance_m() const {
     if (matches.empty()) return 0.0;
     double sum = 0.0;
@@ -101,7 +107,8 @@ double footprint_inside_fraction(const scene_schema::Entity& entity,
 }
 
 CarEvaluation evaluate_cars(const std::vector<scene_schema::Entity>& entities,
-                            const std::vector<GtCar>& gt_cars, const CarMatchOptions& options) {
+                            const std::vector<GtCar>& gt_cars, const CarMatchOptions& options,
+                            const StereoCamera* camera) {
     options.validate();
     CarEvaluation result;
     std::vector<std::size_t> cars;
@@ -150,8 +157,24 @@ CarEvaluation evaluate_cars(const std::vector<scene_schema::Entity>& entities,
     }
     for (std::size_t i : cars) {
         const auto& e = entities[i];
-        if (std::hypot(e.x, e.z) <= options.max_range_m && entity_used[i])
+        if (std::hypot(e.x, e.z) > options.max_range_m) continue;
+        if (entity_used[i]) {
             ++result.entities_matched;
+        } else if (camera && e.z > 0.0 && camera->fx_px > 0.0) {
+            const long u = std::lround(camera->fx_px * e.x / e.z + camera->cx_px);
+            const long v = std::lround(camera->fy_px * e.y / e.z + camera->cy_px);
+            for (const auto& car : gt_cars) {
+                if (car.pixel_count > 0 || car.image_width_px <= 0 || u < 0 ||
+                    u >= car.image_width_px || v < 0) {
+                    continue;
+                }
+                const auto px = static_cast<std::uint32_t>(v * car.image_width_px + u);
+                if (std::binary_search(car.image_pixels.begin(), car.image_pixels.end(), px)) {
+                    ++result.entities_unscorable;
+                    break;
+                }
+            }
+        }
     }
     return result;
 }
@@ -176,6 +199,8 @@ std::vector<GtCar> load_gt_cars(const std::filesystem::path& instance_png,
             if ((value >> 8) != car_label_id) continue;
             GtCar& car = by_instance[value & 0xff];
             car.instance = value & 0xff;
+            car.image_width_px = instance.cols;
+            car.image_pixels.push_back(static_cast<std::uint32_t>(v * instance.cols + u));
             const int d16 = disparity.at<std::uint16_t>(v, u);
             if (d16 == 0) continue;
             car.points_m.push_back(reproject_pixel(camera, u, v, d16 / 256.0));
@@ -184,7 +209,10 @@ std::vector<GtCar> load_gt_cars(const std::filesystem::path& instance_png,
     std::vector<GtCar> cars;
     for (auto& [id, car] : by_instance) {
         car.pixel_count = car.points_m.size();
-        if (car.points_m.empty()) continue;
+        if (car.points_m.empty()) {
+            cars.push_back(std::move(car));
+            continue;
+        }
         Eigen::Vector3d sum = Eigen::Vector3d::Zero();
         for (const auto& p : car.points_m) sum += p.cast<double>();
         car.centroid_m = sum / static_cast<double>(car.points_m.size());

@@ -12,11 +12,6 @@
 namespace cloud_analysis {
 namespace {
 
-/// Points of one class (camera frame) and their original cloud indices.
-struct ClassPoints {
-    std::vector<Eigen::Vector3f> xyz;
-};
-
 /// Voxel centroids and the member points of each voxel (indices into the input).
 struct Voxels {
     std::vector<Eigen::Vector3f> centroid;
@@ -56,55 +51,60 @@ Voxels voxelize(const std::vector<Eigen::Vector3f>& pts, double voxel_m) {
     return v;
 }
 
+using Indices = std::vector<std::size_t>;
+
+std::vector<Eigen::Vector3f> gather(const std::vector<Eigen::Vector3f>& pts, const Indices& idx) {
+    std::vector<Eigen::Vector3f> out;
+    out.reserve(idx.size());
+    for (std::size_t i : idx) out.push_back(pts[i]);
+    return out;
+}
+
 /// Drops stereo smear behind a thing: per viewing direction (0.5 degree azimuth bins), points
 /// farther (bird's-eye range) than the nearest one plus the prior's diagonal plus a margin;
 /// and points implausibly high above or below the ground.
-std::vector<Eigen::Vector3f> drop_outliers(const std::vector<Eigen::Vector3f>& pts,
-                                           const ClassSettings& s,
-                                           const std::optional<GroundPlane>& ground,
-                                           double margin_m) {
-    if (!s.has_prior() || pts.size() < 10) return pts;
+Indices drop_outliers(const std::vector<Eigen::Vector3f>& pts, const Indices& idx,
+                      const ClassSettings& s, const std::optional<GroundPlane>& ground,
+                      double margin_m) {
+    if (!s.has_prior() || idx.size() < 10) return idx;
     constexpr double kBinRad = 0.5 * 3.14159265358979323846 / 180.0;
-    std::vector<double> range(pts.size());
-    std::vector<long> bin(pts.size());
+    std::vector<double> range(idx.size());
+    std::vector<long> bin(idx.size());
     std::unordered_map<long, double> nearest;
-    for (std::size_t i = 0; i < pts.size(); ++i) {
-        const double x = pts[i].x(), z = pts[i].z();
-        range[i] = std::hypot(x, z);
-        bin[i] = std::lround(std::atan2(x, z) / kBinRad);
-        auto [it, inserted] = nearest.emplace(bin[i], range[i]);
-        if (!inserted) it->second = std::min(it->second, range[i]);
+    for (std::size_t k = 0; k < idx.size(); ++k) {
+        const double x = pts[idx[k]].x(), z = pts[idx[k]].z();
+        range[k] = std::hypot(x, z);
+        bin[k] = std::lround(std::atan2(x, z) / kBinRad);
+        auto [it, inserted] = nearest.emplace(bin[k], range[k]);
+        if (!inserted) it->second = std::min(it->second, range[k]);
     }
     const double depth = std::hypot(s.prior_L_m, s.prior_W_m) + margin_m;
-    std::vector<Eigen::Vector3f> kept;
-    kept.reserve(pts.size());
-    for (std::size_t i = 0; i < pts.size(); ++i) {
-        if (range[i] > nearest[bin[i]] + depth) continue;
+    Indices kept;
+    kept.reserve(idx.size());
+    for (std::size_t k = 0; k < idx.size(); ++k) {
+        if (range[k] > nearest[bin[k]] + depth) continue;
         if (ground) {
-            const double h = ground->height(pts[i].cast<double>());
+            const double h = ground->height(pts[idx[k]].cast<double>());
             if (h < -0.5 || h > 1.5 * s.prior_H_m + 0.5) continue;
         }
-        kept.push_back(pts[i]);
+        kept.push_back(idx[k]);
     }
-    return kept.size() >= static_cast<std::size_t>(s.min_points) ? kept : pts;
+    return kept.size() >= static_cast<std::size_t>(s.min_points) ? kept : idx;
 }
 
-/// Splits a thing whose box is much longer than its prior into pieces of about the prior
-/// length, cutting at the emptiest place near each even cut (touching parked cars).
-std::vector<std::vector<Eigen::Vector3f>> split_long(const std::vector<Eigen::Vector3f>& pts,
-                                                     const OrientedBox& box,
-                                                     const ClassSettings& s) {
-    if (!s.has_prior() || box.L_m <= s.split_factor * s.prior_L_m) return {pts};
-    const int pieces = std::max(2, static_cast<int>(std::lround(box.L_m / s.prior_L_m)));
-    const double c = std::cos(box.theta), sn = std::sin(box.theta);
-    std::vector<double> along(pts.size());
+/// Splits the points of a merged blob along the unit direction (dir_x, dir_z) into pieces of
+/// about `prior_m`, cutting at the emptiest place near each even cut (touching parked cars).
+std::vector<Indices> split_along(const std::vector<Eigen::Vector3f>& pts, const Indices& idx,
+                                 double dir_x, double dir_z, double extent_m, double prior_m) {
+    const int pieces = std::max(2, static_cast<int>(std::lround(extent_m / prior_m)));
+    std::vector<double> along(idx.size());
     double lo = 1e300, hi = -1e300;
-    for (std::size_t i = 0; i < pts.size(); ++i) {
-        along[i] = double{pts[i].x()} * c - double{pts[i].z()} * sn;
-        lo = std::min(lo, along[i]);
-        hi = std::max(hi, along[i]);
+    for (std::size_t k = 0; k < idx.size(); ++k) {
+        along[k] = double{pts[idx[k]].x()} * dir_x + double{pts[idx[k]].z()} * dir_z;
+        lo = std::min(lo, along[k]);
+        hi = std::max(hi, along[k]);
     }
-    // Density histogram along the heading, 0.1 m bins.
+    // Density histogram along the direction, 0.1 m bins.
     const double bin = 0.1;
     const int bins = std::max(1, static_cast<int>(std::ceil((hi - lo) / bin)) + 1);
     std::vector<int> hist(static_cast<std::size_t>(bins), 0);
@@ -112,9 +112,8 @@ std::vector<std::vector<Eigen::Vector3f>> split_long(const std::vector<Eigen::Ve
     std::vector<double> cuts;
     const double piece = (hi - lo) / pieces;
     for (int k = 1; k < pieces; ++k) {
-        const double even = lo + k * piece;
-        const int centre = static_cast<int>((even - lo) / bin);
-        const int reach = static_cast<int>(0.25 * s.prior_L_m / bin);
+        const int centre = static_cast<int>(k * piece / bin);
+        const int reach = static_cast<int>(0.25 * prior_m / bin);
         int best = centre;
         for (int b = std::max(0, centre - reach); b <= std::min(bins - 1, centre + reach); ++b) {
             if (hist[static_cast<std::size_t>(b)] < hist[static_cast<std::size_t>(best)]) best = b;
@@ -122,13 +121,28 @@ std::vector<std::vector<Eigen::Vector3f>> split_long(const std::vector<Eigen::Ve
         cuts.push_back(lo + (best + 0.5) * bin);
     }
     std::sort(cuts.begin(), cuts.end());
-    std::vector<std::vector<Eigen::Vector3f>> parts(cuts.size() + 1);
-    for (std::size_t i = 0; i < pts.size(); ++i) {
-        const auto k = static_cast<std::size_t>(
-            std::upper_bound(cuts.begin(), cuts.end(), along[i]) - cuts.begin());
-        parts[k].push_back(pts[i]);
+    std::vector<Indices> parts(cuts.size() + 1);
+    for (std::size_t k = 0; k < idx.size(); ++k) {
+        const auto part = static_cast<std::size_t>(
+            std::upper_bound(cuts.begin(), cuts.end(), along[k]) - cuts.begin());
+        parts[part].push_back(idx[k]);
     }
     return parts;
+}
+
+/// Pieces of a thing whose box is much longer or wider than its prior (a parked row, or
+/// cars side by side merged by the semantic image); {idx} when it fits the prior.
+std::vector<Indices> split_oversized(const std::vector<Eigen::Vector3f>& pts, const Indices& idx,
+                                     const OrientedBox& box, const ClassSettings& s) {
+    if (!s.has_prior()) return {idx};
+    const double c = std::cos(box.theta), sn = std::sin(box.theta);
+    if (box.L_m > s.split_factor * s.prior_L_m) {
+        return split_along(pts, idx, c, -sn, box.L_m, s.prior_L_m);
+    }
+    if (box.W_m > s.split_factor * s.prior_W_m) {
+        return split_along(pts, idx, sn, c, box.W_m, s.prior_W_m);
+    }
+    return {idx};
 }
 
 scene_schema::Entity make_entity(const ClassInfo& info, const OrientedBox& box,
@@ -163,51 +177,51 @@ struct PixelGrid {
     bool valid() const { return width_px > 0 && height_px > 0; }
 };
 
-/// Drops "shadow" clusters: clusters of a thing class whose pixels mostly lie among the pixels
-/// of a nearer cluster of the same class (within `radius_px`). A real object behind another is
-/// occluded there and shows only beside it; interleaved pixels are wrong matches on the nearer
-/// object (dark, textureless car bodies) reprojected too far.
-std::vector<std::vector<std::size_t>> drop_shadow_clusters(
-    std::vector<std::vector<std::size_t>> clusters, const std::vector<Eigen::Vector3f>& pts,
-    const std::vector<std::uint32_t>& pixels, const PixelGrid& grid, double min_gap_m,
-    double max_shared_fraction, int radius_px) {
-    if (!grid.valid() || clusters.size() < 2) return clusters;
-    std::vector<double> mean_range(clusters.size(), 0.0);
-    for (std::size_t c = 0; c < clusters.size(); ++c) {
-        for (std::size_t i : clusters[c])
-            mean_range[c] += std::hypot(double{pts[i].x()}, double{pts[i].z()});
-        mean_range[c] /= static_cast<double>(clusters[c].size());
-    }
-    std::vector<int> owner(static_cast<std::size_t>(grid.width_px) * grid.height_px, -1);
-    for (std::size_t c = 0; c < clusters.size(); ++c) {
-        for (std::size_t i : clusters[c]) owner[pixels[i]] = static_cast<int>(c);
-    }
-    std::vector<char> keep(clusters.size(), 1);
-    for (std::size_t c = 0; c < clusters.size(); ++c) {
+/// One thing instance before it becomes an entity.
+struct Candidate {
+    OrientedBox box;
+    Indices members;
+    double range_m = 0.0;  ///< mean bird's-eye range of the points
+};
+
+/// Image-space suppression of "shadows": candidates whose pixels mostly lie within radius_px
+/// of the pixels of a nearer candidate of the same class (nearer by more than min_gap_m). A
+/// real object behind another is occluded there and shows only beside it; pixels interleaved
+/// with a nearer object's are wrong matches on it (dark, textureless car bodies) reprojected
+/// too far.
+std::vector<Candidate> suppress_shadows(std::vector<Candidate> candidates,
+                                        const std::vector<std::uint32_t>& pixels,
+                                        const PixelGrid& grid, double min_gap_m,
+                                        double max_shared_fraction, int radius_px) {
+    if (!grid.valid() || candidates.size() < 2) return candidates;
+    std::stable_sort(candidates.begin(), candidates.end(),
+                     [](const auto& a, const auto& b) { return a.range_m < b.range_m; });
+    // Nearest accepted range covering each pixel (dilated by radius_px).
+    std::vector<float> cover(static_cast<std::size_t>(grid.width_px) * grid.height_px, 1e30f);
+    std::vector<Candidate> kept;
+    for (auto& c : candidates) {
         std::size_t shared = 0;
-        for (std::size_t i : clusters[c]) {
-            const int u0 = static_cast<int>(pixels[i] % grid.width_px);
-            const int v0 = static_cast<int>(pixels[i] / grid.width_px);
-            bool found = false;
-            for (int dv = -radius_px; dv <= radius_px && !found; ++dv) {
-                for (int du = -radius_px; du <= radius_px && !found; ++du) {
-                    const int u = u0 + du, v = v0 + dv;
-                    if (u < 0 || v < 0 || u >= grid.width_px || v >= grid.height_px) continue;
-                    const int o = owner[static_cast<std::size_t>(v) * grid.width_px + u];
-                    found = o >= 0 &&
-                            mean_range[static_cast<std::size_t>(o)] + min_gap_m < mean_range[c];
-                }
-            }
-            if (found) ++shared;
+        for (std::size_t i : c.members) {
+            if (double{cover[pixels[i]]} + min_gap_m < c.range_m) ++shared;
         }
         if (static_cast<double>(shared) >
-            max_shared_fraction * static_cast<double>(clusters[c].size())) {
-            keep[c] = 0;
+            max_shared_fraction * static_cast<double>(c.members.size())) {
+            continue;
         }
-    }
-    std::vector<std::vector<std::size_t>> kept;
-    for (std::size_t c = 0; c < clusters.size(); ++c) {
-        if (keep[c]) kept.push_back(std::move(clusters[c]));
+        const auto range = static_cast<float>(c.range_m);
+        for (std::size_t i : c.members) {
+            const int u0 = static_cast<int>(pixels[i] % static_cast<std::uint32_t>(grid.width_px));
+            const int v0 = static_cast<int>(pixels[i] / static_cast<std::uint32_t>(grid.width_px));
+            for (int v = std::max(0, v0 - radius_px);
+                 v <= std::min(grid.height_px - 1, v0 + radius_px); ++v) {
+                for (int u = std::max(0, u0 - radius_px);
+                     u <= std::min(grid.width_px - 1, u0 + radius_px); ++u) {
+                    float& slot = cover[static_cast<std::size_t>(v) * grid.width_px + u];
+                    slot = std::min(slot, range);
+                }
+            }
+        }
+        kept.push_back(std::move(c));
     }
     return kept;
 }
@@ -218,27 +232,12 @@ std::vector<scene_schema::Entity> instances_of_class(const ClassInfo& info,
                                                      const PixelGrid& grid, const ClassSettings& s,
                                                      const std::optional<GroundPlane>& ground,
                                                      const ExtractOptions& options) {
-    std::vector<scene_schema::Entity> out;
     const Voxels voxels = voxelize(pts, s.voxel_m);
     ClusterOptions co;
     co.distance_at_10m_m = s.cluster_distance_m;
     co.growth = s.cluster_growth;
     co.distance_max_m = s.cluster_distance_max_m;
     co.min_points = 1;
-    std::vector<std::vector<std::size_t>> clusters;
-    for (const auto& cluster : euclidean_clusters(voxels.centroid, co)) {
-        std::vector<std::size_t> members;
-        for (std::size_t v : cluster) {
-            members.insert(members.end(), voxels.members[v].begin(), voxels.members[v].end());
-        }
-        if (members.size() >= static_cast<std::size_t>(s.min_points)) clusters.push_back(members);
-    }
-    if (s.thing && s.has_prior()) {
-        clusters = drop_shadow_clusters(std::move(clusters), pts, pixels, grid,
-                                        std::hypot(s.prior_L_m, s.prior_W_m),
-                                        options.shadow_fraction, options.shadow_radius_px);
-    }
-
     BoxFitOptions fit;
     if (s.thing && s.has_prior()) {
         fit.prior_L_m = s.prior_L_m;
@@ -246,24 +245,50 @@ std::vector<scene_schema::Entity> instances_of_class(const ClassInfo& info,
         fit.prior_H_m = s.prior_H_m;
     }
     fit.rest_on_ground = s.thing;
-    for (const auto& cluster : clusters) {
-        std::vector<Eigen::Vector3f> members;
-        members.reserve(cluster.size());
-        for (std::size_t i : cluster) members.push_back(pts[i]);
-        if (s.thing) members = drop_outliers(members, s, ground, options.outlier_margin_m);
-        const OrientedBox first = fit_upright_box(members, ground, fit);
-        for (const auto& part : split_long(members, first, s)) {
+
+    std::vector<Candidate> candidates;
+    for (const auto& cluster : euclidean_clusters(voxels.centroid, co)) {
+        Indices members;
+        for (std::size_t v : cluster) {
+            members.insert(members.end(), voxels.members[v].begin(), voxels.members[v].end());
+        }
+        if (members.size() < static_cast<std::size_t>(s.min_points)) continue;
+        if (s.thing) members = drop_outliers(pts, members, s, ground, options.outlier_margin_m);
+        // Fit, split oversized blobs (at most two levels: rows, then side by side), refit.
+        std::vector<std::pair<Indices, int>> work = {{members, 0}};
+        while (!work.empty()) {
+            auto [part, depth] = std::move(work.back());
+            work.pop_back();
             if (part.size() < static_cast<std::size_t>(s.min_points)) continue;
-            const OrientedBox box =
-                part.size() == members.size() ? first : fit_upright_box(part, ground, fit);
+            const OrientedBox box = fit_upright_box(gather(pts, part), ground, fit);
+            if (s.thing && depth < 2) {
+                auto pieces = split_oversized(pts, part, box, s);
+                if (pieces.size() > 1) {
+                    for (auto& piece : pieces) work.emplace_back(std::move(piece), depth + 1);
+                    continue;
+                }
+            }
             // A thing whose points all lie near the ground is mislabelled road, not an object.
             if (s.thing && s.prior_H_m > 0.0 && ground &&
                 box.H_m < options.min_height_fraction * s.prior_H_m) {
                 continue;
             }
-            out.push_back(
-                make_entity(info, box, part.size(), confidence_of(part.size(), s), "instances"));
+            Candidate c{box, std::move(part), 0.0};
+            for (std::size_t i : c.members)
+                c.range_m += std::hypot(double{pts[i].x()}, double{pts[i].z()});
+            c.range_m /= static_cast<double>(c.members.size());
+            candidates.push_back(std::move(c));
         }
+    }
+    if (s.thing && s.has_prior()) {
+        candidates = suppress_shadows(std::move(candidates), pixels, grid, s.prior_W_m,
+                                      options.shadow_fraction,
+                                      options.shadow_radius_px);
+    }
+    std::vector<scene_schema::Entity> out;
+    for (const auto& c : candidates) {
+        out.push_back(make_entity(info, c.box, c.members.size(), confidence_of(c.members.size(), s),
+                                  "instances"));
     }
     std::stable_sort(out.begin(), out.end(),
                      [](const auto& a, const auto& b) { return a.point_count > b.point_count; });

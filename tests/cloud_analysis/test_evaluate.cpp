@@ -135,3 +135,36 @@ TEST_CASE("GT cars come from the instance image's car ids and the GT disparity",
                       Catch::Contains("missing.png"));
     std::filesystem::remove_all(dir);
 }
+
+TEST_CASE("an unmatched entity on a GT car without GT disparity is unscorable, not wrong",
+          "[evaluate]") {
+    StereoCamera cam;
+    cam.fx_px = cam.fy_px = 500.0;
+    cam.cx_px = cam.cx_right_px = 50.0;
+    cam.cy_px = 20.0;
+    cam.baseline_m = 0.5;
+    // GT car 7 covers pixels u 40..60, v 15..25 of a 100 x 40 image but has no GT points.
+    GtCar blind;
+    blind.instance = 7;
+    blind.image_width_px = 100;
+    for (int v = 15; v <= 25; ++v) {
+        for (int u = 40; u <= 60; ++u)
+            blind.image_pixels.push_back(static_cast<std::uint32_t>(v * 100 + u));
+    }
+    const std::vector<GtCar> gt = {gt_car(1, -4.0, 12.0, 400), blind};
+    // Entity centre (0, 0.9, 10) projects to u = 50, v = 65: below the blind car.
+    auto off = car_entity(0.0, 10.0, -kPi / 2.0);
+    // Entity centre (0, 0, 10) projects to u = 50, v = 20: on the blind car.
+    auto on = car_entity(0.0, 10.0, -kPi / 2.0);
+    on.y = 0.0;
+    const std::vector<scene_schema::Entity> entities = {car_entity(-4.0, 12.0, -kPi / 2.0), on,
+                                                        off};
+    const auto ev = evaluate_cars(entities, gt, CarMatchOptions{}, &cam);
+    CHECK(ev.entities_in_range == 3);
+    CHECK(ev.entities_matched == 1);
+    CHECK(ev.entities_unscorable == 1);
+    CHECK(ev.precision() == Approx(1.0 / 3.0));
+    CHECK(ev.precision_scorable() == Approx(1.0 / 2.0));
+    // Without a camera nothing is unscorable.
+    CHECK(evaluate_cars(entities, gt, CarMatchOptions{}).entities_unscorable == 0);
+}

@@ -27,7 +27,7 @@ struct ExtractOptions {
     double shadow_fraction = 0.5;      ///< a thing cluster with more of its pixels than this
                                        ///< within shadow_radius_px of a nearer same-class
                                        ///< cluster's pixels is a wrong-match shadow, (0, 1]
-    int shadow_radius_px = 2;          ///< neighbourhood of that test, pixels, >= 0
+    int shadow_radius_px = 10;         ///< neighbourhood of that test, pixels, >= 0
     double min_height_fraction = 0.3;  ///< things lower than this * prior_H_m above the ground
                                        ///< are mislabelled ground, [0, 1)
     /// Throws std::invalid_argument naming the bad field.
