@@ -40,8 +40,9 @@ struct AnalyseArgs {
 
 /// One output file, formatted in memory before anything is written.
 struct PendingOutput {
-    std::string path;  ///< "-" = stdout
-    std::string bytes;
+    std::string path;   ///< "-" = stdout
+    std::string bytes;  ///< whole file
+    std::string label;  ///< flag that asked for it (for --timings)
 };
 
 void add_analyse_flags(CLI::App& cmd, AnalyseArgs& a) {
@@ -292,38 +293,48 @@ int run_analyse(const AnalyseArgs& a) {
                                                                      : a.class_config.string()}};
         doc.source = source;
         scene_schema::check(doc);
-        outputs.push_back({a.entities, scene_schema::dump(doc)});
+        outputs.push_back({a.entities, scene_schema::dump(doc), "--entities"});
         timings.push_back({"entities", ms_since(t)});
     }
-    t = Clock::now();
     for (const auto& [path, flag] : clouds) {
         if (path.empty()) continue;
+        t = Clock::now();
         outputs.push_back({path.string(),
                            cloud_analysis::format_cloud(
-                               r.cloud, in.palette, cloud_analysis::cloud_format_from_path(path))});
+                               r.cloud, in.palette, cloud_analysis::cloud_format_from_path(path)),
+                           flag});
+        timings.push_back({std::string("format ") + flag, ms_since(t)});
     }
+    t = Clock::now();
     if (!a.disparity_png.empty()) {
-        outputs.push_back(
-            {a.disparity_png.string(), cloud_analysis::encode_disparity_preview_png(
-                                           r.disparity, a.options.disparity.min_disparity +
-                                                            a.options.disparity.num_disparities)});
+        outputs.push_back({a.disparity_png.string(),
+                           cloud_analysis::encode_disparity_preview_png(
+                               r.disparity, a.options.disparity.min_disparity +
+                                                a.options.disparity.num_disparities),
+                           "--disparity-png"});
     }
     if (!a.disparity_kitti.empty()) {
-        outputs.push_back(
-            {a.disparity_kitti.string(), cloud_analysis::encode_kitti_disparity_png(r.disparity)});
+        outputs.push_back({a.disparity_kitti.string(),
+                           cloud_analysis::encode_kitti_disparity_png(r.disparity),
+                           "--disparity-kitti"});
     }
-    timings.push_back({"format outputs", ms_since(t)});
-    t = Clock::now();
-    for (const auto& out : outputs) write_output(out);
-    timings.push_back({"write", ms_since(t)});
+    if (!a.disparity_png.empty() || !a.disparity_kitti.empty()) {
+        timings.push_back({"encode disparity", ms_since(t)});
+    }
+    // Every output exists in memory now: only writing is left.
+    for (const auto& out : outputs) {
+        t = Clock::now();
+        write_output(out);
+        timings.push_back({"write " + out.label, ms_since(t)});
+    }
 
     if (a.timings) {
         double total = 0.0;
         for (const auto& s : timings) {
-            std::fprintf(stderr, "%s: timing: %-15s %9.1f ms\n", kTool, s.stage.c_str(), s.ms);
+            std::fprintf(stderr, "%s: timing: %-22s %9.1f ms\n", kTool, s.stage.c_str(), s.ms);
             total += s.ms;
         }
-        std::fprintf(stderr, "%s: timing: %-15s %9.1f ms (%zu points)\n", kTool, "total", total,
+        std::fprintf(stderr, "%s: timing: %-22s %9.1f ms (%zu points)\n", kTool, "total", total,
                      r.cloud.size());
     }
     return 0;
@@ -341,13 +352,14 @@ int run_make_sample(const SampleArgs& a) {
     std::filesystem::create_directories(a.out);
     // Everything is encoded first, then written.
     const std::vector<PendingOutput> outputs = {
-        {(a.out / "left.png").string(), cloud_analysis::encode_png(s.left)},
-        {(a.out / "right.png").string(), cloud_analysis::encode_png(s.right)},
-        {(a.out / "semantic.png").string(), cloud_analysis::encode_png(s.semantic)},
+        {(a.out / "left.png").string(), cloud_analysis::encode_png(s.left), "left"},
+        {(a.out / "right.png").string(), cloud_analysis::encode_png(s.right), "right"},
+        {(a.out / "semantic.png").string(), cloud_analysis::encode_png(s.semantic), "semantic"},
         {(a.out / "disparity_gt.png").string(),
-         cloud_analysis::encode_kitti_disparity_png(s.disparity)},
-        {(a.out / "calib.yaml").string(), cloud_analysis::synthetic_calibration_yaml(s.camera)},
-        {(a.out / "truth.json").string(), scene_schema::dump(s.truth)},
+         cloud_analysis::encode_kitti_disparity_png(s.disparity), "disparity"},
+        {(a.out / "calib.yaml").string(), cloud_analysis::synthetic_calibration_yaml(s.camera),
+         "calibration"},
+        {(a.out / "truth.json").string(), scene_schema::dump(s.truth), "truth"},
     };
     for (const auto& o : outputs) write_output(o);
     return 0;

@@ -17,24 +17,62 @@ std::int32_t class_id(const Palette& palette, std::uint16_t index) {
                : static_cast<std::int32_t>(palette.classes[index].id);
 }
 
+/// Decimal text of 0..255, built once: colour channels are most of an .xyz line.
+struct ByteText {
+    char text[256][4];
+    std::uint8_t length[256];
+    ByteText() {
+        for (int i = 0; i < 256; ++i) {
+            const auto end = std::to_chars(text[i], text[i] + 4, i).ptr;
+            length[i] = static_cast<std::uint8_t>(end - text[i]);
+        }
+    }
+};
+const ByteText kByteText;
+
+char* put_byte(char* p, std::uint8_t v) {
+    std::memcpy(p, kByteText.text[v], 4);  // copies padding too; the cursor moves by length
+    return p + kByteText.length[v];
+}
+
+/// Unsigned decimal, most significant digit first.
+char* put_unsigned(char* p, std::uint64_t v) {
+    char digits[20];
+    int n = 0;
+    do {
+        digits[n++] = static_cast<char>('0' + v % 10);
+        v /= 10;
+    } while (v != 0);
+    while (n > 0) *p++ = digits[--n];
+    return p;
+}
+
 /// Writes v with 3 decimals (millimetres) at p; returns the end. Fixed point: no locale, no
-/// exponent, |v| < 2^53 / 1000.
+/// exponent. Non-finite values never reach here (reprojection drops them).
 char* put_fixed3(char* p, float value) {
-    long long milli = std::llround(static_cast<double>(value) * 1000.0);
+    const double scaled = static_cast<double>(value) * 1000.0;
+    std::int64_t milli = static_cast<std::int64_t>(scaled < 0.0 ? scaled - 0.5 : scaled + 0.5);
     if (milli < 0) {
         *p++ = '-';
         milli = -milli;
     }
-    p = std::to_chars(p, p + 24, milli / 1000).ptr;
-    const int frac = static_cast<int>(milli % 1000);
-    *p++ = '.';
-    *p++ = static_cast<char>('0' + frac / 100);
-    *p++ = static_cast<char>('0' + (frac / 10) % 10);
-    *p++ = static_cast<char>('0' + frac % 10);
-    return p;
+    const auto m = static_cast<std::uint64_t>(milli);
+    p = put_unsigned(p, m / 1000);
+    const auto frac = static_cast<unsigned>(m % 1000);
+    p[0] = '.';
+    p[1] = static_cast<char>('0' + frac / 100);
+    p[2] = static_cast<char>('0' + (frac / 10) % 10);
+    p[3] = static_cast<char>('0' + frac % 10);
+    return p + 4;
 }
 
-char* put_int(char* p, long long value) { return std::to_chars(p, p + 24, value).ptr; }
+char* put_int(char* p, long long value) {
+    if (value < 0) {
+        *p++ = '-';
+        return put_unsigned(p, static_cast<std::uint64_t>(-value));
+    }
+    return put_unsigned(p, static_cast<std::uint64_t>(value));
+}
 
 template <typename T>
 char* put_raw(char* p, T value) {
@@ -70,13 +108,14 @@ std::string format_xyz(const LabeledCloud& cloud, const Palette& palette) {
         p = put_fixed3(p, xyz.z());
         for (int k = 0; k < 3; ++k) {
             *p++ = ' ';
-            p = put_int(p, c[static_cast<std::size_t>(k)]);
+            p = put_byte(p, c[static_cast<std::size_t>(k)]);
         }
         *p++ = ' ';
         p = put_int(p, class_id(palette, cloud.class_index[i]));
         *p++ = ' ';
         // Rec. 601 luma, the grey value the thesis wrote.
-        p = put_int(p, (299 * c[0] + 587 * c[1] + 114 * c[2] + 500) / 1000);
+        p = put_byte(
+            p, static_cast<std::uint8_t>((299 * c[0] + 587 * c[1] + 114 * c[2] + 500) / 1000));
         *p++ = '\n';
     }
     out.resize(static_cast<std::size_t>(p - out.data()));
