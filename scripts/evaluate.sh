@@ -1,0 +1,92 @@
+#!/usr/bin/env bash
+# Runs the whole KITTI evaluation of cloud-analysis (issue 3 "Done means") and prints the tables:
+# disparity of the tuned defaults vs OpenCV's sample settings, car entities vs the instance
+# ground truth, the ground plane, and the thesis's one-per-class extractors.
+# usage: scripts/evaluate.sh [--no-build] [--build-dir DIR] [--kitti-root DIR] [--out DIR] [frames...]
+#   default frames: 000000_10 000001_10; default KITTI root: ../shared/data/kitti15
+set -euo pipefail
+source "$(dirname "${BASH_SOURCE[0]}")/common.sh"
+
+build=1
+build_dir="$STEREOSCENE_ROOT/build"
+kitti_root="$STEREOSCENE_ROOT/../shared/data/kitti15"
+out_dir=""
+frames=()
+while [ $# -gt 0 ]; do
+    case "$1" in
+        --no-build) build=0 ;;
+        --build-dir) build_dir=$2; shift ;;
+        --kitti-root) kitti_root=$2; shift ;;
+        --out) out_dir=$2; shift ;;
+        -h|--help) sed -n '2,6p' "$0"; exit 0 ;;
+        *) frames+=("$1") ;;
+    esac
+    shift
+done
+[ ${#frames[@]} -gt 0 ] || frames=(000000_10 000001_10)
+
+if [ ! -d "$kitti_root/disp_occ_0" ] || [ ! -d "$kitti_root/instance" ]; then
+    echo "evaluate.sh: no KITTI data at $kitti_root (needs image_2 image_3 semantic_rgb disp_occ_0 instance calib); nothing to evaluate" >&2
+    exit 0
+fi
+if [ "$build" = 1 ]; then
+    stereoscene_build "$build_dir" Release -- cloud-analysis
+fi
+ca="$build_dir/cloud_analysis/cloud-analysis"
+[ -n "$out_dir" ] || out_dir="$build_dir/evaluation"
+mkdir -p "$out_dir"
+
+for f in "${frames[@]}"; do
+    echo "=== frame $f ==="
+    for preset in tuned opencv-sample; do
+        "$ca" --kitti-root "$kitti_root" --frame "$f" --preset "$preset" \
+            -o "$out_dir/$f-$preset.json" --disparity-kitti "$out_dir/$f-$preset-disp.png" 2>"$out_dir/$f-$preset.log"
+        echo "--- disparity preset: $preset"
+        "$ca" evaluate --kitti-root "$kitti_root" --frame "$f" \
+            --entities "$out_dir/$f-$preset.json" --disparity "$out_dir/$f-$preset-disp.png" \
+            --json "$out_dir/$f-$preset-eval.json"
+    done
+    echo "--- thesis extractors (one entity per class), tuned disparity"
+    for method in centroid average variance; do
+        "$ca" --kitti-root "$kitti_root" --frame "$f" --method "$method" \
+            -o "$out_dir/$f-$method.json" 2>"$out_dir/$f-$method.log"
+        /usr/bin/python3 - "$out_dir/$f-$method.json" "$method" <<'PY'
+import json, sys
+doc = json.load(open(sys.argv[1]))
+cars = [e for e in doc["entities"] if e["class"] == "car"]
+line = ", ".join(f'{e["class"]}' for e in doc["entities"])
+print(f"  {sys.argv[2]:9s} {len(doc['entities']):2d} entities ({line})")
+for e in cars:
+    print(f"            car: x {e['x']:.2f} y {e['y']:.2f} z {e['z']:.2f} L {e['L']:.2f} W {e['W']:.2f} H {e['H']:.2f} ({e['point_count']} points)")
+PY
+    done
+done
+
+echo "=== summary over ${frames[*]} ==="
+/usr/bin/python3 - "$out_dir" "${frames[@]}" <<'PY'
+import json, sys, os
+out, frames = sys.argv[1], sys.argv[2:]
+for preset in ("tuned", "opencv-sample"):
+    t = {"gt_owed": 0, "gt_owed_matched": 0, "entities_in_range": 0, "entities_matched": 0,
+         "entities_unscorable": 0}
+    d1, dens, heights = [], [], []
+    for f in frames:
+        ev = json.load(open(os.path.join(out, f"{f}-{preset}-eval.json")))
+        for k in t:
+            t[k] += ev["cars"][k]
+        d1.append(ev["disparity"]["d1_all"])
+        dens.append(ev["disparity"]["density"])
+        if "ground_plane" in ev:
+            heights.append(ev["ground_plane"]["camera_height_m"])
+    rec = t["gt_owed_matched"] / t["gt_owed"] if t["gt_owed"] else 1.0
+    prec = t["entities_matched"] / t["entities_in_range"] if t["entities_in_range"] else 1.0
+    scor = t["entities_in_range"] - t["entities_unscorable"]
+    prec_s = t["entities_matched"] / scor if scor else 1.0
+    print(f"{preset:14s} D1-all " + " / ".join(f"{100*x:.2f} %" for x in d1) +
+          "   density " + " / ".join(f"{100*x:.1f} %" for x in dens))
+    print(f"{'':14s} cars: recall {t['gt_owed_matched']}/{t['gt_owed']} = {100*rec:.1f} %, "
+          f"precision {t['entities_matched']}/{t['entities_in_range']} = {100*prec:.1f} % "
+          f"(scorable {t['entities_matched']}/{scor} = {100*prec_s:.1f} %)")
+    print(f"{'':14s} camera height above the fitted road plane: " +
+          " / ".join(f"{h:.3f} m" for h in heights))
+PY
