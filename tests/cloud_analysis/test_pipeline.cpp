@@ -1,0 +1,103 @@
+#include <catch2/catch.hpp>
+
+#include <filesystem>
+#include <fstream>
+
+#include "cloud_analysis/pipeline.hpp"
+
+using namespace cloud_analysis;
+
+namespace {
+const std::filesystem::path kSample = std::filesystem::path(STEREOSCENE_SAMPLES_DIR) / "synthetic";
+const std::filesystem::path kKitti = std::filesystem::path(STEREOSCENE_SHARED_DATA_DIR) / "kitti15";
+
+InputPaths sample_paths() {
+    InputPaths p;
+    p.left = kSample / "left.png";
+    p.right = kSample / "right.png";
+    p.semantic = kSample / "semantic.png";
+    p.calibration = kSample / "calib.yaml";
+    p.frame_id = "synthetic-street";
+    return p;
+}
+}  // namespace
+
+TEST_CASE("the KITTI layout finds images, semantics and the raw calibration", "[pipeline]") {
+    const InputPaths p = kitti_layout(kKitti, "000000_10");
+    CHECK(p.left == kKitti / "image_2" / "000000_10.png");
+    CHECK(p.right == kKitti / "image_3" / "000000_10.png");
+    CHECK(p.semantic == kKitti / "semantic_rgb" / "000000_10.png");
+    CHECK(p.calibration == kKitti / "calib" / "calib_cam_to_cam.txt");
+    // 000046_10 has no semantic image: the path stays empty rather than naming a missing file.
+    CHECK(kitti_layout(kKitti, "000046_10").semantic.empty());
+}
+
+TEST_CASE("the bundled sample runs through the chain into a labelled metric cloud", "[pipeline]") {
+    const AnalyseOptions options;
+    const LoadedInputs in = load_inputs(sample_paths(), options);
+    CHECK(in.left.channels == 1);
+    CHECK(in.semantic.channels == 3);
+    const AnalyseResult r = analyse(in, options);
+    CHECK(r.cloud.size() > 50000);
+    CHECK(r.classes.void_pixels == 0);
+    REQUIRE(r.timings.size() == 3);
+    CHECK(r.timings[0].stage == "disparity");
+    const nlohmann::json source = describe_run(in, options, "test");
+    CHECK(source["calibration"]["baseline_m"] == 0.54);
+    CHECK(source["disparity"]["block_size"] == options.disparity.block_size);
+}
+
+TEST_CASE("inputs of different sizes are refused before any work, naming the file", "[pipeline]") {
+    InputPaths p = sample_paths();
+    p.right = kKitti / "image_3" / "000000_10.png";
+    REQUIRE_THROWS_WITH(
+        load_inputs(p, AnalyseOptions{}),
+        Catch::Contains("right image is 1242x375") && Catch::Contains("000000_10.png"));
+    p = sample_paths();
+    p.semantic = kKitti / "semantic_rgb" / "000000_10.png";
+    REQUIRE_THROWS_WITH(load_inputs(p, AnalyseOptions{}),
+                        Catch::Contains("semantic image is 1242x375"));
+    p = sample_paths();
+    p.calibration = kKitti / "calib" / "calib_cam_to_cam.txt";  // made for 1242x375 images
+    REQUIRE_THROWS_WITH(load_inputs(p, AnalyseOptions{}),
+                        Catch::Contains("calibration is for 1242x375"));
+    AnalyseOptions raw;
+    raw.raw = true;  // the YAML calibration has no distortion: nothing to rectify with
+    REQUIRE_THROWS_WITH(load_inputs(sample_paths(), raw), Catch::Contains("cannot rectify"));
+}
+
+TEST_CASE("a corrupt image is reported as such with its file", "[pipeline][io]") {
+    const auto bad = std::filesystem::temp_directory_path() / "stereoscene_test_corrupt.png";
+    std::ofstream(bad, std::ios::binary) << "\x89PNG\r\n\x1a\n truncated";
+    InputPaths p = sample_paths();
+    p.left = bad;
+    REQUIRE_THROWS_WITH(
+        load_inputs(p, AnalyseOptions{}),
+        Catch::Contains("cannot decode image") && Catch::Contains("stereoscene_test_corrupt.png"));
+    std::filesystem::remove(bad);
+}
+
+TEST_CASE("raw KITTI input is undistorted and rectified to the S_rect size", "[pipeline]") {
+    AnalyseOptions options;
+    options.raw = true;
+    const LoadedInputs in = load_inputs(kitti_layout(kKitti, "000000_10"), options);
+    const AnalyseResult r = analyse(in, options);
+    CHECK(r.timings[0].stage == "rectify");
+    CHECK(r.disparity.width_px == 1242);
+    CHECK(r.disparity.height_px == 375);
+    CHECK(r.cloud.size() > 1000);
+}
+
+TEST_CASE("rectifying with no distortion and identity rotation leaves the image unchanged",
+          "[calibration]") {
+    ImageU8 img{32, 16, 1, std::vector<std::uint8_t>(32 * 16)};
+    for (std::size_t i = 0; i < img.data.size(); ++i)
+        img.data[i] = static_cast<std::uint8_t>(i * 7);
+    RawCamera cam;
+    cam.K << 30, 0, 16, 0, 30, 8, 0, 0, 1;
+    cam.distortion = {0, 0, 0, 0, 0};
+    cam.P_rect.leftCols<3>() = cam.K;
+    StereoCamera rig;
+    const ImageU8 out = rectify_image(img, cam, rig);
+    CHECK(out.data == img.data);
+}
