@@ -169,7 +169,8 @@ void check_uris(const std::string& json_text) {
 /// check_uris(): it also catches symbolic links that point elsewhere, and tinygltf's habit of
 /// searching the working directory).
 struct FolderGuard {
-    fs::path root;  ///< canonical folder of the model file
+    fs::path root;                ///< canonical folder of the model file
+    mutable std::string refused;  ///< the first existing file refused for being outside root
 
     bool inside(const std::string& path) const {
         std::error_code ec;
@@ -191,7 +192,12 @@ struct FolderGuard {
 bool guard_file_exists(const std::string& path, void* user) {
     const auto* guard = static_cast<const FolderGuard*>(user);
     std::error_code ec;
-    return guard->inside(path) && fs::is_regular_file(path, ec);
+    if (!fs::is_regular_file(path, ec)) return false;
+    if (!guard->inside(path)) {
+        if (guard->refused.empty()) guard->refused = path;
+        return false;
+    }
+    return true;
 }
 
 std::string guard_expand(const std::string& path, void*) { return path; }
@@ -654,7 +660,7 @@ Model load_model_unchecked(const fs::path& path) {
         throw LoadError("file too large");
     }
     std::error_code ec;
-    FolderGuard guard{fs::weakly_canonical(fs::absolute(path).parent_path(), ec)};
+    FolderGuard guard{fs::weakly_canonical(fs::absolute(path).parent_path(), ec), {}};
     if (ec) {
         throw LoadError("cannot resolve the model's folder: " + ec.message());
     }
@@ -672,6 +678,9 @@ Model load_model_unchecked(const fs::path& path) {
                : loader.LoadASCIIFromString(&gltf, &err, &warn,
                                             reinterpret_cast<const char*>(bytes.data()),
                                             static_cast<unsigned int>(bytes.size()), base_dir);
+    if (!guard.refused.empty()) {
+        throw LoadError(guard.refused + " is outside the model's folder (refused)");
+    }
     if (!ok) {
         std::string reason = err.empty() ? warn : err;
         while (!reason.empty() && (reason.back() == '\n' || reason.back() == ' '))

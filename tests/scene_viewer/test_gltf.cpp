@@ -1,0 +1,195 @@
+#include <catch2/catch.hpp>
+
+#include <filesystem>
+#include <fstream>
+#include <string>
+
+#include <scene_viewer/assets/gltf_loader.hpp>
+
+namespace fs = std::filesystem;
+using scene_viewer::load_model;
+using scene_viewer::Model;
+
+namespace {
+
+const fs::path kGltfDir = fs::path(STEREOSCENE_SOURCE_DIR) / "tests/scene_viewer/data/gltf";
+
+std::string load_error(const fs::path& path) {
+    try {
+        load_model(path);
+    } catch (const std::runtime_error& e) {
+        return e.what();
+    }
+    return "";
+}
+
+void require_vec3(const glm::vec3& got, const glm::vec3& want) {
+    CHECK(got.x == Approx(want.x).margin(1e-6));
+    CHECK(got.y == Approx(want.y).margin(1e-6));
+    CHECK(got.z == Approx(want.z).margin(1e-6));
+}
+
+/// A fresh empty folder under the system's temp directory.
+fs::path temp_folder(const std::string& name) {
+    const fs::path dir = fs::temp_directory_path() / ("stereoscene-test-gltf-" + name);
+    fs::remove_all(dir);
+    fs::create_directories(dir);
+    return dir;
+}
+
+}  // namespace
+
+TEST_CASE("a .glb with one triangle loads with its bounds, normals and colour", "[gltf]") {
+    const Model model = load_model(kGltfDir / "triangle.glb");
+    CHECK(model.name == "triangle.glb");
+    REQUIRE(model.primitives.size() == 1);
+    const auto& p = model.primitives[0];
+    CHECK(p.indices == std::vector<std::uint32_t>{0, 1, 2});
+    REQUIRE(p.normals.size() == 3);
+    require_vec3(p.normals[0], {0, 0, 1});
+    CHECK(p.base_colour == glm::vec4(1, 0, 0, 1));
+    CHECK(p.texture == -1);
+    require_vec3(model.bounds_min, {0, 0, 0});
+    require_vec3(model.bounds_max, {1, 1, 0});
+    CHECK(model.warnings.empty());
+}
+
+TEST_CASE("a .gltf with an external .bin loads and its missing normals are computed", "[gltf]") {
+    const Model model = load_model(kGltfDir / "quad_external.gltf");
+    REQUIRE(model.primitives.size() == 1);
+    const auto& p = model.primitives[0];
+    CHECK(scene_viewer::triangle_count(model) == 2);
+    REQUIRE(p.normals.size() == 4);
+    for (const glm::vec3& n : p.normals) require_vec3(n, {0, 0, 1});
+    CHECK(p.base_colour == glm::vec4(1.0f));  // no material: glTF's default white
+    require_vec3(model.bounds_min, {-1, -1, 0});
+    require_vec3(model.bounds_max, {1, 1, 0});
+}
+
+TEST_CASE("a .gltf with a data: URI and no indices gets sequential indices", "[gltf]") {
+    const Model model = load_model(kGltfDir / "quad_datauri.gltf");
+    REQUIRE(model.primitives.size() == 1);
+    const auto& p = model.primitives[0];
+    CHECK(p.positions.size() == 6);
+    CHECK(p.indices == std::vector<std::uint32_t>{0, 1, 2, 3, 4, 5});
+    REQUIRE(p.normals.size() == 6);
+    require_vec3(p.normals[5], {0, 0, 1});
+}
+
+TEST_CASE("node hierarchy transforms are baked into positions", "[gltf]") {
+    // parent: translate (10,0,0); child: translate (0,5,0), scale 2; triangle (0,0,0) (1,0,0)
+    // (0,1,0) -> (10,5,0) (12,5,0) (10,7,0).
+    const Model model = load_model(kGltfDir / "hierarchy.gltf");
+    REQUIRE(model.primitives.size() == 1);
+    const auto& p = model.primitives[0];
+    CHECK(p.node_transform == glm::mat4(1.0f));
+    require_vec3(p.positions[0], {10, 5, 0});
+    require_vec3(p.positions[1], {12, 5, 0});
+    require_vec3(p.positions[2], {10, 7, 0});
+    require_vec3(model.bounds_min, {10, 5, 0});
+    require_vec3(model.bounds_max, {12, 7, 0});
+}
+
+TEST_CASE("two primitives of one mesh keep their own materials", "[gltf]") {
+    const Model model = load_model(kGltfDir / "two_primitives.gltf");
+    REQUIRE(model.primitives.size() == 2);
+    CHECK(model.primitives[0].base_colour == glm::vec4(1, 0, 0, 1));
+    CHECK(model.primitives[1].base_colour == glm::vec4(0, 0, 1, 1));
+    CHECK(model.primitives[0].indices.size() == 3);
+    CHECK(model.primitives[1].indices.size() == 6);  // unsigned byte indices
+    require_vec3(model.bounds_min, {-1, -1, 0});
+    require_vec3(model.bounds_max, {1, 1, 1});
+}
+
+TEST_CASE("a base colour texture is decoded to RGBA8 with its texture coordinates", "[gltf]") {
+    const Model model = load_model(kGltfDir / "textured.gltf");
+    REQUIRE(model.textures.size() == 1);
+    const auto& image = model.textures[0];
+    REQUIRE(image.width == 2);
+    REQUIRE(image.height == 2);
+    REQUIRE(image.pixels.size() == 16);
+    // Rows top to bottom: red, green / blue, white.
+    CHECK(std::vector<std::uint8_t>(image.pixels.begin(), image.pixels.begin() + 4) ==
+          std::vector<std::uint8_t>{255, 0, 0, 255});
+    CHECK(std::vector<std::uint8_t>(image.pixels.begin() + 8, image.pixels.begin() + 12) ==
+          std::vector<std::uint8_t>{0, 0, 255, 255});
+    REQUIRE(model.primitives.size() == 1);
+    const auto& p = model.primitives[0];
+    CHECK(p.texture == 0);
+    REQUIRE(p.texcoords.size() == 4);
+    CHECK(p.texcoords[0] == glm::vec2(0, 1));
+    CHECK(p.texcoords[2] == glm::vec2(1, 0));
+}
+
+TEST_CASE("a LINES primitive is skipped with a warning and the triangles still load", "[gltf]") {
+    const Model model = load_model(kGltfDir / "lines_and_triangles.gltf");
+    REQUIRE(model.primitives.size() == 1);
+    REQUIRE(model.warnings.size() == 1);
+    CHECK_THAT(model.warnings[0], Catch::Contains("LINES"));
+    require_vec3(model.bounds_max, {1, 1, 0});  // the line's (5,5,5) is not part of the model
+}
+
+TEST_CASE("URIs that leave the model's folder are refused before anything is read", "[gltf]") {
+    for (const char* name : {"escape_parent.gltf", "escape_encoded.gltf", "escape_absolute.gltf",
+                             "escape_file_uri.gltf"}) {
+        INFO(name);
+        const std::string error = load_error(kGltfDir / name);
+        CHECK_THAT(error, Catch::StartsWith((kGltfDir / name).string() + ": "));
+        CHECK_THAT(error, Catch::Contains("/buffers/0/uri") && Catch::Contains("refused"));
+    }
+    CHECK_THAT(load_error(kGltfDir / "escape_parent.gltf"), Catch::Contains("leaves"));
+    CHECK_THAT(load_error(kGltfDir / "escape_absolute.gltf"), Catch::Contains("absolute"));
+}
+
+TEST_CASE("a symbolic link that points out of the model's folder is refused", "[gltf]") {
+    const fs::path dir = temp_folder("symlink");
+    fs::copy_file(kGltfDir / "quad_external.gltf", dir / "quad_external.gltf");
+    fs::create_symlink(kGltfDir / "quad_external.bin", dir / "quad_external.bin");
+    const std::string error = load_error(dir / "quad_external.gltf");
+    CHECK_THAT(error, Catch::StartsWith((dir / "quad_external.gltf").string() + ": "));
+    CHECK_THAT(error, Catch::Contains("outside the model's folder"));
+    // The same file beside a real copy of the buffer loads.
+    fs::remove(dir / "quad_external.bin");
+    fs::copy_file(kGltfDir / "quad_external.bin", dir / "quad_external.bin");
+    CHECK(scene_viewer::triangle_count(load_model(dir / "quad_external.gltf")) == 2);
+    fs::remove_all(dir);
+}
+
+TEST_CASE("a truncated .glb is refused and the error names the file", "[gltf]") {
+    const std::string error = load_error(kGltfDir / "truncated.glb");
+    CHECK_THAT(error, Catch::StartsWith((kGltfDir / "truncated.glb").string() + ": "));
+    CHECK_THAT(error, Catch::Contains("truncated .glb"));
+}
+
+TEST_CASE("a missing file and a file that is not glTF are refused with the file name", "[gltf]") {
+    CHECK_THAT(load_error(kGltfDir / "no_such_model.glb"),
+               Catch::Equals((kGltfDir / "no_such_model.glb").string() + ": file not found"));
+    CHECK_THAT(load_error(kGltfDir / "checker.png"),
+               Catch::Equals((kGltfDir / "checker.png").string() + ": not valid glTF JSON"));
+}
+
+TEST_CASE("a buffer shorter than its accessors is refused", "[gltf]") {
+    const fs::path dir = temp_folder("short-buffer");
+    fs::copy_file(kGltfDir / "quad_external.gltf", dir / "quad_external.gltf");
+    std::ofstream(dir / "quad_external.bin", std::ios::binary) << std::string(20, '\0');
+    const std::string error = load_error(dir / "quad_external.gltf");
+    CHECK_THAT(error, Catch::StartsWith((dir / "quad_external.gltf").string() + ": "));
+    CHECK_FALSE(error.empty());
+    fs::remove_all(dir);
+}
+
+TEST_CASE("computed normals are the area-weighted average of the adjacent faces", "[gltf]") {
+    // Two faces share the edge (0,0,0)-(1,0,0): one in the z = 0 plane (area 1, normal +z),
+    // one in the y = 0 plane (area 0.5, normal -y).
+    scene_viewer::MeshPrimitive p;
+    p.positions = {{0, 0, 0}, {1, 0, 0}, {0, 2, 0}, {0, 0, 1}};
+    p.indices = {0, 1, 2, 0, 1, 3};
+    scene_viewer::compute_normals(p);
+    REQUIRE(p.normals.size() == 4);
+    require_vec3(p.normals[2], {0, 0, 1});
+    require_vec3(p.normals[3], {0, -1, 0});
+    // Shared vertices: face areas 1 (+z) and 0.5 (-y) -> direction (0, -0.5, 1) normalised.
+    const glm::vec3 expected = glm::normalize(glm::vec3(0, -0.5f, 1));
+    require_vec3(p.normals[0], expected);
+    require_vec3(p.normals[1], expected);
+}
