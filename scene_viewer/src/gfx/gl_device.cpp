@@ -232,11 +232,6 @@ class GlDevice final : public Device {
         auto it = meshes_.find(call.mesh.id);
         if (it == meshes_.end()) throw std::invalid_argument("draw of an unknown mesh handle");
         const GpuMesh& mesh = it->second;
-        if (call.depth_test) {
-            glEnable(GL_DEPTH_TEST);
-        } else {
-            glDisable(GL_DEPTH_TEST);
-        }
         const glm::mat3 normal_matrix = glm::transpose(glm::inverse(glm::mat3(call.model)));
         glUniformMatrix4fv(u_.model, 1, GL_FALSE, glm::value_ptr(call.model));
         glUniformMatrix4fv(u_.view_projection, 1, GL_FALSE, glm::value_ptr(call.view_projection));

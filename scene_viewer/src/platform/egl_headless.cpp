@@ -92,7 +92,9 @@ HeadlessContext::HeadlessContext() : impl_(std::make_unique<Impl>()) {
     auto get_platform_display = reinterpret_cast<PFNEGLGETPLATFORMDISPLAYEXTPROC>(
         eglGetProcAddress("eglGetPlatformDisplayEXT"));
     if (!has_extension(client, "EGL_EXT_platform_base") || get_platform_display == nullptr) {
-        throw std::runtime_error("EGL_EXT_platform_base missing from EGL client extensions");
+        throw std::runtime_error(
+            "EGL_EXT_platform_base missing from EGL client extensions (no EGL vendor library? "
+            "install libegl-mesa0)");
     }
 
     Impl& s = *impl_;

@@ -11,32 +11,26 @@ void render_world(const World& world, const ModelLibrary& models, Device& device
     setup.width_px = camera.width_px;
     setup.height_px = camera.height_px;
     const glm::mat4 view_projection = camera.projection * camera.view;
-    // The light is fixed relative to the camera's world, so lit renders match across views.
     device.begin_frame(setup);
-    // Depth-tested draws first, then overlays that ignore depth.
-    for (const bool overlay_pass : {false, true}) {
-        const auto& owners = world.meshes.owners();
-        const auto& meshes = world.meshes.dense();
-        for (std::size_t i = 0; i < meshes.size(); ++i) {
-            const EntityId e = owners[i];
-            const Material* material = world.materials.get(e);
-            const WorldMatrix* world_matrix = world.world_matrices.get(e);
-            if (material == nullptr || world_matrix == nullptr) continue;
-            if (material->depth_test == overlay_pass) continue;
-            const UploadedModel& model = models.at(meshes[i].model);
-            for (const UploadedPrimitive& p : model.primitives) {
-                DrawCall call;
-                call.mesh = p.mesh;
-                call.texture = material->lit ? p.texture : TextureHandle{};
-                call.model = world_matrix->value * p.node_transform;
-                call.view_projection = view_projection;
-                call.colour = material->lit ? material->colour * p.base_colour : material->colour;
-                call.lit = material->lit;
-                call.vertex_colour = material->vertex_colour;
-                call.depth_test = material->depth_test;
-                call.point_size_px = material->point_size_px;
-                device.draw(call);
-            }
+    const auto& owners = world.meshes.owners();
+    const auto& meshes = world.meshes.dense();
+    for (std::size_t i = 0; i < meshes.size(); ++i) {
+        const EntityId e = owners[i];
+        const Material* material = world.materials.get(e);
+        const WorldMatrix* world_matrix = world.world_matrices.get(e);
+        if (material == nullptr || world_matrix == nullptr) continue;
+        const UploadedModel& model = models.at(meshes[i].model);
+        for (const UploadedPrimitive& p : model.primitives) {
+            DrawCall call;
+            call.mesh = p.mesh;
+            call.texture = material->lit ? p.texture : TextureHandle{};
+            call.model = world_matrix->value * p.node_transform;
+            call.view_projection = view_projection;
+            call.colour = material->lit ? material->colour * p.base_colour : material->colour;
+            call.lit = material->lit;
+            call.vertex_colour = material->vertex_colour;
+            call.point_size_px = material->point_size_px;
+            device.draw(call);
         }
     }
     device.end_frame();

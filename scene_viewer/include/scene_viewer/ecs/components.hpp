@@ -36,7 +36,6 @@ struct Material {
     glm::vec4 colour{1.0f};      ///< class colour, linear 0..1 (exact palette colour / 255)
     bool lit = true;             ///< false: flat colour, no lighting
     bool vertex_colour = false;  ///< use per-vertex colours (point clouds)
-    bool depth_test = true;      ///< false: drawn over everything (BEV grid overlay)
     float point_size_px = 2.0f;  ///< size of GL points
 };
 

@@ -56,7 +56,6 @@ struct DrawCall {
     glm::vec4 colour{1.0f};           ///< RGBA 0..1
     bool lit = true;                  ///< directional + ambient, else flat colour
     bool vertex_colour = false;       ///< multiply by per-vertex colours
-    bool depth_test = true;           ///< false: always drawn over what is there
     float point_size_px = 1.0f;       ///< for Topology::points
 };
 
