@@ -226,6 +226,44 @@ std::vector<Candidate> suppress_shadows(std::vector<Candidate> candidates,
     return kept;
 }
 
+/// Image-space connected components refined by depth: points of neighbouring pixels (within
+/// radius_px, to hop small disparity holes) are linked when their 3D distance is below the
+/// depth-grown clustering distance.
+std::vector<Indices> image_components(const std::vector<Eigen::Vector3f>& pts,
+                                      const std::vector<std::uint32_t>& pixels,
+                                      const PixelGrid& grid, const ClusterOptions& co,
+                                      int radius_px) {
+    std::vector<long> at(static_cast<std::size_t>(grid.width_px) * grid.height_px, -1);
+    for (std::size_t i = 0; i < pts.size(); ++i) at[pixels[i]] = static_cast<long>(i);
+    std::vector<char> seen(pts.size(), 0);
+    std::vector<Indices> out;
+    for (std::size_t seed = 0; seed < pts.size(); ++seed) {
+        if (seen[seed]) continue;
+        seen[seed] = 1;
+        Indices queue = {seed};
+        for (std::size_t head = 0; head < queue.size(); ++head) {
+            const std::size_t i = queue[head];
+            const int u0 = static_cast<int>(pixels[i] % static_cast<std::uint32_t>(grid.width_px));
+            const int v0 = static_cast<int>(pixels[i] / static_cast<std::uint32_t>(grid.width_px));
+            for (int v = std::max(0, v0 - radius_px);
+                 v <= std::min(grid.height_px - 1, v0 + radius_px); ++v) {
+                for (int u = std::max(0, u0 - radius_px);
+                     u <= std::min(grid.width_px - 1, u0 + radius_px); ++u) {
+                    const long j = at[static_cast<std::size_t>(v) * grid.width_px + u];
+                    if (j < 0 || seen[static_cast<std::size_t>(j)]) continue;
+                    const auto& q = pts[static_cast<std::size_t>(j)];
+                    const double link = co.distance_at(std::min(double{pts[i].z()}, double{q.z()}));
+                    if (double{(pts[i] - q).squaredNorm()} > link * link) continue;
+                    seen[static_cast<std::size_t>(j)] = 1;
+                    queue.push_back(static_cast<std::size_t>(j));
+                }
+            }
+        }
+        out.push_back(std::move(queue));
+    }
+    return out;
+}
+
 std::vector<scene_schema::Entity> instances_of_class(const ClassInfo& info,
                                                      const std::vector<Eigen::Vector3f>& pts,
                                                      const std::vector<std::uint32_t>& pixels,
@@ -246,12 +284,20 @@ std::vector<scene_schema::Entity> instances_of_class(const ClassInfo& info,
     }
     fit.rest_on_ground = s.thing;
 
-    std::vector<Candidate> candidates;
-    for (const auto& cluster : euclidean_clusters(voxels.centroid, co)) {
-        Indices members;
-        for (std::size_t v : cluster) {
-            members.insert(members.end(), voxels.members[v].begin(), voxels.members[v].end());
+    std::vector<Indices> clusters;
+    if (s.thing && options.clustering == "image" && grid.valid()) {
+        clusters = image_components(pts, pixels, grid, co, options.image_radius_px);
+    } else {
+        for (const auto& cluster : euclidean_clusters(voxels.centroid, co)) {
+            Indices members;
+            for (std::size_t v : cluster) {
+                members.insert(members.end(), voxels.members[v].begin(), voxels.members[v].end());
+            }
+            clusters.push_back(std::move(members));
         }
+    }
+    std::vector<Candidate> candidates;
+    for (auto& members : clusters) {
         if (members.size() < static_cast<std::size_t>(s.min_points)) continue;
         if (s.thing) members = drop_outliers(pts, members, s, ground, options.outlier_margin_m);
         // Fit, split oversized blobs (at most two levels: rows, then side by side), refit.
@@ -282,8 +328,7 @@ std::vector<scene_schema::Entity> instances_of_class(const ClassInfo& info,
     }
     if (s.thing && s.has_prior()) {
         candidates = suppress_shadows(std::move(candidates), pixels, grid, s.prior_W_m,
-                                      options.shadow_fraction,
-                                      options.shadow_radius_px);
+                                      options.shadow_fraction, options.shadow_radius_px);
     }
     std::vector<scene_schema::Entity> out;
     for (const auto& c : candidates) {
@@ -309,6 +354,11 @@ void ExtractOptions::validate() const {
     classes.validate();
     ground.validate();
     if (!(max_range_m > 0.0)) throw std::invalid_argument("max_range_m: must be > 0");
+    if (clustering != "euclidean" && clustering != "image") {
+        throw std::invalid_argument("clustering: must be euclidean or image (got '" + clustering +
+                                    "')");
+    }
+    if (image_radius_px < 1) throw std::invalid_argument("image_radius_px: must be >= 1");
     if (!(outlier_margin_m >= 0.0)) throw std::invalid_argument("outlier_margin_m: must be >= 0");
     if (!(shadow_fraction > 0.0 && shadow_fraction <= 1.0)) {
         throw std::invalid_argument("shadow_fraction: must be in (0, 1]");

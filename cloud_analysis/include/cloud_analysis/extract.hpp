@@ -17,10 +17,13 @@ namespace cloud_analysis {
 
 /// Settings of extract_entities.
 struct ExtractOptions {
-    std::string method = "instances";  ///< "instances" | "centroid" | "average" | "variance"
-    ClassConfig classes;               ///< per-class settings (load_class_config)
-    GroundOptions ground;              ///< RANSAC settings of the ground plane
-    double max_range_m = 60.0;         ///< points farther than this (z) are ignored, metres
+    std::string method = "instances";      ///< "instances" | "centroid" | "average" | "variance"
+    ClassConfig classes;                   ///< per-class settings (load_class_config)
+    GroundOptions ground;                  ///< RANSAC settings of the ground plane
+    std::string clustering = "euclidean";  ///< things: "euclidean" (3D, PCL kd-tree) or "image"
+                                           ///< (pixel components refined by depth)
+    int image_radius_px = 2;               ///< "image": pixel neighbourhood linked, >= 1
+    double max_range_m = 60.0;             ///< points farther than this (z) are ignored, metres
     std::vector<std::string> ground_classes = {"road", "sidewalk", "parking"};  ///< plane votes
     double outlier_margin_m = 0.5;     ///< thing points farther than near + prior diagonal +
                                        ///< this (bird's-eye range) are stereo smear, metres
