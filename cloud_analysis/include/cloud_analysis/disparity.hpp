@@ -31,8 +31,8 @@ struct DisparityOptions {
     bool lr_check = false;           ///< drop pixels whose right-image match disagrees
     double lr_max_diff_px = 1.0;     ///< tolerance of that check, px
     bool wls = false;                ///< WLS edge-aware filtering (densifies the map)
-    double wls_lambda = 8000.0;      ///< WLS smoothness weight (ximgproc default 8000)
-    double wls_sigma_colour = 1.5;   ///< WLS sensitivity to image edges (default 1.5)
+    double wls_lambda = 500.0;       ///< WLS smoothness weight (ximgproc sample: 8000)
+    double wls_sigma_colour = 0.8;   ///< WLS edge sensitivity (ximgproc sample: 1.5)
     /// Throws std::invalid_argument naming the first bad field.
     void validate() const;
 };
