@@ -391,6 +391,9 @@ int main(int argc, char** argv) {
     CLI::App* analyse = app.add_subcommand(
         "analyse", "stereo pair -> disparity -> cloud -> entities (the default command)");
     add_analyse_flags(*analyse, analyse_args);
+    analyse->footer(
+        "Other commands: cloud-analysis evaluate --help, cloud-analysis make-sample --help.\n"
+        "Exit codes: 0 ok, 1 failure (one line on stderr, no output written), 2 usage error.");
     cloud_analysis::app::EvaluateArgs evaluate_args;
     CLI::App* evaluate = cloud_analysis::app::add_evaluate_command(app, evaluate_args);
 
