@@ -121,6 +121,21 @@ TEST_CASE("a base colour texture is decoded to RGBA8 with its texture coordinate
     CHECK(p.texcoords[2] == glm::vec2(1, 0));
 }
 
+TEST_CASE("KHR_texture_transform is applied to the texture coordinates", "[gltf]") {
+    // Specification matrix T(offset) R(rotation) S(scale): uv (1, 0) -> scale (0.5, 0) ->
+    // rotate 90 degrees (0, 0.5) -> offset (0.5, 0.75); uv (0, 1) -> (0, 2) -> (-2, 0) ->
+    // (-1.5, 0.25).
+    const Model model = load_model(kGltfDir / "textured_transform.gltf");
+    REQUIRE(model.primitives.size() == 1);
+    const auto& uv = model.primitives[0].texcoords;
+    REQUIRE(uv.size() == 4);
+    CHECK(uv[2].x == Approx(0.5f).margin(1e-6));  // QUAD_UV[2] = (1, 0)
+    CHECK(uv[2].y == Approx(0.75f).margin(1e-6));
+    CHECK(uv[0].x == Approx(-1.5f).margin(1e-6));  // QUAD_UV[0] = (0, 1)
+    CHECK(uv[0].y == Approx(0.25f).margin(1e-6));
+    CHECK(model.primitives[0].texture == 0);
+}
+
 TEST_CASE("a LINES primitive is skipped with a warning and the triangles still load", "[gltf]") {
     const Model model = load_model(kGltfDir / "lines_and_triangles.gltf");
     REQUIRE(model.primitives.size() == 1);

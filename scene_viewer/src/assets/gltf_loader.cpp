@@ -2,6 +2,7 @@
 
 #include <algorithm>
 #include <array>
+#include <cmath>
 #include <cstdint>
 #include <cstring>
 #include <fstream>
@@ -467,6 +468,44 @@ const char* mode_name(int mode) {
     }
 }
 
+/// KHR_texture_transform of a texture reference, as one affine UV matrix.
+struct UvTransform {
+    glm::mat3 matrix{1.0f};
+    int tex_coord = 0;
+};
+
+double number_or(const tinygltf::Value& object, const char* key, int index, double fallback) {
+    if (!object.Has(key)) return fallback;
+    const tinygltf::Value& v = object.Get(key);
+    const tinygltf::Value& item =
+        index < 0
+            ? v
+            : (v.IsArray() && v.ArrayLen() > static_cast<std::size_t>(index) ? v.Get(index)
+                                                                             : tinygltf::Value());
+    return item.IsNumber() || item.IsInt() ? item.GetNumberAsDouble() : fallback;
+}
+
+/// uv' = T(offset) * R(rotation) * S(scale) * uv, the matrix of the extension's specification
+/// (KhronosGroup/glTF, extensions/2.0/Khronos/KHR_texture_transform/README.md).
+UvTransform texture_transform(const tinygltf::TextureInfo& info) {
+    UvTransform out;
+    out.tex_coord = info.texCoord;
+    const auto ext = info.extensions.find("KHR_texture_transform");
+    if (ext == info.extensions.end() || !ext->second.IsObject()) return out;
+    const tinygltf::Value& t = ext->second;
+    const float ox = static_cast<float>(number_or(t, "offset", 0, 0.0));
+    const float oy = static_cast<float>(number_or(t, "offset", 1, 0.0));
+    const float r = static_cast<float>(number_or(t, "rotation", -1, 0.0));
+    const float sx = static_cast<float>(number_or(t, "scale", 0, 1.0));
+    const float sy = static_cast<float>(number_or(t, "scale", 1, 1.0));
+    const glm::mat3 translation(1, 0, 0, 0, 1, 0, ox, oy, 1);
+    const glm::mat3 rotation(std::cos(r), std::sin(r), 0, -std::sin(r), std::cos(r), 0, 0, 0, 1);
+    const glm::mat3 scale(sx, 0, 0, 0, sy, 0, 0, 0, 1);
+    out.matrix = translation * rotation * scale;
+    out.tex_coord = static_cast<int>(number_or(t, "texCoord", -1, info.texCoord));
+    return out;
+}
+
 /// Converts tinygltf's document into our Model: walks the scene's node forest, bakes transforms.
 class Converter {
   public:
@@ -618,9 +657,10 @@ class Converter {
         if (source < 0 || static_cast<std::size_t>(source) >= gltf_.images.size()) {
             throw LoadError(what + ": texture " + std::to_string(texture) + " has no image");
         }
-        if (pbr.baseColorTexture.texCoord != 0) {
+        const UvTransform uv_transform = texture_transform(pbr.baseColorTexture);
+        if (uv_transform.tex_coord != 0) {
             out_.warnings.push_back(what + ": base colour texture uses TEXCOORD_" +
-                                    std::to_string(pbr.baseColorTexture.texCoord) +
+                                    std::to_string(uv_transform.tex_coord) +
                                     ", not loaded; drawn untextured");
             return;
         }
@@ -642,6 +682,10 @@ class Converter {
         if (out.texcoords.empty()) {
             out_.warnings.push_back(what + ": textured material without TEXCOORD_0");
             out.texcoords.assign(out.positions.size(), glm::vec2(0.0f));
+        }
+        if (uv_transform.matrix != glm::mat3(1.0f)) {
+            for (glm::vec2& uv : out.texcoords)
+                uv = glm::vec2(uv_transform.matrix * glm::vec3(uv, 1));
         }
     }
 

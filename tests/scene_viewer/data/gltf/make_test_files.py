@@ -185,6 +185,18 @@ def textured():
     write_json("textured.gltf", d.finish(data_uri(d.bin)))
 
 
+def textured_transform():
+    """textured_transform.gltf: textured.gltf with KHR_texture_transform (offset, rotation 90
+    degrees, scale) on the base colour texture."""
+    textured()
+    doc = json.loads((HERE / "textured.gltf").read_text())
+    doc["extensionsUsed"] = ["KHR_texture_transform"]
+    doc["materials"][0]["pbrMetallicRoughness"]["baseColorTexture"]["extensions"] = {
+        "KHR_texture_transform": {"offset": [0.5, 0.25], "rotation": 1.5707963267948966,
+                                  "scale": [0.5, 2.0]}}
+    write_json("textured_transform.gltf", doc)
+
+
 def lines_and_triangles():
     """lines_and_triangles.gltf: a LINES primitive (skipped with a warning) and a triangle."""
     d = Doc()
@@ -214,5 +226,6 @@ if __name__ == "__main__":
     hierarchy()
     two_primitives()
     textured()
+    textured_transform()
     lines_and_triangles()
     escapes()
