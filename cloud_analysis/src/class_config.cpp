@@ -114,6 +114,11 @@ ClassConfig parse_class_config(std::string_view text, std::string_view origin) {
     }
     try {
         if (!j.is_object()) throw std::invalid_argument(": must be an object");
+        for (const auto& item : j.items()) {
+            if (item.key() != "comment" && item.key() != "defaults" && item.key() != "classes") {
+                throw std::invalid_argument("/" + item.key() + ": unknown member");
+            }
+        }
         ClassConfig config;
         if (j.contains("defaults")) read_settings(j["defaults"], "/defaults", config.fallback);
         if (!j.contains("classes") || !j["classes"].is_array()) {

@@ -81,6 +81,8 @@ TEST_CASE("a malformed class config names the bad member", "[entities]") {
     CHECK_THROWS_WITH(parse_class_config(R"({"classes": [{"thing": true}]})", "x"),
                       Catch::Contains("/classes/0/name"));
     CHECK_THROWS_WITH(parse_class_config("{", "cfg.json"), Catch::Contains("cfg.json"));
+    CHECK_THROWS_WITH(parse_class_config(R"({"classes": [], "clases": []})", "x"),
+                      Catch::Contains("/clases: unknown member"));
 }
 
 TEST_CASE("instances: two cars become two oriented car entities on the fitted road", "[entities]") {
@@ -165,4 +167,32 @@ TEST_CASE("extract options name the bad field", "[entities]") {
     o.method = "instances";
     o.max_range_m = 0.0;
     CHECK_THROWS_WITH(o.validate(), Catch::Contains("max_range_m"));
+}
+
+TEST_CASE("image-space clustering also separates two cars and keeps each whole", "[entities]") {
+    // Give the scene a pixel grid: each point its own pixel, cars in separate image columns.
+    LabeledCloud cloud = test_scene();
+    cloud.width_px = 2000;
+    cloud.height_px = 2000;
+    for (std::size_t i = 0; i < cloud.size(); ++i) {
+        const auto& p = cloud.xyz_m[i];
+        // Pinhole projection with f = 500 px, principal point (1000, 1000).
+        const long u = std::lround(500.0 * double{p.x()} / double{p.z()} + 1000.0);
+        const long v = std::lround(500.0 * double{p.y()} / double{p.z()} + 1000.0);
+        cloud.pixel[i] =
+            static_cast<std::uint32_t>(std::clamp(v, 0L, 1999L) * 2000 + std::clamp(u, 0L, 1999L));
+    }
+    ExtractOptions o = options_with_bundled_config("instances");
+    o.clustering = "image";
+    o.image_radius_px = 3;
+    const auto doc = extract_entities(cloud, test_palette(), StereoCamera{}, o);
+    int cars = 0;
+    for (const auto& e : doc.entities) {
+        if (e.class_name != "car") continue;
+        ++cars;
+        CHECK(e.L == Approx(4.2).margin(0.15));
+    }
+    CHECK(cars == 2);
+    o.clustering = "voxels";
+    CHECK_THROWS_WITH(o.validate(), Catch::Contains("clustering"));
 }
