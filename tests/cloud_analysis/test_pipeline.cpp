@@ -101,3 +101,20 @@ TEST_CASE("rectifying with no distortion and identity rotation leaves the image 
     const ImageU8 out = rectify_image(img, cam, rig);
     CHECK(out.data == img.data);
 }
+
+TEST_CASE("a textureless pair gives an empty disparity, reported as an error", "[pipeline]") {
+    const auto dir = std::filesystem::temp_directory_path() / "stereoscene_test_flat";
+    std::filesystem::create_directories(dir);
+    const ImageU8 flat{200, 60, 1, std::vector<std::uint8_t>(200 * 60, 90)};
+    std::ofstream(dir / "flat.png", std::ios::binary) << encode_png(flat);
+    std::ofstream(dir / "calib.yaml") << "fx: 100\nfy: 100\ncx: 100\ncy: 30\nbaseline_m: 0.5\n";
+    InputPaths p;
+    p.left = p.right = dir / "flat.png";
+    p.calibration = dir / "calib.yaml";
+    AnalyseOptions options;
+    options.disparity.num_disparities = 32;
+    const LoadedInputs in = load_inputs(p, options);
+    REQUIRE_THROWS_WITH(analyse(in, options),
+                        Catch::Contains("empty disparity") && Catch::Contains("flat.png"));
+    std::filesystem::remove_all(dir);
+}
