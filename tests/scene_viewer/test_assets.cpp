@@ -6,6 +6,8 @@
 #include <map>
 #include <string>
 
+#include <unistd.h>
+
 #include <scene_viewer/assets/class_table.hpp>
 #include <scene_viewer/assets/gltf_loader.hpp>
 #include <scene_viewer/assets/image_io.hpp>
@@ -54,7 +56,8 @@ std::string table_error(const fs::path& path) {
 }
 
 fs::path write_table(const std::string& name, const std::string& classes_json) {
-    const fs::path dir = fs::temp_directory_path() / "stereoscene-test-assets";
+    const fs::path dir =
+        fs::temp_directory_path() / ("stereoscene-test-assets-" + std::to_string(::getpid()));
     fs::create_directories(dir);
     const fs::path path = dir / name;
     std::ofstream(path) << R"({"format": "stereoscene-render-classes", "version": 1, "classes": )"
@@ -176,10 +179,12 @@ TEST_CASE("class table errors name the file and the JSON pointer", "[assets]") {
                Catch::Contains("/classes/0/model: model file not found") &&
                    Catch::Contains("no_such_car.glb"));
     CHECK_THAT(table_error(kGltfDir / "checker.png"), Catch::EndsWith(": not valid JSON"));
+    fs::remove_all(bad_colour.parent_path());
 }
 
 TEST_CASE("a user's class table resolves model paths against its own folder", "[assets]") {
-    const fs::path dir = fs::temp_directory_path() / "stereoscene-test-assets" / "user";
+    const fs::path dir = fs::temp_directory_path() /
+                         ("stereoscene-test-assets-" + std::to_string(::getpid())) / "user";
     fs::create_directories(dir / "models");
     fs::copy_file(kGltfDir / "triangle.glb", dir / "models/my_car.glb",
                   fs::copy_options::overwrite_existing);
@@ -191,6 +196,7 @@ TEST_CASE("a user's class table resolves model paths against its own folder", "[
     REQUIRE(table.classes.size() == 1);
     CHECK(table.classes[0].model == dir / "models/my_car.glb");
     CHECK(scene_viewer::triangle_count(load_model(table.classes[0].model)) == 1);
+    fs::remove_all(dir.parent_path());
 }
 
 TEST_CASE("palette colours convert to linear base colours with the sRGB curve", "[assets]") {

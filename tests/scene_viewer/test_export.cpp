@@ -3,6 +3,8 @@
 #include <filesystem>
 #include <string>
 
+#include <unistd.h>
+
 #include <glm/gtc/matrix_transform.hpp>
 #include <scene_viewer/assets/gltf_loader.hpp>
 #include <scene_viewer/assets/scene_export.hpp>
@@ -18,7 +20,8 @@ const fs::path kModelsDir = fs::path(STEREOSCENE_SOURCE_DIR) / "assets/models";
 const fs::path kGltfDir = fs::path(STEREOSCENE_SOURCE_DIR) / "tests/scene_viewer/data/gltf";
 
 fs::path temp_folder(const std::string& name) {
-    const fs::path dir = fs::temp_directory_path() / ("stereoscene-test-export-" + name);
+    const fs::path dir = fs::temp_directory_path() /
+                         ("stereoscene-test-export-" + name + "-" + std::to_string(::getpid()));
     fs::remove_all(dir);
     fs::create_directories(dir);
     return dir;

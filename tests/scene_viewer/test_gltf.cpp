@@ -4,6 +4,8 @@
 #include <fstream>
 #include <string>
 
+#include <unistd.h>
+
 #include <scene_viewer/assets/gltf_loader.hpp>
 
 namespace fs = std::filesystem;
@@ -31,7 +33,8 @@ void require_vec3(const glm::vec3& got, const glm::vec3& want) {
 
 /// A fresh empty folder under the system's temp directory.
 fs::path temp_folder(const std::string& name) {
-    const fs::path dir = fs::temp_directory_path() / ("stereoscene-test-gltf-" + name);
+    const fs::path dir = fs::temp_directory_path() /
+                         ("stereoscene-test-gltf-" + name + "-" + std::to_string(::getpid()));
     fs::remove_all(dir);
     fs::create_directories(dir);
     return dir;
