@@ -196,6 +196,18 @@ TEST_CASE("a buffer shorter than its accessors is refused", "[gltf]") {
     fs::remove_all(dir);
 }
 
+TEST_CASE("an accessor with an absurd element count is refused before allocating", "[gltf]") {
+    const fs::path dir = temp_folder("huge-accessor");
+    std::ofstream(dir / "huge.gltf") << R"({"asset": {"version": "2.0"},
+        "accessors": [{"count": 100000000, "type": "VEC3", "componentType": 5126}],
+        "meshes": [{"primitives": [{"attributes": {"POSITION": 0}}]}],
+        "nodes": [{"mesh": 0}], "scenes": [{"nodes": [0]}], "scene": 0})";
+    const std::string error = load_error(dir / "huge.gltf");
+    CHECK_THAT(error, Catch::StartsWith((dir / "huge.gltf").string() + ": "));
+    CHECK_THAT(error, Catch::Contains("100000000 elements"));
+    fs::remove_all(dir);
+}
+
 TEST_CASE("computed normals are the area-weighted average of the adjacent faces", "[gltf]") {
     // Two faces share the edge (0,0,0)-(1,0,0): one in the z = 0 plane (area 1, normal +z),
     // one in the y = 0 plane (area 0.5, normal -y).

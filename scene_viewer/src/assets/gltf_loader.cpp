@@ -289,6 +289,13 @@ AccessorView view_accessor(const tinygltf::Model& gltf, int index, const std::st
     if (accessor.sparse.isSparse) {
         throw LoadError(what + ": sparse accessors are not supported");
     }
+    // A guard against absurd counts (an accessor without a buffer view allocates its zeros).
+    constexpr std::size_t kMaxElements = std::size_t{1} << 24;
+    if (accessor.count > kMaxElements) {
+        throw LoadError(what + ": accessor " + std::to_string(index) + " has " +
+                        std::to_string(accessor.count) + " elements, more than " +
+                        std::to_string(kMaxElements));
+    }
     AccessorView view;
     view.count = accessor.count;
     view.components = component_count(accessor.type);
