@@ -68,7 +68,7 @@ std::vector<Box> scene_boxes(double ground_y) {
     return {
         on_ground("car", 26, car, -2.0, 11.0, -kPi / 2, 1.8, 1.5, 4.2, 70),
         on_ground("car", 26, car, 2.2, 17.0, -kPi / 2 + 0.35, 1.8, 1.5, 4.4, 95),
-        on_ground("car", 26, car, -2.3, 24.0, -kPi / 2, 1.9, 1.6, 4.6, 60),
+        on_ground("car", 26, car, -0.4, 30.0, -kPi / 2, 1.9, 1.6, 4.6, 60),
         on_ground("person", 24, person, 5.3, 9.0, -kPi / 2, 0.6, 1.75, 0.5, 110),
         on_ground("person", 24, person, -5.6, 14.0, 0.0, 0.6, 1.7, 0.5, 100),
         on_ground("building", 11, building, -10.0, 22.0, -kPi / 2, 4.0, 8.0, 30.0, 130),
