@@ -226,6 +226,30 @@ std::vector<Candidate> suppress_shadows(std::vector<Candidate> candidates,
     return kept;
 }
 
+/// Drops thing candidates whose centre lies inside the footprint of a candidate with more
+/// points: two objects cannot overlap that much, so the smaller is a fragment of the larger.
+std::vector<Candidate> suppress_nested(std::vector<Candidate> candidates) {
+    std::stable_sort(candidates.begin(), candidates.end(), [](const auto& a, const auto& b) {
+        return a.members.size() > b.members.size();
+    });
+    std::vector<Candidate> kept;
+    for (auto& c : candidates) {
+        bool nested = false;
+        for (const auto& k : kept) {
+            const double dx = c.box.centre_m.x() - k.box.centre_m.x();
+            const double dz = c.box.centre_m.z() - k.box.centre_m.z();
+            const double along = dx * std::cos(k.box.theta) - dz * std::sin(k.box.theta);
+            const double across = dx * std::sin(k.box.theta) + dz * std::cos(k.box.theta);
+            if (std::abs(along) < k.box.L_m / 2.0 && std::abs(across) < k.box.W_m / 2.0) {
+                nested = true;
+                break;
+            }
+        }
+        if (!nested) kept.push_back(std::move(c));
+    }
+    return kept;
+}
+
 /// Image-space connected components refined by depth: points of neighbouring pixels (within
 /// radius_px, to hop small disparity holes) are linked when their 3D distance is below the
 /// depth-grown clustering distance.
@@ -330,6 +354,7 @@ std::vector<scene_schema::Entity> instances_of_class(const ClassInfo& info,
         candidates = suppress_shadows(std::move(candidates), pixels, grid, s.prior_W_m,
                                       options.shadow_fraction, options.shadow_radius_px);
     }
+    if (s.thing) candidates = suppress_nested(std::move(candidates));
     std::vector<scene_schema::Entity> out;
     for (const auto& c : candidates) {
         out.push_back(make_entity(info, c.box, c.members.size(), confidence_of(c.members.size(), s),
