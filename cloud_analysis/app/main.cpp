@@ -240,6 +240,28 @@ int run_analyse(const AnalyseArgs& a) {
             throw CLI::ValidationError(flag, e.what());
         }
     }
+    const std::vector<std::pair<std::string, const char*>> all_outputs = {
+        {a.entities, "--entities"},
+        {a.xyz.string(), "--xyz"},
+        {a.pcd.string(), "--pcd"},
+        {a.ply.string(), "--ply"},
+        {a.disparity_png.string(), "--disparity-png"},
+        {a.disparity_kitti.string(), "--disparity-kitti"}};
+    int to_stdout = 0;
+    for (const auto& [path, flag] : all_outputs) {
+        if (path.empty()) continue;
+        if (path == "-") {
+            if (++to_stdout > 1) {
+                throw CLI::ValidationError(flag, "only one output can go to stdout ('-')");
+            }
+            continue;
+        }
+        const std::filesystem::path folder = std::filesystem::path(path).parent_path();
+        if (!folder.empty() && !std::filesystem::is_directory(folder)) {
+            throw std::runtime_error("cannot write output: no such folder (" + folder.string() +
+                                     ", " + flag + ")");
+        }
+    }
     cloud_analysis::ExtractOptions extract;
     extract.method = a.method;
     extract.classes = cloud_analysis::load_class_config(
@@ -322,10 +344,19 @@ int run_analyse(const AnalyseArgs& a) {
         timings.push_back({"encode disparity", ms_since(t)});
     }
     // Every output exists in memory now: only writing is left.
-    for (const auto& out : outputs) {
-        t = Clock::now();
-        write_output(out);
-        timings.push_back({"write " + out.label, ms_since(t)});
+    std::vector<std::filesystem::path> written;
+    try {
+        for (const auto& out : outputs) {
+            t = Clock::now();
+            write_output(out);
+            if (out.path != "-") written.emplace_back(out.path);
+            timings.push_back({"write " + out.label, ms_since(t)});
+        }
+    } catch (...) {
+        // All or nothing: take back the files this run already wrote.
+        std::error_code ignored;
+        for (const auto& path : written) std::filesystem::remove(path, ignored);
+        throw;
     }
 
     if (a.timings) {

@@ -125,6 +125,24 @@ TEST_CASE("a missing input file exits 1 naming it and leaves no output file", "[
     CHECK_FALSE(fs::exists(ply));
 }
 
+TEST_CASE("an output into a missing folder fails before any work and writes nothing", "[cli]") {
+    const auto dir = scratch("no_folder");
+    const fs::path json = dir / "e.json";
+    const Run r = run(tool() + sample_inputs() + " -o " + quote(json.string()) + " --ply " +
+                          quote((dir / "missing" / "c.ply").string()),
+                      dir);
+    CHECK(r.code == 1);
+    CHECK(r.err.find("no such folder") != std::string::npos);
+    CHECK(r.err.find("--ply") != std::string::npos);
+    CHECK_FALSE(fs::exists(json));
+    const Run two = run(tool() + sample_inputs() + " -o - --disparity-kitti -", dir);
+    CHECK(two.code == 2);
+    const Run las =
+        run(tool() + sample_inputs() + " --xyz " + quote((dir / "c.las").string()), dir);
+    CHECK(las.code == 2);
+    CHECK(las.err.find(".las") != std::string::npos);
+}
+
 TEST_CASE("a semantic image of another size and a zero baseline fail before any output", "[cli]") {
     const auto dir = scratch("mismatch");
     const Run small = run(
