@@ -93,6 +93,19 @@ TEST_CASE("node hierarchy transforms are baked into positions", "[gltf]") {
     require_vec3(model.bounds_max, {12, 7, 0});
 }
 
+TEST_CASE("a mirroring node transform keeps triangles counter-clockwise from the front", "[gltf]") {
+    // The +z-facing triangle mirrored in x still faces +z; its winding must be flipped back.
+    const Model model = load_model(kGltfDir / "mirrored.gltf");
+    REQUIRE(model.primitives.size() == 1);
+    const auto& p = model.primitives[0];
+    const glm::vec3 a = p.positions[p.indices[0]];
+    const glm::vec3 b = p.positions[p.indices[1]];
+    const glm::vec3 c = p.positions[p.indices[2]];
+    require_vec3(glm::normalize(glm::cross(b - a, c - a)), {0, 0, 1});
+    require_vec3(p.normals[0], {0, 0, 1});
+    require_vec3(model.bounds_min, {-1, 0, 0});
+}
+
 TEST_CASE("two primitives of one mesh keep their own materials", "[gltf]") {
     const Model model = load_model(kGltfDir / "two_primitives.gltf");
     REQUIRE(model.primitives.size() == 2);

@@ -155,6 +155,14 @@ def hierarchy():
     write_json("hierarchy.gltf", d.finish(data_uri(d.bin)))
 
 
+def mirrored():
+    """mirrored.gltf: the triangle under a node scaled by -1 in x (a mirroring transform)."""
+    d = Doc()
+    pos = d.positions(TRIANGLE)
+    d.node({"scale": [-1, 1, 1], "mesh": d.mesh([{"attributes": {"POSITION": pos}}])})
+    write_json("mirrored.gltf", d.finish(data_uri(d.bin)))
+
+
 def two_primitives():
     """two_primitives.gltf: one mesh, a red triangle and a blue quad at z = 1."""
     d = Doc()
@@ -224,6 +232,7 @@ if __name__ == "__main__":
     quad_external()
     quad_datauri()
     hierarchy()
+    mirrored()
     two_primitives()
     textured()
     textured_transform()
