@@ -160,7 +160,17 @@ OrientedBox fit_upright_box(const std::vector<Eigen::Vector3f>& points_m,
         ab.push_back(frame.footprint(q));
         heights.push_back(frame.height(q));
     }
-    const double angle = best_lshape_angle(ab, options.angle_step_deg);
+    // The angle search costs 90 passes: run it on at most kMaxSearchPoints evenly strided points.
+    constexpr std::size_t kMaxSearchPoints = 3000;
+    double angle = 0.0;
+    if (ab.size() > kMaxSearchPoints) {
+        std::vector<Eigen::Vector2d> sample;
+        const std::size_t stride = ab.size() / kMaxSearchPoints + 1;
+        for (std::size_t i = 0; i < ab.size(); i += stride) sample.push_back(ab[i]);
+        angle = best_lshape_angle(sample, options.angle_step_deg);
+    } else {
+        angle = best_lshape_angle(ab, options.angle_step_deg);
+    }
     Eigen::Vector2d e1(std::cos(angle), std::sin(angle));
     Eigen::Vector2d e2(-std::sin(angle), std::cos(angle));
     std::vector<double> c1, c2;
