@@ -1,7 +1,6 @@
 #include "scene_viewer/assets/scene_export.hpp"
 
 #include <cmath>
-#include <cstring>
 #include <limits>
 #include <map>
 #include <sstream>
@@ -112,7 +111,6 @@ class Builder {
             encode_png(model.textures.at(static_cast<std::size_t>(texture)), 6);
         tinygltf::Image image;
         image.bufferView = add_view(png.data(), png.size(), 0);
-        gltf_.bufferViews.back().target = 0;
         image.mimeType = "image/png";
         gltf_.images.push_back(std::move(image));
         tinygltf::Texture tex;
@@ -207,13 +205,9 @@ void export_scene_glb(const std::vector<PlacedModel>& scene, const std::filesyst
     } catch (const std::exception& e) {
         throw std::runtime_error(path.string() + ": " + e.what());
     }
-    try {
-        scene_schema::write_file_atomic(
-            path, std::string_view(reinterpret_cast<const char*>(bytes.data()), bytes.size()));
-    } catch (const std::exception& e) {
-        // FileError already names the path.
-        throw std::runtime_error(e.what());
-    }
+    // scene_schema::FileError (a std::runtime_error) already names the path.
+    scene_schema::write_file_atomic(
+        path, std::string_view(reinterpret_cast<const char*>(bytes.data()), bytes.size()));
 }
 
 }  // namespace scene_viewer
