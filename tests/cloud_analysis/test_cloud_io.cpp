@@ -4,6 +4,8 @@
 #include <cstring>
 #include <filesystem>
 #include <fstream>
+#include <iomanip>
+#include <random>
 #include <sstream>
 
 #include <pcl/io/pcd_io.h>
@@ -107,4 +109,44 @@ TEST_CASE("cloud formats follow the file extension", "[cloud_io]") {
     CHECK(cloud_format_from_path("b.pcd") == CloudFormat::kPcd);
     CHECK(cloud_format_from_path("b.ply") == CloudFormat::kPly);
     CHECK_THROWS_WITH(cloud_format_from_path("b.las"), Catch::Contains(".las"));
+}
+
+TEST_CASE("the fast xyz formatter agrees with iostream on random points", "[cloud_io]") {
+    const Palette city = load_palette("cityscapes");
+    std::mt19937 rng(42);
+    std::uniform_real_distribution<float> coord(-90.0f, 90.0f);
+    std::uniform_int_distribution<int> byte(0, 255);
+    std::uniform_int_distribution<int> cls(0, static_cast<int>(city.classes.size()));
+    LabeledCloud cloud;
+    for (int i = 0; i < 2000; ++i) {
+        cloud.xyz_m.emplace_back(coord(rng), coord(rng) / 100.0f, coord(rng) * 10.0f);
+        cloud.colour.push_back(Rgb{static_cast<std::uint8_t>(byte(rng)),
+                                   static_cast<std::uint8_t>(byte(rng)),
+                                   static_cast<std::uint8_t>(byte(rng))});
+        const int c = cls(rng);
+        cloud.class_index.push_back(c == static_cast<int>(city.classes.size())
+                                        ? kVoidClass
+                                        : static_cast<std::uint16_t>(c));
+        cloud.pixel.push_back(static_cast<std::uint32_t>(i));
+    }
+    // Naive reference: iostream fixed point, "-0.000" printed as "0.000".
+    std::ostringstream ref;
+    ref << "//X Y Z R G B Class Intensity\n" << std::fixed << std::setprecision(3);
+    const auto coordinate = [&](float v) {
+        std::ostringstream one;
+        one << std::fixed << std::setprecision(3) << static_cast<double>(v);
+        const std::string text = one.str();
+        return text == "-0.000" ? std::string("0.000") : text;
+    };
+    for (std::size_t i = 0; i < cloud.size(); ++i) {
+        const auto& p = cloud.xyz_m[i];
+        const auto& c = cloud.colour[i];
+        const int id =
+            cloud.class_index[i] == kVoidClass ? 0 : city.classes[cloud.class_index[i]].id;
+        const int luma = (299 * c[0] + 587 * c[1] + 114 * c[2] + 500) / 1000;
+        ref << coordinate(p.x()) << ' ' << coordinate(p.y()) << ' ' << coordinate(p.z()) << ' '
+            << int{c[0]} << ' ' << int{c[1]} << ' ' << int{c[2]} << ' ' << id << ' ' << luma
+            << '\n';
+    }
+    CHECK(format_xyz(cloud, city) == ref.str());
 }
