@@ -269,7 +269,17 @@ int run_analyse(const AnalyseArgs& a) {
     extract.validate();
     const cloud_analysis::LoadedInputs in = cloud_analysis::load_inputs(a.paths, a.options);
     std::optional<cloud_analysis::DisparityMap> gt;
-    if (!a.gt_disparity.empty()) gt = cloud_analysis::read_kitti_disparity(a.gt_disparity);
+    if (!a.gt_disparity.empty()) {
+        gt = cloud_analysis::read_kitti_disparity(a.gt_disparity);
+        const auto& cam = in.calibration.camera;
+        if (gt->width_px != cam.width_px || gt->height_px != cam.height_px) {
+            throw std::runtime_error(
+                "inputs do not match: GT disparity is " + std::to_string(gt->width_px) + "x" +
+                std::to_string(gt->height_px) + ", rectified images are " +
+                std::to_string(cam.width_px) + "x" + std::to_string(cam.height_px) + " (" +
+                a.gt_disparity.string() + ")");
+        }
+    }
     timings.push_back({"load", ms_since(t)});
     if (!in.calibration.note.empty()) {
         std::cerr << kTool << ": warning: " << in.calibration.note << " (" << in.calibration.source
