@@ -196,3 +196,61 @@ TEST_CASE("image-space clustering also separates two cars and keeps each whole",
     o.clustering = "voxels";
     CHECK_THROWS_WITH(o.validate(), Catch::Contains("clustering"));
 }
+
+namespace {
+
+/// Gives every point the pixel of a pinhole camera (f = 500 px, principal point (1000, 1000))
+/// on a 2000 x 2000 grid.
+void project_pixels(LabeledCloud& cloud) {
+    cloud.width_px = 2000;
+    cloud.height_px = 2000;
+    for (std::size_t i = 0; i < cloud.size(); ++i) {
+        const auto& p = cloud.xyz_m[i];
+        const long u = std::lround(500.0 * double{p.x()} / double{p.z()} + 1000.0);
+        const long v = std::lround(500.0 * double{p.y()} / double{p.z()} + 1000.0);
+        cloud.pixel[i] =
+            static_cast<std::uint32_t>(std::clamp(v, 0L, 1999L) * 2000 + std::clamp(u, 0L, 1999L));
+    }
+}
+
+int count_class(const scene_schema::EntityDocument& doc, const std::string& name) {
+    int n = 0;
+    for (const auto& e : doc.entities) n += e.class_name == name ? 1 : 0;
+    return n;
+}
+
+}  // namespace
+
+TEST_CASE("wrong matches interleaved with a near car's pixels are not a second car", "[entities]") {
+    LabeledCloud cloud;
+    for (float x = -6.0f; x <= 6.0f; x += 0.25f) {
+        for (float z = 3.0f; z <= 40.0f; z += 0.25f) add_point(cloud, {x, 1.65f, z}, 0);
+    }
+    // The rear of a car 10 m ahead; every 10th of its pixels matched wrongly at twice the
+    // depth (the same viewing ray, so the same pixel neighbourhood).
+    int k = 0;
+    for (float y = 0.15f; y <= 1.65f; y += 0.02f) {
+        for (float x = -0.9f; x <= 0.9f; x += 0.02f) {
+            const float scale = (k++ % 10 == 0) ? 2.0f : 1.0f;
+            add_point(cloud, {x * scale, y * scale, 10.0f * scale}, 2);
+        }
+    }
+    project_pixels(cloud);
+    ExtractOptions o = options_with_bundled_config("instances");
+    CHECK(count_class(extract_entities(cloud, test_palette(), StereoCamera{}, o), "car") == 1);
+    o.shadow_fraction = 1.0;  // never suppress: the shadow becomes a second car
+    CHECK(count_class(extract_entities(cloud, test_palette(), StereoCamera{}, o), "car") == 2);
+}
+
+TEST_CASE("a fragment whose box centre falls inside a larger car is dropped", "[entities]") {
+    LabeledCloud cloud = test_scene();
+    // A blob of car points 1 m behind the visible side of the first car (inside its body).
+    for (float y = 0.8f; y <= 1.2f; y += 0.05f) {
+        for (float x = -3.7f; x <= -3.3f; x += 0.05f) {
+            for (float z = 11.8f; z <= 12.2f; z += 0.1f) add_point(cloud, {x, y, z}, 2);
+        }
+    }
+    const auto doc = extract_entities(cloud, test_palette(), StereoCamera{},
+                                      options_with_bundled_config("instances"));
+    CHECK(count_class(doc, "car") == 2);
+}
