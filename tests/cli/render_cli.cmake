@@ -1,4 +1,5 @@
-# CLI tests of scene-render: run the real binary (see render_cli_check.cmake).
+# CLI tests of scene-render: run the real binary (see render_cli_check.cmake). Each test writes
+# into its own folder so parallel runs do not see each other's temporary files.
 include_guard(GLOBAL)
 
 set(_render_check ${CMAKE_CURRENT_LIST_DIR}/render_cli_check.cmake)
@@ -23,42 +24,42 @@ render_cli_test("--help exits 0 and names the views" ARGS --help CODE 0
     STDOUT "--view")
 render_cli_test("--version exits 0" ARGS --version CODE 0 STDOUT "scene-render")
 render_cli_test("a bad flag exits 2" ARGS --no-such-flag CODE 2)
-render_cli_test("an unknown view exits 2" ARGS ${_street} --view top -o ${_render_out}/top.png
-    CODE 2 STDERR "--view" OUTPUT ${_render_out}/top.png OUTPUT_EXISTS 0)
+render_cli_test("an unknown view exits 2" ARGS ${_street} --view top -o ${_render_out}/top/out.png
+    CODE 2 STDERR "--view" OUTPUT ${_render_out}/top/out.png OUTPUT_EXISTS 0)
 render_cli_test("a zero image size exits 2" ARGS ${_street} --size 0x10
-    -o ${_render_out}/zero.png CODE 2 STDERR "--size" OUTPUT ${_render_out}/zero.png
+    -o ${_render_out}/zero/out.png CODE 2 STDERR "--size" OUTPUT ${_render_out}/zero/out.png
     OUTPUT_EXISTS 0)
 render_cli_test("an absurd image size exits 2" ARGS ${_street} --size 20000x100
-    -o ${_render_out}/huge.png CODE 2 STDERR "16384" OUTPUT ${_render_out}/huge.png
+    -o ${_render_out}/huge/out.png CODE 2 STDERR "16384" OUTPUT ${_render_out}/huge/out.png
     OUTPUT_EXISTS 0)
 render_cli_test("an invalid entity file exits 1 naming the pointer and leaves no output"
-    ARGS ${_bad} -o ${_render_out}/bad.png CODE 1
+    ARGS ${_bad} -o ${_render_out}/bad/out.png CODE 1
     STDERR "invalid entity file: /entities/1/W: .*bad_width.json"
-    OUTPUT ${_render_out}/bad.png OUTPUT_EXISTS 0)
+    OUTPUT ${_render_out}/bad/out.png OUTPUT_EXISTS 0)
 render_cli_test("a missing entity file exits 1" ARGS ${_render_out}/none.json
-    -o ${_render_out}/none.png CODE 1 STDERR "cannot read entity file"
-    OUTPUT ${_render_out}/none.png OUTPUT_EXISTS 0)
+    -o ${_render_out}/none/out.png CODE 1 STDERR "cannot read entity file"
+    OUTPUT ${_render_out}/none/out.png OUTPUT_EXISTS 0)
 render_cli_test("a missing point cloud exits 1 before rendering" ARGS ${_street}
-    --cloud ${_render_out}/none.ply -o ${_render_out}/nocloud.png CODE 1 STDERR "--cloud"
-    OUTPUT ${_render_out}/nocloud.png OUTPUT_EXISTS 0)
+    --cloud ${_render_out}/none.ply -o ${_render_out}/nocloud/out.png CODE 1 STDERR "--cloud"
+    OUTPUT ${_render_out}/nocloud/out.png OUTPUT_EXISTS 0)
 render_cli_test("--info prints the GL renderer" ARGS --info CODE 0 STDOUT "GL renderer: .+")
 foreach(view camera chase bev)
     render_cli_test("renders the street sample in the ${view} view" ARGS ${_street}
-        --view ${view} --size 320x180 -o ${_render_out}/street_${view}.png CODE 0
-        OUTPUT ${_render_out}/street_${view}.png OUTPUT_EXISTS 1)
+        --view ${view} --size 320x180 -o ${_render_out}/street_${view}/out.png CODE 0
+        OUTPUT ${_render_out}/street_${view}/out.png OUTPUT_EXISTS 1)
 endforeach()
 render_cli_test("renders a free view in semantic shading" ARGS ${_street} --view free
     --eye 0,-20,-5 --target 0,0,20 --fov 50 --shading semantic --size 200x120
-    -o ${_render_out}/street_free.png CODE 0 OUTPUT ${_render_out}/street_free.png
+    -o ${_render_out}/street_free/out.png CODE 0 OUTPUT ${_render_out}/street_free/out.png
     OUTPUT_EXISTS 1)
 render_cli_test("--eye without a free view exits 2" ARGS ${_street} --eye 0,0,0
-    -o ${_render_out}/eye.png CODE 2 STDERR "--eye")
+    -o ${_render_out}/eye/out.png CODE 2 STDERR "--eye")
 render_cli_test("grid renders two entity files into one labelled figure" ARGS grid
     --inputs ${_street} ${_street} --labels A B --view bev --size 200x200
-    -o ${_render_out}/grid.png CODE 0 OUTPUT ${_render_out}/grid.png OUTPUT_EXISTS 1)
+    -o ${_render_out}/grid/out.png CODE 0 OUTPUT ${_render_out}/grid/out.png OUTPUT_EXISTS 1)
 render_cli_test("grid with a label count that differs exits 2" ARGS grid
-    --inputs ${_street} ${_street} --labels A -o ${_render_out}/grid2.png CODE 2
-    STDERR "--labels" OUTPUT ${_render_out}/grid2.png OUTPUT_EXISTS 0)
+    --inputs ${_street} ${_street} --labels A -o ${_render_out}/grid2/out.png CODE 2
+    STDERR "--labels" OUTPUT ${_render_out}/grid2/out.png OUTPUT_EXISTS 0)
 render_cli_test("'-' writes the PNG to stdout" ARGS ${_street} --size 64x32 -o - CODE 0
     STDOUT "PNG")
 render_cli_test("bench times a short run and prints a table" ARGS bench --frames 2

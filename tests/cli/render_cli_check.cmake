@@ -3,6 +3,8 @@
 # [-DOUTPUT=<file>] [-DOUTPUT_EXISTS=0|1] [-DPNG_STDOUT=1]
 string(REPLACE "|" ";" args "${ARGS}")
 if(DEFINED OUTPUT)
+    get_filename_component(dir "${OUTPUT}" DIRECTORY)
+    file(MAKE_DIRECTORY "${dir}")
     file(REMOVE "${OUTPUT}")
 endif()
 execute_process(COMMAND ${EXE} ${args} RESULT_VARIABLE code OUTPUT_VARIABLE out
