@@ -139,7 +139,8 @@ std::vector<Indices> split_oversized(const std::vector<Eigen::Vector3f>& pts, co
     if (box.L_m > s.split_factor * s.prior_L_m) {
         return split_along(pts, idx, c, -sn, box.L_m, s.prior_L_m);
     }
-    if (box.W_m > s.split_factor * s.prior_W_m) {
+    // Across the heading only for a clear double width: smear and oblique views widen single cars.
+    if (box.W_m > std::max(s.split_factor, 1.9) * s.prior_W_m) {
         return split_along(pts, idx, sn, c, box.W_m, s.prior_W_m);
     }
     return {idx};
