@@ -3,6 +3,7 @@
 #include <cstdio>
 #include <iostream>
 #include <optional>
+#include <set>
 #include <sstream>
 #include <stdexcept>
 #include <string>
@@ -197,6 +198,17 @@ std::unique_ptr<Gpu> start_gpu(const std::optional<ClassTable>& classes) {
     return gpu;
 }
 
+/// One warning per class, per run, for classes drawn as boxes for want of a model.
+void warn_boxes(const SceneRenderer& renderer) {
+    static std::set<std::string> warned;
+    for (const std::string& name : renderer.classes_drawn_as_boxes()) {
+        if (warned.insert(name).second) {
+            std::cerr << "scene-render: warning: no model for class '" << name
+                      << "', drawn as a box in its class colour\n";
+        }
+    }
+}
+
 void write_output(const std::string& path, const ImageRgba8& image) {
     try {
         write_png(path, image, 1);
@@ -223,12 +235,13 @@ int run(int argc, char** argv) {
     app.set_version_flag("--version", "scene-render 0.1.0");
     app.require_subcommand(0, 1);
 
-    std::string input, output, background;
+    std::string input, output, background, glb;
     float opacity = 0.6f;
     bool info = false;
     ViewArgs view;
     app.add_option("input", input, "entity file (JSON, schema 1.x)");
     app.add_option("-o,--output", output, "output PNG, '-' for stdout");
+    app.add_option("--glb", glb, "also export the assembled scene as one binary glTF (.glb)");
     app.add_option("--background", background,
                    "camera view: lay the render over this image (e.g. the left image)");
     app.add_option("--opacity", opacity, "--background: opacity of the render, 0..1")
@@ -343,7 +356,9 @@ int run(int argc, char** argv) {
         auto gpu = start_gpu(classes);
         std::vector<ImageRgba8> tiles;
         for (const auto& document : documents) {
-            tiles.push_back(gpu->renderer.render(document, cloud ? &*cloud : nullptr, options));
+            gpu->renderer.load(document, cloud ? &*cloud : nullptr, options);
+            if (classes) warn_boxes(gpu->renderer);
+            tiles.push_back(gpu->renderer.render_frame());
         }
         GridFigureOptions figure;
         figure.columns = grid_columns;
@@ -352,7 +367,7 @@ int run(int argc, char** argv) {
     }
 
     if (input.empty()) usage("an entity file is required", "input");
-    if (output.empty()) usage("an output path is required", "--output");
+    if (output.empty() && glb.empty()) usage("an output path is required", "--output/--glb");
     const auto document = read_entities(input);
     RenderOptions options = render_options(view, document);
     if (!(opacity >= 0.0f && opacity <= 1.0f)) usage("must be in 0..1", "--opacity");
@@ -370,12 +385,34 @@ int run(int argc, char** argv) {
     const auto classes = read_classes(view);
 
     auto gpu = start_gpu(classes);
-    ImageRgba8 image = gpu->renderer.render(document, cloud ? &*cloud : nullptr, options);
-    if (background_image) {
-        composite_over(image, resize_nearest(*background_image, image.width, image.height),
-                       opacity);
+    gpu->renderer.load(document, cloud ? &*cloud : nullptr, options);
+    if (classes) warn_boxes(gpu->renderer);
+    // Everything is built in memory before the first file is written.
+    std::vector<unsigned char> glb_bytes;
+    if (!glb.empty()) {
+        try {
+            glb_bytes = export_scene_glb_bytes(gpu->renderer.placed_models());
+        } catch (const std::exception& e) {
+            throw Failure{"cannot export the scene", e.what(), glb};
+        }
     }
-    write_output(output, image);
+    if (!output.empty()) {
+        ImageRgba8 image = gpu->renderer.render_frame();
+        if (background_image) {
+            composite_over(image, resize_nearest(*background_image, image.width, image.height),
+                           opacity);
+        }
+        write_output(output, image);
+    }
+    if (!glb.empty()) {
+        try {
+            scene_schema::write_file_atomic(
+                glb, std::string_view(reinterpret_cast<const char*>(glb_bytes.data()),
+                                      glb_bytes.size()));
+        } catch (const std::exception& e) {
+            throw Failure{"cannot write the scene", e.what(), glb};
+        }
+    }
     return 0;
 }
 

@@ -9,10 +9,10 @@ set(_bad ${PROJECT_SOURCE_DIR}/tests/scene_viewer/data/bad_width.json)
 file(MAKE_DIRECTORY ${_render_out})
 
 function(render_cli_test name)
-    cmake_parse_arguments(T "" "CODE;STDERR;STDOUT;OUTPUT;OUTPUT_EXISTS" "ARGS" ${ARGN})
+    cmake_parse_arguments(T "" "CODE;STDERR;STDOUT;OUTPUT;OUTPUT_EXISTS;MAGIC" "ARGS" ${ARGN})
     string(REPLACE ";" "|" args "${T_ARGS}")
     set(defs -DEXE=$<TARGET_FILE:scene-render> "-DARGS=${args}" -DCODE=${T_CODE})
-    foreach(key STDERR STDOUT OUTPUT OUTPUT_EXISTS)
+    foreach(key STDERR STDOUT OUTPUT OUTPUT_EXISTS MAGIC)
         if(DEFINED T_${key})
             list(APPEND defs "-D${key}=${T_${key}}")
         endif()
@@ -64,3 +64,11 @@ render_cli_test("'-' writes the PNG to stdout" ARGS ${_street} --size 64x32 -o -
     STDOUT "PNG")
 render_cli_test("bench times a short run and prints a table" ARGS bench --frames 2
     --entities 5 --size 160x90 CODE 0 STDOUT "ms/frame")
+render_cli_test("--glb exports the scene as binary glTF without an image" ARGS ${_street}
+    --glb ${_render_out}/glb/out.glb CODE 0 OUTPUT ${_render_out}/glb/out.glb OUTPUT_EXISTS 1
+    MAGIC 676c5446)
+render_cli_test("a class without a model is drawn as a box with one warning" ARGS
+    ${PROJECT_SOURCE_DIR}/tests/scene_viewer/data/street_unmodelled.json --size 160x90
+    -o ${_render_out}/unmodelled/out.png CODE 0
+    STDERR "^scene-render: warning: no model for class 'train'[^\n]*\n$"
+    OUTPUT ${_render_out}/unmodelled/out.png OUTPUT_EXISTS 1)

@@ -1,6 +1,6 @@
 # Runs scene-render once and checks its exit code, stderr, stdout and output file.
 # -DEXE=... -DARGS="a|b|c" -DCODE=<exit code> [-DSTDERR=<regex>] [-DSTDOUT=<regex>]
-# [-DOUTPUT=<file>] [-DOUTPUT_EXISTS=0|1] [-DPNG_STDOUT=1]
+# [-DOUTPUT=<file>] [-DOUTPUT_EXISTS=0|1] [-DMAGIC=<hex of the first bytes, default PNG>]
 string(REPLACE "|" ";" args "${ARGS}")
 if(DEFINED OUTPUT)
     get_filename_component(dir "${OUTPUT}" DIRECTORY)
@@ -33,9 +33,14 @@ if(DEFINED OUTPUT)
         message(FATAL_ERROR "output ${OUTPUT} left behind by a failed run")
     endif()
     if(OUTPUT_EXISTS)
-        file(READ "${OUTPUT}" magic LIMIT 8 HEX)
-        if(NOT magic STREQUAL "89504e470d0a1a0a")
-            message(FATAL_ERROR "${OUTPUT} is not a PNG (${magic})")
+        if(NOT DEFINED MAGIC)
+            set(MAGIC 89504e470d0a1a0a)  # PNG
+        endif()
+        string(LENGTH "${MAGIC}" hex_length)
+        math(EXPR byte_count "${hex_length} / 2")
+        file(READ "${OUTPUT}" magic LIMIT ${byte_count} HEX)
+        if(NOT magic STREQUAL "${MAGIC}")
+            message(FATAL_ERROR "${OUTPUT} starts with ${magic}, expected ${MAGIC}")
         endif()
     endif()
     get_filename_component(dir "${OUTPUT}" DIRECTORY)

@@ -1,4 +1,5 @@
 #include <cmath>
+#include <set>
 
 #include <catch2/catch.hpp>
 #include <glm/glm.hpp>
@@ -252,4 +253,44 @@ TEST_CASE("A textured model uploads its texture once and lit draws bind it", "[e
     CHECK_FALSE(device.draws[0].texture.valid());
     CHECK(device.draws[0].colour == glm::vec4(0, 0, 142 / 255.0f, 1));
     CHECK(device.textures_created == 1);
+}
+
+TEST_CASE("The assembled scene places every entity with the matrix it is drawn with",
+          "[ecs][export]") {
+    NullDevice device;
+    SceneRenderer renderer(device);
+    Model car;
+    MeshPrimitive prim;
+    prim.positions = {{-1, 0, -2}, {1, 1.5f, 2}, {1, 0, 2}};
+    prim.normals = {{0, 1, 0}, {0, 1, 0}, {0, 1, 0}};
+    prim.indices = {0, 1, 2};
+    car.primitives.push_back(prim);
+    car.bounds_min = {-1, 0, -2};
+    car.bounds_max = {1, 1.5f, 2};
+    renderer.set_class_model("car", car);
+
+    auto doc = one_car(0.3);
+    doc.entities.push_back(entity("wall", 12, {-6, 0, 30}, -M_PI / 2, {0.3, 2, 10}));
+    doc.entities.push_back(entity("road", 7, {0, 1.6, 20}, -M_PI / 2, {7, 0.05, 40}));
+    RenderOptions options;
+    options.view = chase_view();
+    renderer.load(doc, nullptr, options);
+    renderer.render_frame();
+    const std::vector<PlacedModel> placed = renderer.placed_models();
+    // Three entities and the ego car; draws are in the same order.
+    REQUIRE(placed.size() == 4);
+    REQUIRE(device.draws.size() == 4);
+    for (std::size_t i = 0; i < placed.size(); ++i) {
+        CHECK(placed[i].world == device.draws[i].model);
+    }
+    CHECK(placed[0].name == doc.entities[0].id);
+    CHECK(placed[0].model->primitives.size() == 1);
+    CHECK(placed[0].model->bounds_max == glm::vec3(1, 1.5f, 2));  // the class model itself
+    CHECK(placed[3].name == "ego");
+    // The wall has no model: a box in the wall's class colour (linear).
+    REQUIRE(placed[1].model != nullptr);
+    CHECK(placed[1].model->primitives.at(0).base_colour.b ==
+          Approx(std::pow((156 / 255.0 + 0.055) / 1.055, 2.4)).epsilon(1e-3));
+    // Road is a patch by design; only the wall is reported as a box for want of a model.
+    CHECK(renderer.classes_drawn_as_boxes() == std::set<std::string>{"wall"});
 }

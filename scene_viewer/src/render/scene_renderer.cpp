@@ -4,6 +4,7 @@
 
 #include "scene_viewer/assets/class_table.hpp"
 #include "scene_viewer/assets/gltf_loader.hpp"
+#include "scene_viewer/render/palette.hpp"
 #include "scene_viewer/systems/build_scene_system.hpp"
 #include "scene_viewer/systems/camera_system.hpp"
 #include "scene_viewer/systems/render_system.hpp"
@@ -35,6 +36,7 @@ SceneRenderer::SceneRenderer(Device& device) : device_(&device), models_(device)
 
 void SceneRenderer::set_class_model(const std::string& class_name, const Model& model) {
     models_.put("class:" + class_name, model);
+    class_models_[class_name] = model;
 }
 
 void SceneRenderer::load(const scene_schema::EntityDocument& document, const PointCloud* cloud,
@@ -58,6 +60,48 @@ ImageRgba8 SceneRenderer::render_frame() {
         for (std::size_t i = 3; i < image.pixels.size(); i += 4) image.pixels[i] = 255;
     }
     return image;
+}
+
+std::set<std::string> SceneRenderer::classes_drawn_as_boxes() const {
+    std::set<std::string> names;
+    const auto& owners = world_.meshes.owners();
+    const auto& meshes = world_.meshes.dense();
+    for (std::size_t i = 0; i < meshes.size(); ++i) {
+        const SourceEntity* source = world_.sources.get(owners[i]);
+        if (source == nullptr || source->index < 0) continue;
+        if (is_ground_class(source->class_id, source->class_name)) continue;
+        if (models_.at(meshes[i].model).key == "box") names.insert(source->class_name);
+    }
+    return names;
+}
+
+std::vector<PlacedModel> SceneRenderer::placed_models() {
+    update_world_matrices(world_);
+    std::vector<PlacedModel> placed;
+    const auto& owners = world_.meshes.owners();
+    const auto& meshes = world_.meshes.dense();
+    for (std::size_t i = 0; i < meshes.size(); ++i) {
+        const EntityId e = owners[i];
+        const SourceEntity* source = world_.sources.get(e);
+        const WorldMatrix* world_matrix = world_.world_matrices.get(e);
+        if (source == nullptr || world_matrix == nullptr || !meshes[i].fit_to_transform) continue;
+        const std::string& key = models_.at(meshes[i].model).key;
+        const Model* model = nullptr;
+        if (key.rfind("class:", 0) == 0) {
+            model = &class_models_.at(key.substr(6));
+        } else {
+            auto it = export_boxes_.find(source->class_name);
+            if (it == export_boxes_.end()) {
+                const Rgb8 colour = class_colour(source->class_id, source->class_name);
+                it =
+                    export_boxes_.emplace(source->class_name, make_box_model(linear_colour(colour)))
+                        .first;
+            }
+            model = &it->second;
+        }
+        placed.push_back(PlacedModel{model, world_matrix->value, source->id});
+    }
+    return placed;
 }
 
 ImageRgba8 SceneRenderer::render(const scene_schema::EntityDocument& document,

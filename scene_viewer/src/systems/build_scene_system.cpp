@@ -110,7 +110,8 @@ void build_scene(World& world, const scene_schema::EntityDocument& document,
                               : to_colour(class_colour(src.class_id, src.class_name));
         material.lit = lit;
         world.materials.set(e, material);
-        world.sources.set(e, SourceEntity{static_cast<std::int32_t>(i), src.id, src.class_id});
+        world.sources.set(
+            e, SourceEntity{static_cast<std::int32_t>(i), src.id, src.class_id, src.class_name});
     }
 
     const ViewKind kind = options.view.kind;
@@ -134,7 +135,7 @@ void build_scene(World& world, const scene_schema::EntityDocument& document,
         material.colour = lit ? lit_colour : to_colour(class_colour(26, "car"));
         material.lit = lit;
         world.materials.set(e, material);
-        world.sources.set(e, SourceEntity{-1, "ego", 26});
+        world.sources.set(e, SourceEntity{-1, "ego", 26, "car"});
     }
 
     Camera camera;
@@ -152,7 +153,7 @@ void build_scene(World& world, const scene_schema::EntityDocument& document,
     }
     const EntityId camera_entity = world.create();
     world.cameras.set(camera_entity, camera);
-    world.sources.set(camera_entity, SourceEntity{-1, "camera", 0});
+    world.sources.set(camera_entity, SourceEntity{-1, "camera", 0, ""});
 
     if (kind == ViewKind::bev && options.grid) {
         const float aspect =
@@ -169,7 +170,7 @@ void build_scene(World& world, const scene_schema::EntityDocument& document,
         material.lit = false;
         material.vertex_colour = true;
         world.materials.set(e, material);
-        world.sources.set(e, SourceEntity{-1, "grid", 0});
+        world.sources.set(e, SourceEntity{-1, "grid", 0, ""});
     }
 
     if (cloud != nullptr && cloud->size() > 0) {
@@ -181,7 +182,7 @@ void build_scene(World& world, const scene_schema::EntityDocument& document,
         material.vertex_colour = true;
         material.point_size_px = options.point_size_px;
         world.materials.set(e, material);
-        world.sources.set(e, SourceEntity{-1, "cloud", 0});
+        world.sources.set(e, SourceEntity{-1, "cloud", 0, ""});
     }
 }
 

@@ -53,6 +53,7 @@ struct SourceEntity {
     std::int32_t index = -1;  ///< position in EntityDocument::entities; -1 for helpers
     std::string id;           ///< entity id from the file ("ego", "grid", "cloud" for helpers)
     int class_id = 0;         ///< class id from the file
+    std::string class_name;   ///< class name from the file ("" for helpers)
 };
 
 }  // namespace scene_viewer

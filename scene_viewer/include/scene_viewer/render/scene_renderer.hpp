@@ -4,11 +4,15 @@
 /// fixed order (build -> transforms -> camera -> render) and reads the image back. One renderer
 /// keeps its device, uploaded models and world across frames, so a process renders many frames.
 
+#include <map>
 #include <memory>
+#include <set>
 #include <string>
+#include <vector>
 
 #include "scene_schema/entities.hpp"
 #include "scene_viewer/assets/model.hpp"
+#include "scene_viewer/assets/scene_export.hpp"
 #include "scene_viewer/ecs/world.hpp"
 #include "scene_viewer/gfx/device.hpp"
 #include "scene_viewer/render/model_library.hpp"
@@ -71,11 +75,23 @@ class SceneRenderer {
     const World& world() const { return world_; }
     const ModelLibrary& models() const { return models_; }
 
+    /// Names of the loaded document's classes that are drawn as boxes for want of a model
+    /// (ground classes excluded: they are patches by design).
+    std::set<std::string> classes_drawn_as_boxes() const;
+
+    /// The loaded scene as glTF instances for export_scene_glb(): every entity (and the ego car)
+    /// with its model (class model, or a box in the class colour) and its world matrix in the
+    /// OpenGL frame (+Y up, metres). Grid and point cloud are not part of it. Valid until the
+    /// next load() or set_class_model().
+    std::vector<PlacedModel> placed_models();
+
   private:
     Device* device_;
     ModelLibrary models_;
     World world_;
     RenderOptions options_;
+    std::map<std::string, Model> class_models_;  ///< CPU copies of the class models, for export
+    std::map<std::string, Model> export_boxes_;  ///< box models by class name, for export
 };
 
 struct ClassTable;
