@@ -241,7 +241,8 @@ int run(int argc, char** argv) {
     ViewArgs view;
     app.add_option("input", input, "entity file (JSON, schema 1.x)");
     app.add_option("-o,--output", output, "output PNG, '-' for stdout");
-    app.add_option("--glb", glb, "also export the assembled scene as one binary glTF (.glb)");
+    app.add_option("--glb,--export-glb", glb,
+                   "also export the assembled scene as one binary glTF (.glb)");
     app.add_option("--background", background,
                    "camera view: lay the render over this image (e.g. the left image)");
     app.add_option("--opacity", opacity, "--background: opacity of the render, 0..1")
