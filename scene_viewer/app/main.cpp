@@ -57,7 +57,8 @@ struct ViewArgs {
 void add_view_options(CLI::App& app, ViewArgs& a) {
     app.add_option("--view", a.view, "camera | chase | bev | free")->capture_default_str();
     app.add_option("--size", a.size,
-                   "image size WxH in pixels (default: the frame's camera size, else 1242x375)");
+                   "image size WxH in pixels (default: camera view: the frame's camera size, else "
+                   "1242x375; bev: 800x800; chase/free: 1280x720)");
     app.add_option("--eye", a.eye, "free/chase view: eye x,y,z in metres (KITTI camera frame)");
     app.add_option("--target", a.target, "free/chase view: look-at point x,y,z in metres");
     app.add_option("--fov", a.fov_deg, "free/chase view: vertical field of view in degrees");
@@ -128,6 +129,11 @@ RenderOptions render_options(const ViewArgs& a, const scene_schema::EntityDocume
     }
     if (!a.size.empty()) {
         std::tie(o.width_px, o.height_px) = parse_size(a.size);
+    } else if (o.view.kind == ViewKind::bev) {
+        o.width_px = o.height_px = 800;
+    } else if (o.view.kind != ViewKind::camera) {
+        o.width_px = 1280;
+        o.height_px = 720;
     } else if (document.frame.camera) {
         o.width_px = document.frame.camera->width_px;
         o.height_px = document.frame.camera->height_px;
@@ -198,10 +204,13 @@ std::unique_ptr<Gpu> start_gpu(const std::optional<ClassTable>& classes) {
     return gpu;
 }
 
-/// One warning per class, per run, for classes drawn as boxes for want of a model.
-void warn_boxes(const SceneRenderer& renderer) {
+/// One warning per class, per run, for classes drawn as boxes for want of a model (classes of
+/// kind "block" without a model are boxes by design and do not warn).
+void warn_boxes(const SceneRenderer& renderer, const ClassTable& table) {
     static std::set<std::string> warned;
     for (const std::string& name : renderer.classes_drawn_as_boxes()) {
+        const RenderClass* c = table.find(std::string_view(name));
+        if (c != nullptr && c->kind == RenderKind::Block) continue;
         if (warned.insert(name).second) {
             std::cerr << "scene-render: warning: no model for class '" << name
                       << "', drawn as a box in its class colour\n";
@@ -358,7 +367,7 @@ int run(int argc, char** argv) {
         std::vector<ImageRgba8> tiles;
         for (const auto& document : documents) {
             gpu->renderer.load(document, cloud ? &*cloud : nullptr, options);
-            if (classes) warn_boxes(gpu->renderer);
+            if (classes) warn_boxes(gpu->renderer, *classes);
             tiles.push_back(gpu->renderer.render_frame());
         }
         GridFigureOptions figure;
@@ -387,7 +396,7 @@ int run(int argc, char** argv) {
 
     auto gpu = start_gpu(classes);
     gpu->renderer.load(document, cloud ? &*cloud : nullptr, options);
-    if (classes) warn_boxes(gpu->renderer);
+    if (classes) warn_boxes(gpu->renderer, *classes);
     // Everything is built in memory before the first file is written.
     std::vector<unsigned char> glb_bytes;
     if (!glb.empty()) {
