@@ -72,6 +72,8 @@ TEST_CASE("an exported scene loads back with the same triangles and world bounds
         body_found = body_found || p.base_colour == car.primitives[0].base_colour;
     }
     CHECK(body_found);
+    CHECK(back.primitives[0].material_name == car.primitives[0].material_name);
+    CHECK(car.primitives[0].material_name == "body");
     // No temporary file is left beside the output.
     CHECK(std::distance(fs::directory_iterator(dir), fs::directory_iterator()) == 1);
     fs::remove_all(dir);

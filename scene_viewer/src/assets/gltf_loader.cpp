@@ -647,8 +647,10 @@ class Converter {
             throw LoadError(what + ": material " + std::to_string(material_index) +
                             " does not exist");
         }
-        const tinygltf::PbrMetallicRoughness& pbr =
-            gltf_.materials[static_cast<std::size_t>(material_index)].pbrMetallicRoughness;
+        const tinygltf::Material& material =
+            gltf_.materials[static_cast<std::size_t>(material_index)];
+        out.material_name = material.name;
+        const tinygltf::PbrMetallicRoughness& pbr = material.pbrMetallicRoughness;
         if (pbr.baseColorFactor.size() == 4) {
             out.base_colour = glm::vec4(pbr.baseColorFactor[0], pbr.baseColorFactor[1],
                                         pbr.baseColorFactor[2], pbr.baseColorFactor[3]);

@@ -154,6 +154,7 @@ class Builder {
         out.indices = add_accessor(p.indices, TINYGLTF_TYPE_SCALAR,
                                    TINYGLTF_COMPONENT_TYPE_UNSIGNED_INT, kElementArrayBuffer);
         tinygltf::Material material;
+        material.name = p.material_name;
         material.pbrMetallicRoughness.baseColorFactor = {p.base_colour.r, p.base_colour.g,
                                                          p.base_colour.b, p.base_colour.a};
         material.pbrMetallicRoughness.metallicFactor = 0.0;

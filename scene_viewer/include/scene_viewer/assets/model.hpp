@@ -27,6 +27,7 @@ struct MeshPrimitive {
     glm::vec4 base_colour{1.0f};         ///< glTF baseColorFactor (linear RGBA)
     int texture = -1;                    ///< index into Model::textures, or -1
     glm::mat4 node_transform{1.0f};      ///< node hierarchy flattened into the model frame
+    std::string material_name;           ///< glTF material name (may be empty), kept for export
 };
 
 /// A whole model: every primitive of every node of the default scene, flattened.
