@@ -18,12 +18,19 @@ using namespace scene_viewer;
 
 namespace {
 
-/// One context and device for the whole test run (destroyed in reverse order).
-Device& gl_device() {
-    static HeadlessContext context;
-    static std::unique_ptr<Device> device = make_gl_device();
-    return *device;
+/// One context and device for the whole test run (made on first use, destroyed in reverse
+/// order at exit); every GL test uses them, so test order does not matter.
+struct Gl {
+    HeadlessContext context;
+    std::unique_ptr<Device> device = make_gl_device();
+};
+
+Gl& gl() {
+    static Gl instance;
+    return instance;
 }
+
+Device& gl_device() { return *gl().device; }
 
 scene_schema::Entity entity(const std::string& cls, int id, glm::dvec3 centre, double theta,
                             glm::dvec3 whl) {
@@ -94,8 +101,7 @@ constexpr Rgb8 kCar{0, 0, 142};
 }  // namespace
 
 TEST_CASE("The headless context is an OpenGL 4.5 core context", "[gl]") {
-    HeadlessContext context;
-    const GlInfo info = context.info();
+    const GlInfo info = gl().context.info();
     CHECK(info.version.rfind("4.", 0) == 0);
     CHECK_FALSE(info.renderer.empty());
 }
