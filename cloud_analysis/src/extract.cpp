@@ -295,7 +295,6 @@ std::vector<scene_schema::Entity> instances_of_class(const ClassInfo& info,
                                                      const PixelGrid& grid, const ClassSettings& s,
                                                      const std::optional<GroundPlane>& ground,
                                                      const ExtractOptions& options) {
-    const Voxels voxels = voxelize(pts, s.voxel_m);
     ClusterOptions co;
     co.distance_at_10m_m = s.cluster_distance_m;
     co.growth = s.cluster_growth;
@@ -313,6 +312,7 @@ std::vector<scene_schema::Entity> instances_of_class(const ClassInfo& info,
     if (s.thing && options.clustering == "image" && grid.valid()) {
         clusters = image_components(pts, pixels, grid, co, options.image_radius_px);
     } else {
+        const Voxels voxels = voxelize(pts, s.voxel_m);
         for (const auto& cluster : euclidean_clusters(voxels.centroid, co)) {
             Indices members;
             for (std::size_t v : cluster) {
@@ -398,7 +398,7 @@ void ExtractOptions::validate() const {
 scene_schema::EntityDocument extract_entities(const LabeledCloud& cloud, const Palette& palette,
                                               const StereoCamera& camera,
                                               const ExtractOptions& options) {
-    (void)camera;
+    static_cast<void>(camera);  // not needed by the current extractors (see extract.hpp)
     options.validate();
     if (cloud.class_index.size() != cloud.xyz_m.size()) {
         throw std::invalid_argument("cloud: class_index and xyz_m differ in size");

@@ -40,7 +40,9 @@ struct ExtractOptions {
 /// Builds the entities of a labelled cloud (ids "<class>-<n>", point_count and confidence on
 /// each; sky and void never). The caller fills frame and source. With method "instances"
 /// the ground plane, when found, is reported in document.extra["ground_plane"] (normal, d,
-/// camera_height_m, inliers). The result passes scene_schema::check().
+/// camera_height_m, inliers). The result passes scene_schema::check() once the caller has set
+/// frame.id. `camera` is not needed by the current extractors (image-space steps use the
+/// cloud's pixel indices); it stays in the signature for stages that project.
 scene_schema::EntityDocument extract_entities(const LabeledCloud& cloud, const Palette& palette,
                                               const StereoCamera& camera,
                                               const ExtractOptions& options);
