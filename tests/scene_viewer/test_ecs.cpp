@@ -294,3 +294,25 @@ TEST_CASE("The assembled scene places every entity with the matrix it is drawn w
     // Road is a patch by design; only the wall is reported as a box for want of a model.
     CHECK(renderer.classes_drawn_as_boxes() == std::set<std::string>{"wall"});
 }
+
+TEST_CASE("Replacing a class model frees the old model's meshes and textures", "[ecs][models]") {
+    NullDevice device;
+    {
+        SceneRenderer renderer(device);
+        Model model;
+        MeshPrimitive prim;
+        prim.positions = {{0, 0, 0}, {1, 0, 0}, {0, 1, 0}};
+        prim.texcoords = {{0, 0}, {1, 0}, {0, 1}};
+        prim.indices = {0, 1, 2};
+        prim.texture = 0;
+        model.primitives = {prim, prim};
+        model.textures.push_back(ImageRgba8{1, 1, {1, 2, 3, 255}});
+        renderer.set_class_model("car", model);
+        renderer.set_class_model("car", model);
+        CHECK(device.meshes_destroyed == 2);
+        CHECK(device.textures_destroyed == 1);
+    }
+    // The renderer's destructor frees the rest: 2 + 1 class meshes, the box, 1 texture.
+    CHECK(device.meshes_destroyed == 5);
+    CHECK(device.textures_destroyed == 2);
+}

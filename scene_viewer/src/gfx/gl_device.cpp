@@ -191,6 +191,13 @@ class GlDevice final : public Device {
         return TextureHandle{id};
     }
 
+    void destroy_texture(TextureHandle handle) override {
+        auto it = textures_.find(handle.id);
+        if (it == textures_.end()) return;
+        glDeleteTextures(1, &it->second);
+        textures_.erase(it);
+    }
+
     void destroy_mesh(MeshHandle handle) override {
         auto it = meshes_.find(handle.id);
         if (it == meshes_.end()) return;

@@ -16,6 +16,8 @@ TextureHandle NullDevice::create_texture(const ImageRgba8& /*image*/) {
 
 void NullDevice::destroy_mesh(MeshHandle /*mesh*/) { ++meshes_destroyed; }
 
+void NullDevice::destroy_texture(TextureHandle /*texture*/) { ++textures_destroyed; }
+
 void NullDevice::begin_frame(const FrameSetup& setup) {
     ++frames_begun;
     last_setup = setup;

@@ -20,15 +20,18 @@ glm::vec4 display_colour(const glm::vec4& linear) {
 }  // namespace
 
 ModelLibrary::~ModelLibrary() {
-    for (const auto& m : models_) {
-        for (const auto& p : m.primitives) device_->destroy_mesh(p.mesh);
-    }
+    for (const auto& m : models_) release(m);
+}
+
+void ModelLibrary::release(const UploadedModel& model) {
+    for (const auto& p : model.primitives) device_->destroy_mesh(p.mesh);
+    for (const auto& t : model.textures) device_->destroy_texture(t);
 }
 
 std::uint32_t ModelLibrary::store(UploadedModel model) {
     auto it = index_.find(model.key);
     if (it != index_.end()) {
-        for (const auto& p : models_[it->second].primitives) device_->destroy_mesh(p.mesh);
+        release(models_[it->second]);
         models_[it->second] = std::move(model);
         return it->second;
     }
@@ -43,8 +46,8 @@ std::uint32_t ModelLibrary::put(const std::string& key, const Model& model) {
     up.key = key;
     up.bounds_min = model.bounds_min;
     up.bounds_max = model.bounds_max;
-    std::vector<TextureHandle> textures;
-    for (const auto& t : model.textures) textures.push_back(device_->create_texture(t));
+    for (const auto& t : model.textures) up.textures.push_back(device_->create_texture(t));
+    const std::vector<TextureHandle>& textures = up.textures;
     for (const auto& prim : model.primitives) {
         MeshData data;
         data.positions = prim.positions;

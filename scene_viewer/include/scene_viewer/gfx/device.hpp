@@ -66,6 +66,7 @@ class Device {
     virtual MeshHandle create_mesh(const MeshData& mesh) = 0;
     virtual TextureHandle create_texture(const ImageRgba8& image) = 0;
     virtual void destroy_mesh(MeshHandle mesh) = 0;
+    virtual void destroy_texture(TextureHandle texture) = 0;
     virtual void begin_frame(const FrameSetup& setup) = 0;
     virtual void draw(const DrawCall& call) = 0;
     virtual void end_frame() = 0;

@@ -14,6 +14,7 @@ class NullDevice final : public Device {
     MeshHandle create_mesh(const MeshData& mesh) override;
     TextureHandle create_texture(const ImageRgba8& image) override;
     void destroy_mesh(MeshHandle mesh) override;
+    void destroy_texture(TextureHandle texture) override;
     void begin_frame(const FrameSetup& setup) override;
     void draw(const DrawCall& call) override;
     void end_frame() override;
@@ -24,6 +25,7 @@ class NullDevice final : public Device {
     std::vector<MeshData> meshes;  ///< every mesh created; handle id = index + 1
     int textures_created = 0;
     int meshes_destroyed = 0;
+    int textures_destroyed = 0;
     int frames_begun = 0;
     int frames_ended = 0;
     FrameSetup last_setup;

@@ -29,6 +29,7 @@ struct UploadedPrimitive {
 struct UploadedModel {
     std::string key;
     std::vector<UploadedPrimitive> primitives;
+    std::vector<TextureHandle> textures;  ///< owned by this model, freed with it
     glm::vec3 bounds_min{-0.5f};
     glm::vec3 bounds_max{0.5f};
     std::size_t triangle_count = 0;
@@ -52,6 +53,7 @@ class ModelLibrary {
 
   private:
     std::uint32_t store(UploadedModel model);
+    void release(const UploadedModel& model);
     Device* device_;
     std::vector<UploadedModel> models_;
     std::unordered_map<std::string, std::uint32_t> index_;
