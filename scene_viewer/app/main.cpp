@@ -1,6 +1,9 @@
 // scene-render: renders entity files headless (see docs/cli.md). Parses, validates every input,
 // then calls the scene_viewer library; the only error boundary of the tool.
+#include <cerrno>
 #include <cstdio>
+#include <cstring>
+#include <fstream>
 #include <iostream>
 #include <optional>
 #include <set>
