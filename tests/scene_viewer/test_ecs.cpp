@@ -220,6 +220,13 @@ TEST_CASE("Render options refuse absurd image sizes naming the field", "[ecs][op
     options.width_px = 100;
     options.height_px = kMaxImageSide + 1;
     CHECK_THROWS_WITH(options.validate(), Catch::Contains("height_px"));
+    // 16384^2 is fine without MSAA but not with 4 samples per pixel.
+    options.width_px = options.height_px = kMaxImageSide;
+    options.shading = Shading::semantic;
+    CHECK_NOTHROW(options.validate());
+    options.shading = Shading::lit;
+    options.msaa_samples = 4;
+    CHECK_THROWS_WITH(options.validate(), Catch::Contains("msaa_samples"));
 }
 
 TEST_CASE("A textured model uploads its texture once and lit draws bind it", "[ecs][systems]") {

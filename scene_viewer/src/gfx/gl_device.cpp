@@ -208,6 +208,12 @@ class GlDevice final : public Device {
     void begin_frame(const FrameSetup& setup) override {
         if (setup.width_px <= 0 || setup.height_px <= 0)
             throw std::invalid_argument("frame size must be positive");
+        GLint max_size = 0;
+        glGetIntegerv(GL_MAX_RENDERBUFFER_SIZE, &max_size);
+        if (setup.width_px > max_size || setup.height_px > max_size)
+            throw std::runtime_error(
+                "frame " + std::to_string(setup.width_px) + "x" + std::to_string(setup.height_px) +
+                " exceeds GL_MAX_RENDERBUFFER_SIZE " + std::to_string(max_size));
         const int samples = setup.msaa_samples > 1 ? setup.msaa_samples : 0;
         if (setup.width_px != width_ || setup.height_px != height_ || samples != samples_) {
             release_targets();

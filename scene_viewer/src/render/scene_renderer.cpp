@@ -1,5 +1,6 @@
 #include "scene_viewer/render/scene_renderer.hpp"
 
+#include <algorithm>
 #include <stdexcept>
 
 #include "scene_viewer/assets/class_table.hpp"
@@ -25,6 +26,11 @@ void RenderOptions::validate() const {
         throw std::invalid_argument("height_px must be in 1.." + std::to_string(kMaxImageSide));
     if (msaa_samples < 0 || msaa_samples > 16)
         throw std::invalid_argument("msaa_samples must be in 0..16");
+    const long long samples = static_cast<long long>(width_px) * height_px *
+                              (shading == Shading::lit ? std::max(1, msaa_samples) : 1);
+    if (samples > kMaxFrameSamples)
+        throw std::invalid_argument("width_px * height_px * msaa_samples must be <= " +
+                                    std::to_string(kMaxFrameSamples) + " (lower --size or --msaa)");
     if (!(point_size_px >= 1.0f && point_size_px <= 64.0f))
         throw std::invalid_argument("point_size_px must be in 1..64");
     view.validate();

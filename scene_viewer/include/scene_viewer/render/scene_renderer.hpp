@@ -32,6 +32,9 @@ Shading parse_shading(const std::string& name);
 
 /// Largest accepted image side, pixels.
 inline constexpr int kMaxImageSide = 16384;
+/// Largest accepted pixels x MSAA samples of one frame (2^28: 16384^2 without MSAA, about 2 GB
+/// of colour and depth).
+inline constexpr long long kMaxFrameSamples = 1LL << 28;
 
 struct RenderOptions {
     int width_px = 1242;             ///< image width, pixels, 1..kMaxImageSide
