@@ -122,6 +122,9 @@ void add_analyse_flags(CLI::App& cmd, AnalyseArgs& a) {
         ->group(sg);
     cmd.add_flag("--colour-matching,!--grey-matching", d.colour, "match on RGB instead of grey")
         ->group(sg);
+    cmd.add_flag("--pad-left,!--no-pad-left", d.pad_left,
+                 "pad the views so the left border band (min + num disparities wide) is matched")
+        ->group(sg);
     cmd.add_flag("--lr-check", d.lr_check, "drop pixels failing a full left-right check")
         ->group(sg);
     cmd.add_option("--lr-max-diff", d.lr_max_diff_px, "left-right tolerance, px")
@@ -203,6 +206,9 @@ void resolve(AnalyseArgs& a, const CLI::App& cmd) {
         keep("--sgbm-mode", d.mode, sample.mode);
         if (cmd.count("--colour-matching") == 0 && cmd.count("--grey-matching") == 0) {
             d.colour = sample.colour;
+        }
+        if (cmd.count("--pad-left") == 0 && cmd.count("--no-pad-left") == 0) {
+            d.pad_left = sample.pad_left;
         }
     }
     try {

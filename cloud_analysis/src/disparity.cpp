@@ -1,5 +1,6 @@
 #include "cloud_analysis/disparity.hpp"
 
+#include <algorithm>
 #include <cmath>
 #include <stdexcept>
 
@@ -71,6 +72,7 @@ DisparityOptions opencv_sample_disparity_options() {
     o.speckle_range = 32;
     o.mode = "sgbm";
     o.colour = true;
+    o.pad_left = false;
     return o;
 }
 
@@ -96,12 +98,21 @@ DisparityMap compute_disparity(const ImageU8& left, const ImageU8& right,
         options.uniqueness_ratio, options.speckle_window_size, options.speckle_range,
         sgbm_mode(options.mode));
 
+    // StereoSGBM leaves the first min + num disparities columns empty. Padding both views on the
+    // left with black lets those pixels match wherever their partner is inside the right view.
+    const int pad =
+        options.pad_left ? std::max(0, options.min_disparity + options.num_disparities) : 0;
+    cv::Mat lp = l, rp = r;
+    if (pad > 0) {
+        cv::copyMakeBorder(l, lp, 0, 0, pad, 0, cv::BORDER_CONSTANT, cv::Scalar::all(0));
+        cv::copyMakeBorder(r, rp, 0, 0, pad, 0, cv::BORDER_CONSTANT, cv::Scalar::all(0));
+    }
     cv::Mat raw_left;  // CV_16S, disparity * 16
-    sgbm->compute(l, r, raw_left);
+    sgbm->compute(lp, rp, raw_left);
     cv::Mat raw_right;
     if (options.lr_check || options.wls) {
         cv::Ptr<cv::StereoMatcher> right_matcher = cv::ximgproc::createRightMatcher(sgbm);
-        right_matcher->compute(r, l, raw_right);  // negative disparities of the right image
+        right_matcher->compute(rp, lp, raw_right);  // negative disparities of the right image
     }
     const int invalid_raw = (options.min_disparity - 1) * 16;
     if (options.wls) {
@@ -110,9 +121,11 @@ DisparityMap compute_disparity(const ImageU8& left, const ImageU8& right,
         wls->setLambda(options.wls_lambda);
         wls->setSigmaColor(options.wls_sigma_colour);
         cv::Mat filtered;
-        wls->filter(raw_left, l, filtered, raw_right);
+        wls->filter(raw_left, lp, filtered, raw_right);
         raw_left = filtered;
     }
+    raw_left = raw_left.colRange(pad, pad + left.width_px);
+    if (!raw_right.empty()) raw_right = raw_right.colRange(pad, pad + left.width_px);
 
     DisparityMap out;
     out.width_px = left.width_px;

@@ -27,6 +27,7 @@ struct DisparityOptions {
     int speckle_window_size = 100;   ///< max size of a speckle to remove, px; 0 disables
     int speckle_range = 2;           ///< max disparity step inside a speckle, px
     std::string mode = "sgbm_3way";  ///< "sgbm" (5 paths), "hh" (8 paths), "sgbm_3way", "hh4"
+    bool pad_left = true;            ///< pad the views so the left border band gets disparities
     bool colour = false;             ///< match on RGB (cn = 3) instead of grey
     bool lr_check = false;           ///< drop pixels whose right-image match disagrees
     double lr_max_diff_px = 1.0;     ///< tolerance of that check, px
@@ -39,7 +40,7 @@ struct DisparityOptions {
 
 /// OpenCV's samples/cpp/stereo_match.cpp settings for SGBM (SADWindowSize 3, P1 8*cn*3^2,
 /// P2 32*cn*3^2, disp12MaxDiff 1, preFilterCap 63, uniquenessRatio 10, speckleWindowSize 100,
-/// speckleRange 32, MODE_SGBM, colour) with numDisparities widened to 128 for KITTI.
+/// speckleRange 32, MODE_SGBM, colour, no padding) with numDisparities widened to 128 for KITTI.
 DisparityOptions opencv_sample_disparity_options();
 
 /// Disparity of the left image. Images must have the same size and channel count.
