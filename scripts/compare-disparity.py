@@ -21,6 +21,7 @@ SETTINGS = [
     ("tuned + `--wls`", ["--wls"]),
     ("tuned + `--lr-check --wls`", ["--lr-check", "--wls"]),
     ("tuned but `--sgbm-mode sgbm`", ["--sgbm-mode", "sgbm"]),
+    ("tuned but `--no-pad-left`", ["--no-pad-left"]),
 ]
 print("| settings | frame | D1-all % | D1-valid % | EPE px | density % | ms |")
 print("|---|---|---|---|---|---|---|")
