@@ -107,3 +107,23 @@ TEST_CASE("KITTI disparity PNGs round-trip at 1/256 px", "[disparity][io]") {
         }
     }
 }
+
+TEST_CASE("left padding gives the border band its disparity; without it the band is empty",
+          "[disparity]") {
+    auto [left, right] = random_dot_pair(160, 60, 12, 5);
+    DisparityOptions options;
+    options.num_disparities = 32;
+    const auto band_hits = [&](const DisparityMap& map) {
+        int exact = 0;
+        for (int v = 10; v < 50; ++v) {
+            for (int u = 16; u < 28; ++u) {  // inside the 32 px band, right of u = d
+                const float d = map.disparity_px[static_cast<std::size_t>(v) * 160 + u];
+                if (std::abs(d - 12.0f) <= 0.25f) ++exact;
+            }
+        }
+        return exact;
+    };
+    CHECK(band_hits(compute_disparity(left, right, options)) > 40 * 12 * 9 / 10);
+    options.pad_left = false;
+    CHECK(band_hits(compute_disparity(left, right, options)) == 0);
+}
