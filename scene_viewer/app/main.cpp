@@ -5,6 +5,7 @@
 #include <cstring>
 #include <fstream>
 #include <iostream>
+#include <map>
 #include <optional>
 #include <set>
 #include <sstream>
@@ -23,6 +24,7 @@
 #include "scene_viewer/render/benchmark.hpp"
 #include "scene_viewer/render/image.hpp"
 #include "scene_viewer/render/scene_renderer.hpp"
+#include "scene_viewer/sensors/stereo_sensors.hpp"
 
 namespace {
 
@@ -288,6 +290,53 @@ int run(int argc, char** argv) {
         ->capture_default_str();
     bench->add_flag("--boxes", bench_boxes, "draw boxes instead of glTF models");
 
+    CLI::App* sensors = app.add_subcommand(
+        "sensors",
+        "render a stereo rig's view of a scene in a KITTI-like folder (see docs/cli.md)");
+    std::string sensors_input, sensors_out, sensors_size, sensors_frame = "000000";
+    std::string sensors_classes;
+    bool sensors_boxes = false;
+    SensorOptions sensor_options;
+    std::optional<double> sensors_baseline;
+    sensors->add_option("input", sensors_input, "entity file: the scene (KITTI camera frame)")
+        ->required();
+    sensors->add_option("--out", sensors_out, "output folder (KITTI layout)")->required();
+    sensors->add_option("--frame", sensors_frame, "frame name of the files")->capture_default_str();
+    sensors->add_option("--seed", sensor_options.sensor.seed, "seed of the sensor noise")
+        ->capture_default_str();
+    sensors->add_option("--size", sensors_size,
+                        "image size WxH; the intrinsics scale with it (default: the file's "
+                        "frame.camera, else KITTI's 1242x375)");
+    sensors->add_option("--baseline", sensors_baseline,
+                        "stereo baseline in metres (default: the file's, else 0.54)");
+    sensors
+        ->add_option("--camera-height", sensor_options.rig.camera_height_m,
+                     "camera above the road in metres (ground underlay)")
+        ->capture_default_str();
+    sensors
+        ->add_option("--noise", sensor_options.sensor.noise_sigma,
+                     "Gaussian noise, standard deviation in 8-bit levels")
+        ->capture_default_str();
+    sensors
+        ->add_option("--blur", sensor_options.sensor.blur_sigma_px,
+                     "Gaussian blur, standard deviation in pixels")
+        ->capture_default_str();
+    sensors
+        ->add_option("--right-gain", sensor_options.sensor.right_gain,
+                     "gain of the right camera relative to the left")
+        ->capture_default_str();
+    sensors->add_flag("--vignetting", sensor_options.sensor.vignetting,
+                      "darken the corners of both images");
+    sensors
+        ->add_option("--msaa", sensor_options.msaa_samples,
+                     "colour images: multisample count, 0 = off")
+        ->capture_default_str();
+    bool sensors_no_ground = false;
+    sensors->add_flag("--no-ground", sensors_no_ground, "no terrain underlay under the road level");
+    sensors->add_flag("--boxes", sensors_boxes, "draw every entity as a box (no glTF models)");
+    sensors->add_option("--classes", sensors_classes,
+                        "class table (default: assets/classes/render_classes.json)");
+
     try {
         app.parse(argc, argv);
     } catch (const CLI::ParseError& e) {
@@ -333,6 +382,46 @@ int run(int argc, char** argv) {
             std::printf("%-16s %10zu %10.2f %10.2f %8.1f %8.2f %9.1f\n", c.name.c_str(),
                         r.triangles, r.frame_ms, r.frame_ms_min, r.fps, r.png_ms,
                         static_cast<double>(r.png_bytes) / 1024.0);
+        }
+        return 0;
+    }
+
+    if (*sensors) {
+        const auto document = read_entities(sensors_input);
+        StereoRig rig = rig_for(document, sensor_options.rig);
+        if (!sensors_size.empty()) {
+            const auto [w, h] = parse_size(sensors_size);
+            rig = rig.resized(w, h);
+        }
+        if (sensors_baseline) rig.baseline_m = *sensors_baseline;
+        sensor_options.rig = rig;
+        sensor_options.ground_underlay = !sensors_no_ground;
+        try {
+            sensor_options.validate();
+        } catch (const std::invalid_argument& e) {
+            usage(e.what(), "sensors");
+        }
+        try {
+            check_frame_name(sensors_frame);
+        } catch (const std::invalid_argument& e) {
+            usage(e.what(), "--frame");
+        }
+        ViewArgs classes_args;
+        classes_args.boxes = sensors_boxes;
+        classes_args.classes = sensors_classes;
+        const auto classes = read_classes(classes_args);
+        auto gpu = start_gpu(classes);
+        std::map<std::string, std::string> files;
+        try {
+            files = kitti_layout_files(render_stereo_frame(gpu->renderer, document, sensor_options),
+                                       sensors_frame);
+        } catch (const std::invalid_argument& e) {
+            throw Failure{"cannot render the sensors", e.what(), sensors_input};
+        }
+        try {
+            write_files(sensors_out, files);
+        } catch (const std::exception& e) {
+            throw Failure{"cannot write the sensor files", e.what(), sensors_out};
         }
         return 0;
     }

@@ -26,8 +26,11 @@ uniform float u_point_size;
 out vec3 v_normal;
 out vec4 v_colour;
 out vec2 v_texcoord;
+out vec3 v_world;
 void main() {
-    gl_Position = u_view_projection * (u_model * vec4(a_position, 1.0));
+    vec4 world = u_model * vec4(a_position, 1.0);
+    v_world = world.xyz;
+    gl_Position = u_view_projection * world;
     gl_PointSize = u_point_size;
     v_normal = u_normal_matrix * a_normal;
     v_colour = a_colour;
@@ -39,7 +42,9 @@ constexpr const char* kFragmentShader = R"(#version 450 core
 in vec3 v_normal;
 in vec4 v_colour;
 in vec2 v_texcoord;
+in vec3 v_world;
 uniform vec4 u_colour;
+uniform int u_procedural;
 uniform int u_lit;
 uniform int u_vertex_colour;
 uniform int u_textured;
@@ -47,10 +52,33 @@ uniform sampler2D u_texture;
 uniform vec3 u_light_direction;
 uniform float u_ambient;
 out vec4 o_colour;
+// Value noise on a lattice hashed from world coordinates (metres): fixed to the surface, so
+// every view of a point sees the same texture (what stereo matching needs).
+float hash3(vec3 p) {
+    p = fract(p * 0.3183099 + vec3(0.71, 0.113, 0.419));
+    p *= 17.0;
+    return fract(p.x * p.y * p.z * (p.x + p.y + p.z));
+}
+float value_noise(vec3 x) {
+    vec3 i = floor(x);
+    vec3 f = fract(x);
+    f = f * f * (3.0 - 2.0 * f);
+    return mix(mix(mix(hash3(i), hash3(i + vec3(1, 0, 0)), f.x),
+                   mix(hash3(i + vec3(0, 1, 0)), hash3(i + vec3(1, 1, 0)), f.x), f.y),
+               mix(mix(hash3(i + vec3(0, 0, 1)), hash3(i + vec3(1, 0, 1)), f.x),
+                   mix(hash3(i + vec3(0, 1, 1)), hash3(i + vec3(1, 1, 1)), f.x), f.y), f.z);
+}
 void main() {
     vec4 c = u_colour;
     if (u_vertex_colour != 0) c *= v_colour;
     if (u_textured != 0) c *= texture(u_texture, v_texcoord);
+    if (u_procedural != 0) {
+        // Octaves of 0.6 m, 0.2 m, 7 cm and 2.5 cm cells; 0 mean, about +-0.5 range.
+        vec3 p = v_world + vec3(1000.0);
+        float n = 0.35 * value_noise(p / 0.6) + 0.3 * value_noise(p / 0.2) +
+                  0.2 * value_noise(p / 0.07) + 0.15 * value_noise(p / 0.025) - 0.5;
+        c.rgb = clamp(c.rgb * (1.0 + 1.2 * n) + vec3(0.18 * n), 0.0, 1.0);
+    }
     if (u_lit != 0) {
         vec3 n = normalize(v_normal);
         if (!gl_FrontFacing) n = -n;
@@ -106,7 +134,7 @@ class GlDevice final : public Device {
         u_ = Uniforms{at("u_model"),           at("u_view_projection"), at("u_normal_matrix"),
                       at("u_point_size"),      at("u_colour"),          at("u_lit"),
                       at("u_vertex_colour"),   at("u_textured"),        at("u_texture"),
-                      at("u_light_direction"), at("u_ambient")};
+                      at("u_light_direction"), at("u_ambient"),         at("u_procedural")};
         glEnable(GL_PROGRAM_POINT_SIZE);
     }
 
@@ -253,6 +281,7 @@ class GlDevice final : public Device {
         glUniform1i(u_.lit, call.lit ? 1 : 0);
         glUniform1i(u_.vertex_colour, call.vertex_colour ? 1 : 0);
         glUniform1f(u_.point_size, call.point_size_px);
+        glUniform1i(u_.procedural, call.procedural ? 1 : 0);
         auto tex = textures_.find(call.texture.id);
         const bool textured = tex != textures_.end();
         glUniform1i(u_.textured, textured ? 1 : 0);
@@ -291,6 +320,24 @@ class GlDevice final : public Device {
                 image.pixels.begin() + static_cast<std::ptrdiff_t>((height_ - 1 - y) * row));
         }
         return image;
+    }
+
+    std::vector<float> read_depth() override {
+        if (samples_ > 0) throw std::logic_error("depth readback needs a frame without MSAA");
+        const std::size_t w = static_cast<std::size_t>(width_);
+        std::vector<float> depth(w * height_);
+        glBindFramebuffer(GL_READ_FRAMEBUFFER, resolve_fbo_);
+        glPixelStorei(GL_PACK_ALIGNMENT, 4);
+        glReadPixels(0, 0, width_, height_, GL_DEPTH_COMPONENT, GL_FLOAT, depth.data());
+        for (int y = 0; y < height_ / 2; ++y) {
+            std::swap_ranges(depth.begin() + static_cast<std::ptrdiff_t>(y * w),
+                             depth.begin() + static_cast<std::ptrdiff_t>((y + 1) * w),
+                             depth.begin() + static_cast<std::ptrdiff_t>((height_ - 1 - y) * w));
+        }
+        const GLenum err = glGetError();
+        if (err != GL_NO_ERROR)
+            throw std::runtime_error("GL error " + std::to_string(err) + " reading depth");
+        return depth;
     }
 
   private:
@@ -346,7 +393,7 @@ class GlDevice final : public Device {
     /// Uniform locations of the one program.
     struct Uniforms {
         GLint model, view_projection, normal_matrix, point_size, colour, lit, vertex_colour,
-            textured, texture, light_direction, ambient;
+            textured, texture, light_direction, ambient, procedural;
     };
     Uniforms u_{};
     std::unordered_map<std::uint32_t, GpuMesh> meshes_;

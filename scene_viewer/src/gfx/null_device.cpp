@@ -43,4 +43,9 @@ ImageRgba8 NullDevice::read_pixels() {
     return image;
 }
 
+std::vector<float> NullDevice::read_depth() {
+    return std::vector<float>(static_cast<std::size_t>(last_setup.width_px) * last_setup.height_px,
+                              1.0f);
+}
+
 }  // namespace scene_viewer

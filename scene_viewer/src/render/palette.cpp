@@ -1,5 +1,8 @@
 #include "scene_viewer/render/palette.hpp"
 
+#include <stdexcept>
+#include <string>
+
 namespace scene_viewer {
 
 namespace {
@@ -55,6 +58,28 @@ bool is_ground_class(int class_id, std::string_view class_name) {
     if (auto e = cityscapes_by_id(class_id)) return e->ground;
     if (auto e = cityscapes_by_name(class_name)) return e->ground;
     return false;
+}
+
+bool has_instances(int class_id) { return class_id >= 24 && class_id <= 33; }
+
+std::vector<std::uint16_t> kitti_instance_ids(const std::vector<int>& class_ids) {
+    std::vector<std::uint16_t> ids;
+    ids.reserve(class_ids.size());
+    int counts[256] = {};
+    for (int c : class_ids) {
+        if (c < 0 || c > 255)
+            throw std::invalid_argument("class_id " + std::to_string(c) +
+                                        " does not fit KITTI's 8-bit labelId");
+        int n = 0;
+        if (has_instances(c)) {
+            n = ++counts[c];
+            if (n > 255)
+                throw std::invalid_argument("more than 255 instances of class_id " +
+                                            std::to_string(c) + " (KITTI's 8-bit instance index)");
+        }
+        ids.push_back(static_cast<std::uint16_t>(c << 8 | n));
+    }
+    return ids;
 }
 
 }  // namespace scene_viewer

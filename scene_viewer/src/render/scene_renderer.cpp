@@ -16,7 +16,8 @@ namespace scene_viewer {
 Shading parse_shading(const std::string& name) {
     if (name == "lit") return Shading::lit;
     if (name == "semantic") return Shading::semantic;
-    throw std::invalid_argument("unknown shading '" + name + "' (lit, semantic)");
+    if (name == "instance") return Shading::instance;
+    throw std::invalid_argument("unknown shading '" + name + "' (lit, semantic, instance)");
 }
 
 void RenderOptions::validate() const {
@@ -57,7 +58,9 @@ ImageRgba8 SceneRenderer::render_frame() {
     update_cameras(world_);
     FrameSetup setup;
     const bool lit = options_.shading == Shading::lit;
-    const Rgb8 bg = lit ? kLitBackground : kSemanticBackground;
+    const Rgb8 bg = lit                                     ? kLitBackground
+                    : options_.shading == Shading::semantic ? kSemanticBackground
+                                                            : Rgb8{0, 0, 0};
     setup.clear_colour = {bg[0] / 255.0f, bg[1] / 255.0f, bg[2] / 255.0f, 0.0f};
     setup.msaa_samples = lit ? options_.msaa_samples : 0;
     render_world(world_, models_, *device_, setup);

@@ -73,6 +73,12 @@ void build_scene(World& world, const scene_schema::EntityDocument& document,
     const std::uint32_t box = *models.find("box");
     float ground_top_y = kDefaultCameraHeight;
     bool has_ground = false;
+    std::vector<std::uint16_t> instance_ids;
+    if (options.shading == Shading::instance) {
+        std::vector<int> class_ids;
+        for (const auto& src : document.entities) class_ids.push_back(src.class_id);
+        instance_ids = kitti_instance_ids(class_ids);
+    }
 
     for (std::size_t i = 0; i < document.entities.size(); ++i) {
         const auto& src = document.entities[i];
@@ -109,6 +115,11 @@ void build_scene(World& world, const scene_schema::EntityDocument& document,
                               ? glm::vec4(1.0f)
                               : to_colour(class_colour(src.class_id, src.class_name));
         material.lit = lit;
+        material.procedural = lit && options.procedural_texture;
+        if (!instance_ids.empty()) {
+            material.colour = {(instance_ids[i] >> 8) / 255.0f, (instance_ids[i] & 0xff) / 255.0f,
+                               0.0f, 1.0f};
+        }
         world.materials.set(e, material);
         world.sources.set(
             e, SourceEntity{static_cast<std::int32_t>(i), src.id, src.class_id, src.class_name});

@@ -30,6 +30,7 @@ void render_world(const World& world, const ModelLibrary& models, Device& device
             call.lit = material->lit;
             call.vertex_colour = material->vertex_colour;
             call.point_size_px = material->point_size_px;
+            call.procedural = material->procedural;
             device.draw(call);
         }
     }

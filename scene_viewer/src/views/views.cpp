@@ -82,8 +82,9 @@ ViewMatrices view_matrices(const ViewSpec& spec, int width_px, int height_px) {
     ViewMatrices m;
     switch (spec.kind) {
         case ViewKind::camera:
-            // The renderer's world frame is the GL frame of this very camera: identity pose.
-            m.view = glm::mat4(1.0f);
+            // The renderer's world frame is the GL frame of the left camera: identity pose, or a
+            // pure translation for another camera of a rectified rig.
+            m.view = glm::translate(glm::mat4(1.0f), -kitti_to_gl(spec.camera_position_kitti));
             m.projection = spec.intrinsics
                                ? projection_from_intrinsics(*spec.intrinsics, width_px, height_px,
                                                             spec.near_m, spec.far_m)

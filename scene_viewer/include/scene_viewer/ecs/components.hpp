@@ -37,6 +37,7 @@ struct Material {
     bool lit = true;             ///< false: flat colour, no lighting
     bool vertex_colour = false;  ///< use per-vertex colours (point clouds)
     float point_size_px = 2.0f;  ///< size of GL points
+    bool procedural = false;     ///< modulate by world-space value noise (sensor renders)
 };
 
 /// A camera: what view it takes and the matrices the camera system computed for it.

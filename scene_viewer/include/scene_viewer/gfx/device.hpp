@@ -57,6 +57,7 @@ struct DrawCall {
     bool lit = true;                  ///< directional + ambient, else flat colour
     bool vertex_colour = false;       ///< multiply by per-vertex colours
     float point_size_px = 1.0f;       ///< for Topology::points
+    bool procedural = false;          ///< modulate by value noise fixed in world space (stereo)
 };
 
 /// The backend interface. One frame: begin_frame, draw..., end_frame, then read_pixels.
@@ -72,6 +73,9 @@ class Device {
     virtual void end_frame() = 0;
     /// The last frame as RGBA8, row 0 at the top.
     virtual ImageRgba8 read_pixels() = 0;
+    /// The last frame's window depth (0 near .. 1 far plane or nothing drawn), row 0 at the top;
+    /// only for frames without multisampling.
+    virtual std::vector<float> read_depth() = 0;
 };
 
 }  // namespace scene_viewer

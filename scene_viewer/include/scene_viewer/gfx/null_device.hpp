@@ -20,6 +20,8 @@ class NullDevice final : public Device {
     void end_frame() override;
     /// A cleared image of the frame size (clear colour), so callers can run unchanged.
     ImageRgba8 read_pixels() override;
+    /// Depth 1 (nothing drawn) everywhere, of the frame size.
+    std::vector<float> read_depth() override;
 
     /// Recorded state.
     std::vector<MeshData> meshes;  ///< every mesh created; handle id = index + 1

@@ -25,9 +25,10 @@ namespace scene_viewer {
 enum class Shading {
     lit,       ///< directional + ambient light, class colours, MSAA
     semantic,  ///< exact palette colours, no lighting, no MSAA (pixel-checkable)
+    instance,  ///< flat (labelId, instance, 0) / 255 per entity, no MSAA (KITTI instance ids)
 };
 
-/// "lit" / "semantic" -> Shading; throws std::invalid_argument otherwise.
+/// "lit" / "semantic" / "instance" -> Shading; throws std::invalid_argument otherwise.
 Shading parse_shading(const std::string& name);
 
 /// Largest accepted image side, pixels.
@@ -37,16 +38,17 @@ inline constexpr int kMaxImageSide = 16384;
 inline constexpr long long kMaxFrameSamples = 1LL << 28;
 
 struct RenderOptions {
-    int width_px = 1242;             ///< image width, pixels, 1..kMaxImageSide
-    int height_px = 375;             ///< image height, pixels, 1..kMaxImageSide
-    ViewSpec view;                   ///< camera; camera-view intrinsics come from the file
-    bool fit_bev = true;             ///< bev: frame every entity (ignores bev_* of view)
-    Shading shading = Shading::lit;  ///< lit or semantic
-    int msaa_samples = 4;            ///< lit: multisample count (0 = off); semantic: unused
-    bool grid = true;                ///< bev: draw a 1 m ground grid (10 m lines darker)
-    bool ego = true;                 ///< chase/bev/free: draw the ego car at the camera
-    float point_size_px = 2.0f;      ///< point cloud overlay: point size, pixels
-    bool keep_alpha = false;         ///< keep alpha 0 where nothing was drawn (compositing)
+    int width_px = 1242;              ///< image width, pixels, 1..kMaxImageSide
+    int height_px = 375;              ///< image height, pixels, 1..kMaxImageSide
+    ViewSpec view;                    ///< camera; camera-view intrinsics come from the file
+    bool fit_bev = true;              ///< bev: frame every entity (ignores bev_* of view)
+    Shading shading = Shading::lit;   ///< lit or semantic
+    int msaa_samples = 4;             ///< lit: multisample count (0 = off); semantic: unused
+    bool grid = true;                 ///< bev: draw a 1 m ground grid (10 m lines darker)
+    bool ego = true;                  ///< chase/bev/free: draw the ego car at the camera
+    float point_size_px = 2.0f;       ///< point cloud overlay: point size, pixels
+    bool keep_alpha = false;          ///< keep alpha 0 where nothing was drawn (compositing)
+    bool procedural_texture = false;  ///< lit: world-space noise texture on every surface
     /// Throws std::invalid_argument naming the bad field.
     void validate() const;
 };
@@ -74,6 +76,9 @@ class SceneRenderer {
     /// load() then render_frame().
     ImageRgba8 render(const scene_schema::EntityDocument& document, const PointCloud* cloud,
                       const RenderOptions& options);
+
+    /// Window depth of the last frame (semantic or instance shading: no MSAA), row 0 at the top.
+    std::vector<float> read_depth() { return device_->read_depth(); }
 
     const World& world() const { return world_; }
     const ModelLibrary& models() const { return models_; }

@@ -30,6 +30,9 @@ struct ViewSpec {
     float bev_half_height_m = 30.0f;            ///< bev: half the forward extent, metres
     float near_m = 0.1f;                        ///< near plane, metres
     float far_m = 500.0f;                       ///< far plane, metres
+    glm::vec3 camera_position_kitti{0.0f};      ///< camera view: optical centre in the
+                                                ///< frame's left camera, metres (right
+                                                ///< camera of a rig: (baseline, 0, 0))
     /// Throws std::invalid_argument naming the bad field.
     void validate() const;
 };

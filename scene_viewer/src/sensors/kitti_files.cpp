@@ -1,0 +1,186 @@
+#include <cstdio>
+#include <map>
+#include <sstream>
+#include <stdexcept>
+#include <string>
+#include <vector>
+
+#include <zlib.h>
+
+#include "scene_schema/entities.hpp"
+#include "scene_viewer/sensors/stereo_sensors.hpp"
+
+namespace scene_viewer {
+
+namespace {
+
+void put_u32(std::vector<unsigned char>& out, std::uint32_t v) {
+    for (int s = 24; s >= 0; s -= 8) out.push_back(static_cast<unsigned char>(v >> s));
+}
+
+void put_chunk(std::vector<unsigned char>& out, const char* type,
+               const std::vector<unsigned char>& data) {
+    put_u32(out, static_cast<std::uint32_t>(data.size()));
+    const std::size_t start = out.size();
+    out.insert(out.end(), type, type + 4);
+    out.insert(out.end(), data.begin(), data.end());
+    const uLong crc = crc32(0L, out.data() + start, static_cast<uInt>(out.size() - start));
+    put_u32(out, static_cast<std::uint32_t>(crc));
+}
+
+/// PNG (ISO/IEC 15948) of big-endian sample bytes: `raw` holds height rows of `row_bytes`; every
+/// row is filtered with the Sub filter (bytes_per_pixel back), then zlib-compressed.
+std::vector<unsigned char> encode_png(const std::vector<unsigned char>& raw, int width, int height,
+                                      int bit_depth, int colour_type, int bytes_per_pixel) {
+    const std::size_t row_bytes = static_cast<std::size_t>(width) * bytes_per_pixel;
+    std::vector<unsigned char> filtered;
+    filtered.reserve((row_bytes + 1) * height);
+    for (int y = 0; y < height; ++y) {
+        const unsigned char* row = raw.data() + row_bytes * y;
+        filtered.push_back(1);  // Sub
+        for (std::size_t i = 0; i < row_bytes; ++i) {
+            const unsigned char left =
+                i >= static_cast<std::size_t>(bytes_per_pixel) ? row[i - bytes_per_pixel] : 0;
+            filtered.push_back(static_cast<unsigned char>(row[i] - left));
+        }
+    }
+    uLongf size = compressBound(static_cast<uLong>(filtered.size()));
+    std::vector<unsigned char> idat(size);
+    if (compress2(idat.data(), &size, filtered.data(), static_cast<uLong>(filtered.size()), 6) !=
+        Z_OK) {
+        throw std::runtime_error("PNG: zlib compression failed");
+    }
+    idat.resize(size);
+    std::vector<unsigned char> png = {0x89, 'P', 'N', 'G', '\r', '\n', 0x1a, '\n'};
+    std::vector<unsigned char> ihdr;
+    put_u32(ihdr, static_cast<std::uint32_t>(width));
+    put_u32(ihdr, static_cast<std::uint32_t>(height));
+    ihdr.insert(ihdr.end(), {static_cast<unsigned char>(bit_depth),
+                             static_cast<unsigned char>(colour_type), 0, 0, 0});
+    put_chunk(png, "IHDR", ihdr);
+    put_chunk(png, "IDAT", idat);
+    put_chunk(png, "IEND", {});
+    return png;
+}
+
+std::string numbers(const std::vector<double>& values) {
+    std::string out;
+    char buffer[32];
+    for (double v : values) {
+        std::snprintf(buffer, sizeof buffer, "%.12e", v);
+        if (!out.empty()) out += ' ';
+        out += buffer;
+    }
+    return out;
+}
+
+std::string as_text(const std::vector<unsigned char>& bytes) {
+    return std::string(bytes.begin(), bytes.end());
+}
+
+}  // namespace
+
+std::vector<unsigned char> encode_png_rgb8(const ImageRgb8& image) {
+    if (image.width <= 0 || image.height <= 0 ||
+        image.pixels.size() != static_cast<std::size_t>(image.width) * image.height * 3)
+        throw std::invalid_argument("PNG: RGB image size does not match its pixel data");
+    return encode_png(image.pixels, image.width, image.height, 8, 2, 3);
+}
+
+std::vector<unsigned char> encode_png_u16(const ImageU16& image) {
+    if (image.width <= 0 || image.height <= 0 ||
+        image.values.size() != static_cast<std::size_t>(image.width) * image.height)
+        throw std::invalid_argument("PNG: 16-bit image size does not match its values");
+    std::vector<unsigned char> raw;
+    raw.reserve(image.values.size() * 2);
+    for (std::uint16_t v : image.values) {
+        raw.push_back(static_cast<unsigned char>(v >> 8));
+        raw.push_back(static_cast<unsigned char>(v & 0xff));
+    }
+    return encode_png(raw, image.width, image.height, 16, 0, 2);
+}
+
+std::string format_kitti_calib(const StereoRig& rig) {
+    rig.validate();
+    const double fx = rig.fx_px, fy = rig.fy_px, cx = rig.cx_px, cy = rig.cy_px;
+    const std::vector<double> size = {static_cast<double>(rig.width_px),
+                                      static_cast<double>(rig.height_px)};
+    const std::vector<double> identity = {1, 0, 0, 0, 1, 0, 0, 0, 1};
+    std::string out = "calib_time: synthetic (scene-render sensors)\n";
+    out += "S_rect_02: " + numbers(size) + "\n";
+    out += "R_rect_02: " + numbers(identity) + "\n";
+    out += "P_rect_02: " + numbers({fx, 0, cx, 0, 0, fy, cy, 0, 0, 0, 1, 0}) + "\n";
+    out += "S_rect_03: " + numbers(size) + "\n";
+    out += "R_rect_03: " + numbers(identity) + "\n";
+    out +=
+        "P_rect_03: " + numbers({fx, 0, cx, -fx * rig.baseline_m, 0, fy, cy, 0, 0, 0, 1, 0}) + "\n";
+    return out;
+}
+
+StereoRig parse_kitti_calib(const std::string& text) {
+    std::map<std::string, std::vector<double>> fields;
+    std::istringstream lines(text);
+    std::string line;
+    while (std::getline(lines, line)) {
+        const auto colon = line.find(':');
+        if (colon == std::string::npos) continue;
+        std::istringstream values(line.substr(colon + 1));
+        std::vector<double> v;
+        double d = 0.0;
+        while (values >> d) v.push_back(d);
+        fields[line.substr(0, colon)] = v;
+    }
+    auto need = [&](const std::string& key, std::size_t count) -> const std::vector<double>& {
+        auto it = fields.find(key);
+        if (it == fields.end()) throw std::invalid_argument(key + ": missing");
+        if (it->second.size() != count)
+            throw std::invalid_argument(key + ": expected " + std::to_string(count) + " numbers");
+        return it->second;
+    };
+    const auto& p2 = need("P_rect_02", 12);
+    const auto& p3 = need("P_rect_03", 12);
+    const auto& s = need("S_rect_02", 2);
+    StereoRig rig;
+    rig.width_px = static_cast<int>(std::lround(s[0]));
+    rig.height_px = static_cast<int>(std::lround(s[1]));
+    rig.fx_px = p2[0];
+    rig.cx_px = p2[2];
+    rig.fy_px = p2[5];
+    rig.cy_px = p2[6];
+    if (!(rig.fx_px > 0.0)) throw std::invalid_argument("P_rect_02: fx must be > 0");
+    rig.baseline_m = (p2[3] - p3[3]) / rig.fx_px;
+    rig.validate();
+    return rig;
+}
+
+void check_frame_name(const std::string& frame_name) {
+    if (frame_name.empty() || frame_name.find_first_of("/\\") != std::string::npos ||
+        frame_name == "." || frame_name == "..")
+        throw std::invalid_argument("frame name '" + frame_name + "' must be a plain file stem");
+}
+
+std::map<std::string, std::string> kitti_layout_files(const StereoFrame& frame,
+                                                      const std::string& frame_name) {
+    check_frame_name(frame_name);
+    const std::string png = frame_name + ".png";
+    return {{"image_2/" + png, as_text(encode_png_rgb8(frame.left))},
+            {"image_3/" + png, as_text(encode_png_rgb8(frame.right))},
+            {"semantic_rgb/" + png, as_text(encode_png_rgb8(frame.semantic))},
+            {"instance/" + png, as_text(encode_png_u16(frame.instance))},
+            {"disp_occ_0/" + png, as_text(encode_png_u16(frame.disparity))},
+            {"depth/" + png, as_text(encode_png_u16(frame.depth_mm))},
+            {"calib/calib_cam_to_cam.txt", format_kitti_calib(frame.rig)}};
+}
+
+void write_files(const std::filesystem::path& root,
+                 const std::map<std::string, std::string>& files) {
+    for (const auto& [relative, bytes] : files) {
+        const std::filesystem::path path = root / relative;
+        std::error_code ec;
+        std::filesystem::create_directories(path.parent_path(), ec);
+        if (ec) throw scene_schema::FileError(path.parent_path().string() + ": " + ec.message());
+        scene_schema::write_file_atomic(path, bytes);
+    }
+}
+
+}  // namespace scene_viewer

@@ -1,0 +1,216 @@
+#include "scene_viewer/sensors/stereo_sensors.hpp"
+
+#include <algorithm>
+#include <cmath>
+#include <stdexcept>
+#include <string>
+
+#include "scene_viewer/render/palette.hpp"
+#include "scene_viewer/render/scene_renderer.hpp"
+
+namespace scene_viewer {
+
+namespace {
+
+/// Sky of the colour images: zenith colour at the top, horizon colour at and below the
+/// principal row (a horizontal camera's horizon).
+constexpr float kSkyZenith[3] = {78.0f, 128.0f, 196.0f};
+constexpr float kSkyHorizon[3] = {196.0f, 212.0f, 228.0f};
+
+/// Id of the ground underlay added under every sensor scene.
+constexpr const char* kUnderlayId = "sensor-ground-underlay";
+
+/// The colour image under the sky: the MSAA resolve of a frame cleared to the lit background
+/// with alpha 0 holds alpha * surface + (1 - alpha) * background, so adding
+/// (1 - alpha) * (sky - background) swaps the background for the sky, exact at edges too.
+ImageRgb8 composite_sky(const ImageRgba8& render, double cy_px) {
+    ImageRgb8 out;
+    out.width = render.width;
+    out.height = render.height;
+    out.pixels.resize(static_cast<std::size_t>(render.width) * render.height * 3);
+    for (int y = 0; y < render.height; ++y) {
+        const float t =
+            cy_px > 0 ? std::clamp(static_cast<float>((cy_px - y) / cy_px), 0.0f, 1.0f) : 0.0f;
+        float sky[3];
+        for (int c = 0; c < 3; ++c) sky[c] = kSkyHorizon[c] + t * (kSkyZenith[c] - kSkyHorizon[c]);
+        for (int x = 0; x < render.width; ++x) {
+            const std::size_t i = static_cast<std::size_t>(y) * render.width + x;
+            const float alpha = render.pixels[i * 4 + 3] / 255.0f;
+            for (int c = 0; c < 3; ++c) {
+                const float v =
+                    render.pixels[i * 4 + c] + (1.0f - alpha) * (sky[c] - kLitBackground[c]);
+                out.pixels[i * 3 + c] =
+                    static_cast<std::uint8_t>(std::lround(std::clamp(v, 0.0f, 255.0f)));
+            }
+        }
+    }
+    return out;
+}
+
+}  // namespace
+
+void StereoRig::validate() const {
+    if (width_px < 1 || width_px > kMaxImageSide)
+        throw std::invalid_argument("width_px must be in 1.." + std::to_string(kMaxImageSide));
+    if (height_px < 1 || height_px > kMaxImageSide)
+        throw std::invalid_argument("height_px must be in 1.." + std::to_string(kMaxImageSide));
+    if (!(fx_px > 0.0)) throw std::invalid_argument("fx_px must be > 0");
+    if (!(fy_px > 0.0)) throw std::invalid_argument("fy_px must be > 0");
+    if (!std::isfinite(cx_px)) throw std::invalid_argument("cx_px must be finite");
+    if (!std::isfinite(cy_px)) throw std::invalid_argument("cy_px must be finite");
+    if (!(baseline_m > 0.0 && baseline_m < 100.0))
+        throw std::invalid_argument("baseline_m must be in (0, 100) metres");
+    if (!(camera_height_m > 0.0 && camera_height_m < 100.0))
+        throw std::invalid_argument("camera_height_m must be in (0, 100) metres");
+}
+
+StereoRig StereoRig::resized(int width, int height) const {
+    StereoRig r = *this;
+    const double sx = static_cast<double>(width) / width_px;
+    const double sy = static_cast<double>(height) / height_px;
+    r.width_px = width;
+    r.height_px = height;
+    r.fx_px *= sx;
+    r.cx_px *= sx;
+    r.fy_px *= sy;
+    r.cy_px *= sy;
+    return r;
+}
+
+StereoRig rig_for(const scene_schema::EntityDocument& document, const StereoRig& defaults) {
+    StereoRig rig = defaults;
+    if (const auto& k = document.frame.camera) {
+        rig.width_px = k->width_px;
+        rig.height_px = k->height_px;
+        rig.fx_px = k->fx_px;
+        rig.fy_px = k->fy_px;
+        rig.cx_px = k->cx_px;
+        rig.cy_px = k->cy_px;
+        if (k->baseline_m > 0.0) rig.baseline_m = k->baseline_m;
+    }
+    return rig;
+}
+
+void SensorModelOptions::validate() const {
+    if (!(noise_sigma >= 0.0 && noise_sigma <= 64.0))
+        throw std::invalid_argument("noise_sigma must be in 0..64 levels");
+    if (!(blur_sigma_px >= 0.0 && blur_sigma_px <= 10.0))
+        throw std::invalid_argument("blur_sigma_px must be in 0..10 pixels");
+    if (!(right_gain > 0.0 && right_gain <= 4.0))
+        throw std::invalid_argument("right_gain must be in (0, 4]");
+    if (!(vignetting_strength >= 0.0 && vignetting_strength <= 1.0))
+        throw std::invalid_argument("vignetting_strength must be in 0..1");
+}
+
+void SensorOptions::validate() const {
+    rig.validate();
+    sensor.validate();
+    if (msaa_samples < 0 || msaa_samples > 16)
+        throw std::invalid_argument("msaa_samples must be in 0..16");
+    if (!(underlay_size_m > 0.0)) throw std::invalid_argument("underlay_size_m must be > 0");
+    if (!(near_m > 0.0f)) throw std::invalid_argument("near_m must be > 0");
+    if (!(far_m > near_m)) throw std::invalid_argument("far_m must be > near_m");
+}
+
+std::vector<float> disparity_from_window_depth(const std::vector<float>& window_depth, double fx_px,
+                                               double baseline_m, float near_m, float far_m) {
+    std::vector<float> disparity(window_depth.size(), 0.0f);
+    const double n = near_m, f = far_m;
+    for (std::size_t i = 0; i < window_depth.size(); ++i) {
+        const double d = window_depth[i];
+        if (d >= 1.0) continue;
+        const double z = 2.0 * n * f / (f + n - (2.0 * d - 1.0) * (f - n));
+        disparity[i] = static_cast<float>(fx_px * baseline_m / z);
+    }
+    return disparity;
+}
+
+StereoFrame render_stereo_frame(SceneRenderer& renderer,
+                                const scene_schema::EntityDocument& document,
+                                const SensorOptions& options) {
+    options.validate();
+    const StereoRig& rig = options.rig;
+    scene_schema::EntityDocument scene = document;
+    if (options.ground_underlay) {
+        // Appended after the file's entities, so their instance ids do not change. Its top lies
+        // 1 cm under the road level, under any road patch of the file.
+        scene_schema::Entity underlay;
+        underlay.id = kUnderlayId;
+        underlay.class_name = "terrain";
+        underlay.class_id = 22;
+        underlay.theta = -M_PI / 2;
+        underlay.W = underlay.L = options.underlay_size_m;
+        underlay.H = 0.02;
+        underlay.y = rig.camera_height_m + 0.02;
+        scene.entities.push_back(underlay);
+    }
+
+    RenderOptions o;
+    o.width_px = rig.width_px;
+    o.height_px = rig.height_px;
+    o.view.kind = ViewKind::camera;
+    // GL samples pixel i at i + 0.5; KITTI/OpenCV put pixel i's centre at u = i. Shifting the
+    // principal point by half a pixel makes the images match the calibration exactly.
+    scene_schema::CameraIntrinsics k;
+    k.width_px = rig.width_px;
+    k.height_px = rig.height_px;
+    k.fx_px = rig.fx_px;
+    k.fy_px = rig.fy_px;
+    k.cx_px = rig.cx_px + 0.5;
+    k.cy_px = rig.cy_px + 0.5;
+    k.baseline_m = rig.baseline_m;
+    o.view.intrinsics = k;
+    o.view.near_m = options.near_m;
+    o.view.far_m = options.far_m;
+    o.fit_bev = false;
+    o.grid = false;
+    o.ego = false;
+    o.keep_alpha = true;
+    o.procedural_texture = true;
+    o.msaa_samples = options.msaa_samples;
+
+    StereoFrame frame;
+    frame.rig = rig;
+    o.shading = Shading::lit;
+    const ImageRgba8 left = renderer.render(scene, nullptr, o);
+    o.view.camera_position_kitti = {static_cast<float>(rig.baseline_m), 0.0f, 0.0f};
+    const ImageRgba8 right = renderer.render(scene, nullptr, o);
+    o.view.camera_position_kitti = glm::vec3(0.0f);
+    frame.left = apply_sensor_model(composite_sky(left, rig.cy_px), 0, options.sensor);
+    frame.right = apply_sensor_model(composite_sky(right, rig.cy_px), 1, options.sensor);
+
+    o.shading = Shading::semantic;
+    const ImageRgba8 semantic = renderer.render(scene, nullptr, o);
+    const std::vector<float> window_depth = renderer.read_depth();
+    o.shading = Shading::instance;
+    const ImageRgba8 instance = renderer.render(scene, nullptr, o);
+
+    const int w = rig.width_px, h = rig.height_px;
+    const std::size_t count = static_cast<std::size_t>(w) * h;
+    const Rgb8 sky = class_colour(23, "sky");
+    frame.semantic = ImageRgb8{w, h, std::vector<std::uint8_t>(count * 3)};
+    frame.instance = ImageU16{w, h, std::vector<std::uint16_t>(count, 0)};
+    frame.disparity = ImageU16{w, h, std::vector<std::uint16_t>(count, 0)};
+    frame.depth_mm = ImageU16{w, h, std::vector<std::uint16_t>(count, 0)};
+    frame.depth_m.assign(count, 0.0f);
+    const std::vector<float> disparity = disparity_from_window_depth(
+        window_depth, rig.fx_px, rig.baseline_m, options.near_m, options.far_m);
+    for (std::size_t i = 0; i < count; ++i) {
+        const std::uint8_t* s = &semantic.pixels[i * 4];
+        const bool drawn = s[3] != 0;
+        for (int c = 0; c < 3; ++c) frame.semantic.pixels[i * 3 + c] = drawn ? s[c] : sky[c];
+        const std::uint8_t* id = &instance.pixels[i * 4];
+        if (id[3] != 0) frame.instance.values[i] = static_cast<std::uint16_t>(id[0] << 8 | id[1]);
+        if (disparity[i] > 0.0f) {
+            const double z = rig.fx_px * rig.baseline_m / static_cast<double>(disparity[i]);
+            frame.depth_m[i] = static_cast<float>(z);
+            frame.disparity.values[i] = static_cast<std::uint16_t>(
+                std::min(65535L, std::lround(static_cast<double>(disparity[i]) * 256.0)));
+            const long mm = std::lround(z * 1000.0);
+            frame.depth_mm.values[i] = mm <= 65535 ? static_cast<std::uint16_t>(mm) : 0;
+        }
+    }
+    return frame;
+}
+
+}  // namespace scene_viewer
