@@ -3,6 +3,7 @@
 #include <cmath>
 #include <cstdio>
 #include <iostream>
+#include <optional>
 #include <sstream>
 #include <stdexcept>
 
@@ -11,8 +12,10 @@
 
 #include "cloud_analysis/calibration.hpp"
 #include "cloud_analysis/disparity.hpp"
+#include "cloud_analysis/entity_eval.hpp"
 #include "cloud_analysis/evaluate.hpp"
 #include "cloud_analysis/io.hpp"
+#include "cloud_analysis/kitti_labels.hpp"
 
 namespace cloud_analysis::app {
 namespace {
@@ -24,8 +27,48 @@ struct ResolvedPaths {
     fs::path gt_disparity, instance, calib;
 };
 
+bool entity_mode(const EvaluateArgs& args) {
+    return !args.reference.empty() || !args.labels.empty();
+}
+
 ResolvedPaths resolve(const EvaluateArgs& args) {
     ResolvedPaths p{args.gt_disparity, args.instance, args.calib};
+    if (!args.reference.empty() && !args.labels.empty()) {
+        throw CLI::ValidationError("--reference/--labels", "give one reference, not both");
+    }
+    if (entity_mode(args) && args.entities.empty()) {
+        throw CLI::ValidationError("--entities", "required with --reference or --labels");
+    }
+    if (args.bars.any() && !entity_mode(args)) {
+        throw CLI::ValidationError("--require-recall/--max-*", "bars need --reference or --labels");
+    }
+    try {
+        args.entity_eval.validate();
+        args.bars.validate();
+    } catch (const std::invalid_argument& e) {
+        throw CLI::ValidationError("evaluate", e.what());
+    }
+    if (entity_mode(args)) {
+        std::vector<fs::path> inputs = {args.entities,
+                                        args.reference.empty() ? args.labels : args.reference};
+        if (!args.disparity.empty()) {
+            if (p.gt_disparity.empty() && !args.kitti_root.empty() && !args.frame.empty()) {
+                p.gt_disparity = args.kitti_root / "disp_occ_0" / (args.frame + ".png");
+            }
+            if (p.gt_disparity.empty()) {
+                throw CLI::ValidationError("--gt-disparity", "required with --disparity");
+            }
+            inputs.push_back(args.disparity);
+            inputs.push_back(p.gt_disparity);
+        }
+        for (const auto& f : inputs) {
+            std::error_code ec;
+            if (!fs::is_regular_file(f, ec)) {
+                throw std::runtime_error("cannot evaluate: no such file (" + f.string() + ")");
+            }
+        }
+        return p;
+    }
     if (!args.kitti_root.empty()) {
         if (args.frame.empty()) throw CLI::ValidationError("--frame", "required with --kitti-root");
         const std::string png = args.frame + ".png";
@@ -86,17 +129,216 @@ CLI::App* add_evaluate_command(CLI::App& app, EvaluateArgs& args) {
     sub->add_option("--min-gt-pixels", args.min_gt_pixels,
                     "GT cars with fewer GT disparity pixels are not owed (recall)")
         ->check(CLI::NonNegativeNumber);
+    const std::string ee = "Entity-to-entity (--reference or --labels)";
+    sub->add_option("--reference", args.reference,
+                    "reference entity file (e.g. a rendered scene's truth): score --entities "
+                    "against it per class and distance bin")
+        ->group(ee);
+    sub->add_option("--labels", args.labels,
+                    "KITTI label_2 file as the reference (y = box bottom; DontCare/Misc ignored)")
+        ->group(ee);
+    auto& o = args.entity_eval;
+    sub->add_option("--match-distance", o.max_match_distance_m,
+                    "largest bird's-eye centre distance of a match, metres")
+        ->check(CLI::PositiveNumber)
+        ->capture_default_str()
+        ->group(ee);
+    sub->add_option("--eval-range", o.max_range_m,
+                    "entities farther than this (bird's-eye) are ignored, metres")
+        ->check(CLI::PositiveNumber)
+        ->capture_default_str()
+        ->group(ee);
+    sub->add_option("--iou-threshold", o.iou_threshold, "BEV IoU of a good match, (0, 1]")
+        ->check(CLI::Range(1e-9, 1.0))
+        ->capture_default_str()
+        ->group(ee);
+    sub->add_option("--stuff-overlap", o.stuff_overlap,
+                    "a stuff entity lying at least this share inside a reference thing is "
+                    "spurious, (0, 1]")
+        ->check(CLI::Range(1e-9, 1.0))
+        ->capture_default_str()
+        ->group(ee);
+    const std::string bg = "Bars (exit 3 when one is missed; off unless given)";
+    auto& b = args.bars;
+    sub->add_option("--bar-class", b.class_name, "class the bars apply to")
+        ->capture_default_str()
+        ->group(bg);
+    sub->add_option("--bar-range", b.max_range_m, "bars use the bins up to this edge, metres")
+        ->check(CLI::IsMember({10.0, 20.0, 30.0, 50.0}))
+        ->capture_default_str()
+        ->group(bg);
+    sub->add_option("--require-recall", b.require_recall, "minimum recall, [0, 1]")
+        ->check(CLI::Range(0.0, 1.0))
+        ->group(bg);
+    sub->add_option("--max-spurious", b.max_spurious, "most unmatched entities of the class")
+        ->check(CLI::NonNegativeNumber)
+        ->group(bg);
+    sub->add_option("--max-stuff-on-things", b.max_stuff_on_things,
+                    "most stuff-class entities sitting on a reference thing (any class)")
+        ->check(CLI::NonNegativeNumber)
+        ->group(bg);
+    sub->add_option("--max-median-centre-error", b.max_median_centre_error_m,
+                    "largest median 3D centre error, metres")
+        ->check(CLI::NonNegativeNumber)
+        ->group(bg);
+    sub->add_option("--max-median-heading-error", b.max_median_heading_error_deg,
+                    "largest median heading error (mod 180), degrees")
+        ->check(CLI::NonNegativeNumber)
+        ->group(bg);
+    sub->add_option("--min-good-iou-fraction", b.min_good_iou_fraction,
+                    "least share of reference entities matched with BEV IoU >= --iou-threshold")
+        ->check(CLI::Range(0.0, 1.0))
+        ->group(bg);
+    sub->footer(
+        "Exit codes: 0 ok, 1 failure, 2 usage error, 3 a bar was missed (one stderr line "
+        "each).");
     return sub;
 }
 
-void run_evaluate(const EvaluateArgs& args) {
+namespace {
+
+std::string bin_row(const std::string& cls, const std::string& bin, const ClassBinScore& s,
+                    bool thing) {
+    char line[320];
+    if (!thing) {
+        std::snprintf(line, sizeof line, "  %-12s %-6s %4s %4zu %4s %4s %4zu  (stuff on things)\n",
+                      cls.c_str(), bin.c_str(), "-", s.estimate, "-", "-", s.spurious);
+        return line;
+    }
+    std::vector<double> dw, dh, dl;
+    for (const auto& e : s.size_errors_m) {
+        dw.push_back(std::abs(e.x()));
+        dh.push_back(std::abs(e.y()));
+        dl.push_back(std::abs(e.z()));
+    }
+    std::snprintf(line, sizeof line,
+                  "  %-12s %-6s %4zu %4zu %4zu %4zu %4zu %6.3f %6.3f %7.2f %7.1f %5.2f %5.2f "
+                  "%4zu/%-4zu %5.2f %5.2f %5.2f\n",
+                  cls.c_str(), bin.c_str(), s.reference, s.estimate, s.matched, s.missed,
+                  s.spurious, s.recall(), s.precision(), median(s.centre_errors_m),
+                  median(s.heading_errors_deg), median(s.bev_ious), median(s.ious_3d), s.good_iou,
+                  s.reference, median(dw), median(dh), median(dl));
+    return line;
+}
+
+nlohmann::json bin_json(const ClassBinScore& s) {
+    std::vector<double> dw, dh, dl;
+    for (const auto& e : s.size_errors_m) {
+        dw.push_back(std::abs(e.x()));
+        dh.push_back(std::abs(e.y()));
+        dl.push_back(std::abs(e.z()));
+    }
+    return {{"reference", s.reference},
+            {"estimate", s.estimate},
+            {"matched", s.matched},
+            {"missed", s.missed},
+            {"spurious", s.spurious},
+            {"recall", s.recall()},
+            {"precision", s.precision()},
+            {"good_iou", s.good_iou},
+            {"good_iou_fraction", s.good_iou_fraction()},
+            {"median_centre_error_m", median(s.centre_errors_m)},
+            {"median_heading_error_deg", median(s.heading_errors_deg)},
+            {"median_bev_iou", median(s.bev_ious)},
+            {"median_iou_3d", median(s.ious_3d)},
+            {"median_abs_size_error_m", {{"W", median(dw)}, {"H", median(dh)}, {"L", median(dl)}}}};
+}
+
+/// Entity-to-entity scores into table and JSON; returns the missed bars.
+std::vector<std::string> evaluate_entity_files(const EvaluateArgs& args, std::ostream& table,
+                                               nlohmann::json& out) {
+    const scene_schema::EntityDocument doc = scene_schema::read_file(args.entities);
+    std::vector<scene_schema::Entity> reference;
+    std::string reference_name;
+    if (!args.labels.empty()) {
+        reference = entities_from_kitti_labels(load_kitti_labels(args.labels));
+        reference_name = args.labels.string();
+    } else {
+        reference = scene_schema::read_file(args.reference).entities;
+        reference_name = args.reference.string();
+    }
+    const EntityEvaluation ev = evaluate_entities(reference, doc.entities, args.entity_eval);
+    const auto& o = ev.options;
+    table << "entities " << args.entities.string() << " vs reference " << reference_name << "\n"
+          << "  matching: same class, greedy by bird's-eye centre distance <= "
+          << fixed(o.max_match_distance_m, 2) << " m; range <= " << fixed(o.max_range_m, 0)
+          << " m; good = BEV IoU >= " << fixed(o.iou_threshold, 2) << "\n"
+          << "  class        bin     ref  est  hit miss spur recall  prec. centre_m head_deg "
+             "bev   3d   good      |dW|  |dH|  |dL|\n";
+    nlohmann::json classes = nlohmann::json::object();
+    for (const auto& c : ev.classes) {
+        nlohmann::json bins = nlohmann::json::object();
+        for (std::size_t i = 0; i < c.bins.size(); ++i) {
+            const std::string name = distance_bin_name(static_cast<int>(i));
+            bins[name] = bin_json(c.bins[i]);
+            if (c.bins[i].reference + c.bins[i].estimate > 0 || i + 1 == c.bins.size()) {
+                table << bin_row(c.class_name, name, c.bins[i], c.thing);
+            }
+        }
+        classes[c.class_name] = {{"thing", c.thing}, {"bins", bins}};
+    }
+    nlohmann::json matches = nlohmann::json::array();
+    for (const auto& m : ev.matches) {
+        matches.push_back(
+            {{"reference", reference[m.reference].id},
+             {"estimate", doc.entities[m.estimate].id},
+             {"class", reference[m.reference].class_name},
+             {"range_m", bev_range_m(reference[m.reference])},
+             {"centre_error_m", m.centre_error_m},
+             {"bev_centre_error_m", m.bev_centre_error_m},
+             {"size_error_m", {m.size_error_m.x(), m.size_error_m.y(), m.size_error_m.z()}},
+             {"heading_error_deg", m.heading_error_rad * 180.0 / 3.14159265358979},
+             {"bev_iou", m.bev_iou},
+             {"iou_3d", m.iou_3d}});
+    }
+    nlohmann::json missed = nlohmann::json::array(), spurious = nlohmann::json::array();
+    for (const auto r : ev.missed) missed.push_back(reference[r].id);
+    for (const auto e : ev.spurious) spurious.push_back(doc.entities[e].id);
+    if (!ev.missed.empty()) table << "  missed:   " << missed.dump() << "\n";
+    if (!ev.spurious.empty()) table << "  spurious: " << spurious.dump() << "\n";
+
+    std::vector<std::string> missed_bars;
+    nlohmann::json bars = nlohmann::json::object();
+    if (args.bars.any()) {
+        missed_bars = check_bars(ev, args.bars);
+        const ClassBinScore s = ev.within(args.bars.class_name, args.bars.max_range_m);
+        table << "  bars (" << args.bars.class_name << " within " << fixed(args.bars.max_range_m, 0)
+              << " m): recall " << fixed(s.recall(), 3) << ", spurious " << s.spurious
+              << ", stuff on things " << ev.stuff_on_things(args.bars.max_range_m)
+              << ", median centre error " << fixed(median(s.centre_errors_m), 3)
+              << " m, median heading error " << fixed(median(s.heading_errors_deg), 2)
+              << " deg, BEV IoU >= " << fixed(o.iou_threshold, 2) << " for " << s.good_iou << "/"
+              << s.reference << ": " << (missed_bars.empty() ? "PASS" : "FAIL") << "\n";
+        bars = {{"class", args.bars.class_name},
+                {"max_range_m", args.bars.max_range_m},
+                {"pass", missed_bars.empty()},
+                {"missed", missed_bars}};
+    }
+    out["entities"] = {{"entities_file", args.entities.string()},
+                       {"reference_file", reference_name},
+                       {"max_match_distance_m", o.max_match_distance_m},
+                       {"max_range_m", o.max_range_m},
+                       {"iou_threshold", o.iou_threshold},
+                       {"stuff_overlap", o.stuff_overlap},
+                       {"classes", classes},
+                       {"matches", matches},
+                       {"missed", missed},
+                       {"spurious", spurious}};
+    if (args.bars.any()) out["bars"] = bars;
+    return missed_bars;
+}
+
+}  // namespace
+
+int run_evaluate(const EvaluateArgs& args) {
     const ResolvedPaths paths = resolve(args);
     nlohmann::json out = nlohmann::json::object();
     if (!args.frame.empty()) out["frame"] = args.frame;
     std::ostringstream table;
+    std::vector<std::string> missed_bars;
 
-    const DisparityMap gt_disparity = read_kitti_disparity(paths.gt_disparity);
     if (!args.disparity.empty()) {
+        const DisparityMap gt_disparity = read_kitti_disparity(paths.gt_disparity);
         const DisparityMap estimate = read_kitti_disparity(args.disparity);
         if (estimate.width_px != gt_disparity.width_px ||
             estimate.height_px != gt_disparity.height_px) {
@@ -118,7 +360,9 @@ void run_evaluate(const EvaluateArgs& args) {
               << " GT px)\n";
     }
 
-    if (!args.entities.empty()) {
+    if (entity_mode(args)) {
+        missed_bars = evaluate_entity_files(args, table, out);
+    } else if (!args.entities.empty()) {
         const scene_schema::EntityDocument doc = scene_schema::read_file(args.entities);
         const Calibration calib = load_calibration(paths.calib);
         const std::vector<GtCar> gt =
@@ -197,6 +441,62 @@ void run_evaluate(const EvaluateArgs& args) {
     } else if (!args.json.empty()) {
         scene_schema::write_file_atomic(args.json, json_text);
     }
+    for (const auto& m : missed_bars) std::cerr << "cloud-analysis: bar missed: " << m << "\n";
+    return missed_bars.empty() ? 0 : kExitBarMissed;
+}
+
+CLI::App* add_export_kitti_command(CLI::App& app, ExportKittiArgs& args) {
+    CLI::App* sub = app.add_subcommand(
+        "export-kitti",
+        "Write an entity file as KITTI object label_2 lines (y = box bottom, alpha, 2D box "
+        "from the camera; stuff classes are skipped) so KITTI's tools can score it");
+    sub->add_option("entities", args.entities, "entity JSON file")->required();
+    sub->add_option("-o,--output", args.output, "label_2 text file ('-' = stdout)")->required();
+    sub->add_option("--calib", args.calib,
+                    "calibration (KITTI or YAML/JSON) for the 2D boxes; default: the entity "
+                    "file's frame.camera, else 2D boxes are -1");
+    return sub;
+}
+
+int run_export_kitti(const ExportKittiArgs& args) {
+    for (const auto& f : {args.entities, args.calib}) {
+        std::error_code ec;
+        if (!f.empty() && !fs::is_regular_file(f, ec)) {
+            throw std::runtime_error("cannot export: no such file (" + f.string() + ")");
+        }
+    }
+    if (args.output != "-") {
+        const fs::path folder = fs::path(args.output).parent_path();
+        if (!folder.empty() && !fs::is_directory(folder)) {
+            throw std::runtime_error("cannot export: no such folder (" + folder.string() + ", -o)");
+        }
+    }
+    const scene_schema::EntityDocument doc = scene_schema::read_file(args.entities);
+    std::optional<scene_schema::CameraIntrinsics> camera = doc.frame.camera;
+    if (!args.calib.empty()) {
+        const StereoCamera c = load_calibration(args.calib).camera;
+        scene_schema::CameraIntrinsics k;
+        k.width_px = c.width_px > 0 ? c.width_px : (camera ? camera->width_px : 0);
+        k.height_px = c.height_px > 0 ? c.height_px : (camera ? camera->height_px : 0);
+        k.fx_px = c.fx_px;
+        k.fy_px = c.fy_px;
+        k.cx_px = c.cx_px;
+        k.cy_px = c.cy_px;
+        k.baseline_m = c.baseline_m;
+        camera = k;
+    }
+    std::vector<KittiLabel> labels;
+    for (const auto& e : doc.entities) {
+        if (!kitti_type_of_class(e.class_name)) continue;
+        labels.push_back(kitti_label_from_entity(e, camera ? &*camera : nullptr));
+    }
+    const std::string text = format_kitti_labels(labels);
+    if (args.output == "-") {
+        std::cout << text;
+    } else {
+        scene_schema::write_file_atomic(args.output, text);
+    }
+    return 0;
 }
 
 }  // namespace cloud_analysis::app

@@ -1,12 +1,16 @@
 #pragma once
 
 /// The `cloud-analysis evaluate` subcommand: scores a run against KITTI-style ground truth
-/// (disparity vs disp_occ_0; car entities vs the instance images' cars) and prints a table.
+/// (disparity vs disp_occ_0; car entities vs the instance images' cars) or entity-to-entity
+/// against a reference entity file / KITTI label_2 file, with optional pass bars (exit 3 when
+/// one is missed), and prints a table. Also `export-kitti` (entities -> label_2).
 
 #include <filesystem>
 #include <string>
 
 #include <CLI/CLI.hpp>
+
+#include "cloud_analysis/entity_eval.hpp"
 
 namespace cloud_analysis::app {
 
@@ -17,12 +21,26 @@ struct EvaluateArgs {
     std::filesystem::path kitti_root;  ///< --kitti-root: folder with calib/, instance/, ...
     std::string frame;                 ///< --frame: frame id, e.g. 000000_10
     std::filesystem::path
-        gt_disparity;                ///< --gt-disparity: overrides <root>/disp_occ_0/<frame>.png
-    std::filesystem::path instance;  ///< --instance: overrides <root>/instance/<frame>.png
-    std::filesystem::path calib;     ///< --calib: overrides <root>/calib/calib_cam_to_cam.txt
-    std::filesystem::path json;      ///< --json: also write the scores as JSON ("-" = stdout)
-    double max_range_m = 30.0;       ///< --max-range: cars farther than this are ignored, m
-    int min_gt_pixels = 200;         ///< --min-gt-pixels: GT cars owed for recall
+        gt_disparity;                 ///< --gt-disparity: overrides <root>/disp_occ_0/<frame>.png
+    std::filesystem::path instance;   ///< --instance: overrides <root>/instance/<frame>.png
+    std::filesystem::path calib;      ///< --calib: overrides <root>/calib/calib_cam_to_cam.txt
+    std::filesystem::path json;       ///< --json: also write the scores as JSON ("-" = stdout)
+    double max_range_m = 30.0;        ///< --max-range: cars farther than this are ignored, m
+    int min_gt_pixels = 200;          ///< --min-gt-pixels: GT cars owed for recall
+    std::filesystem::path reference;  ///< --reference: reference entity file (entity-to-entity)
+    std::filesystem::path labels;     ///< --labels: KITTI label_2 file as the reference
+    cloud_analysis::EntityEvalOptions entity_eval;  ///< --match-distance, --eval-range, ...
+    cloud_analysis::EvalBars bars;                  ///< --require-recall, ... (exit 3)
+};
+
+/// Exit code of `evaluate` when the scores miss a bar (--require-recall, ...).
+inline constexpr int kExitBarMissed = 3;
+
+/// Flags of `export-kitti`, filled by CLI11.
+struct ExportKittiArgs {
+    std::filesystem::path entities;  ///< positional: entity JSON file
+    std::string output;              ///< -o: label_2 text file ("-" = stdout)
+    std::filesystem::path calib;     ///< --calib: camera for alpha/2D boxes (else the file's)
 };
 
 /// Registers `evaluate` on app and binds its flags to args (which must outlive parsing).
@@ -31,7 +49,15 @@ CLI::App* add_evaluate_command(CLI::App& app, EvaluateArgs& args);
 
 /// Runs the evaluation: table to stdout (to stderr when --json is "-"), JSON to --json.
 /// Throws CLI::ValidationError for inconsistent flags (map to exit 2) and std::exception
-/// for failures (map to exit 1, message "<what failed>: <detail> (<file>)").
-void run_evaluate(const EvaluateArgs& args);
+/// for failures (map to exit 1, message "<what failed>: <detail> (<file>)"). Returns 0, or
+/// kExitBarMissed after printing one stderr line per missed bar.
+int run_evaluate(const EvaluateArgs& args);
+
+/// Registers `export-kitti` on app and binds its flags to args.
+CLI::App* add_export_kitti_command(CLI::App& app, ExportKittiArgs& args);
+
+/// Writes the entities of a file as KITTI label_2 lines (atomically); returns 0. Throws like
+/// run_evaluate.
+int run_export_kitti(const ExportKittiArgs& args);
 
 }  // namespace cloud_analysis::app

@@ -413,7 +413,8 @@ int run_make_sample(const SampleArgs& a) {
 }
 
 bool is_subcommand(const std::string& arg) {
-    return arg == "analyse" || arg == "evaluate" || arg == "make-sample" || arg == "help";
+    return arg == "analyse" || arg == "evaluate" || arg == "export-kitti" ||
+           arg == "make-sample" || arg == "help";
 }
 
 }  // namespace
@@ -430,8 +431,8 @@ int main(int argc, char** argv) {
     CLI::App app{
         "cloud-analysis: rectified stereo pair + calibration + semantic image -> "
         "disparity, labelled metric point cloud and entity file.\n"
-        "Commands: analyse (default), evaluate, make-sample. Exit codes: 0 ok, 1 failure, 2 "
-        "usage."};
+        "Commands: analyse (default), evaluate, export-kitti, make-sample. Exit codes: 0 ok, 1 "
+        "failure, 2 usage, 3 (evaluate) a bar was missed."};
     app.set_version_flag("--version", std::string(kTool) + " " + STEREOSCENE_VERSION);
     app.require_subcommand(0, 1);
     AnalyseArgs analyse_args;
@@ -443,6 +444,8 @@ int main(int argc, char** argv) {
         "Exit codes: 0 ok, 1 failure (one line on stderr, no output written), 2 usage error.");
     cloud_analysis::app::EvaluateArgs evaluate_args;
     CLI::App* evaluate = cloud_analysis::app::add_evaluate_command(app, evaluate_args);
+    cloud_analysis::app::ExportKittiArgs export_args;
+    CLI::App* export_kitti = cloud_analysis::app::add_export_kitti_command(app, export_args);
 
     SampleArgs sample_args;
     CLI::App* sample = app.add_subcommand(
@@ -465,10 +468,8 @@ int main(int argc, char** argv) {
             resolve(analyse_args, *analyse);
             return run_analyse(analyse_args);
         }
-        if (*evaluate) {
-            cloud_analysis::app::run_evaluate(evaluate_args);
-            return 0;
-        }
+        if (*evaluate) return cloud_analysis::app::run_evaluate(evaluate_args);
+        if (*export_kitti) return cloud_analysis::app::run_export_kitti(export_args);
         std::cout << app.help();
         return 0;
     } catch (const CLI::ParseError& e) {
