@@ -6,6 +6,7 @@
 
 #include <catch2/catch.hpp>
 
+#include "gl_test_context.hpp"
 #include "scene_viewer/assets/class_table.hpp"
 #include "scene_viewer/assets/image_io.hpp"
 #include "scene_viewer/gfx/gl_device.hpp"
@@ -18,19 +19,8 @@ using namespace scene_viewer;
 
 namespace {
 
-/// One context and device for the whole test run (made on first use, destroyed in reverse
-/// order at exit); every GL test uses them, so test order does not matter.
-struct Gl {
-    HeadlessContext context;
-    std::unique_ptr<Device> device = make_gl_device();
-};
-
-Gl& gl() {
-    static Gl instance;
-    return instance;
-}
-
-Device& gl_device() { return *gl().device; }
+using testing::gl;
+using testing::gl_device;
 
 scene_schema::Entity entity(const std::string& cls, int id, glm::dvec3 centre, double theta,
                             glm::dvec3 whl) {

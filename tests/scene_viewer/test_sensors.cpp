@@ -1,0 +1,302 @@
+// Synthetic stereo sensors: real llvmpipe renders of tiny scenes with known answers, and the
+// CPU parts (sensor model, calibration text, PNG encoding, instance ids) on their own.
+#include <algorithm>
+#include <cmath>
+#include <limits>
+#include <string>
+#include <vector>
+
+#include <catch2/catch.hpp>
+
+#include "gl_test_context.hpp"
+#include "scene_viewer/assets/image_io.hpp"
+#include "scene_viewer/render/palette.hpp"
+#include "scene_viewer/render/scene_renderer.hpp"
+#include "scene_viewer/sensors/stereo_sensors.hpp"
+
+using namespace scene_viewer;
+
+namespace {
+
+/// A small rig: 320 x 160 px, f = 300 px, principal point at the image centre, 0.5 m baseline.
+StereoRig small_rig() {
+    StereoRig rig;
+    rig.width_px = 320;
+    rig.height_px = 160;
+    rig.fx_px = rig.fy_px = 300.0;
+    rig.cx_px = 160.0;
+    rig.cy_px = 80.0;
+    rig.baseline_m = 0.5;
+    return rig;
+}
+
+SensorOptions small_options() {
+    SensorOptions o;
+    o.rig = small_rig();
+    o.ground_underlay = false;
+    return o;
+}
+
+scene_schema::Entity box(const std::string& id, const std::string& cls, int class_id, double x,
+                         double y, double z, double w, double h, double l) {
+    scene_schema::Entity e;
+    e.id = id;
+    e.class_name = cls;
+    e.class_id = class_id;
+    e.x = x, e.y = y, e.z = z;
+    e.theta = -M_PI / 2;  // length along +z
+    e.W = w, e.H = h, e.L = l;
+    return e;
+}
+
+scene_schema::EntityDocument scene(std::vector<scene_schema::Entity> entities) {
+    scene_schema::EntityDocument doc;
+    doc.frame.id = "sensors";
+    doc.entities = std::move(entities);
+    return doc;
+}
+
+StereoFrame render(const scene_schema::EntityDocument& doc, const SensorOptions& options) {
+    SceneRenderer renderer(testing::gl_device());
+    return render_stereo_frame(renderer, doc, options);
+}
+
+std::size_t at(const StereoRig& rig, int x, int y) {
+    return static_cast<std::size_t>(y) * rig.width_px + x;
+}
+
+Rgb8 rgb(const ImageRgb8& image, int x, int y) {
+    const std::size_t i = (static_cast<std::size_t>(y) * image.width + x) * 3;
+    return {image.pixels[i], image.pixels[i + 1], image.pixels[i + 2]};
+}
+
+/// Sum of squared differences of a patch of the left image at (x, y) and the right image at
+/// (x - shift, y), over the three channels.
+double ssd(const StereoFrame& f, int x, int y, int half, int shift) {
+    double sum = 0.0;
+    for (int dy = -half; dy <= half; ++dy) {
+        for (int dx = -half; dx <= half; ++dx) {
+            const Rgb8 l = rgb(f.left, x + dx, y + dy);
+            const Rgb8 r = rgb(f.right, x + dx - shift, y + dy);
+            for (int c = 0; c < 3; ++c) {
+                const double d = static_cast<double>(l[c]) - r[c];
+                sum += d * d;
+            }
+        }
+    }
+    return sum;
+}
+
+}  // namespace
+
+TEST_CASE("A box at known depth gives the GT disparity fx B / z at its centre pixel",
+          "[sensors][gl]") {
+    // A wall 4 m wide whose front face is at z = 10 - 0.25 = 9.75 m, centred on the optical axis.
+    const auto doc = scene({box("wall", "building", 11, 0.0, 0.0, 10.0, 4.0, 3.0, 0.5)});
+    const SensorOptions options = small_options();
+    const StereoFrame f = render(doc, options);
+    const StereoRig& rig = f.rig;
+    const double expected = rig.fx_px * rig.baseline_m / 9.75;
+    const std::size_t centre = at(rig, 160, 80);
+    CHECK(f.disparity.values[centre] / 256.0 == Approx(expected).margin(0.5));
+    CHECK(f.disparity.values[centre] / 256.0 == Approx(expected).margin(0.02));
+    CHECK(f.depth_m[centre] == Approx(9.75).margin(0.005));
+    CHECK(f.depth_mm.values[centre] == Approx(9750).margin(5));
+    // Nothing drawn in the corner (no underlay): no disparity, no depth, sky.
+    CHECK(f.disparity.values[at(rig, 0, 0)] == 0);
+    CHECK(f.depth_mm.values[at(rig, 0, 0)] == 0);
+    CHECK(rgb(f.semantic, 0, 0) == Rgb8{70, 130, 180});
+}
+
+TEST_CASE("The right image is the left one shifted by the GT disparity", "[sensors][gl]") {
+    // A textured wall at 7.75 m: d = 300 * 0.5 / 7.75 = 19.35 px.
+    const auto doc = scene({box("wall", "building", 11, 0.0, 0.0, 8.0, 8.0, 4.0, 0.5)});
+    // The geometry alone: no noise, no blur, equal gains.
+    SensorOptions options = small_options();
+    options.sensor.noise_sigma = 0.0;
+    options.sensor.blur_sigma_px = 0.0;
+    options.sensor.right_gain = 1.0;
+    const StereoFrame f = render(doc, options);
+    const int x = 170, y = 80, half = 7;
+    const double d = f.disparity.values[at(f.rig, x, y)] / 256.0;
+    REQUIRE(d == Approx(19.35).margin(0.05));
+    int best = -1;
+    double best_ssd = std::numeric_limits<double>::max(), worst_ssd = 0.0;
+    for (int shift = 0; shift <= 40; ++shift) {
+        const double s = ssd(f, x, y, half, shift);
+        if (s < best_ssd) best_ssd = s, best = shift;
+        worst_ssd = std::max(worst_ssd, s);
+    }
+    CHECK(std::abs(best - d) <= 1.0);
+    // The texture makes the match distinct: other shifts cost far more than the right one.
+    CHECK(ssd(f, x, y, half, best + 4) > 3.0 * best_ssd);
+    CHECK(ssd(f, x, y, half, best - 4) > 3.0 * best_ssd);
+    CHECK(worst_ssd > 10.0 * best_ssd);
+}
+
+TEST_CASE("The semantic image shows the class colour at the projected centre", "[sensors][gl]") {
+    // Car centre (1, 0.5, 12): u = 300 * 1 / 12 + 160 = 185, v = 300 * 0.5 / 12 + 80 = 92.5.
+    const auto doc = scene({box("car-1", "car", 26, 1.0, 0.5, 12.0, 1.8, 1.5, 4.2),
+                            box("person-1", "person", 24, -2.0, 0.8, 10.0, 0.6, 1.7, 0.5)});
+    SensorOptions options = small_options();
+    options.ground_underlay = true;
+    const StereoFrame f = render(doc, options);
+    CHECK(rgb(f.semantic, 185, 92) == Rgb8{0, 0, 142});
+    // Person: u = 300 * -2 / 10 + 160 = 100, v = 300 * 0.8 / 10 + 80 = 104.
+    CHECK(rgb(f.semantic, 100, 104) == Rgb8{220, 20, 60});
+    // The underlay fills the ground below the horizon (terrain), the sky is above it.
+    CHECK(rgb(f.semantic, 5, 155) == Rgb8{152, 251, 152});
+    CHECK(rgb(f.semantic, 5, 5) == Rgb8{70, 130, 180});
+    // Every semantic pixel is an exact palette colour.
+    for (int y = 0; y < f.rig.height_px; y += 7) {
+        for (int x = 0; x < f.rig.width_px; x += 7) {
+            const Rgb8 c = rgb(f.semantic, x, y);
+            const bool known = c == Rgb8{0, 0, 142} || c == Rgb8{220, 20, 60} ||
+                               c == Rgb8{152, 251, 152} || c == Rgb8{70, 130, 180};
+            CHECK(known);
+        }
+    }
+}
+
+TEST_CASE("Two cars get distinct KITTI instance ids, stuff gets instance 0", "[sensors][gl]") {
+    const auto doc = scene({box("building-1", "building", 11, 0.0, -1.0, 30.0, 20.0, 10.0, 4.0),
+                            box("car-a", "car", 26, -2.0, 0.5, 12.0, 1.8, 1.5, 4.2),
+                            box("car-b", "car", 26, 2.0, 0.5, 12.0, 1.8, 1.5, 4.2)});
+    const StereoFrame f = render(doc, small_options());
+    // Car centres: u = 160 -+ 50, v = 92.5.
+    CHECK(f.instance.values[at(f.rig, 110, 92)] == (26 << 8 | 1));
+    CHECK(f.instance.values[at(f.rig, 210, 92)] == (26 << 8 | 2));
+    CHECK(f.instance.values[at(f.rig, 160, 60)] == (11 << 8));
+    CHECK(f.instance.values[at(f.rig, 0, 0)] == 0);
+}
+
+TEST_CASE("KITTI instance ids count per class in file order", "[sensors]") {
+    const std::vector<std::uint16_t> ids = kitti_instance_ids({26, 7, 26, 24, 26, 11});
+    const std::vector<std::uint16_t> expected = {26 << 8 | 1, 7 << 8,      26 << 8 | 2,
+                                                 24 << 8 | 1, 26 << 8 | 3, 11 << 8};
+    CHECK(ids == expected);
+    CHECK_THROWS_AS(kitti_instance_ids(std::vector<int>(256, 26)), std::invalid_argument);
+    CHECK_THROWS_AS(kitti_instance_ids({300}), std::invalid_argument);
+}
+
+TEST_CASE("Sensor renders are deterministic: same seed same bytes, another seed other noise",
+          "[sensors][gl]") {
+    const auto doc = scene({box("wall", "building", 11, 0.0, 0.0, 8.0, 8.0, 4.0, 0.5),
+                            box("car-1", "car", 26, 1.0, 0.5, 6.0, 1.8, 1.5, 4.2)});
+    SensorOptions options = small_options();
+    options.sensor.seed = 7;
+    const StereoFrame a = render(doc, options);
+    const StereoFrame b = render(doc, options);
+    CHECK(a.left.pixels == b.left.pixels);
+    CHECK(a.right.pixels == b.right.pixels);
+    options.sensor.seed = 8;
+    const StereoFrame c = render(doc, options);
+    CHECK(a.left.pixels != c.left.pixels);
+    CHECK(a.right.pixels != c.right.pixels);
+    // Only the noise differs: ground truth is the same, and the images differ by a few levels.
+    CHECK(a.disparity.values == c.disparity.values);
+    CHECK(a.semantic.pixels == c.semantic.pixels);
+    double sum = 0.0;
+    for (std::size_t i = 0; i < a.left.pixels.size(); ++i)
+        sum += std::abs(static_cast<int>(a.left.pixels[i]) - c.left.pixels[i]);
+    const double mean_abs = sum / static_cast<double>(a.left.pixels.size());
+    CHECK(mean_abs > 1.0);
+    CHECK(mean_abs < 6.0);
+}
+
+TEST_CASE("The sensor model adds Gaussian noise of the given sigma and the right camera's gain",
+          "[sensors]") {
+    ImageRgb8 grey{200, 100, std::vector<std::uint8_t>(200 * 100 * 3, 128)};
+    SensorModelOptions o;
+    o.blur_sigma_px = 0.0;
+    o.noise_sigma = 3.0;
+    o.right_gain = 0.9;
+    for (int camera : {0, 1}) {
+        const ImageRgb8 out = apply_sensor_model(grey, camera, o);
+        double sum = 0.0, sum2 = 0.0;
+        for (std::uint8_t v : out.pixels) sum += v, sum2 += static_cast<double>(v) * v;
+        const double n = static_cast<double>(out.pixels.size());
+        const double mean = sum / n, sd = std::sqrt(sum2 / n - mean * mean);
+        CHECK(mean == Approx(camera == 0 ? 128.0 : 115.2).margin(0.1));
+        CHECK(sd == Approx(3.0).margin(0.1));
+    }
+    o.vignetting = true;
+    o.noise_sigma = 0.0;
+    const ImageRgb8 v = apply_sensor_model(grey, 0, o);
+    CHECK(v.pixels[(50 * 200 + 100) * 3] == 128);
+    CHECK(v.pixels[0] < 100);
+    SensorModelOptions bad;
+    bad.right_gain = 0.0;
+    CHECK_THROWS_WITH(apply_sensor_model(grey, 0, bad), Catch::Contains("right_gain"));
+}
+
+TEST_CASE("GT disparity linearises the depth buffer", "[sensors]") {
+    const float n = 0.3f, far = 1000.0f;
+    std::vector<float> window;
+    for (double z : {1.0, 7.75, 40.0, 300.0}) {
+        // Window depth of eye depth z under a GL perspective projection.
+        const double nd = n, fd = far;
+        const double ndc = ((fd + nd) - 2.0 * fd * nd / z) / (fd - nd);
+        window.push_back(static_cast<float>(0.5 * ndc + 0.5));
+    }
+    window.push_back(1.0f);
+    const std::vector<float> d = disparity_from_window_depth(window, 721.5377, 0.54, n, far);
+    CHECK(d[0] == Approx(721.5377 * 0.54 / 1.0).epsilon(1e-4));
+    CHECK(d[1] == Approx(721.5377 * 0.54 / 7.75).epsilon(1e-4));
+    CHECK(d[2] == Approx(721.5377 * 0.54 / 40.0).epsilon(1e-3));
+    CHECK(d[3] == Approx(721.5377 * 0.54 / 300.0).epsilon(2e-2));
+    CHECK(d[4] == 0.0f);
+}
+
+TEST_CASE("The calibration file round-trips through KITTI's calib_cam_to_cam format",
+          "[sensors][calib]") {
+    const StereoRig rig;  // KITTI's
+    const std::string text = format_kitti_calib(rig);
+    CHECK(text.find("P_rect_03: 7.215377000000e+02 0.000000000000e+00 6.095593000000e+02 "
+                    "-3.896") != std::string::npos);
+    CHECK(text.find("R_rect_02: 1.0") != std::string::npos);
+    const StereoRig back = parse_kitti_calib(text);
+    CHECK(back.width_px == 1242);
+    CHECK(back.height_px == 375);
+    CHECK(back.fx_px == Approx(rig.fx_px).epsilon(1e-12));
+    CHECK(back.fy_px == Approx(rig.fy_px).epsilon(1e-12));
+    CHECK(back.cx_px == Approx(rig.cx_px).epsilon(1e-12));
+    CHECK(back.cy_px == Approx(rig.cy_px).epsilon(1e-12));
+    CHECK(back.baseline_m == Approx(0.54).epsilon(1e-12));
+    std::string broken = text;
+    broken.erase(broken.find("P_rect_03"));
+    CHECK_THROWS_WITH(parse_kitti_calib(broken), Catch::Contains("P_rect_03"));
+}
+
+TEST_CASE("A rig takes the entity file's intrinsics and scales with the image size", "[sensors]") {
+    scene_schema::EntityDocument doc;
+    doc.frame.camera = scene_schema::CameraIntrinsics{640, 480, 500, 510, 320, 240, 0.3};
+    const StereoRig rig = rig_for(doc, StereoRig{});
+    CHECK(rig.width_px == 640);
+    CHECK(rig.fy_px == 510);
+    CHECK(rig.baseline_m == 0.3);
+    CHECK(rig.camera_height_m == 1.65);
+    const StereoRig half = StereoRig{}.resized(621, 188);
+    CHECK(half.fx_px == Approx(721.5377 / 2));
+    CHECK(half.cy_px == Approx(172.854 * 188 / 375));
+}
+
+TEST_CASE("The PNG encoder writes RGB and 16-bit images that decode back", "[sensors][png]") {
+    ImageRgb8 rgb_image{5, 3, {}};
+    for (int i = 0; i < 5 * 3 * 3; ++i)
+        rgb_image.pixels.push_back(static_cast<std::uint8_t>(i * 5));
+    const auto rgb_png = encode_png_rgb8(rgb_image);
+    const ImageRgba8 back = decode_image_memory(rgb_png.data(), rgb_png.size(), "rgb");
+    REQUIRE(back.width == 5);
+    REQUIRE(back.height == 3);
+    for (int p = 0; p < 15; ++p) {
+        for (int c = 0; c < 3; ++c) CHECK(back.pixels[p * 4 + c] == rgb_image.pixels[p * 3 + c]);
+    }
+    ImageU16 ids{4, 2, {26 << 8 | 1, 26 << 8 | 2, 11 << 8, 0, 65535, 256, 7 << 8, 24 << 8 | 3}};
+    const auto u16_png = encode_png_u16(ids);
+    CHECK(u16_png[24] == 16);  // IHDR bit depth
+    CHECK(u16_png[25] == 0);   // grey
+    const ImageRgba8 grey = decode_image_memory(u16_png.data(), u16_png.size(), "u16");
+    REQUIRE(grey.width == 4);
+    for (int p = 0; p < 8; ++p) CHECK(grey.pixels[p * 4] == ids.values[p] >> 8);
+}
