@@ -1,0 +1,110 @@
+# The closed loop of issue 5: for every committed rendered sample (samples/rendered/<scene>/ in
+# KITTI layout, ground truth samples/rendered/<scene>/scene.json or
+# samples/rendered/scenes/<scene>.json), run cloud-analysis with the default settings, then
+# score the entities against the scene file with the bars of docs/evaluation.md "Closed loop".
+# `evaluate` exits 3 when a bar is missed, so each test is just the command. The bars are the
+# issue's and are not weakened per sample.
+#
+# Run as a script (cmake -DEXE=... -DARGS="a|b" -DCODE=n [-DSTDERR=regex] -P closed_loop.cmake)
+# it runs the command once and checks its exit code and stderr.
+if(CMAKE_SCRIPT_MODE_FILE)
+    string(REPLACE "|" ";" args "${ARGS}")
+    execute_process(COMMAND ${EXE} ${args} RESULT_VARIABLE code ERROR_VARIABLE err
+        OUTPUT_QUIET)
+    if(NOT code STREQUAL "${CODE}")
+        message(FATAL_ERROR "exit code ${code}, expected ${CODE}\nstderr: ${err}")
+    endif()
+    if(DEFINED STDERR AND NOT err MATCHES "${STDERR}")
+        message(FATAL_ERROR "stderr does not match '${STDERR}': ${err}")
+    endif()
+    return()
+endif()
+include_guard(GLOBAL)
+
+set(STEREOSCENE_CLOSED_LOOP_SAMPLES ${PROJECT_SOURCE_DIR}/samples/rendered CACHE PATH
+    "folder of rendered samples the closed-loop tests run on")
+set(_loop_samples ${STEREOSCENE_CLOSED_LOOP_SAMPLES})
+set(_loop_out ${CMAKE_CURRENT_BINARY_DIR}/closed_loop_out)
+file(MAKE_DIRECTORY ${_loop_out})
+set(STEREOSCENE_CLOSED_LOOP_BARS
+    --bar-class car --bar-range 30 --require-recall 1.0 --max-spurious 0
+    --max-stuff-on-things 0 --max-median-centre-error 0.5 --max-median-heading-error 10
+    --min-good-iou-fraction 0.7)
+
+file(GLOB _loop_calibs LIST_DIRECTORIES false
+    ${_loop_samples}/*/calib/calib_cam_to_cam.txt)
+set(STEREOSCENE_CLOSED_LOOP_SCENES "")
+foreach(_calib IN LISTS _loop_calibs)
+    get_filename_component(_dir ${_calib} DIRECTORY)
+    get_filename_component(_dir ${_dir} DIRECTORY)
+    get_filename_component(_scene ${_dir} NAME)
+    if(EXISTS ${_dir}/scene.json)
+        set(_truth ${_dir}/scene.json)
+    elseif(EXISTS ${_loop_samples}/scenes/${_scene}.json)
+        set(_truth ${_loop_samples}/scenes/${_scene}.json)
+    else()
+        message(WARNING "closed loop: ${_dir} has no scene file (scene.json or "
+                        "scenes/${_scene}.json); not tested")
+        continue()
+    endif()
+    file(GLOB _frames ${_dir}/image_2/*.png)
+    list(SORT _frames)
+    foreach(_image IN LISTS _frames)
+        get_filename_component(_frame ${_image} NAME_WE)
+        set(_name "${_scene}/${_frame}")
+        set(_entities ${_loop_out}/${_scene}-${_frame}.json)
+        add_test(NAME "closed loop ${_name}: cloud-analysis reconstructs the scene"
+            COMMAND $<TARGET_FILE:cloud-analysis> --kitti-root ${_dir} --frame ${_frame}
+                -o ${_entities})
+        set_tests_properties("closed loop ${_name}: cloud-analysis reconstructs the scene"
+            PROPERTIES FIXTURES_SETUP "closed_loop_${_scene}_${_frame}" LABELS closed_loop)
+        add_test(NAME "closed loop ${_name}: cars within 30 m meet the bars"
+            COMMAND $<TARGET_FILE:cloud-analysis> evaluate --entities ${_entities}
+                --reference ${_truth} ${STEREOSCENE_CLOSED_LOOP_BARS}
+                --json ${_loop_out}/${_scene}-${_frame}-eval.json)
+        set_tests_properties("closed loop ${_name}: cars within 30 m meet the bars"
+            PROPERTIES FIXTURES_REQUIRED "closed_loop_${_scene}_${_frame}" LABELS closed_loop)
+        list(APPEND STEREOSCENE_CLOSED_LOOP_SCENES ${_name})
+    endforeach()
+endforeach()
+if(NOT STEREOSCENE_CLOSED_LOOP_SCENES)
+    message(STATUS "closed loop: no rendered samples under ${_loop_samples} yet")
+endif()
+
+# The evaluation's own CLI contract, on the bundled synthetic sample (always present).
+set(_syn ${PROJECT_SOURCE_DIR}/samples/synthetic)
+add_test(NAME "evaluate --reference scores a file against itself with every bar met"
+    COMMAND $<TARGET_FILE:cloud-analysis> evaluate --entities ${_syn}/truth.json
+        --reference ${_syn}/truth.json ${STEREOSCENE_CLOSED_LOOP_BARS})
+function(closed_loop_cli_test name)
+    cmake_parse_arguments(T "" "CODE;STDERR" "ARGS" ${ARGN})
+    string(REPLACE ";" "|" args "${T_ARGS}")
+    add_test(NAME "${name}" COMMAND ${CMAKE_COMMAND} -DEXE=$<TARGET_FILE:cloud-analysis>
+        "-DARGS=${args}" -DCODE=${T_CODE} "-DSTDERR=${T_STDERR}" -P ${CMAKE_CURRENT_LIST_FILE})
+endfunction()
+closed_loop_cli_test("evaluate exits 3 and names the bar when a bar is missed"
+    ARGS evaluate --entities ${_syn}/expected_entities.json --reference ${_syn}/truth.json
+        --require-recall 1.0 --max-median-centre-error 0.0001
+    CODE 3 STDERR "cloud-analysis: bar missed: median centre error .*--max-median-centre-error")
+closed_loop_cli_test("evaluate bars without a reference are a usage error"
+    ARGS evaluate --entities ${_syn}/truth.json --require-recall 1.0
+    CODE 2 STDERR "need --reference or --labels")
+closed_loop_cli_test("evaluate with a missing reference exits 1 naming it"
+    ARGS evaluate --entities ${_syn}/truth.json --reference ${_loop_out}/none.json
+    CODE 1 STDERR "no such file .*none.json")
+closed_loop_cli_test("evaluate refuses a malformed label_2 file naming the line"
+    ARGS evaluate --entities ${_syn}/truth.json --labels ${_syn}/calib.yaml
+    CODE 1 STDERR "cannot read KITTI labels: line 1: .*calib.yaml")
+add_test(NAME "export-kitti writes the truth as label_2"
+    COMMAND $<TARGET_FILE:cloud-analysis> export-kitti ${_syn}/truth.json
+        -o ${_loop_out}/truth_label_2.txt)
+set_tests_properties("export-kitti writes the truth as label_2" PROPERTIES
+    FIXTURES_SETUP closed_loop_export)
+add_test(NAME "the exported labels read back as the reference give every car with IoU 0.99"
+    COMMAND $<TARGET_FILE:cloud-analysis> evaluate --entities ${_syn}/truth.json
+        --labels ${_loop_out}/truth_label_2.txt --bar-range 50 --require-recall 1.0
+        --max-spurious 0 --max-median-centre-error 0.01 --max-median-heading-error 0.1
+        --iou-threshold 0.99 --min-good-iou-fraction 1.0)
+set_tests_properties(
+    "the exported labels read back as the reference give every car with IoU 0.99"
+    PROPERTIES FIXTURES_REQUIRED closed_loop_export)
