@@ -1,0 +1,32 @@
+#!/usr/bin/env bash
+# Regenerates samples/rendered/<scene>/ from samples/rendered/scenes/<scene>.json with
+# `scene-render sensors` (default sensor model, seed 0). The committed samples use KITTI's rig at
+# half size (621x188, intrinsics halved) to keep the repository small; pass --full for KITTI's
+# 1242x375 into another folder.
+# usage: scripts/make-rendered-samples.sh [--full] [OUTPUT_DIR]   (default: samples/rendered)
+#        SCENE_RENDER=<path> skips the build and uses that binary.
+set -euo pipefail
+source "$(dirname "${BASH_SOURCE[0]}")/common.sh"
+
+size=(--size 621x188)
+if [ "${1:-}" = "--full" ]; then
+    size=()
+    shift
+fi
+out=${1:-"$STEREOSCENE_ROOT/samples/rendered"}
+render=${SCENE_RENDER:-}
+if [ -z "$render" ]; then
+    build="$STEREOSCENE_ROOT/build"
+    stereoscene_build "$build" Release -- scene-render
+    render="$build/scene_viewer/scene-render"
+fi
+
+for scene in "$STEREOSCENE_ROOT"/samples/rendered/scenes/*.json; do
+    name=$(basename "$scene" .json)
+    echo "== scene-render sensors: $name" >&2
+    rm -rf "$out/$name.tmp"
+    "$render" sensors "$scene" --out "$out/$name.tmp" --frame 000000 --seed 0 "${size[@]}"
+    rm -rf "${out:?}/$name"
+    mv "$out/$name.tmp" "$out/$name"
+done
+echo "wrote $(du -sh "$out" | cut -f1) under $out" >&2
