@@ -260,3 +260,15 @@ TEST_CASE("without a camera the exported 2D box is -1", "[kitti_labels]") {
     cam.fx_px = cam.fy_px = 700.0;
     CHECK(cloud_analysis::kitti_label_from_entity(behind, &cam).bbox[0] == -1.0);
 }
+
+TEST_CASE("the exported alpha equals KITTI's own on a label_2 line", "[kitti_labels]") {
+    // KITTI object training 000001: Car alpha 1.85 at x -16.53, z 58.49, rotation_y 1.57.
+    const auto labels = cloud_analysis::parse_kitti_labels(
+        "Car 0.00 0 1.85 387.63 181.54 423.81 203.12 1.67 1.87 3.69 -16.53 2.39 58.49 1.57\n",
+        "000001.txt");
+    const auto entities = cloud_analysis::entities_from_kitti_labels(labels);
+    REQUIRE(entities.size() == 1);
+    const auto back = cloud_analysis::kitti_label_from_entity(entities[0], nullptr);
+    CHECK(back.alpha == Approx(1.85).margin(0.005));
+    CHECK(back.y == Approx(2.39));
+}
