@@ -294,7 +294,7 @@ int run(int argc, char** argv) {
         "sensors",
         "render a stereo rig's view of a scene in a KITTI-like folder (see docs/cli.md)");
     std::string sensors_input, sensors_out, sensors_size, sensors_frame = "000000";
-    std::string sensors_classes;
+    std::string sensors_classes, sensors_rig;
     bool sensors_boxes = false;
     SensorOptions sensor_options;
     std::optional<double> sensors_baseline;
@@ -304,6 +304,9 @@ int run(int argc, char** argv) {
     sensors->add_option("--frame", sensors_frame, "frame name of the files")->capture_default_str();
     sensors->add_option("--seed", sensor_options.sensor.seed, "seed of the sensor noise")
         ->capture_default_str();
+    sensors->add_option("--rig", sensors_rig,
+                        "rig from a KITTI calib_cam_to_cam.txt (P_rect_02, P_rect_03, S_rect_02); "
+                        "default: the file's frame.camera, else KITTI's");
     sensors->add_option("--size", sensors_size,
                         "image size WxH; the intrinsics scale with it (default: the file's "
                         "frame.camera, else KITTI's 1242x375)");
@@ -389,6 +392,19 @@ int run(int argc, char** argv) {
     if (*sensors) {
         const auto document = read_entities(sensors_input);
         StereoRig rig = rig_for(document, sensor_options.rig);
+        if (!sensors_rig.empty()) {
+            std::ifstream in(sensors_rig, std::ios::binary);
+            if (!in) throw Failure{"cannot read rig", std::strerror(errno), sensors_rig};
+            std::stringstream text;
+            text << in.rdbuf();
+            try {
+                const double height = rig.camera_height_m;
+                rig = parse_kitti_calib(text.str());
+                rig.camera_height_m = height;
+            } catch (const std::invalid_argument& e) {
+                throw Failure{"invalid rig", e.what(), sensors_rig};
+            }
+        }
         if (!sensors_size.empty()) {
             const auto [w, h] = parse_size(sensors_size);
             rig = rig.resized(w, h);
