@@ -93,6 +93,8 @@ for arg in sys.argv[1:]:
     stuff = sum(c["bins"][b]["spurious"] for c in e["classes"].values() if not c["thing"]
                 for b in ("0-10", "10-20", "20-30"))
     verdict = "pass" if d["bars"]["pass"] else "FAIL"
-    print(f"| {scene} | {method} | {ref} | {hit} | {spur} | {stuff} | {centre:.2f} | "
-          f"{head:.1f} | {good}/{ref} | {verdict} |")
+    centre = f"{centre:.2f}" if cars else "-"
+    head = f"{head:.1f}" if cars else "-"
+    print(f"| {scene} | {method} | {ref} | {hit} | {spur} | {stuff} | {centre} | {head} | "
+          f"{good}/{ref} | {verdict} |")
 EOF
