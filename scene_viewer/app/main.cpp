@@ -67,7 +67,7 @@ void add_view_options(CLI::App& app, ViewArgs& a) {
     app.add_option("--eye", a.eye, "free/chase view: eye x,y,z in metres (KITTI camera frame)");
     app.add_option("--target", a.target, "free/chase view: look-at point x,y,z in metres");
     app.add_option("--fov", a.fov_deg, "free/chase view: vertical field of view in degrees");
-    app.add_option("--shading", a.shading, "lit | semantic")->capture_default_str();
+    app.add_option("--shading", a.shading, "lit | semantic | instance")->capture_default_str();
     app.add_option("--msaa", a.msaa, "lit shading: multisample count, 0 = off")
         ->capture_default_str();
     app.add_flag("--no-grid", a.no_grid, "bev view: no metre grid");
