@@ -10,6 +10,7 @@
 
 #include "gl_test_context.hpp"
 #include "scene_viewer/assets/image_io.hpp"
+#include "scene_viewer/gfx/null_device.hpp"
 #include "scene_viewer/render/palette.hpp"
 #include "scene_viewer/render/scene_renderer.hpp"
 #include "scene_viewer/sensors/stereo_sensors.hpp"
@@ -299,4 +300,22 @@ TEST_CASE("The PNG encoder writes RGB and 16-bit images that decode back", "[sen
     const ImageRgba8 grey = decode_image_memory(u16_png.data(), u16_png.size(), "u16");
     REQUIRE(grey.width == 4);
     for (int p = 0; p < 8; ++p) CHECK(grey.pixels[p * 4] == ids.values[p] >> 8);
+}
+
+TEST_CASE("The sensor pipeline runs on the null backend: all sky, no disparity", "[sensors][ecs]") {
+    NullDevice device;
+    SceneRenderer renderer(device);
+    const auto doc = scene({box("car-1", "car", 26, 1.0, 0.5, 12.0, 1.8, 1.5, 4.2)});
+    const StereoFrame f = render_stereo_frame(renderer, doc, small_options());
+    CHECK(device.frames_begun == 4);  // left, right, semantic, instance
+    CHECK(f.left.width == 320);
+    CHECK(rgb(f.semantic, 160, 80) == Rgb8{70, 130, 180});
+    CHECK(std::all_of(f.disparity.values.begin(), f.disparity.values.end(),
+                      [](std::uint16_t v) { return v == 0; }));
+    CHECK(std::all_of(f.instance.values.begin(), f.instance.values.end(),
+                      [](std::uint16_t v) { return v == 0; }));
+    // The last frame was the instance pass: one draw, coloured (26, 1, 0) / 255.
+    REQUIRE(device.draws.size() == 1);
+    CHECK(device.draws[0].colour.r * 255.0f == Approx(26.0f));
+    CHECK(device.draws[0].colour.g * 255.0f == Approx(1.0f));
 }
