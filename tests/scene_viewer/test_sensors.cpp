@@ -129,6 +129,12 @@ TEST_CASE("The right image is the left one shifted by the GT disparity", "[senso
         worst_ssd = std::max(worst_ssd, s);
     }
     CHECK(std::abs(best - d) <= 1.0);
+    // Sub-pixel: a parabola through the costs around the best shift lands on d.
+    REQUIRE(best > 0);
+    const double c0 = ssd(f, x, y, half, best - 1), c1 = best_ssd,
+                 c2 = ssd(f, x, y, half, best + 1);
+    const double refined = best + 0.5 * (c0 - c2) / (c0 - 2.0 * c1 + c2);
+    CHECK(refined == Approx(d).margin(0.5));
     // The texture makes the match distinct: other shifts cost far more than the right one.
     CHECK(ssd(f, x, y, half, best + 4) > 3.0 * best_ssd);
     CHECK(ssd(f, x, y, half, best - 4) > 3.0 * best_ssd);
