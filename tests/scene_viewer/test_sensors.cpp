@@ -325,3 +325,21 @@ TEST_CASE("The sensor pipeline runs on the null backend: all sky, no disparity",
     CHECK(device.draws[0].colour.r * 255.0f == Approx(26.0f));
     CHECK(device.draws[0].colour.g * 255.0f == Approx(1.0f));
 }
+
+TEST_CASE("Where nothing is drawn the colour images show the sky gradient", "[sensors][gl]") {
+    const auto doc = scene({box("car-1", "car", 26, 1.0, 0.5, 12.0, 1.8, 1.5, 4.2)});
+    SensorOptions options = small_options();
+    options.sensor.noise_sigma = 0.0;
+    options.sensor.blur_sigma_px = 0.0;
+    options.sensor.right_gain = 1.0;
+    const StereoFrame f = render(doc, options);
+    for (const ImageRgb8* image : {&f.left, &f.right}) {
+        const Rgb8 top = rgb(*image, 5, 0), horizon = rgb(*image, 5, 80), low = rgb(*image, 5, 150);
+        CHECK(std::abs(top[0] - 78) <= 2);
+        CHECK(std::abs(top[2] - 196) <= 2);
+        CHECK(horizon == Rgb8{196, 212, 228});
+        CHECK(low == Rgb8{196, 212, 228});
+    }
+    // The car is drawn (textured body), not sky.
+    CHECK(rgb(f.left, 185, 92) != rgb(f.left, 5, 92));
+}
