@@ -51,6 +51,17 @@ ResolvedPaths resolve(const EvaluateArgs& args) {
     if (entity_mode(args)) {
         std::vector<fs::path> inputs = {args.entities,
                                         args.reference.empty() ? args.labels : args.reference};
+        if (args.min_visible_pixels > 0) {
+            if (p.instance.empty() && !args.kitti_root.empty() && !args.frame.empty()) {
+                p.instance = args.kitti_root / "instance" / (args.frame + ".png");
+            }
+            if (p.instance.empty() || args.reference.empty()) {
+                throw CLI::ValidationError("--min-visible-pixels",
+                                           "needs --reference and --instance (or --kitti-root "
+                                           "and --frame)");
+            }
+            inputs.push_back(p.instance);
+        }
         if (!args.disparity.empty()) {
             if (p.gt_disparity.empty() && !args.kitti_root.empty() && !args.frame.empty()) {
                 p.gt_disparity = args.kitti_root / "disp_occ_0" / (args.frame + ".png");
@@ -158,6 +169,13 @@ CLI::App* add_evaluate_command(CLI::App& app, EvaluateArgs& args) {
         ->check(CLI::Range(1e-9, 1.0))
         ->capture_default_str()
         ->group(ee);
+    sub->add_option("--min-visible-pixels", args.min_visible_pixels,
+                    "reference things with fewer pixels in --instance (scene-render sensors' "
+                    "instance image of the reference) are not scored, like KITTI's DontCare "
+                    "(0 = score all)")
+        ->check(CLI::NonNegativeNumber)
+        ->capture_default_str()
+        ->group(ee);
     const std::string bg = "Bars (exit 3 when one is missed; off unless given)";
     auto& b = args.bars;
     sub->add_option("--bar-class", b.class_name, "class the bars apply to")
@@ -245,8 +263,8 @@ nlohmann::json bin_json(const ClassBinScore& s) {
 }
 
 /// Entity-to-entity scores into table and JSON; returns the missed bars.
-std::vector<std::string> evaluate_entity_files(const EvaluateArgs& args, std::ostream& table,
-                                               nlohmann::json& out) {
+std::vector<std::string> evaluate_entity_files(const EvaluateArgs& args, const ResolvedPaths& paths,
+                                               std::ostream& table, nlohmann::json& out) {
     const scene_schema::EntityDocument doc = scene_schema::read_file(args.entities);
     std::vector<scene_schema::Entity> reference;
     std::string reference_name;
@@ -257,7 +275,16 @@ std::vector<std::string> evaluate_entity_files(const EvaluateArgs& args, std::os
         reference = scene_schema::read_file(args.reference).entities;
         reference_name = args.reference.string();
     }
-    const EntityEvaluation ev = evaluate_entities(reference, doc.entities, args.entity_eval);
+    std::vector<bool> ignored;
+    std::vector<std::size_t> visible;
+    if (args.min_visible_pixels > 0) {
+        visible = visible_instance_pixels(paths.instance, reference);
+        for (const auto v : visible) {
+            ignored.push_back(v < static_cast<std::size_t>(args.min_visible_pixels));
+        }
+    }
+    const EntityEvaluation ev =
+        evaluate_entities(reference, doc.entities, args.entity_eval, ignored);
     const auto& o = ev.options;
     table << "entities " << args.entities.string() << " vs reference " << reference_name << "\n"
           << "  matching: same class, greedy by bird's-eye centre distance <= "
@@ -296,6 +323,14 @@ std::vector<std::string> evaluate_entity_files(const EvaluateArgs& args, std::os
     for (const auto e : ev.spurious) spurious.push_back(doc.entities[e].id);
     if (!ev.missed.empty()) table << "  missed:   " << missed.dump() << "\n";
     if (!ev.spurious.empty()) table << "  spurious: " << spurious.dump() << "\n";
+    nlohmann::json not_scored = nlohmann::json::array();
+    for (const auto r : ev.ignored) {
+        not_scored.push_back({{"id", reference[r].id}, {"visible_pixels", visible[r]}});
+    }
+    if (!ev.ignored.empty()) {
+        table << "  not scored (< " << args.min_visible_pixels
+              << " visible pixels): " << not_scored.dump() << "\n";
+    }
 
     std::vector<std::string> missed_bars;
     nlohmann::json bars = nlohmann::json::object();
@@ -323,7 +358,9 @@ std::vector<std::string> evaluate_entity_files(const EvaluateArgs& args, std::os
                        {"classes", classes},
                        {"matches", matches},
                        {"missed", missed},
-                       {"spurious", spurious}};
+                       {"spurious", spurious},
+                       {"min_visible_pixels", args.min_visible_pixels},
+                       {"not_scored", not_scored}};
     if (args.bars.any()) out["bars"] = bars;
     return missed_bars;
 }
@@ -361,7 +398,7 @@ int run_evaluate(const EvaluateArgs& args) {
     }
 
     if (entity_mode(args)) {
-        missed_bars = evaluate_entity_files(args, table, out);
+        missed_bars = evaluate_entity_files(args, paths, table, out);
     } else if (!args.entities.empty()) {
         const scene_schema::EntityDocument doc = scene_schema::read_file(args.entities);
         const Calibration calib = load_calibration(paths.calib);

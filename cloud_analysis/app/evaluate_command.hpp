@@ -29,6 +29,7 @@ struct EvaluateArgs {
     int min_gt_pixels = 200;          ///< --min-gt-pixels: GT cars owed for recall
     std::filesystem::path reference;  ///< --reference: reference entity file (entity-to-entity)
     std::filesystem::path labels;     ///< --labels: KITTI label_2 file as the reference
+    int min_visible_pixels = 0;       ///< --min-visible-pixels: fewer in --instance = not scored
     cloud_analysis::EntityEvalOptions entity_eval;  ///< --match-distance, --eval-range, ...
     cloud_analysis::EvalBars bars;                  ///< --require-recall, ... (exit 3)
 };

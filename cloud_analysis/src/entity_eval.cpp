@@ -7,6 +7,8 @@
 #include <set>
 #include <stdexcept>
 
+#include <opencv2/imgcodecs.hpp>
+
 namespace cloud_analysis {
 namespace {
 
@@ -182,8 +184,15 @@ std::size_t EntityEvaluation::stuff_on_things(double max_range_m) const {
 
 EntityEvaluation evaluate_entities(const std::vector<scene_schema::Entity>& reference,
                                    const std::vector<scene_schema::Entity>& estimate,
-                                   const EntityEvalOptions& options) {
+                                   const EntityEvalOptions& options,
+                                   const std::vector<bool>& reference_ignored) {
     options.validate();
+    if (!reference_ignored.empty() && reference_ignored.size() != reference.size()) {
+        throw std::invalid_argument("reference_ignored: size differs from the reference list");
+    }
+    const auto ignored = [&](std::size_t r) {
+        return !reference_ignored.empty() && reference_ignored[r];
+    };
     EntityEvaluation ev;
     ev.options = options;
     std::map<std::string, ClassScore> classes;
@@ -239,12 +248,20 @@ EntityEvaluation evaluate_entities(const std::vector<scene_schema::Entity>& refe
         m.iou_3d = iou_3d(ref, est);
         ev.matches.push_back(m);
     }
+    // Matches with ignored references only keep their estimate from being spurious.
+    ev.matches.erase(std::remove_if(ev.matches.begin(), ev.matches.end(),
+                                    [&](const EntityMatch& m) { return ignored(m.reference); }),
+                     ev.matches.end());
     std::sort(ev.matches.begin(), ev.matches.end(),
               [](const EntityMatch& a, const EntityMatch& b) { return a.reference < b.reference; });
 
     for (std::size_t r = 0; r < reference.size(); ++r) {
         const auto& ref = reference[r];
         if (!options.is_thing(ref.class_name) || !in_range(ref)) continue;
+        if (ignored(r)) {
+            ev.ignored.push_back(r);
+            continue;
+        }
         add_to(score_of(ref.class_name), distance_bin(bev_range_m(ref)), [&](ClassBinScore& b) {
             ++b.reference;
             if (!ref_used[r]) ++b.missed;
@@ -286,6 +303,36 @@ EntityEvaluation evaluate_entities(const std::vector<scene_schema::Entity>& refe
     }
     for (auto& [name, c] : classes) ev.classes.push_back(std::move(c));
     return ev;
+}
+
+std::vector<std::size_t> visible_instance_pixels(
+    const std::filesystem::path& instance_png, const std::vector<scene_schema::Entity>& reference) {
+    cv::Mat image;
+    try {
+        image = cv::imread(instance_png.string(), cv::IMREAD_UNCHANGED);
+    } catch (const cv::Exception& e) {
+        throw std::runtime_error("cannot read instance image: " + e.msg + " (" +
+                                 instance_png.string() + ")");
+    }
+    if (image.empty() || image.type() != CV_16UC1) {
+        throw std::runtime_error("cannot read instance image: not a 16-bit single-channel PNG (" +
+                                 instance_png.string() + ")");
+    }
+    std::vector<std::size_t> count_of_id(65536, 0);
+    for (int v = 0; v < image.rows; ++v) {
+        const auto* row = image.ptr<std::uint16_t>(v);
+        for (int u = 0; u < image.cols; ++u) ++count_of_id[row[u]];
+    }
+    std::map<int, int> ordinal;
+    std::vector<std::size_t> visible(reference.size(), 0);
+    for (std::size_t i = 0; i < reference.size(); ++i) {
+        const int c = reference[i].class_id;
+        if (c < 0 || c > 255) continue;
+        const int n = ++ordinal[c];
+        if (n > 255) continue;
+        visible[i] = count_of_id[static_cast<std::size_t>(c << 8 | n)];
+    }
+    return visible;
 }
 
 void EvalBars::validate() const {

@@ -108,3 +108,7 @@ add_test(NAME "the exported labels read back as the reference give every car wit
 set_tests_properties(
     "the exported labels read back as the reference give every car with IoU 0.99"
     PROPERTIES FIXTURES_REQUIRED closed_loop_export)
+closed_loop_cli_test("evaluate --min-visible-pixels without an instance image is a usage error"
+    ARGS evaluate --entities ${_syn}/truth.json --reference ${_syn}/truth.json
+        --min-visible-pixels 100
+    CODE 2 STDERR "--min-visible-pixels")

@@ -272,3 +272,21 @@ TEST_CASE("the exported alpha equals KITTI's own on a label_2 line", "[kitti_lab
     CHECK(back.alpha == Approx(1.85).margin(0.005));
     CHECK(back.y == Approx(2.39));
 }
+
+TEST_CASE("an ignored reference is neither owed nor makes its estimate spurious", "[entity_eval]") {
+    const std::vector<Entity> reference = {box("car", 0.0, 10.0, 0.0), box("car", 4.0, 20.0, 0.0),
+                                           box("car", -4.0, 20.0, 0.0)};
+    // The first is found, the hidden second is found too, the hidden third is not.
+    const std::vector<Entity> estimate = {box("car", 0.0, 10.0, 0.0), box("car", 4.0, 20.5, 0.0)};
+    const auto ev = cloud_analysis::evaluate_entities(reference, estimate, EntityEvalOptions{},
+                                                      {false, true, true});
+    const auto s = ev.within("car", 30.0);
+    CHECK(s.reference == 1);
+    CHECK(s.matched == 1);
+    CHECK(s.missed == 0);
+    CHECK(s.spurious == 0);
+    CHECK(ev.ignored.size() == 2);
+    CHECK_THROWS_AS(
+        cloud_analysis::evaluate_entities(reference, estimate, EntityEvalOptions{}, {true}),
+        std::invalid_argument);
+}

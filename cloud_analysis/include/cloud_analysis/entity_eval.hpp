@@ -7,6 +7,7 @@
 /// bars of the closed loop (issue 5). See docs/evaluation.md "Closed loop".
 
 #include <array>
+#include <filesystem>
 #include <string>
 #include <vector>
 
@@ -108,6 +109,7 @@ struct EntityEvaluation {
     std::vector<EntityMatch> matches;   ///< every accepted match
     std::vector<std::size_t> spurious;  ///< estimate indices: unmatched things, stuff on things
     std::vector<std::size_t> missed;    ///< reference indices of unmatched things in range
+    std::vector<std::size_t> ignored;   ///< reference indices not scored (reference_ignored)
     /// The class's scores for a range limit: bins whose upper edge <= max_range_m merged
     /// (max_range_m must be a bin edge, e.g. 30 -> 0-10, 10-20, 20-30).
     ClassBinScore within(const std::string& class_name, double max_range_m) const;
@@ -122,10 +124,20 @@ double median(std::vector<double> values);
 /// with bird's-eye centre distance <= max_match_distance_m are matched greedily by ascending
 /// distance, one-to-one; unmatched estimates are spurious. A stuff-class estimate whose
 /// footprint lies at least stuff_overlap inside any reference thing's footprint is spurious
-/// too ("an entity made out of a stuff class where a thing is").
+/// too ("an entity made out of a stuff class where a thing is"). References flagged in
+/// `reference_ignored` (empty = none) take part in matching, so an estimate on them is not
+/// spurious, but are not scored (like KITTI's DontCare), e.g. cars hidden behind others.
 EntityEvaluation evaluate_entities(const std::vector<scene_schema::Entity>& reference,
                                    const std::vector<scene_schema::Entity>& estimate,
-                                   const EntityEvalOptions& options);
+                                   const EntityEvalOptions& options,
+                                   const std::vector<bool>& reference_ignored = {});
+
+/// Visible pixels of each reference entity in a KITTI instance PNG (uint16, labelId << 8 | n)
+/// rendered from the same file by `scene-render sensors`, whose n is the entity's 1-based
+/// ordinal among the file's entities of its class_id (document order); 0 for classes without
+/// instances. Throws std::runtime_error naming the file.
+std::vector<std::size_t> visible_instance_pixels(
+    const std::filesystem::path& instance_png, const std::vector<scene_schema::Entity>& reference);
 
 /// Pass bars of the closed loop; a negative value switches a bar off.
 struct EvalBars {
