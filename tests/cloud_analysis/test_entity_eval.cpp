@@ -1,8 +1,11 @@
 #include <cmath>
+#include <filesystem>
 #include <string>
 #include <vector>
 
 #include <catch2/catch.hpp>
+#include <opencv2/core.hpp>
+#include <opencv2/imgcodecs.hpp>
 
 #include "cloud_analysis/entity_eval.hpp"
 #include "cloud_analysis/kitti_labels.hpp"
@@ -289,4 +292,29 @@ TEST_CASE("an ignored reference is neither owed nor makes its estimate spurious"
     CHECK_THROWS_AS(
         cloud_analysis::evaluate_entities(reference, estimate, EntityEvalOptions{}, {true}),
         std::invalid_argument);
+}
+
+TEST_CASE("visible pixels follow the renderer's instance ids: labelId << 8 | ordinal in class",
+          "[entity_eval]") {
+    // Cars (26) 1 and 2, a person (24) 1; car 2 has 3 pixels, the person 2, car 1 none.
+    cv::Mat image(4, 4, CV_16UC1, cv::Scalar(0));
+    image.at<std::uint16_t>(0, 0) = 26 << 8 | 2;
+    image.at<std::uint16_t>(0, 1) = 26 << 8 | 2;
+    image.at<std::uint16_t>(3, 3) = 26 << 8 | 2;
+    image.at<std::uint16_t>(1, 1) = 24 << 8 | 1;
+    image.at<std::uint16_t>(2, 1) = 24 << 8 | 1;
+    image.at<std::uint16_t>(2, 2) = 7 << 8;  // road, no instance
+    const auto path = std::filesystem::temp_directory_path() / "stereoscene_visible_test.png";
+    REQUIRE(cv::imwrite(path.string(), image));
+    std::vector<Entity> reference = {box("car", 0, 10, 0), box("road", 0, 20, 0),
+                                     box("person", 1, 9, 0), box("car", 2, 12, 0)};
+    reference[0].class_id = 26;
+    reference[1].class_id = 7;
+    reference[2].class_id = 24;
+    reference[3].class_id = 26;
+    const auto visible = cloud_analysis::visible_instance_pixels(path, reference);
+    std::filesystem::remove(path);
+    CHECK(visible == std::vector<std::size_t>{0, 0, 2, 3});
+    CHECK_THROWS_WITH(cloud_analysis::visible_instance_pixels(path, reference),
+                      Catch::Contains("stereoscene_visible_test.png"));
 }
