@@ -2,390 +2,24 @@
 // cloud (.xyz/.pcd/.ply) and entity file. Thin CLI: parse, validate, call the library, write.
 
 #include <algorithm>
-#include <chrono>
-#include <cstdio>
 #include <iostream>
-#include <optional>
-#include <set>
 #include <string>
 #include <vector>
 
 #include <CLI/CLI.hpp>
 #include <scene_schema/entities.hpp>
 
-#include "cloud_analysis/cloud_io.hpp"
-#include "cloud_analysis/disparity.hpp"
-#include "cloud_analysis/extract.hpp"
-#include "cloud_analysis/pipeline.hpp"
+#include "analyse_command.hpp"
+#include "cloud_analysis/io.hpp"
 #include "cloud_analysis/synthetic.hpp"
 #include "evaluate_command.hpp"
+#include "perf_commands.hpp"
 
 namespace {
 
-constexpr const char* kTool = "cloud-analysis";
-
-/// Flags of `analyse` (the default command).
-struct AnalyseArgs {
-    cloud_analysis::InputPaths paths;
-    std::filesystem::path kitti_root;
-    std::string frame;
-    cloud_analysis::AnalyseOptions options;
-    std::string preset = "tuned";
-    std::string method = "instances";
-    std::filesystem::path class_config;
-    std::string entities;
-    std::filesystem::path xyz, pcd, ply, disparity_png, disparity_kitti, gt_disparity;
-    bool timings = false;
-};
-
-/// One output file, formatted in memory before anything is written.
-struct PendingOutput {
-    std::string path;   ///< "-" = stdout
-    std::string bytes;  ///< whole file
-    std::string label;  ///< flag that asked for it (for --timings)
-};
-
-void add_analyse_flags(CLI::App& cmd, AnalyseArgs& a) {
-    auto& d = a.options.disparity;
-    const std::string in = "Inputs";
-    cmd.add_option("--left,-l", a.paths.left, "left rectified image (PNG/JPG)")->group(in);
-    cmd.add_option("--right,-r", a.paths.right, "right rectified image")->group(in);
-    cmd.add_option("--semantic,-s", a.paths.semantic, "semantic colour image of the left view")
-        ->group(in);
-    cmd.add_option("--calib,-c", a.paths.calibration,
-                   "calibration: KITTI calib_cam_to_cam.txt, KITTI object calib, or YAML/JSON "
-                   "(fx fy cx cy baseline_m [distortion])")
-        ->group(in);
-    cmd.add_option("--kitti-root", a.kitti_root,
-                   "KITTI folder: image_2/ image_3/ semantic_rgb/ calib/ (with --frame)")
-        ->group(in);
-    cmd.add_option("--frame", a.frame, "frame id, e.g. 000000_10 (names the entity frame)")
-        ->group(in);
-    cmd.add_flag("--raw", a.options.raw,
-                 "inputs are unrectified: undistort and rectify with K/D/R_rect first")
-        ->group(in);
-    cmd.add_option("--left-camera", a.options.calibration.left_camera,
-                   "KITTI camera index of the left image")
-        ->capture_default_str()
-        ->group(in);
-    cmd.add_option("--right-camera", a.options.calibration.right_camera,
-                   "KITTI camera index of the right image")
-        ->capture_default_str()
-        ->group(in);
-    cmd.add_option("--palette", a.options.palette,
-                   "semantic palette: cityscapes, carla, thesis or a palette JSON file")
-        ->capture_default_str()
-        ->group(in);
-
-    const std::string sg = "Disparity (cv::StereoSGBM)";
-    cmd.add_option("--preset", a.preset,
-                   "starting values: tuned (KITTI-tuned defaults) or opencv-sample "
-                   "(samples/cpp/stereo_match.cpp); flags below override")
-        ->check(CLI::IsMember({"tuned", "opencv-sample"}))
-        ->capture_default_str()
-        ->group(sg);
-    cmd.add_option("--min-disparity", d.min_disparity, "smallest disparity, px")
-        ->capture_default_str()
-        ->group(sg);
-    cmd.add_option("--num-disparities", d.num_disparities, "search range, px, multiple of 16")
-        ->capture_default_str()
-        ->group(sg);
-    cmd.add_option("--block-size", d.block_size, "matching window, px, odd")
-        ->capture_default_str()
-        ->group(sg);
-    cmd.add_option("--p1", d.p1, "penalty of +-1 px changes (0 = 8*cn*block^2)")
-        ->capture_default_str()
-        ->group(sg);
-    cmd.add_option("--p2", d.p2, "penalty of larger changes (0 = 32*cn*block^2)")
-        ->capture_default_str()
-        ->group(sg);
-    cmd.add_option("--disp12-max-diff", d.disp12_max_diff,
-                   "SGBM internal left-right check, px (<0 off)")
-        ->capture_default_str()
-        ->group(sg);
-    cmd.add_option("--pre-filter-cap", d.pre_filter_cap, "prefilter clip, 1..63")
-        ->capture_default_str()
-        ->group(sg);
-    cmd.add_option("--uniqueness-ratio", d.uniqueness_ratio, "uniqueness margin, %")
-        ->capture_default_str()
-        ->group(sg);
-    cmd.add_option("--speckle-window-size", d.speckle_window_size,
-                   "largest speckle removed, px (0 off)")
-        ->capture_default_str()
-        ->group(sg);
-    cmd.add_option("--speckle-range", d.speckle_range, "disparity step inside a speckle, px")
-        ->capture_default_str()
-        ->group(sg);
-    cmd.add_option("--sgbm-mode", d.mode, "sgbm, hh, sgbm_3way or hh4")
-        ->check(CLI::IsMember({"sgbm", "hh", "sgbm_3way", "hh4"}))
-        ->capture_default_str()
-        ->group(sg);
-    cmd.add_flag("--colour-matching,!--grey-matching", d.colour, "match on RGB instead of grey")
-        ->group(sg);
-    cmd.add_flag("--pad-left,!--no-pad-left", d.pad_left,
-                 "pad the views so the left border band (min + num disparities wide) is matched")
-        ->group(sg);
-    cmd.add_flag("--lr-check", d.lr_check, "drop pixels failing a full left-right check")
-        ->group(sg);
-    cmd.add_option("--lr-max-diff", d.lr_max_diff_px, "left-right tolerance, px")
-        ->capture_default_str()
-        ->group(sg);
-    cmd.add_flag("--wls", d.wls, "WLS filtering (ximgproc): denser, smoother map")->group(sg);
-    cmd.add_option("--wls-lambda", d.wls_lambda, "WLS smoothness")
-        ->capture_default_str()
-        ->group(sg);
-    cmd.add_option("--wls-sigma", d.wls_sigma_colour, "WLS edge sensitivity")
-        ->capture_default_str()
-        ->group(sg);
-
-    const std::string cl = "Cloud and entities";
-    cmd.add_option("--max-range", a.options.reproject.max_range_m,
-                   "drop points farther than this from the camera, m")
-        ->capture_default_str()
-        ->group(cl);
-    cmd.add_flag("!--drop-void", a.options.reproject.keep_void,
-                 "drop points whose semantic colour is not in the palette")
-        ->group(cl);
-    cmd.add_option("--method", a.method,
-                   "entity extractor: instances, or the thesis's centroid, average, variance")
-        ->check(CLI::IsMember({"instances", "centroid", "average", "variance"}))
-        ->capture_default_str()
-        ->group(cl);
-    cmd.add_option("--class-config", a.class_config, "per-class settings JSON")->group(cl);
-
-    const std::string out = "Outputs (written only when every stage succeeded)";
-    cmd.add_option("-o,--entities", a.entities, "entity JSON file ('-' = stdout)")->group(out);
-    cmd.add_option("--xyz", a.xyz, "ASCII cloud for CloudCompare (//X Y Z R G B Class Intensity)")
-        ->group(out);
-    cmd.add_option("--pcd", a.pcd, "binary PCD v0.7 cloud for PCL (x y z rgb label)")->group(out);
-    cmd.add_option("--ply", a.ply, "binary PLY cloud (x y z, red green blue, scalar_class)")
-        ->group(out);
-    cmd.add_option("--disparity-png", a.disparity_png, "8-bit viewable disparity PNG")->group(out);
-    cmd.add_option("--disparity-kitti", a.disparity_kitti,
-                   "KITTI 16-bit disparity PNG (d*256, 0 = none)")
-        ->group(out);
-    cmd.add_option("--gt-disparity", a.gt_disparity,
-                   "KITTI GT disparity PNG: print D1-all, EPE and density to stderr")
-        ->group(out);
-    cmd.add_flag("--timings", a.timings, "milliseconds per stage to stderr")->group(out);
-}
-
-/// Resolves --kitti-root/--frame and the preset; throws CLI::ValidationError for flag misuse.
-void resolve(AnalyseArgs& a, const CLI::App& cmd) {
-    if (!a.kitti_root.empty()) {
-        if (a.frame.empty()) throw CLI::ValidationError("--kitti-root", "needs --frame");
-        const auto k = cloud_analysis::kitti_layout(a.kitti_root, a.frame);
-        if (a.paths.left.empty()) a.paths.left = k.left;
-        if (a.paths.right.empty()) a.paths.right = k.right;
-        if (a.paths.semantic.empty()) a.paths.semantic = k.semantic;
-        if (a.paths.calibration.empty()) a.paths.calibration = k.calibration;
-    }
-    if (a.paths.left.empty()) throw CLI::RequiredError("--left (or --kitti-root and --frame)");
-    if (a.paths.right.empty()) throw CLI::RequiredError("--right (or --kitti-root and --frame)");
-    if (a.paths.calibration.empty()) {
-        throw CLI::RequiredError("--calib (or --kitti-root and --frame)");
-    }
-    a.paths.frame_id = !a.frame.empty() ? a.frame : a.paths.left.stem().string();
-    if (a.preset == "opencv-sample") {
-        // Start from the sample's values, then re-apply only flags the user gave.
-        const auto sample = cloud_analysis::opencv_sample_disparity_options();
-        auto& d = a.options.disparity;
-        const auto keep = [&](const char* flag, auto& field, const auto& value) {
-            if (cmd.count(flag) == 0) field = value;
-        };
-        keep("--min-disparity", d.min_disparity, sample.min_disparity);
-        keep("--num-disparities", d.num_disparities, sample.num_disparities);
-        keep("--block-size", d.block_size, sample.block_size);
-        keep("--p1", d.p1, sample.p1);
-        keep("--p2", d.p2, sample.p2);
-        keep("--disp12-max-diff", d.disp12_max_diff, sample.disp12_max_diff);
-        keep("--pre-filter-cap", d.pre_filter_cap, sample.pre_filter_cap);
-        keep("--uniqueness-ratio", d.uniqueness_ratio, sample.uniqueness_ratio);
-        keep("--speckle-window-size", d.speckle_window_size, sample.speckle_window_size);
-        keep("--speckle-range", d.speckle_range, sample.speckle_range);
-        keep("--sgbm-mode", d.mode, sample.mode);
-        if (cmd.count("--colour-matching") == 0 && cmd.count("--grey-matching") == 0) {
-            d.colour = sample.colour;
-        }
-        if (cmd.count("--pad-left") == 0 && cmd.count("--no-pad-left") == 0) {
-            d.pad_left = sample.pad_left;
-        }
-    }
-    try {
-        a.options.validate();
-    } catch (const std::invalid_argument& e) {
-        throw CLI::ValidationError("analyse", e.what());
-    }
-}
-
-void write_output(const PendingOutput& out) {
-    if (out.path == "-") {
-        std::fwrite(out.bytes.data(), 1, out.bytes.size(), stdout);
-        std::fflush(stdout);
-    } else {
-        scene_schema::write_file_atomic(out.path, out.bytes);
-    }
-}
-
-int run_analyse(const AnalyseArgs& a) {
-    using Clock = std::chrono::steady_clock;
-    const auto ms_since = [](Clock::time_point t) {
-        return std::chrono::duration<double, std::milli>(Clock::now() - t).count();
-    };
-    auto t = Clock::now();
-    std::vector<cloud_analysis::StageTiming> timings;
-
-    // Validate everything before the expensive stages.
-    const std::vector<std::pair<std::filesystem::path, const char*>> clouds = {
-        {a.xyz, "--xyz"}, {a.pcd, "--pcd"}, {a.ply, "--ply"}};
-    for (const auto& [path, flag] : clouds) {
-        if (path.empty()) continue;
-        try {
-            cloud_analysis::cloud_format_from_path(path);
-        } catch (const std::invalid_argument& e) {
-            throw CLI::ValidationError(flag, e.what());
-        }
-    }
-    const std::vector<std::pair<std::string, const char*>> all_outputs = {
-        {a.entities, "--entities"},
-        {a.xyz.string(), "--xyz"},
-        {a.pcd.string(), "--pcd"},
-        {a.ply.string(), "--ply"},
-        {a.disparity_png.string(), "--disparity-png"},
-        {a.disparity_kitti.string(), "--disparity-kitti"}};
-    int to_stdout = 0;
-    for (const auto& [path, flag] : all_outputs) {
-        if (path.empty()) continue;
-        if (path == "-") {
-            if (++to_stdout > 1) {
-                throw CLI::ValidationError(flag, "only one output can go to stdout ('-')");
-            }
-            continue;
-        }
-        const std::filesystem::path folder = std::filesystem::path(path).parent_path();
-        if (!folder.empty() && !std::filesystem::is_directory(folder)) {
-            throw std::runtime_error("cannot write output: no such folder (" + folder.string() +
-                                     ", " + flag + ")");
-        }
-    }
-    cloud_analysis::ExtractOptions extract;
-    extract.method = a.method;
-    extract.classes = cloud_analysis::load_class_config(
-        a.class_config.empty() ? cloud_analysis::default_class_config_path() : a.class_config);
-    extract.validate();
-    const cloud_analysis::LoadedInputs in = cloud_analysis::load_inputs(a.paths, a.options);
-    std::optional<cloud_analysis::DisparityMap> gt;
-    if (!a.gt_disparity.empty()) {
-        gt = cloud_analysis::read_kitti_disparity(a.gt_disparity);
-        const auto& cam = in.calibration.camera;
-        if (gt->width_px != cam.width_px || gt->height_px != cam.height_px) {
-            throw std::runtime_error(
-                "inputs do not match: GT disparity is " + std::to_string(gt->width_px) + "x" +
-                std::to_string(gt->height_px) + ", rectified images are " +
-                std::to_string(cam.width_px) + "x" + std::to_string(cam.height_px) + " (" +
-                a.gt_disparity.string() + ")");
-        }
-    }
-    timings.push_back({"load", ms_since(t)});
-    if (!in.calibration.note.empty()) {
-        std::cerr << kTool << ": warning: " << in.calibration.note << " (" << in.calibration.source
-                  << ")\n";
-    }
-
-    cloud_analysis::AnalyseResult r = cloud_analysis::analyse(in, a.options);
-    timings.insert(timings.end(), r.timings.begin(), r.timings.end());
-    if (in.semantic.empty()) {
-        std::cerr << kTool << ": warning: no semantic image: every point is void\n";
-    } else if (r.classes.void_pixels > 0) {
-        std::cerr << kTool << ": warning: " << r.classes.void_pixels
-                  << " semantic pixels have colours not in palette '" << in.palette.name
-                  << "' and count as void (" << a.paths.semantic.string() << ")\n";
-    }
-    if (gt) {
-        const auto s = cloud_analysis::score_disparity(r.disparity, *gt);
-        std::fprintf(stderr,
-                     "%s: disparity vs %s: D1-all %.2f %%, D1-valid %.2f %%, EPE %.3f px, "
-                     "density %.2f %% (%zu GT px)\n",
-                     kTool, a.gt_disparity.string().c_str(), 100.0 * s.d1_all, 100.0 * s.d1_valid,
-                     s.epe_px, 100.0 * s.density, s.gt_pixels);
-    }
-
-    std::vector<PendingOutput> outputs;
-    if (!a.entities.empty()) {
-        t = Clock::now();
-        scene_schema::EntityDocument doc =
-            cloud_analysis::extract_entities(r.cloud, in.palette, r.camera, extract);
-        doc.frame.id = a.paths.frame_id;
-        scene_schema::CameraIntrinsics cam;
-        cam.width_px = r.camera.width_px;
-        cam.height_px = r.camera.height_px;
-        cam.fx_px = r.camera.fx_px;
-        cam.fy_px = r.camera.fy_px;
-        cam.cx_px = r.camera.cx_px;
-        cam.cy_px = r.camera.cy_px;
-        cam.baseline_m = r.camera.baseline_m;
-        doc.frame.camera = cam;
-        nlohmann::json source = cloud_analysis::describe_run(in, a.options, STEREOSCENE_VERSION);
-        source["extract"] = {{"method", a.method},
-                             {"class_config", a.class_config.empty() ? std::string("default")
-                                                                     : a.class_config.string()}};
-        doc.source = source;
-        scene_schema::check(doc);
-        outputs.push_back({a.entities, scene_schema::dump(doc), "--entities"});
-        timings.push_back({"entities", ms_since(t)});
-    }
-    for (const auto& [path, flag] : clouds) {
-        if (path.empty()) continue;
-        t = Clock::now();
-        outputs.push_back({path.string(),
-                           cloud_analysis::format_cloud(
-                               r.cloud, in.palette, cloud_analysis::cloud_format_from_path(path)),
-                           flag});
-        timings.push_back({std::string("format ") + flag, ms_since(t)});
-    }
-    t = Clock::now();
-    if (!a.disparity_png.empty()) {
-        outputs.push_back({a.disparity_png.string(),
-                           cloud_analysis::encode_disparity_preview_png(
-                               r.disparity, a.options.disparity.min_disparity +
-                                                a.options.disparity.num_disparities),
-                           "--disparity-png"});
-    }
-    if (!a.disparity_kitti.empty()) {
-        outputs.push_back({a.disparity_kitti.string(),
-                           cloud_analysis::encode_kitti_disparity_png(r.disparity),
-                           "--disparity-kitti"});
-    }
-    if (!a.disparity_png.empty() || !a.disparity_kitti.empty()) {
-        timings.push_back({"encode disparity", ms_since(t)});
-    }
-    // Every output exists in memory now: only writing is left.
-    std::vector<std::filesystem::path> written;
-    try {
-        for (const auto& out : outputs) {
-            t = Clock::now();
-            write_output(out);
-            if (out.path != "-") written.emplace_back(out.path);
-            timings.push_back({"write " + out.label, ms_since(t)});
-        }
-    } catch (...) {
-        // All or nothing: take back the files this run already wrote.
-        std::error_code ignored;
-        for (const auto& path : written) std::filesystem::remove(path, ignored);
-        throw;
-    }
-
-    if (a.timings) {
-        double total = 0.0;
-        for (const auto& s : timings) {
-            std::fprintf(stderr, "%s: timing: %-22s %9.1f ms\n", kTool, s.stage.c_str(), s.ms);
-            total += s.ms;
-        }
-        std::fprintf(stderr, "%s: timing: %-22s %9.1f ms (%zu points)\n", kTool, "total", total,
-                     r.cloud.size());
-    }
-    return 0;
-}
+using cloud_analysis::app::kTool;
+using cloud_analysis::app::PendingOutput;
+using cloud_analysis::app::write_output;
 
 /// Flags of `make-sample`.
 struct SampleArgs {
@@ -413,8 +47,8 @@ int run_make_sample(const SampleArgs& a) {
 }
 
 bool is_subcommand(const std::string& arg) {
-    return arg == "analyse" || arg == "evaluate" || arg == "export-kitti" ||
-           arg == "make-sample" || arg == "help";
+    return arg == "analyse" || arg == "evaluate" || arg == "export-kitti" || arg == "make-sample" ||
+           arg == "batch" || arg == "bench" || arg == "help";
 }
 
 }  // namespace
@@ -431,21 +65,29 @@ int main(int argc, char** argv) {
     CLI::App app{
         "cloud-analysis: rectified stereo pair + calibration + semantic image -> "
         "disparity, labelled metric point cloud and entity file.\n"
-        "Commands: analyse (default), evaluate, export-kitti, make-sample. Exit codes: 0 ok, 1 "
+        "Commands: analyse (default), evaluate, export-kitti, make-sample, batch, bench. Exit "
+        "codes: 0 ok, 1 "
         "failure, 2 usage, 3 (evaluate) a bar was missed."};
     app.set_version_flag("--version", std::string(kTool) + " " + STEREOSCENE_VERSION);
     app.require_subcommand(0, 1);
-    AnalyseArgs analyse_args;
+    cloud_analysis::app::AnalyseArgs analyse_args;
     CLI::App* analyse = app.add_subcommand(
         "analyse", "stereo pair -> disparity -> cloud -> entities (the default command)");
-    add_analyse_flags(*analyse, analyse_args);
+    cloud_analysis::app::add_input_flags(*analyse, analyse_args);
+    cloud_analysis::app::add_settings_flags(*analyse, analyse_args);
+    cloud_analysis::app::add_output_flags(*analyse, analyse_args);
     analyse->footer(
-        "Other commands: cloud-analysis evaluate --help, cloud-analysis make-sample --help.\n"
+        "Other commands: evaluate, export-kitti, make-sample, batch, bench (each with --help).\n"
         "Exit codes: 0 ok, 1 failure (one line on stderr, no output written), 2 usage error.");
     cloud_analysis::app::EvaluateArgs evaluate_args;
     CLI::App* evaluate = cloud_analysis::app::add_evaluate_command(app, evaluate_args);
     cloud_analysis::app::ExportKittiArgs export_args;
     CLI::App* export_kitti = cloud_analysis::app::add_export_kitti_command(app, export_args);
+
+    cloud_analysis::app::BatchArgs batch_args;
+    CLI::App* batch = cloud_analysis::app::add_batch_command(app, batch_args);
+    cloud_analysis::app::BenchArgs bench_args;
+    CLI::App* bench = cloud_analysis::app::add_bench_command(app, bench_args);
 
     SampleArgs sample_args;
     CLI::App* sample = app.add_subcommand(
@@ -465,8 +107,16 @@ int main(int argc, char** argv) {
         app.parse(args);
         if (*sample) return run_make_sample(sample_args);
         if (*analyse) {
-            resolve(analyse_args, *analyse);
-            return run_analyse(analyse_args);
+            cloud_analysis::app::resolve(analyse_args, *analyse);
+            return cloud_analysis::app::run_analyse(analyse_args);
+        }
+        if (*batch) {
+            cloud_analysis::app::resolve_batch(batch_args, *batch);
+            return cloud_analysis::app::run_batch(batch_args);
+        }
+        if (*bench) {
+            cloud_analysis::app::resolve(bench_args.analyse, *bench);
+            return cloud_analysis::app::run_bench(bench_args);
         }
         if (*evaluate) return cloud_analysis::app::run_evaluate(evaluate_args);
         if (*export_kitti) return cloud_analysis::app::run_export_kitti(export_args);

@@ -1,6 +1,7 @@
 #include "cloud_analysis/disparity.hpp"
 
 #include <algorithm>
+#include <chrono>
 #include <cmath>
 #include <stdexcept>
 
@@ -56,6 +57,7 @@ void DisparityOptions::validate() const {
     if (!(lr_max_diff_px >= 0.0)) bad("lr_max_diff_px", "must be >= 0");
     if (!(wls_lambda > 0.0)) bad("wls_lambda", "must be > 0");
     if (!(wls_sigma_colour > 0.0)) bad("wls_sigma_colour", "must be > 0");
+    if (downscale != 1 && downscale != 2) bad("downscale", "must be 1 or 2");
 }
 
 DisparityOptions opencv_sample_disparity_options() {
@@ -76,56 +78,146 @@ DisparityOptions opencv_sample_disparity_options() {
     return o;
 }
 
-DisparityMap compute_disparity(const ImageU8& left, const ImageU8& right,
-                               const DisparityOptions& options) {
+DisparityOptions disparity_preset(const std::string& name) {
+    if (name == "tuned") return DisparityOptions{};
+    if (name == "opencv-sample") return opencv_sample_disparity_options();
+    if (name == "fast") {
+        // Half the pixels in each direction: 64 disparities at half scale cover the same 128 px
+        // of range; the smaller window keeps the same footprint in the scene.
+        DisparityOptions o;
+        o.downscale = 2;
+        o.block_size = 5;
+        o.p2 = 0;
+        o.speckle_window_size = 25;
+        return o;
+    }
+    if (name == "quality") {
+        DisparityOptions o;
+        o.mode = "sgbm";
+        o.wls = true;
+        return o;
+    }
+    bad("preset", "must be tuned, fast, quality or opencv-sample");
+}
+
+struct DisparityMatcher::Impl {
+    DisparityOptions options;
+    cv::Ptr<cv::StereoSGBM> sgbm;
+    cv::Ptr<cv::StereoMatcher> right_matcher;           // lr-check / WLS only
+    cv::Ptr<cv::ximgproc::DisparityWLSFilter> wls;      // WLS only
+    cv::Mat lp, rp, raw_left, raw_right, filtered, up;  // reused buffers
+
+    int pad() const {
+        return options.pad_left ? std::max(0, options.min_disparity + matched_disparities()) : 0;
+    }
+    int matched_disparities() const {
+        // At 1/s scale the same metric range needs 1/s of the disparities (multiple of 16).
+        const int n = options.num_disparities / options.downscale;
+        return std::max(16, (n + 15) / 16 * 16);
+    }
+
+    /// Grey (unless colour), scaled and left-padded views into lp and rp.
+    void prepare(const ImageU8& left, const ImageU8& right) {
+        if (left.width_px != right.width_px || left.height_px != right.height_px) {
+            throw std::invalid_argument("left and right images differ in size");
+        }
+        if (left.channels != right.channels) {
+            throw std::invalid_argument("left and right images differ in channel count");
+        }
+        if (left.empty()) throw std::invalid_argument("empty images");
+        cv::Mat l = to_matcher_input(left, options.colour);
+        cv::Mat r = to_matcher_input(right, options.colour);
+        if (options.downscale > 1) {
+            const cv::Size size(left.width_px / options.downscale,
+                                left.height_px / options.downscale);
+            cv::Mat ls, rs;
+            cv::resize(l, ls, size, 0, 0, cv::INTER_AREA);
+            cv::resize(r, rs, size, 0, 0, cv::INTER_AREA);
+            l = ls;
+            r = rs;
+        }
+        // StereoSGBM leaves the first min + num disparities columns empty. Padding both views
+        // on the left with black lets those pixels match wherever their partner is in view.
+        const int p = pad();
+        if (p > 0) {
+            cv::copyMakeBorder(l, lp, 0, 0, p, 0, cv::BORDER_CONSTANT, cv::Scalar::all(0));
+            cv::copyMakeBorder(r, rp, 0, 0, p, 0, cv::BORDER_CONSTANT, cv::Scalar::all(0));
+        } else {
+            lp = l;
+            rp = r;
+        }
+    }
+};
+
+DisparityMatcher::DisparityMatcher(const DisparityOptions& options)
+    : impl_(std::make_unique<Impl>()) {
     options.validate();
-    if (left.width_px != right.width_px || left.height_px != right.height_px) {
-        throw std::invalid_argument("left and right images differ in size");
-    }
-    if (left.channels != right.channels) {
-        throw std::invalid_argument("left and right images differ in channel count");
-    }
-    if (left.empty()) throw std::invalid_argument("empty images");
-    const cv::Mat l = to_matcher_input(left, options.colour);
-    const cv::Mat r = to_matcher_input(right, options.colour);
-    const int cn = l.channels();
+    impl_->options = options;
+    const int cn = options.colour ? 3 : 1;
     const int area = options.block_size * options.block_size;
     const int p1 = options.p1 > 0 ? options.p1 : 8 * cn * area;
     const int p2 = options.p2 > 0 ? options.p2 : 32 * cn * area;
-    cv::Ptr<cv::StereoSGBM> sgbm = cv::StereoSGBM::create(
-        options.min_disparity, options.num_disparities, options.block_size, p1,
-        std::max(p2, p1 + 1), options.disp12_max_diff, options.pre_filter_cap,
-        options.uniqueness_ratio, options.speckle_window_size, options.speckle_range,
-        sgbm_mode(options.mode));
-
-    // StereoSGBM leaves the first min + num disparities columns empty. Padding both views on the
-    // left with black lets those pixels match wherever their partner is inside the right view.
-    const int pad =
-        options.pad_left ? std::max(0, options.min_disparity + options.num_disparities) : 0;
-    cv::Mat lp = l, rp = r;
-    if (pad > 0) {
-        cv::copyMakeBorder(l, lp, 0, 0, pad, 0, cv::BORDER_CONSTANT, cv::Scalar::all(0));
-        cv::copyMakeBorder(r, rp, 0, 0, pad, 0, cv::BORDER_CONSTANT, cv::Scalar::all(0));
-    }
-    cv::Mat raw_left;  // CV_16S, disparity * 16
-    sgbm->compute(lp, rp, raw_left);
-    cv::Mat raw_right;
+    impl_->sgbm = cv::StereoSGBM::create(options.min_disparity, impl_->matched_disparities(),
+                                         options.block_size, p1, std::max(p2, p1 + 1),
+                                         options.disp12_max_diff, options.pre_filter_cap,
+                                         options.uniqueness_ratio, options.speckle_window_size,
+                                         options.speckle_range, sgbm_mode(options.mode));
     if (options.lr_check || options.wls) {
-        cv::Ptr<cv::StereoMatcher> right_matcher = cv::ximgproc::createRightMatcher(sgbm);
-        right_matcher->compute(rp, lp, raw_right);  // negative disparities of the right image
+        impl_->right_matcher = cv::ximgproc::createRightMatcher(impl_->sgbm);
+    }
+    if (options.wls) {
+        impl_->wls = cv::ximgproc::createDisparityWLSFilter(impl_->sgbm);
+        impl_->wls->setLambda(options.wls_lambda);
+        impl_->wls->setSigmaColor(options.wls_sigma_colour);
+    }
+}
+
+DisparityMatcher::~DisparityMatcher() = default;
+DisparityMatcher::DisparityMatcher(DisparityMatcher&&) noexcept = default;
+DisparityMatcher& DisparityMatcher::operator=(DisparityMatcher&&) noexcept = default;
+
+const DisparityOptions& DisparityMatcher::options() const { return impl_->options; }
+
+double DisparityMatcher::time_matcher_only_ms(const ImageU8& left, const ImageU8& right) {
+    Impl& m = *impl_;
+    m.prepare(left, right);
+    const auto start = std::chrono::steady_clock::now();
+    m.sgbm->compute(m.lp, m.rp, m.raw_left);
+    return std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - start)
+        .count();
+}
+
+DisparityMap DisparityMatcher::compute(const ImageU8& left, const ImageU8& right) {
+    Impl& m = *impl_;
+    const DisparityOptions& options = m.options;
+    m.prepare(left, right);
+    m.sgbm->compute(m.lp, m.rp, m.raw_left);  // CV_16S, disparity * 16
+    const bool need_right = options.lr_check || options.wls;
+    if (need_right) m.right_matcher->compute(m.rp, m.lp, m.raw_right);  // negative disparities
+    cv::Mat raw_left = m.raw_left;
+    if (options.wls) {
+        m.wls->filter(m.raw_left, m.lp, m.filtered, m.raw_right);
+        raw_left = m.filtered;
+    }
+    const int pad = m.pad();
+    const int scaled_width = m.lp.cols - pad;
+    raw_left = raw_left.colRange(pad, pad + scaled_width);
+    cv::Mat raw_right;
+    if (need_right) raw_right = m.raw_right.colRange(pad, pad + scaled_width);
+    const int scale = options.downscale;
+    if (scale > 1) {
+        // Nearest neighbour: a missing value must not blend into its valid neighbours.
+        const cv::Size full(left.width_px, left.height_px);
+        cv::resize(raw_left, m.up, full, 0, 0, cv::INTER_NEAREST);
+        raw_left = m.up;
+        if (options.lr_check) {
+            cv::Mat up_right;
+            cv::resize(raw_right, up_right, full, 0, 0, cv::INTER_NEAREST);
+            raw_right = up_right;
+        }
     }
     const int invalid_raw = (options.min_disparity - 1) * 16;
-    if (options.wls) {
-        cv::Ptr<cv::ximgproc::DisparityWLSFilter> wls =
-            cv::ximgproc::createDisparityWLSFilter(sgbm);
-        wls->setLambda(options.wls_lambda);
-        wls->setSigmaColor(options.wls_sigma_colour);
-        cv::Mat filtered;
-        wls->filter(raw_left, lp, filtered, raw_right);
-        raw_left = filtered;
-    }
-    raw_left = raw_left.colRange(pad, pad + left.width_px);
-    if (!raw_right.empty()) raw_right = raw_right.colRange(pad, pad + left.width_px);
+    const float to_px = static_cast<float>(scale) / 16.0f;
 
     DisparityMap out;
     out.width_px = left.width_px;
@@ -137,11 +229,11 @@ DisparityMap compute_disparity(const ImageU8& left, const ImageU8& right,
         float* dst = out.disparity_px.data() + static_cast<std::size_t>(v) * out.width_px;
         for (int u = 0; u < raw_left.cols; ++u) {
             if (row[u] <= invalid_raw || row[u] <= 0) continue;
-            const float d = static_cast<float>(row[u]) / 16.0f;
+            const float d = static_cast<float>(row[u]) * to_px;
             if (row_r != nullptr) {
                 const int ur = static_cast<int>(std::lround(static_cast<float>(u) - d));
                 if (ur < 0) continue;
-                const float dr = -static_cast<float>(row_r[ur]) / 16.0f;
+                const float dr = -static_cast<float>(row_r[ur]) * to_px;
                 if (!(dr > 0.0f) || std::abs(dr - d) > static_cast<float>(options.lr_max_diff_px)) {
                     continue;
                 }
@@ -150,6 +242,11 @@ DisparityMap compute_disparity(const ImageU8& left, const ImageU8& right,
         }
     }
     return out;
+}
+
+DisparityMap compute_disparity(const ImageU8& left, const ImageU8& right,
+                               const DisparityOptions& options) {
+    return DisparityMatcher(options).compute(left, right);
 }
 
 DisparityScore score_disparity(const DisparityMap& estimate, const DisparityMap& ground_truth) {

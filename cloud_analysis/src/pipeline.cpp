@@ -56,16 +56,24 @@ void AnalyseOptions::validate() const {
 
 LoadedInputs load_inputs(const InputPaths& paths, const AnalyseOptions& options) {
     options.validate();
-    LoadedInputs in;
-    in.paths = paths;
-    in.calibration = load_calibration(paths.calibration, options.calibration);
-    in.palette = [&] {
+    const Calibration calibration = load_calibration(paths.calibration, options.calibration);
+    const Palette palette = [&] {
         try {
             return load_palette(options.palette);
         } catch (const std::exception& e) {
             throw std::runtime_error(std::string("cannot read palette: ") + e.what());
         }
     }();
+    return load_inputs(paths, options, calibration, palette);
+}
+
+LoadedInputs load_inputs(const InputPaths& paths, const AnalyseOptions& options,
+                         const Calibration& calibration, const Palette& palette) {
+    options.validate();
+    LoadedInputs in;
+    in.paths = paths;
+    in.calibration = calibration;
+    in.palette = palette;
     in.left = read_image(paths.left);
     in.right = read_image(paths.right);
     if (in.left.width_px != in.right.width_px || in.left.height_px != in.right.height_px) {
@@ -114,6 +122,12 @@ LoadedInputs load_inputs(const InputPaths& paths, const AnalyseOptions& options)
 }
 
 AnalyseResult analyse(const LoadedInputs& in, const AnalyseOptions& options) {
+    DisparityMatcher matcher(options.disparity);
+    return analyse(in, options, matcher);
+}
+
+AnalyseResult analyse(const LoadedInputs& in, const AnalyseOptions& options,
+                      DisparityMatcher& matcher) {
     options.validate();
     AnalyseResult r;
     r.camera = in.calibration.camera;
@@ -134,7 +148,7 @@ AnalyseResult analyse(const LoadedInputs& in, const AnalyseOptions& options) {
         semantic = &rect_semantic;
         watch.lap("rectify");
     }
-    r.disparity = compute_disparity(*left, *right, options.disparity);
+    r.disparity = matcher.compute(*left, *right);
     watch.lap("disparity");
     if (r.disparity.valid_count() == 0) {
         throw std::runtime_error("empty disparity: no pixel has a valid disparity (" +
@@ -193,7 +207,8 @@ nlohmann::json describe_run(const LoadedInputs& in, const AnalyseOptions& o,
                       {"lr_max_diff_px", d.lr_max_diff_px},
                       {"wls", d.wls},
                       {"wls_lambda", d.wls_lambda},
-                      {"wls_sigma_colour", d.wls_sigma_colour}};
+                      {"wls_sigma_colour", d.wls_sigma_colour},
+                      {"downscale", d.downscale}};
     j["reproject"] = {{"max_range_m", o.reproject.max_range_m},
                       {"min_disparity_px", o.reproject.min_disparity_px},
                       {"keep_void", o.reproject.keep_void}};

@@ -31,7 +31,7 @@ TEST_CASE("KITTI raw calibration gives fx, cx and the 0.53 m baseline", "[calibr
 }
 
 TEST_CASE("kitti15's calibration without P_rect_03 derives the baseline from R and T",
-          "[calibration]") {
+          "[calibration][kitti]") {
     const Calibration c = load_calibration(kShared / "kitti15/calib/calib_cam_to_cam.txt");
     CHECK(c.camera.baseline_m == Approx(0.532).margin(0.003));
     CHECK_FALSE(c.note.empty());
@@ -39,7 +39,7 @@ TEST_CASE("kitti15's calibration without P_rect_03 derives the baseline from R a
     CHECK(c.raw_left->distortion.size() == 5);
 }
 
-TEST_CASE("KITTI object calibration reads P2 and P3", "[calibration]") {
+TEST_CASE("KITTI object calibration reads P2 and P3", "[calibration][kitti]") {
     const Calibration c = load_calibration(kShared / "kitti_object/calib/000000.txt");
     CHECK(c.format == "kitti_object");
     CHECK(c.camera.fx_px == Approx(707.0493));

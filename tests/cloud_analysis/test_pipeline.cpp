@@ -22,7 +22,7 @@ InputPaths sample_paths() {
 }
 }  // namespace
 
-TEST_CASE("the KITTI layout finds images, semantics and the raw calibration", "[pipeline]") {
+TEST_CASE("the KITTI layout finds images, semantics and the raw calibration", "[pipeline][kitti]") {
     const InputPaths p = kitti_layout(kKitti, "000000_10");
     CHECK(p.left == kKitti / "image_2" / "000000_10.png");
     CHECK(p.right == kKitti / "image_3" / "000000_10.png");
@@ -47,7 +47,8 @@ TEST_CASE("the bundled sample runs through the chain into a labelled metric clou
     CHECK(source["disparity"]["block_size"] == options.disparity.block_size);
 }
 
-TEST_CASE("inputs of different sizes are refused before any work, naming the file", "[pipeline]") {
+TEST_CASE("inputs of different sizes are refused before any work, naming the file",
+          "[pipeline][kitti]") {
     InputPaths p = sample_paths();
     p.right = kKitti / "image_3" / "000000_10.png";
     REQUIRE_THROWS_WITH(
@@ -77,7 +78,7 @@ TEST_CASE("a corrupt image is reported as such with its file", "[pipeline][io]")
     std::filesystem::remove(bad);
 }
 
-TEST_CASE("raw KITTI input is undistorted and rectified to the S_rect size", "[pipeline]") {
+TEST_CASE("raw KITTI input is undistorted and rectified to the S_rect size", "[pipeline][kitti]") {
     AnalyseOptions options;
     options.raw = true;
     const LoadedInputs in = load_inputs(kitti_layout(kKitti, "000000_10"), options);

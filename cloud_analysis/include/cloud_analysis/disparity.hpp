@@ -7,6 +7,7 @@
 /// KITTI 2015 scores (Menze & Geiger, CVPR 2015).
 
 #include <cstddef>
+#include <memory>
 #include <string>
 
 #include "cloud_analysis/io.hpp"
@@ -34,6 +35,7 @@ struct DisparityOptions {
     bool wls = false;                ///< WLS edge-aware filtering (densifies the map)
     double wls_lambda = 500.0;       ///< WLS smoothness weight (ximgproc sample: 8000)
     double wls_sigma_colour = 0.8;   ///< WLS edge sensitivity (ximgproc sample: 1.5)
+    int downscale = 1;  ///< match at 1/downscale resolution (1 or 2) and upsample the map, x
     /// Throws std::invalid_argument naming the first bad field.
     void validate() const;
 };
@@ -43,7 +45,37 @@ struct DisparityOptions {
 /// speckleRange 32, MODE_SGBM, colour, no padding) with numDisparities widened to 128 for KITTI.
 DisparityOptions opencv_sample_disparity_options();
 
-/// Disparity of the left image. Images must have the same size and channel count.
+/// Speed presets (docs/performance.md): "tuned" (the defaults above), "fast" (half-resolution
+/// matching with 64 disparities, upsampled), "quality" (full 5-path SGBM + WLS) and
+/// "opencv-sample". Throws std::invalid_argument for another name.
+DisparityOptions disparity_preset(const std::string& name);
+
+/// A matcher built once and reused across frames: it keeps OpenCV's matcher objects and their
+/// working buffers, so a batch allocates them once (libSGM's StereoSGM class does the same).
+class DisparityMatcher {
+  public:
+    /// Validates and keeps the options; throws std::invalid_argument naming the bad field.
+    explicit DisparityMatcher(const DisparityOptions& options);
+    ~DisparityMatcher();
+    DisparityMatcher(DisparityMatcher&&) noexcept;
+    DisparityMatcher& operator=(DisparityMatcher&&) noexcept;
+
+    /// Disparity of the left image. Images must have the same size and channel count.
+    DisparityMap compute(const ImageU8& left, const ImageU8& right);
+
+    /// Milliseconds of the OpenCV matcher call alone (cv::StereoSGBM::compute on the same grey,
+    /// scaled and padded views compute() builds): the floor the rest of the pipeline adds to.
+    double time_matcher_only_ms(const ImageU8& left, const ImageU8& right);
+
+    const DisparityOptions& options() const;
+
+  private:
+    struct Impl;
+    std::unique_ptr<Impl> impl_;
+};
+
+/// Disparity of the left image with a one-off matcher. Images must have the same size and
+/// channel count.
 DisparityMap compute_disparity(const ImageU8& left, const ImageU8& right,
                                const DisparityOptions& options);
 

@@ -59,6 +59,11 @@ struct LoadedInputs {
 /// Throws std::runtime_error "<what failed>: <detail> (<file>)".
 LoadedInputs load_inputs(const InputPaths& paths, const AnalyseOptions& options);
 
+/// As load_inputs with a calibration and palette already read (batch mode reads them once);
+/// only the images are read and every consistency check is made again.
+LoadedInputs load_inputs(const InputPaths& paths, const AnalyseOptions& options,
+                         const Calibration& calibration, const Palette& palette);
+
 /// Milliseconds spent in one stage.
 struct StageTiming {
     std::string stage;  ///< e.g. "disparity"
@@ -77,6 +82,10 @@ struct AnalyseResult {
 /// Runs rectify (if raw) -> disparity -> classify -> reproject. Throws std::runtime_error when
 /// the disparity has no valid pixel or no point survives reprojection.
 AnalyseResult analyse(const LoadedInputs& inputs, const AnalyseOptions& options);
+
+/// As above with a matcher kept across frames (its options replace options.disparity).
+AnalyseResult analyse(const LoadedInputs& inputs, const AnalyseOptions& options,
+                      DisparityMatcher& matcher);
 
 /// The `source` block of the entity file: tool, version, inputs, calibration, parameters.
 nlohmann::json describe_run(const LoadedInputs& inputs, const AnalyseOptions& options,

@@ -1,0 +1,76 @@
+#pragma once
+
+/// The `analyse` command (the default) and what `batch` and `bench` share with it: the flags of
+/// one analysis, their resolution into options, and one run from files to written outputs.
+
+#include <filesystem>
+#include <string>
+#include <vector>
+
+#include <CLI/CLI.hpp>
+
+#include "cloud_analysis/extract.hpp"
+#include "cloud_analysis/pipeline.hpp"
+
+namespace cloud_analysis::app {
+
+inline constexpr const char* kTool = "cloud-analysis";
+
+/// Flags of `analyse` (the default command).
+struct AnalyseArgs {
+    cloud_analysis::InputPaths paths;
+    std::filesystem::path kitti_root;
+    std::string frame;
+    cloud_analysis::AnalyseOptions options;
+    std::string preset = "tuned";
+    std::string method = "instances";
+    std::filesystem::path class_config;
+    std::string entities;
+    std::filesystem::path xyz, pcd, ply, disparity_png, disparity_kitti, gt_disparity;
+    bool timings = false;
+};
+
+/// One output file, formatted in memory before anything is written.
+struct PendingOutput {
+    std::string path;   ///< "-" = stdout
+    std::string bytes;  ///< whole file
+    std::string label;  ///< flag that asked for it (for --timings)
+};
+
+/// Input flags of one frame (--left ... --kitti-root --frame).
+void add_input_flags(CLI::App& cmd, AnalyseArgs& a);
+/// Settings flags shared by analyse, batch and bench (palette, preset, SGBM, cloud, entities).
+void add_settings_flags(CLI::App& cmd, AnalyseArgs& a);
+/// Output flags of one frame (-o, --xyz, ..., --timings).
+void add_output_flags(CLI::App& cmd, AnalyseArgs& a);
+
+/// Applies the preset (flags given on `cmd` win) and validates; throws CLI::ValidationError.
+void resolve_settings(AnalyseArgs& a, const CLI::App& cmd);
+/// Resolves --kitti-root/--frame into paths, then the settings; throws CLI::ValidationError.
+void resolve(AnalyseArgs& a, const CLI::App& cmd);
+
+/// Writes one output atomically (or to stdout for "-").
+void write_output(const PendingOutput& out);
+
+/// Extraction settings of the flags, with the class config read and validated.
+cloud_analysis::ExtractOptions extract_options(const AnalyseArgs& a);
+
+/// The entity file of one analysed frame (entities, camera, `source` block), checked against
+/// the schema, as text.
+std::string entity_json(const cloud_analysis::LoadedInputs& in,
+                        const cloud_analysis::AnalyseResult& r, const AnalyseArgs& a,
+                        const cloud_analysis::ExtractOptions& extract);
+
+/// What one run measured.
+struct RunReport {
+    std::vector<cloud_analysis::StageTiming> timings;  ///< load, disparity, ..., write per output
+    std::size_t points = 0;                            ///< points in the cloud
+};
+
+/// One analysis from files to written outputs. Throws on failure, leaving no output behind.
+RunReport analyse_and_write(const AnalyseArgs& a);
+
+/// `analyse`: analyse_and_write, then --timings to stderr. Returns the exit code.
+int run_analyse(const AnalyseArgs& a);
+
+}  // namespace cloud_analysis::app

@@ -1,0 +1,366 @@
+#include "perf_commands.hpp"
+
+#include <sys/resource.h>
+#include <unistd.h>
+
+#include <algorithm>
+#include <chrono>
+#include <cstdio>
+#include <exception>
+#include <fstream>
+#include <future>
+#include <map>
+#include <optional>
+
+#include <nlohmann/json.hpp>
+#include <scene_schema/entities.hpp>
+
+#include "cloud_analysis/cloud_io.hpp"
+#include "cloud_analysis/disparity.hpp"
+
+namespace cloud_analysis::app {
+namespace {
+
+using Clock = std::chrono::steady_clock;
+
+double ms_between(Clock::time_point a, Clock::time_point b) {
+    return std::chrono::duration<double, std::milli>(b - a).count();
+}
+
+/// Peak resident set of this process so far, MB (getrusage's ru_maxrss is in KiB on Linux).
+double peak_rss_mb() {
+    rusage usage{};
+    getrusage(RUSAGE_SELF, &usage);
+    return static_cast<double>(usage.ru_maxrss) / 1024.0;
+}
+
+/// Current resident set, MB (VmRSS of /proc/self/status; 0 when unavailable).
+double current_rss_mb() {
+    std::ifstream status("/proc/self/status");
+    std::string key;
+    while (status >> key) {
+        if (key == "VmRSS:") {
+            double kib = 0.0;
+            status >> kib;
+            return kib / 1024.0;
+        }
+        status.ignore(4096, '\n');
+    }
+    return 0.0;
+}
+
+double median(std::vector<double> v) {
+    if (v.empty()) return 0.0;
+    std::sort(v.begin(), v.end());
+    const std::size_t n = v.size();
+    return n % 2 == 1 ? v[n / 2] : 0.5 * (v[n / 2 - 1] + v[n / 2]);
+}
+
+/// One frame read from disk, or why it could not be.
+struct LoadedFrame {
+    std::string frame;
+    std::optional<LoadedInputs> inputs;
+    std::string error;
+    double ms = 0.0;
+};
+
+/// One frame's outputs, formatted and written on the writer thread.
+struct WriteJob {
+    std::string frame;
+    std::vector<PendingOutput> ready;  ///< already formatted (entity file, disparity)
+    LabeledCloud cloud;                ///< formatted on the writer thread
+    Palette palette;
+    std::vector<std::pair<std::filesystem::path, CloudFormat>> clouds;
+};
+
+/// Formats and writes one frame's outputs, all or nothing; returns an error text or "".
+std::string write_frame(WriteJob job) {
+    std::vector<std::filesystem::path> written;
+    try {
+        for (const auto& [path, format] : job.clouds) {
+            job.ready.push_back({path.string(), format_cloud(job.cloud, job.palette, format), ""});
+        }
+        for (const auto& out : job.ready) {
+            write_output(out);
+            written.emplace_back(out.path);
+        }
+    } catch (const std::exception& e) {
+        std::error_code ignored;
+        for (const auto& path : written) std::filesystem::remove(path, ignored);
+        return e.what();
+    }
+    return {};
+}
+
+std::vector<std::string> read_frame_list(const std::filesystem::path& path) {
+    std::ifstream in(path);
+    if (!in)
+        throw std::runtime_error("cannot read frame list: no such file (" + path.string() + ")");
+    std::vector<std::string> frames;
+    std::string line;
+    while (std::getline(in, line)) {
+        const auto first = line.find_first_not_of(" \t\r");
+        if (first == std::string::npos || line[first] == '#') continue;
+        const auto last = line.find_last_not_of(" \t\r");
+        frames.push_back(line.substr(first, last - first + 1));
+    }
+    return frames;
+}
+
+}  // namespace
+
+CLI::App* add_batch_command(CLI::App& app, BatchArgs& a) {
+    CLI::App* cmd = app.add_subcommand(
+        "batch",
+        "analyse many KITTI-layout frames in one process (matcher, calibration and palette "
+        "kept; decoding and writing overlap matching)");
+    cmd->add_option("--kitti-root", a.kitti_root,
+                    "KITTI folder: image_2/ image_3/ semantic_rgb/ calib/")
+        ->required();
+    auto* frames = cmd->add_option("--frames", a.frames, "frame ids, e.g. 000000_10 000001_10");
+    auto* list = cmd->add_option("--list", a.list, "file of frame ids, one per line (# comments)");
+    frames->excludes(list);
+    cmd->add_option("--out-dir", a.out_dir, "output folder: <frame>.json per frame")->required();
+    cmd->add_option("--clouds", a.cloud_formats, "also write <frame>.<fmt> clouds: xyz pcd ply")
+        ->check(CLI::IsMember({"xyz", "pcd", "ply"}));
+    cmd->add_flag("--disparity-kitti", a.disparity_kitti,
+                  "also write <frame>_disparity.png (KITTI 16-bit)");
+    cmd->add_option("--report", a.report,
+                    "JSON report: per-frame ms and resident memory ('-' = stdout)");
+    add_settings_flags(*cmd, a.settings);
+    cmd->footer(
+        "A frame that fails is named on stderr and skipped; exit 1 if any frame failed. Every "
+        "file of a frame is written atomically, all or nothing.");
+    return cmd;
+}
+
+void resolve_batch(BatchArgs& a, const CLI::App& cmd) {
+    if (!a.list.empty()) a.frames = read_frame_list(a.list);
+    if (a.frames.empty()) throw CLI::RequiredError("--frames or --list (with frames)");
+    resolve_settings(a.settings, cmd);
+}
+
+int run_batch(const BatchArgs& a) {
+    if (!std::filesystem::is_directory(a.out_dir)) {
+        throw std::runtime_error("cannot write output: no such folder (" + a.out_dir.string() +
+                                 ", --out-dir)");
+    }
+    if (!std::filesystem::is_directory(a.kitti_root)) {
+        throw std::runtime_error("cannot read frames: no such folder (" + a.kitti_root.string() +
+                                 ", --kitti-root)");
+    }
+    const AnalyseOptions& options = a.settings.options;
+    const ExtractOptions extract = extract_options(a.settings);
+    const Palette palette = [&] {
+        try {
+            return load_palette(options.palette);
+        } catch (const std::exception& e) {
+            throw std::runtime_error(std::string("cannot read palette: ") + e.what());
+        }
+    }();
+    DisparityMatcher matcher(options.disparity);
+    std::map<std::filesystem::path, Calibration> calibrations;  // touched by the loader only
+
+    const auto load = [&](std::size_t i) {
+        LoadedFrame f;
+        f.frame = a.frames[i];
+        const auto start = Clock::now();
+        try {
+            const InputPaths paths = kitti_layout(a.kitti_root, f.frame);
+            auto it = calibrations.find(paths.calibration);
+            if (it == calibrations.end()) {
+                it = calibrations
+                         .emplace(paths.calibration,
+                                  load_calibration(paths.calibration, options.calibration))
+                         .first;
+            }
+            f.inputs = load_inputs(paths, options, it->second, palette);
+        } catch (const std::exception& e) {
+            f.error = e.what();
+        }
+        f.ms = ms_between(start, Clock::now());
+        return f;
+    };
+
+    const std::size_t n = a.frames.size();
+    const bool tty = isatty(STDERR_FILENO) != 0;
+    std::size_t failed = 0;
+    const auto fail = [&](const std::string& frame, const std::string& what) {
+        ++failed;
+        std::fprintf(stderr, "%s%s: error: frame %s: %s\n", tty ? "\n" : "", kTool, frame.c_str(),
+                     what.c_str());
+    };
+    nlohmann::json per_frame = nlohmann::json::array();
+    std::future<LoadedFrame> next = std::async(std::launch::async, load, 0);
+    std::future<std::string> writing;
+    std::string writing_frame;
+    const auto start = Clock::now();
+    for (std::size_t i = 0; i < n; ++i) {
+        LoadedFrame frame = next.get();
+        if (i + 1 < n) next = std::async(std::launch::async, load, i + 1);
+        const auto t0 = Clock::now();
+        nlohmann::json record = {{"frame", frame.frame}, {"load_ms", frame.ms}};
+        if (!frame.inputs) {
+            fail(frame.frame, frame.error);
+            record["error"] = frame.error;
+        } else {
+            try {
+                const LoadedInputs& in = *frame.inputs;
+                AnalyseResult r = analyse(in, options, matcher);
+                WriteJob job;
+                job.frame = frame.frame;
+                const std::filesystem::path stem = a.out_dir / frame.frame;
+                job.ready.push_back(
+                    {stem.string() + ".json", entity_json(in, r, a.settings, extract), ""});
+                if (a.disparity_kitti) {
+                    job.ready.push_back({stem.string() + "_disparity.png",
+                                         encode_kitti_disparity_png(r.disparity), ""});
+                }
+                for (const auto& fmt : a.cloud_formats) {
+                    const std::filesystem::path path = stem.string() + "." + fmt;
+                    job.clouds.emplace_back(path, cloud_format_from_path(path));
+                }
+                record["points"] = r.cloud.size();
+                if (!job.clouds.empty()) {
+                    job.cloud = std::move(r.cloud);
+                    job.palette = in.palette;
+                }
+                for (const auto& s : r.timings) record[s.stage + "_ms"] = s.ms;
+                // One write in flight: wait for frame n-1 before handing over frame n.
+                if (writing.valid()) {
+                    const std::string error = writing.get();
+                    if (!error.empty()) fail(writing_frame, error);
+                }
+                writing_frame = frame.frame;
+                writing = std::async(std::launch::async, write_frame, std::move(job));
+            } catch (const std::exception& e) {
+                fail(frame.frame, e.what());
+                record["error"] = e.what();
+            }
+        }
+        record["analyse_ms"] = ms_between(t0, Clock::now());
+        record["rss_mb"] = current_rss_mb();
+        per_frame.push_back(record);
+        const double seconds = ms_between(start, Clock::now()) / 1000.0;
+        if (tty || (i + 1) % 10 == 0 || i + 1 == n) {
+            std::fprintf(stderr, "%s%s: batch: %zu/%zu frames, %.1f fps, %zu failed%s",
+                         tty ? "\r" : "", kTool, i + 1, n, static_cast<double>(i + 1) / seconds,
+                         failed, tty ? "" : "\n");
+        }
+    }
+    if (writing.valid()) {
+        const std::string error = writing.get();
+        if (!error.empty()) fail(writing_frame, error);
+    }
+    const double seconds = ms_between(start, Clock::now()) / 1000.0;
+    const double fps = static_cast<double>(n) / seconds;
+    std::fprintf(stderr,
+                 "%s%s: batch: %zu frames in %.2f s (%.2f fps), %zu failed, peak RSS %.0f MB\n",
+                 tty ? "\n" : "", kTool, n, seconds, fps, failed, peak_rss_mb());
+    if (!a.report.empty()) {
+        const nlohmann::json report = {{"frames", n},
+                                       {"failed", failed},
+                                       {"seconds", seconds},
+                                       {"fps", fps},
+                                       {"peak_rss_mb", peak_rss_mb()},
+                                       {"preset", a.settings.preset},
+                                       {"per_frame", per_frame}};
+        write_output({a.report.string(), report.dump(1) + "\n", "--report"});
+    }
+    return failed == 0 ? 0 : 1;
+}
+
+CLI::App* add_bench_command(CLI::App& app, BenchArgs& a) {
+    CLI::App* cmd = app.add_subcommand(
+        "bench",
+        "time one frame: per-stage medians of the real run (entities; entities + all three "
+        "clouds) beside cv::StereoSGBM::compute alone on the same input, as JSON");
+    add_input_flags(*cmd, a.analyse);
+    add_settings_flags(*cmd, a.analyse);
+    cmd->add_option("--runs", a.runs, "timed runs per row (median)")
+        ->capture_default_str()
+        ->check(CLI::Range(1, 1000));
+    cmd->add_option("--warmup", a.warmup, "untimed runs before each row")
+        ->capture_default_str()
+        ->check(CLI::Range(0, 100));
+    cmd->add_option("--work-dir", a.work_dir, "folder for the timed outputs")->required();
+    cmd->add_option("--json", a.json, "result file ('-' = stdout)")->capture_default_str();
+    return cmd;
+}
+
+int run_bench(const BenchArgs& a) {
+    if (!std::filesystem::is_directory(a.work_dir)) {
+        throw std::runtime_error("cannot write output: no such folder (" + a.work_dir.string() +
+                                 ", --work-dir)");
+    }
+    // The floor: the OpenCV matcher call alone, on the views compute() prepares.
+    const LoadedInputs in = load_inputs(a.analyse.paths, a.analyse.options);
+    DisparityMatcher matcher(a.analyse.options.disparity);
+    std::vector<double> matcher_ms;
+    for (int i = 0; i < a.warmup + a.runs; ++i) {
+        const double ms = matcher.time_matcher_only_ms(in.left, in.right);
+        if (i >= a.warmup) matcher_ms.push_back(ms);
+    }
+    const double floor_ms = median(matcher_ms);
+
+    struct Row {
+        std::string name;
+        bool clouds;
+    };
+    nlohmann::json rows = nlohmann::json::array();
+    for (const Row& row : {Row{"entities", false}, Row{"entities + xyz/pcd/ply", true}}) {
+        AnalyseArgs run = a.analyse;
+        run.timings = false;
+        run.entities = (a.work_dir / "bench.json").string();
+        if (row.clouds) {
+            run.xyz = a.work_dir / "bench.xyz";
+            run.pcd = a.work_dir / "bench.pcd";
+            run.ply = a.work_dir / "bench.ply";
+        }
+        std::map<std::string, std::vector<double>> stages;
+        std::vector<std::string> order;
+        std::vector<double> totals;
+        std::size_t points = 0;
+        for (int i = 0; i < a.warmup + a.runs; ++i) {
+            const auto t0 = Clock::now();
+            const RunReport report = analyse_and_write(run);
+            const double total = ms_between(t0, Clock::now());
+            points = report.points;
+            if (i < a.warmup) continue;
+            totals.push_back(total);
+            for (const auto& s : report.timings) {
+                if (stages.count(s.stage) == 0) order.push_back(s.stage);
+                stages[s.stage].push_back(s.ms);
+            }
+        }
+        nlohmann::json stage_json = nlohmann::json::array();
+        for (const auto& name : order) {
+            stage_json.push_back({{"stage", name}, {"ms", median(stages[name])}});
+        }
+        const double total_ms = median(totals);
+        rows.push_back({{"row", row.name},
+                        {"stages", stage_json},
+                        {"total_ms", total_ms},
+                        {"fps", 1000.0 / total_ms},
+                        {"ratio_to_matcher", total_ms / floor_ms},
+                        {"points", points}});
+    }
+    const auto& d = a.analyse.options.disparity;
+    const nlohmann::json result = {{"frame", in.paths.frame_id},
+                                   {"width", in.left.width_px},
+                                   {"height", in.left.height_px},
+                                   {"preset", a.analyse.preset},
+                                   {"num_disparities", d.num_disparities},
+                                   {"block_size", d.block_size},
+                                   {"mode", d.mode},
+                                   {"downscale", d.downscale},
+                                   {"runs", a.runs},
+                                   {"warmup", a.warmup},
+                                   {"matcher_ms", floor_ms},
+                                   {"rows", rows},
+                                   {"peak_rss_mb", peak_rss_mb()}};
+    write_output({a.json, result.dump(1) + "\n", "--json"});
+    return 0;
+}
+
+}  // namespace cloud_analysis::app
