@@ -2,11 +2,11 @@
 
 #include <climits>
 #include <fstream>
-#include <mutex>
 #include <stdexcept>
 
 #include <stb/stb_image.h>
-#include <stb/stb_image_write.h>
+
+#include <zlib.h>
 
 namespace scene_viewer {
 namespace {
@@ -22,10 +22,18 @@ bool slurp(const std::filesystem::path& path, std::vector<unsigned char>& out) {
     return size == 0 || static_cast<bool>(in.read(reinterpret_cast<char*>(out.data()), size));
 }
 
-void append_bytes(void* context, void* data, int size) {
-    auto* out = static_cast<std::vector<unsigned char>*>(context);
-    const auto* bytes = static_cast<const unsigned char*>(data);
-    out->insert(out->end(), bytes, bytes + size);
+void put_u32(std::vector<unsigned char>& out, std::uint32_t v) {
+    for (int s = 24; s >= 0; s -= 8) out.push_back(static_cast<unsigned char>(v >> s));
+}
+
+void put_chunk(std::vector<unsigned char>& out, const char* type, const unsigned char* data,
+               std::size_t size) {
+    put_u32(out, static_cast<std::uint32_t>(size));
+    const std::size_t start = out.size();
+    out.insert(out.end(), type, type + 4);
+    out.insert(out.end(), data, data + size);
+    const uLong crc = crc32(0L, out.data() + start, static_cast<uInt>(out.size() - start));
+    put_u32(out, static_cast<std::uint32_t>(crc));
 }
 
 }  // namespace
@@ -47,17 +55,44 @@ std::vector<unsigned char> encode_png(const ImageRgba8& image, int zlib_level) {
     if (zlib_level < 0 || zlib_level > 9) {
         throw std::invalid_argument("encode_png: zlib_level must be 0..9");
     }
-    // stb keeps the level in a global; serialise encoders so concurrent calls stay correct.
-    static std::mutex level_mutex;
-    std::lock_guard<std::mutex> lock(level_mutex);
-    stbi_write_png_compression_level = zlib_level;
-    std::vector<unsigned char> out;
-    const int ok = stbi_write_png_to_func(append_bytes, &out, image.width, image.height, 4,
-                                          image.pixels.data(), image.width * 4);
-    if (ok == 0) {
-        throw std::runtime_error("encode_png: stb_image_write failed");
+    return encode_png_samples(image.pixels.data(), image.width, image.height, 8, 6, 4, zlib_level);
+}
+
+std::vector<unsigned char> encode_png_samples(const unsigned char* rows, int width, int height,
+                                              int bit_depth, int colour_type, int bytes_per_pixel,
+                                              int zlib_level) {
+    if (width <= 0 || height <= 0 || bytes_per_pixel <= 0 || zlib_level < 0 || zlib_level > 9) {
+        throw std::invalid_argument("encode_png_samples: bad size or zlib level");
     }
-    return out;
+    const std::size_t row_bytes = static_cast<std::size_t>(width) * bytes_per_pixel;
+    const std::size_t bpp = static_cast<std::size_t>(bytes_per_pixel);
+    std::vector<unsigned char> filtered((row_bytes + 1) * static_cast<std::size_t>(height));
+    for (std::size_t y = 0; y < static_cast<std::size_t>(height); ++y) {
+        const unsigned char* row = rows + row_bytes * y;
+        unsigned char* dst = filtered.data() + (row_bytes + 1) * y;
+        dst[0] = 1;  // Sub: each byte minus the same byte of the pixel to its left
+        for (std::size_t i = 0; i < bpp && i < row_bytes; ++i) dst[1 + i] = row[i];
+        for (std::size_t i = bpp; i < row_bytes; ++i) {
+            dst[1 + i] = static_cast<unsigned char>(row[i] - row[i - bpp]);
+        }
+    }
+    uLongf size = compressBound(static_cast<uLong>(filtered.size()));
+    std::vector<unsigned char> idat(size);
+    if (compress2(idat.data(), &size, filtered.data(), static_cast<uLong>(filtered.size()),
+                  zlib_level) != Z_OK) {
+        throw std::runtime_error("encode_png: zlib compression failed");
+    }
+    std::vector<unsigned char> png = {0x89, 'P', 'N', 'G', '\r', '\n', 0x1a, '\n'};
+    png.reserve(size + 64);
+    std::vector<unsigned char> ihdr;
+    put_u32(ihdr, static_cast<std::uint32_t>(width));
+    put_u32(ihdr, static_cast<std::uint32_t>(height));
+    ihdr.insert(ihdr.end(), {static_cast<unsigned char>(bit_depth),
+                             static_cast<unsigned char>(colour_type), 0, 0, 0});
+    put_chunk(png, "IHDR", ihdr.data(), ihdr.size());
+    put_chunk(png, "IDAT", idat.data(), size);
+    put_chunk(png, "IEND", nullptr, 0);
+    return png;
 }
 
 ImageRgba8 decode_image_memory(const unsigned char* bytes, std::size_t size,

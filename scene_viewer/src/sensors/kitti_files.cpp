@@ -5,63 +5,13 @@
 #include <string>
 #include <vector>
 
-#include <zlib.h>
-
 #include "scene_schema/entities.hpp"
+#include "scene_viewer/assets/image_io.hpp"
 #include "scene_viewer/sensors/stereo_sensors.hpp"
 
 namespace scene_viewer {
 
 namespace {
-
-void put_u32(std::vector<unsigned char>& out, std::uint32_t v) {
-    for (int s = 24; s >= 0; s -= 8) out.push_back(static_cast<unsigned char>(v >> s));
-}
-
-void put_chunk(std::vector<unsigned char>& out, const char* type,
-               const std::vector<unsigned char>& data) {
-    put_u32(out, static_cast<std::uint32_t>(data.size()));
-    const std::size_t start = out.size();
-    out.insert(out.end(), type, type + 4);
-    out.insert(out.end(), data.begin(), data.end());
-    const uLong crc = crc32(0L, out.data() + start, static_cast<uInt>(out.size() - start));
-    put_u32(out, static_cast<std::uint32_t>(crc));
-}
-
-/// PNG (ISO/IEC 15948) of big-endian sample bytes: `raw` holds height rows of `row_bytes`; every
-/// row is filtered with the Sub filter (bytes_per_pixel back), then zlib-compressed.
-std::vector<unsigned char> encode_png(const std::vector<unsigned char>& raw, int width, int height,
-                                      int bit_depth, int colour_type, int bytes_per_pixel) {
-    const std::size_t row_bytes = static_cast<std::size_t>(width) * bytes_per_pixel;
-    std::vector<unsigned char> filtered;
-    filtered.reserve((row_bytes + 1) * height);
-    for (int y = 0; y < height; ++y) {
-        const unsigned char* row = raw.data() + row_bytes * y;
-        filtered.push_back(1);  // Sub
-        for (std::size_t i = 0; i < row_bytes; ++i) {
-            const unsigned char left =
-                i >= static_cast<std::size_t>(bytes_per_pixel) ? row[i - bytes_per_pixel] : 0;
-            filtered.push_back(static_cast<unsigned char>(row[i] - left));
-        }
-    }
-    uLongf size = compressBound(static_cast<uLong>(filtered.size()));
-    std::vector<unsigned char> idat(size);
-    if (compress2(idat.data(), &size, filtered.data(), static_cast<uLong>(filtered.size()), 6) !=
-        Z_OK) {
-        throw std::runtime_error("PNG: zlib compression failed");
-    }
-    idat.resize(size);
-    std::vector<unsigned char> png = {0x89, 'P', 'N', 'G', '\r', '\n', 0x1a, '\n'};
-    std::vector<unsigned char> ihdr;
-    put_u32(ihdr, static_cast<std::uint32_t>(width));
-    put_u32(ihdr, static_cast<std::uint32_t>(height));
-    ihdr.insert(ihdr.end(), {static_cast<unsigned char>(bit_depth),
-                             static_cast<unsigned char>(colour_type), 0, 0, 0});
-    put_chunk(png, "IHDR", ihdr);
-    put_chunk(png, "IDAT", idat);
-    put_chunk(png, "IEND", {});
-    return png;
-}
 
 std::string numbers(const std::vector<double>& values) {
     std::string out;
@@ -84,7 +34,7 @@ std::vector<unsigned char> encode_png_rgb8(const ImageRgb8& image) {
     if (image.width <= 0 || image.height <= 0 ||
         image.pixels.size() != static_cast<std::size_t>(image.width) * image.height * 3)
         throw std::invalid_argument("PNG: RGB image size does not match its pixel data");
-    return encode_png(image.pixels, image.width, image.height, 8, 2, 3);
+    return encode_png_samples(image.pixels.data(), image.width, image.height, 8, 2, 3, 6);
 }
 
 std::vector<unsigned char> encode_png_u16(const ImageU16& image) {
@@ -97,7 +47,7 @@ std::vector<unsigned char> encode_png_u16(const ImageU16& image) {
         raw.push_back(static_cast<unsigned char>(v >> 8));
         raw.push_back(static_cast<unsigned char>(v & 0xff));
     }
-    return encode_png(raw, image.width, image.height, 16, 0, 2);
+    return encode_png_samples(raw.data(), image.width, image.height, 16, 0, 2, 6);
 }
 
 std::string format_kitti_calib(const StereoRig& rig) {

@@ -1,8 +1,8 @@
 #pragma once
 
-/// PNG encoding and image decoding for the whole scene_viewer library, through Debian's
-/// compiled stb (libstb.so). Nobody defines STB_IMAGE_IMPLEMENTATION or
-/// STB_IMAGE_WRITE_IMPLEMENTATION: the implementation is linked, not compiled in.
+/// PNG encoding (zlib, one encoder for 8- and 16-bit images) and image decoding through
+/// Debian's compiled stb (libstb.so). Nobody defines STB_IMAGE_IMPLEMENTATION: the
+/// implementation is linked, not compiled in.
 
 #include <cstddef>
 #include <filesystem>
@@ -13,9 +13,16 @@
 
 namespace scene_viewer {
 
-/// Encodes an RGBA8 image (rows top to bottom) as PNG bytes; zlib_level 0..9 (stb's default
-/// is 8). Throws std::invalid_argument for an empty or inconsistent image or a bad level.
+/// Encodes an RGBA8 image (rows top to bottom) as PNG bytes; zlib_level 0..9 (1 is fast).
+/// Throws std::invalid_argument for an empty or inconsistent image or a bad level.
 std::vector<unsigned char> encode_png(const ImageRgba8& image, int zlib_level = 6);
+
+/// Encodes PNG (ISO/IEC 15948) from raw sample bytes: `height` rows of width * bytes_per_pixel
+/// bytes, 16-bit samples big-endian; `colour_type` as in IHDR (0 grey, 2 RGB, 6 RGBA). Every
+/// row uses the Sub filter (fast, and nearly as small as adaptive filtering on renders).
+std::vector<unsigned char> encode_png_samples(const unsigned char* rows, int width, int height,
+                                              int bit_depth, int colour_type, int bytes_per_pixel,
+                                              int zlib_level);
 
 /// Decodes a PNG/JPEG/BMP/TGA file into RGBA8 (rows top to bottom); throws std::runtime_error
 /// "<file>: <reason>".
