@@ -210,8 +210,10 @@ int run_batch(const BatchArgs& a) {
                 WriteJob job;
                 job.frame = frame.frame;
                 const std::filesystem::path stem = a.out_dir / frame.frame;
+                const auto te = Clock::now();
                 job.ready.push_back(
                     {stem.string() + ".json", entity_json(in, r, a.settings, extract), ""});
+                record["entities_ms"] = ms_between(te, Clock::now());
                 if (a.disparity_kitti) {
                     job.ready.push_back({stem.string() + "_disparity.png",
                                          encode_kitti_disparity_png(r.disparity), ""});

@@ -127,3 +127,55 @@ TEST_CASE("left padding gives the border band its disparity; without it the band
     options.pad_left = false;
     CHECK(band_hits(compute_disparity(left, right, options)) == 0);
 }
+
+TEST_CASE("a matcher reused across frames gives the same maps as one-off matchers",
+          "[disparity][batch]") {
+    auto [left_a, right_a] = random_dot_pair(160, 80, 12, 3);
+    auto [left_b, right_b] = random_dot_pair(200, 60, 20, 4);  // another size in between
+    DisparityOptions options;
+    options.num_disparities = 32;
+    DisparityMatcher matcher(options);
+    const DisparityMap a1 = matcher.compute(left_a, right_a);
+    const DisparityMap b = matcher.compute(left_b, right_b);
+    const DisparityMap a2 = matcher.compute(left_a, right_a);
+    CHECK(a1.disparity_px == compute_disparity(left_a, right_a, options).disparity_px);
+    CHECK(b.disparity_px == compute_disparity(left_b, right_b, options).disparity_px);
+    CHECK(a2.disparity_px == a1.disparity_px);
+    CHECK(b.width_px == 200);
+}
+
+TEST_CASE("half-resolution matching recovers the full-scale disparity", "[disparity][preset]") {
+    const int d = 20;
+    auto [left, right] = random_dot_pair(240, 120, d, 5);
+    DisparityOptions options;
+    options.num_disparities = 64;  // 32 at half scale
+    options.downscale = 2;
+    options.block_size = 5;
+    const DisparityMap map = compute_disparity(left, right, options);
+    REQUIRE(map.width_px == 240);
+    REQUIRE(map.height_px == 120);
+    std::size_t valid = 0, close = 0;
+    for (int v = 10; v < 110; ++v) {
+        for (int u = 80; u < 230; ++u) {
+            const float got = map.disparity_px[static_cast<std::size_t>(v) * 240 + u];
+            if (got <= 0.0f) continue;
+            ++valid;
+            if (std::abs(got - static_cast<float>(d)) <= 1.0f) ++close;
+        }
+    }
+    CHECK(valid > 100 * 150 * 8 / 10);
+    CHECK(close > valid * 9 / 10);
+}
+
+TEST_CASE("the speed presets differ as documented and an unknown one is refused",
+          "[disparity][preset]") {
+    CHECK(disparity_preset("tuned").downscale == 1);
+    CHECK(disparity_preset("fast").downscale == 2);
+    CHECK(disparity_preset("quality").mode == "sgbm");
+    CHECK(disparity_preset("quality").wls);
+    CHECK(disparity_preset("opencv-sample").block_size == 3);
+    CHECK_THROWS_WITH(disparity_preset("turbo"), Catch::Contains("preset"));
+    DisparityOptions o;
+    o.downscale = 3;
+    CHECK_THROWS_WITH(o.validate(), Catch::Contains("downscale"));
+}

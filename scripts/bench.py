@@ -1,0 +1,337 @@
+#!/usr/bin/python3
+"""Benchmarks of cloud-analysis and scene-render (issue 6); a benchmark, never a test.
+
+usage: scripts/bench.py --build BUILD_DIR [--out out/bench] [--runs 5] [--batch-frames 100]
+                        [--parts table,batch,presets,scaling] [--plots docs/images]
+
+table    per-stage medians of `cloud-analysis bench` (entities; entities + three clouds) beside
+         the OpenCV matcher alone on the same input in the same process, the ratio, fps, peak
+         RSS; for a KITTI-size synthetic pair made on the fly and ../shared/data/kitti15 frames;
+         plus `scene-render bench` rows (50 entities, 1280x720).
+batch    `cloud-analysis batch` over BATCH_FRAMES frames (the available frames repeated): fps and
+         resident memory per frame.
+presets  tuned / fast / quality: D1-all on kitti15 (--gt-disparity) and the car numbers of
+         `cloud-analysis evaluate`, beside the matcher and pipeline time.
+scaling  time vs pixels (1/4, 1/2, 1, 2 x KITTI) and vs disparities (64..256); scene-render vs
+         entities (10..10000); PNG plots into --plots.
+Everything goes to OUT/bench.json and a Markdown table on stdout. Reads shared data in place.
+"""
+import argparse
+import json
+import os
+import pathlib
+import re
+import statistics
+import subprocess
+import sys
+
+ROOT = pathlib.Path(__file__).resolve().parent.parent
+KITTI = ROOT.parent / "shared" / "data" / "kitti15"
+KITTI_FRAMES = ["000000_10", "000001_10"]  # frames with semantic_rgb and disp_occ_0
+
+
+def log(*a):
+    print(*a, file=sys.stderr, flush=True)
+
+
+def run(cmd, **kw):
+    log("$", " ".join(str(c) for c in cmd))
+    return subprocess.run([str(c) for c in cmd], capture_output=True, text=True, **kw)
+
+
+def make_sample(tool, folder, width, height):
+    """Synthetic pair of the given size (fx scaled from KITTI's 721.5 at 1242 px)."""
+    folder = pathlib.Path(folder)
+    if not (folder / "left.png").exists():
+        fx = 721.5 * width / 1242.0
+        r = run([tool, "make-sample", "--out", folder, "--width", width, "--height", height,
+                 "--fx", f"{fx:.3f}"])
+        if r.returncode != 0:
+            sys.exit(r.stderr)
+    return ["--left", folder / "left.png", "--right", folder / "right.png",
+            "--semantic", folder / "semantic.png", "--calib", folder / "calib.yaml"]
+
+
+def kitti_layout_of(sample, folder, frame="synthetic_10"):
+    """A KITTI-layout folder holding the synthetic pair (for `batch`)."""
+    folder = pathlib.Path(folder)
+    for sub, name in [("image_2", "left.png"), ("image_3", "right.png"),
+                      ("semantic_rgb", "semantic.png"), ("calib", "calib.yaml")]:
+        (folder / sub).mkdir(parents=True, exist_ok=True)
+        ext = ".txt" if sub == "calib" else ".png"
+        target = folder / sub / (frame + ext)
+        if not target.exists():
+            target.symlink_to(pathlib.Path(sample).resolve() / name)
+    return folder
+
+
+def bench(tool, inputs, work, runs, extra=()):
+    work.mkdir(parents=True, exist_ok=True)
+    r = run([tool, "bench", *inputs, *extra, "--work-dir", work, "--runs", runs, "--json", "-"])
+    if r.returncode != 0:
+        sys.exit(f"cloud-analysis bench failed: {r.stderr}")
+    return json.loads(r.stdout)
+
+
+ROW = re.compile(r"^(lit msaa \d+|semantic)\s+(\d+)\s+([\d.]+)\s+([\d.]+)\s+([\d.]+)\s+([\d.]+)\s+([\d.]+)")
+
+
+def render_bench(render, entities=50, frames=30, extra=()):
+    r = run([render, "bench", "--entities", entities, "--frames", frames, *extra])
+    if r.returncode != 0:
+        log(f"scene-render bench failed: {r.stderr.strip()}")
+        return []
+    rows = []
+    for line in (r.stdout + r.stderr).splitlines():
+        m = ROW.match(line.strip())
+        if m:
+            rows.append({"shading": m[1], "triangles": int(m[2]), "ms_per_frame": float(m[3]),
+                         "min_ms": float(m[4]), "fps": float(m[5]), "png_ms": float(m[6]),
+                         "png_kib": float(m[7])})
+    return rows
+
+
+def stage(row, name):
+    return sum(s["ms"] for s in row["stages"] if s["stage"] == name)
+
+
+def part_table(a, tool, render, result):
+    inputs = {"synthetic 1242x375": make_sample(tool, a.out / "kitti-size", 1242, 375)}
+    if (KITTI / "image_2").is_dir():
+        for f in KITTI_FRAMES:
+            inputs[f"kitti15 {f}"] = ["--kitti-root", KITTI, "--frame", f]
+    table = []
+    for name, args in inputs.items():
+        b = bench(tool, args, a.out / "work", a.runs)
+        b["input"] = name
+        table.append(b)
+    result["cloud_analysis"] = table
+    print("\n### cloud-analysis, one frame (median of %d runs after a warm-up)\n" % a.runs)
+    print("| input | output | load | matcher alone | disparity stage | entities | clouds "
+          "(format+write) | total ms | fps | pipeline / matcher | peak RSS MB |")
+    print("|---|---|---|---|---|---|---|---|---|---|---|")
+    for b in table:
+        for row in b["rows"]:
+            clouds = sum(s["ms"] for s in row["stages"]
+                         if s["stage"].startswith(("format --", "write --x", "write --p")))
+            print(f"| {b['input']} | {row['row']} | {stage(row, 'load'):.1f} | "
+                  f"{b['matcher_ms']:.1f} | {stage(row, 'disparity'):.1f} | "
+                  f"{stage(row, 'entities'):.1f} | {clouds:.1f} | {row['total_ms']:.1f} | "
+                  f"{row['fps']:.1f} | {row['ratio_to_matcher']:.2f} | {b['peak_rss_mb']:.0f} |")
+    if render:
+        rows = render_bench(render, 50, a.render_frames)
+        result["scene_render"] = rows
+        print("\n### scene-render bench (50 entities, 1280x720, readback)\n")
+        print("| shading | triangles | ms/frame | fps | PNG ms | PNG KiB |")
+        print("|---|---|---|---|---|---|")
+        for r in rows:
+            print(f"| {r['shading']} | {r['triangles']} | {r['ms_per_frame']:.1f} | "
+                  f"{r['fps']:.1f} | {r['png_ms']:.1f} | {r['png_kib']:.1f} |")
+
+
+def part_batch(a, tool, result):
+    sample = a.out / "kitti-size"
+    make_sample(tool, sample, 1242, 375)
+    roots = [(kitti_layout_of(sample, a.out / "synthetic-kitti"), ["synthetic_10"])]
+    if (KITTI / "image_2").is_dir():
+        roots.append((KITTI, KITTI_FRAMES))
+    result["batch"] = []
+    print(f"\n### cloud-analysis batch, {a.batch_frames} frames\n")
+    print("| frames from | preset | method | fps | RSS first / median / last frame MB | peak RSS MB |")
+    print("|---|---|---|---|---|---|")
+    for root, frames in roots:
+        for preset, method in [("tuned", "instances"), ("tuned", "centroid"),
+                               ("fast", "instances")]:
+            out = a.out / "batch"
+            out.mkdir(parents=True, exist_ok=True)
+            listing = out / "frames.txt"
+            listing.write_text("\n".join(frames[i % len(frames)]
+                                         for i in range(a.batch_frames)) + "\n")
+            report = out / "report.json"
+            r = run([tool, "batch", "--kitti-root", root, "--list", listing, "--out-dir", out,
+                     "--preset", preset, "--method", method, "--report", report])
+            if r.returncode != 0:
+                sys.exit(f"batch failed: {r.stderr}")
+            rep = json.loads(report.read_text())
+            rss = [f["rss_mb"] for f in rep["per_frame"]]
+            rep_short = {k: v for k, v in rep.items() if k != "per_frame"}
+            rep_short.update(root=str(root), method=method, rss_mb=rss)
+            result["batch"].append(rep_short)
+            src = "synthetic 1242x375" if "synthetic" in str(root) else "kitti15 " + "+".join(frames)
+            print(f"| {src} | {preset} | {method} | {rep['fps']:.2f} | {rss[0]:.0f} / "
+                  f"{statistics.median(rss):.0f} / {rss[-1]:.0f} | {rep['peak_rss_mb']:.0f} |")
+
+
+def part_presets(a, tool, result):
+    if not (KITTI / "image_2").is_dir():
+        log("presets: ../shared/data/kitti15 missing, skipped")
+        return
+    result["presets"] = []
+    print("\n### presets on kitti15 (accuracy from --gt-disparity and `evaluate`)\n")
+    print("| preset | frame | matcher ms | pipeline ms (entities) | D1-all % | density % | "
+          "car recall | car precision (scorable) | centre dist m |")
+    print("|---|---|---|---|---|---|---|---|---|")
+    out = a.out / "presets"
+    out.mkdir(parents=True, exist_ok=True)
+    for preset in ["tuned", "fast", "quality"]:
+        for f in KITTI_FRAMES:
+            b = bench(tool, ["--kitti-root", KITTI, "--frame", f], a.out / "work", 3,
+                      ["--preset", preset])
+            ent, disp = out / f"{preset}-{f}.json", out / f"{preset}-{f}.png"
+            r = run([tool, "--kitti-root", KITTI, "--frame", f, "--preset", preset, "-o", ent,
+                     "--disparity-kitti", disp])
+            if r.returncode != 0:
+                sys.exit(r.stderr)
+            ev = out / f"{preset}-{f}-eval.json"
+            r = run([tool, "evaluate", "--entities", ent, "--disparity", disp,
+                     "--kitti-root", KITTI, "--frame", f, "--json", ev])
+            if r.returncode not in (0, 3):
+                sys.exit(r.stderr)
+            e = json.loads(ev.read_text())
+            d, c = e["disparity"], e["cars"]
+            row = {"preset": preset, "frame": f, "matcher_ms": b["matcher_ms"],
+                   "pipeline_ms": b["rows"][0]["total_ms"], "d1_all": d["d1_all"],
+                   "density": d["density"], "recall": c["recall"], "precision": c["precision"],
+                   "precision_scorable": c["precision_scorable"],
+                   "centre_m": c["mean_centre_distance_m"]}
+            result["presets"].append(row)
+            print(f"| {preset} | {f} | {row['matcher_ms']:.1f} | {row['pipeline_ms']:.1f} | "
+                  f"{100 * row['d1_all']:.2f} | {100 * row['density']:.1f} | "
+                  f"{c['gt_owed_matched']}/{c['gt_owed']} | {100 * c['precision']:.0f} % "
+                  f"({100 * c['precision_scorable']:.0f} %) | {row['centre_m']:.2f} |")
+
+
+def part_scaling(a, tool, render, result):
+    sizes = [(621, 188, "1/4"), (878, 265, "1/2"), (1242, 375, "1"), (1756, 530, "2")]
+    scaling = {"size": [], "disparities": [], "entities": []}
+    for w, h, label in sizes:
+        args = make_sample(tool, a.out / f"sample-{w}x{h}", w, h)
+        b = bench(tool, args, a.out / "work", 3)
+        row = b["rows"][0]
+        scaling["size"].append({"pixels": w * h, "label": f"{label} ({w}x{h})",
+                                "matcher_ms": b["matcher_ms"], "total_ms": row["total_ms"],
+                                "disparity_ms": stage(row, "disparity"),
+                                "entities_ms": stage(row, "entities")})
+    args = make_sample(tool, a.out / "kitti-size", 1242, 375)
+    for n in [64, 128, 192, 256]:
+        b = bench(tool, args, a.out / "work", 3, ["--num-disparities", n])
+        row = b["rows"][0]
+        scaling["disparities"].append({"num_disparities": n, "matcher_ms": b["matcher_ms"],
+                                       "total_ms": row["total_ms"],
+                                       "disparity_ms": stage(row, "disparity")})
+    if render:
+        for n in [10, 100, 1000, 10000]:
+            rows = render_bench(render, n, 3 if n >= 1000 else 10)
+            lit = [r for r in rows if r["shading"] == "lit msaa 0"] or rows[:1]
+            if lit:
+                scaling["entities"].append({"entities": n, **lit[0]})
+    result["scaling"] = scaling
+    print("\n### scaling\n")
+    print("| image | pixels | matcher ms | pipeline ms (entities) |")
+    print("|---|---|---|---|")
+    for s in scaling["size"]:
+        print(f"| {s['label']} | {s['pixels']} | {s['matcher_ms']:.1f} | {s['total_ms']:.1f} |")
+    print("\n| disparities | matcher ms | pipeline ms (entities) |")
+    print("|---|---|---|")
+    for s in scaling["disparities"]:
+        print(f"| {s['num_disparities']} | {s['matcher_ms']:.1f} | {s['total_ms']:.1f} |")
+    if scaling["entities"]:
+        print("\n| entities | triangles | ms/frame (lit, no MSAA) | PNG ms |")
+        print("|---|---|---|---|")
+        for s in scaling["entities"]:
+            print(f"| {s['entities']} | {s['triangles']} | {s['ms_per_frame']:.1f} | "
+                  f"{s['png_ms']:.1f} |")
+    if a.plots:
+        plot(scaling, pathlib.Path(a.plots))
+
+
+def plot(scaling, folder):
+    import matplotlib
+    matplotlib.use("Agg")
+    import matplotlib.pyplot as plt
+    folder.mkdir(parents=True, exist_ok=True)
+
+    fig, ax = plt.subplots(figsize=(5, 3.5))
+    px = [s["pixels"] / 1e3 for s in scaling["size"]]
+    ax.plot(px, [s["matcher_ms"] for s in scaling["size"]], "o-", label="matcher alone")
+    ax.plot(px, [s["total_ms"] for s in scaling["size"]], "s-", label="pipeline (entities)")
+    ax.set_xlabel("image size, kilopixels (1/4, 1/2, 1, 2 x KITTI)")
+    ax.set_ylabel("ms per frame")
+    ax.set_title("cloud-analysis vs image size (128 disparities)")
+    ax.grid(True, alpha=0.3)
+    ax.legend()
+    fig.tight_layout()
+    fig.savefig(folder / "perf_size.png", dpi=100)
+
+    fig, ax = plt.subplots(figsize=(5, 3.5))
+    nd = [s["num_disparities"] for s in scaling["disparities"]]
+    ax.plot(nd, [s["matcher_ms"] for s in scaling["disparities"]], "o-", label="matcher alone")
+    ax.plot(nd, [s["total_ms"] for s in scaling["disparities"]], "s-",
+            label="pipeline (entities)")
+    ax.set_xlabel("number of disparities")
+    ax.set_ylabel("ms per frame")
+    ax.set_title("cloud-analysis vs disparities (1242x375)")
+    ax.grid(True, alpha=0.3)
+    ax.legend()
+    fig.tight_layout()
+    fig.savefig(folder / "perf_disparities.png", dpi=100)
+
+    if scaling["entities"]:
+        fig, ax = plt.subplots(figsize=(5, 3.5))
+        ne = [s["entities"] for s in scaling["entities"]]
+        ax.loglog(ne, [s["ms_per_frame"] for s in scaling["entities"]], "o-",
+                  label="render + readback")
+        ax.loglog(ne, [s["png_ms"] for s in scaling["entities"]], "s-", label="PNG encode")
+        ax.set_xlabel("entities (glTF cars)")
+        ax.set_ylabel("ms per frame")
+        ax.set_title("scene-render vs entities (1280x720, llvmpipe)")
+        ax.grid(True, which="both", alpha=0.3)
+        ax.legend()
+        fig.tight_layout()
+        fig.savefig(folder / "perf_entities.png", dpi=100)
+
+
+def main():
+    p = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    p.add_argument("--build", type=pathlib.Path, required=True)
+    p.add_argument("--out", type=pathlib.Path, default=ROOT / "out" / "bench")
+    p.add_argument("--runs", type=int, default=5)
+    p.add_argument("--batch-frames", type=int, default=100)
+    p.add_argument("--render-frames", type=int, default=30)
+    p.add_argument("--parts", default="table,batch,presets,scaling")
+    p.add_argument("--plots", default="")
+    p.add_argument("--render", type=pathlib.Path, help="scene-render binary (default: BUILD's)")
+    a = p.parse_args()
+    a.out = a.out.resolve()
+    a.out.mkdir(parents=True, exist_ok=True)
+    tool = a.build / "cloud_analysis" / "cloud-analysis"
+    render = a.render or a.build / "scene_viewer" / "scene-render"
+    if not render.exists():
+        log("scene-render not built: its rows are skipped")
+        render = None
+    parts = a.parts.split(",")
+    machine = {"nproc": os.cpu_count(), "cpu": "", "gl_renderer": ""}
+    for line in open("/proc/cpuinfo"):
+        if line.startswith("model name"):
+            machine["cpu"] = line.split(":", 1)[1].strip()
+            break
+    if render:
+        info = run([render, "--info"])
+        m = re.search(r"GL renderer:\s*(.+)", info.stdout + info.stderr)
+        machine["gl_renderer"] = m[1].strip() if m else ""
+    result = {"machine": machine}
+    print(f"machine: {machine['nproc']} cores, {machine['cpu']}, GL {machine['gl_renderer']}")
+    if "table" in parts:
+        part_table(a, tool, render, result)
+    if "batch" in parts:
+        part_batch(a, tool, result)
+    if "presets" in parts:
+        part_presets(a, tool, result)
+    if "scaling" in parts:
+        part_scaling(a, tool, render, result)
+    (a.out / "bench.json").write_text(json.dumps(result, indent=1) + "\n")
+    log(f"wrote {a.out / 'bench.json'}")
+
+
+if __name__ == "__main__":
+    main()
