@@ -9,7 +9,9 @@
 #include <fstream>
 #include <sstream>
 #include <string>
+#include <tuple>
 
+#include <nlohmann/json.hpp>
 #include <scene_schema/entities.hpp>
 
 namespace fs = std::filesystem;
@@ -261,4 +263,101 @@ TEST_CASE("CloudCompare loads our .xyz and .ply with every point and PCL reads o
     const auto data = ascii.find("DATA ascii\n");
     REQUIRE(data != std::string::npos);
     CHECK(count_lines(ascii.substr(data)) - 1 == points);
+}
+
+namespace {
+
+/// A KITTI-layout folder holding the bundled sample as frame `street_10`.
+fs::path sample_as_kitti(const fs::path& dir) {
+    const fs::path root = dir / "kitti";
+    for (const auto& [sub, name, ext] :
+         {std::tuple<const char*, const char*, const char*>{"image_2", "left.png", ".png"},
+          {"image_3", "right.png", ".png"},
+          {"semantic_rgb", "semantic.png", ".png"},
+          {"calib", "calib.yaml", ".txt"}}) {
+        fs::create_directories(root / sub);
+        fs::copy_file(kSample / name, root / sub / (std::string("street_10") + ext));
+    }
+    return root;
+}
+
+}  // namespace
+
+TEST_CASE("batch writes what analyse writes per frame and names a failed frame, exit 1",
+          "[cli][batch]") {
+    const auto dir = scratch("batch");
+    const fs::path root = sample_as_kitti(dir);
+    const fs::path out = dir / "out";
+    fs::create_directories(out);
+    const Run r = run(tool() + " batch --kitti-root " + quote(root.string()) +
+                          " --frames street_10 missing_10 street_10 --clouds ply --out-dir " +
+                          quote(out.string()) + " --report " + quote((dir / "r.json").string()),
+                      dir);
+    CHECK(r.code == 1);
+    CHECK(r.err.find("error: frame missing_10:") != std::string::npos);
+    CHECK(r.err.find("3/3 frames") != std::string::npos);
+    CHECK(fs::exists(out / "street_10.ply"));
+    CHECK_FALSE(fs::exists(out / "missing_10.json"));
+    const auto report = nlohmann::json::parse(slurp(dir / "r.json"));
+    CHECK(report["frames"] == 3);
+    CHECK(report["failed"] == 1);
+    CHECK(report["per_frame"].size() == 3);
+    CHECK(report["per_frame"][2]["points"].get<std::size_t>() > 50000);
+
+    // The same frame through `analyse` gives the same entity file, byte for byte.
+    const Run one = run(tool() + " --kitti-root " + quote(root.string()) +
+                            " --frame street_10 -o " + quote((dir / "one.json").string()),
+                        dir);
+    REQUIRE(one.code == 0);
+    CHECK(slurp(out / "street_10.json") == slurp(dir / "one.json"));
+    const scene_schema::EntityDocument doc = scene_schema::read_file(out / "street_10.json");
+    CHECK(doc.frame.id == "street_10");
+    CHECK_FALSE(doc.entities.empty());
+}
+
+TEST_CASE("batch without frames or with both --frames and --list is a usage error",
+          "[cli][batch]") {
+    const auto dir = scratch("batch_usage");
+    const std::string base =
+        tool() + " batch --kitti-root " + quote(dir.string()) + " --out-dir " + quote(dir.string());
+    CHECK(run(base, dir).code == 2);
+    std::ofstream(dir / "list.txt") << "# frames\nstreet_10\n";
+    CHECK(run(base + " --frames a --list " + quote((dir / "list.txt").string()), dir).code == 2);
+    CHECK(run(base + " --frames a --preset turbo", dir).code == 2);
+}
+
+TEST_CASE("bench reports the pipeline's stages beside the matcher alone as JSON", "[cli][bench]") {
+    const auto dir = scratch("bench");
+    const Run r = run(tool() + " bench" + sample_inputs() + " --runs 1 --warmup 0 --work-dir " +
+                          quote(dir.string()),
+                      dir);
+    REQUIRE(r.code == 0);
+    const auto j = nlohmann::json::parse(r.out);
+    const double matcher = j["matcher_ms"];
+    CHECK(matcher > 0.0);
+    REQUIRE(j["rows"].size() == 2);
+    for (const auto& row : j["rows"]) {
+        const double total = row["total_ms"];
+        CHECK(row["ratio_to_matcher"].get<double>() == Approx(total / matcher));
+        CHECK(row["stages"][1]["stage"] == "disparity");
+    }
+    CHECK(j["rows"][1]["stages"].size() > j["rows"][0]["stages"].size());
+    CHECK(j["peak_rss_mb"].get<double>() > 10.0);
+    CHECK(fs::exists(dir / "bench.ply"));
+}
+
+TEST_CASE("the palette flag takes a palette file path as well as a bundled name", "[cli][semantic]") {
+    const auto dir = scratch("palette_path");
+    const fs::path file = fs::path(STEREOSCENE_SOURCE_DIR) / "assets/palettes/cityscapes.json";
+    const Run by_name = run(tool() + sample_inputs() + " --palette cityscapes -o -", dir);
+    const Run by_path =
+        run(tool() + sample_inputs() + " --palette " + quote(file.string()) + " -o -", dir);
+    REQUIRE(by_name.code == 0);
+    REQUIRE(by_path.code == 0);
+    CHECK(by_path.out == by_name.out);
+    const Run missing = run(
+        tool() + sample_inputs() + " --palette " + quote((dir / "none.json").string()) + " -o -",
+        dir);
+    CHECK(missing.code == 1);
+    CHECK(missing.err.find("none.json") != std::string::npos);
 }
