@@ -319,8 +319,10 @@ def main():
         info = run([render, "--info"])
         m = re.search(r"GL renderer:\s*(.+)", info.stdout + info.stderr)
         machine["gl_renderer"] = m[1].strip() if m else ""
+    machine["load_average_1_5_15"] = os.getloadavg()  # other jobs on the machine skew times
     result = {"machine": machine}
-    print(f"machine: {machine['nproc']} cores, {machine['cpu']}, GL {machine['gl_renderer']}")
+    print(f"machine: {machine['nproc']} cores, {machine['cpu']}, GL {machine['gl_renderer']}, "
+          f"load average at start {machine['load_average_1_5_15'][0]:.2f}")
     if "table" in parts:
         part_table(a, tool, render, result)
     if "batch" in parts:
@@ -329,6 +331,7 @@ def main():
         part_presets(a, tool, result)
     if "scaling" in parts:
         part_scaling(a, tool, render, result)
+    result["load_average_at_end"] = os.getloadavg()
     (a.out / "bench.json").write_text(json.dumps(result, indent=1) + "\n")
     log(f"wrote {a.out / 'bench.json'}")
 

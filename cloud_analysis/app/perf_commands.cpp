@@ -64,32 +64,53 @@ struct LoadedFrame {
     double ms = 0.0;
 };
 
-/// One frame's outputs, formatted and written on the writer thread.
-struct WriteJob {
-    std::string frame;
-    std::vector<PendingOutput> ready;  ///< already formatted (entity file, disparity)
-    LabeledCloud cloud;                ///< formatted on the writer thread
-    Palette palette;
-    std::vector<std::pair<std::filesystem::path, CloudFormat>> clouds;
+/// One analysed frame handed to the finishing thread: entity extraction, formatting, writing.
+struct FinishJob {
+    LoadedInputs in;
+    AnalyseResult result;
+    const AnalyseArgs* settings = nullptr;
+    const ExtractOptions* extract = nullptr;
+    std::filesystem::path stem;  ///< out-dir/<frame>
+    bool disparity_kitti = false;
+    std::vector<std::string> cloud_formats;
 };
 
-/// Formats and writes one frame's outputs, all or nothing; returns an error text or "".
-std::string write_frame(WriteJob job) {
+/// What finishing a frame gave: an error text ("" when none) and its milliseconds.
+struct Finished {
+    std::string error;
+    double ms = 0.0;
+};
+
+/// Extracts the entities, formats every output and writes them, all or nothing.
+Finished finish_frame(FinishJob job) {
+    const auto start = Clock::now();
     std::vector<std::filesystem::path> written;
+    Finished done;
     try {
-        for (const auto& [path, format] : job.clouds) {
-            job.ready.push_back({path.string(), format_cloud(job.cloud, job.palette, format), ""});
+        std::vector<PendingOutput> outputs;
+        outputs.push_back({job.stem.string() + ".json",
+                           entity_json(job.in, job.result, *job.settings, *job.extract), ""});
+        if (job.disparity_kitti) {
+            outputs.push_back({job.stem.string() + "_disparity.png",
+                               encode_kitti_disparity_png(job.result.disparity), ""});
         }
-        for (const auto& out : job.ready) {
+        for (const auto& fmt : job.cloud_formats) {
+            const std::filesystem::path path = job.stem.string() + "." + fmt;
+            outputs.push_back(
+                {path.string(),
+                 format_cloud(job.result.cloud, job.in.palette, cloud_format_from_path(path)), ""});
+        }
+        for (const auto& out : outputs) {
             write_output(out);
             written.emplace_back(out.path);
         }
     } catch (const std::exception& e) {
         std::error_code ignored;
         for (const auto& path : written) std::filesystem::remove(path, ignored);
-        return e.what();
+        done.error = e.what();
     }
-    return {};
+    done.ms = ms_between(start, Clock::now());
+    return done;
 }
 
 std::vector<std::string> read_frame_list(const std::filesystem::path& path) {
@@ -192,49 +213,36 @@ int run_batch(const BatchArgs& a) {
     };
     nlohmann::json per_frame = nlohmann::json::array();
     std::future<LoadedFrame> next = std::async(std::launch::async, load, 0);
-    std::future<std::string> writing;
-    std::string writing_frame;
+    std::future<Finished> finishing;
+    std::string finishing_frame;
+    std::size_t finishing_record = 0;
+    const auto collect = [&] {
+        if (!finishing.valid()) return;
+        const Finished done = finishing.get();
+        per_frame[finishing_record]["finish_ms"] = done.ms;
+        if (!done.error.empty()) {
+            fail(finishing_frame, done.error);
+            per_frame[finishing_record]["error"] = done.error;
+        }
+    };
     const auto start = Clock::now();
     for (std::size_t i = 0; i < n; ++i) {
         LoadedFrame frame = next.get();
         if (i + 1 < n) next = std::async(std::launch::async, load, i + 1);
         const auto t0 = Clock::now();
         nlohmann::json record = {{"frame", frame.frame}, {"load_ms", frame.ms}};
+        std::optional<FinishJob> job;
         if (!frame.inputs) {
             fail(frame.frame, frame.error);
             record["error"] = frame.error;
         } else {
             try {
-                const LoadedInputs& in = *frame.inputs;
-                AnalyseResult r = analyse(in, options, matcher);
-                WriteJob job;
-                job.frame = frame.frame;
-                const std::filesystem::path stem = a.out_dir / frame.frame;
-                const auto te = Clock::now();
-                job.ready.push_back(
-                    {stem.string() + ".json", entity_json(in, r, a.settings, extract), ""});
-                record["entities_ms"] = ms_between(te, Clock::now());
-                if (a.disparity_kitti) {
-                    job.ready.push_back({stem.string() + "_disparity.png",
-                                         encode_kitti_disparity_png(r.disparity), ""});
-                }
-                for (const auto& fmt : a.cloud_formats) {
-                    const std::filesystem::path path = stem.string() + "." + fmt;
-                    job.clouds.emplace_back(path, cloud_format_from_path(path));
-                }
-                record["points"] = r.cloud.size();
-                if (!job.clouds.empty()) {
-                    job.cloud = std::move(r.cloud);
-                    job.palette = in.palette;
-                }
+                AnalyseResult r = analyse(*frame.inputs, options, matcher);
                 for (const auto& s : r.timings) record[s.stage + "_ms"] = s.ms;
-                // One write in flight: wait for frame n-1 before handing over frame n.
-                if (writing.valid()) {
-                    const std::string error = writing.get();
-                    if (!error.empty()) fail(writing_frame, error);
-                }
-                writing_frame = frame.frame;
-                writing = std::async(std::launch::async, write_frame, std::move(job));
+                record["points"] = r.cloud.size();
+                job =
+                    FinishJob{std::move(*frame.inputs), std::move(r),      &a.settings,    &extract,
+                              a.out_dir / frame.frame,  a.disparity_kitti, a.cloud_formats};
             } catch (const std::exception& e) {
                 fail(frame.frame, e.what());
                 record["error"] = e.what();
@@ -243,6 +251,13 @@ int run_batch(const BatchArgs& a) {
         record["analyse_ms"] = ms_between(t0, Clock::now());
         record["rss_mb"] = current_rss_mb();
         per_frame.push_back(record);
+        // One frame finishing at a time: frame n-1 must be done before frame n is handed over.
+        collect();
+        if (job) {
+            finishing_frame = frame.frame;
+            finishing_record = per_frame.size() - 1;
+            finishing = std::async(std::launch::async, finish_frame, std::move(*job));
+        }
         const double seconds = ms_between(start, Clock::now()) / 1000.0;
         if (tty || (i + 1) % 10 == 0 || i + 1 == n) {
             std::fprintf(stderr, "%s%s: batch: %zu/%zu frames, %.1f fps, %zu failed%s",
@@ -250,10 +265,7 @@ int run_batch(const BatchArgs& a) {
                          failed, tty ? "" : "\n");
         }
     }
-    if (writing.valid()) {
-        const std::string error = writing.get();
-        if (!error.empty()) fail(writing_frame, error);
-    }
+    collect();
     const double seconds = ms_between(start, Clock::now()) / 1000.0;
     const double fps = static_cast<double>(n) / seconds;
     std::fprintf(stderr,
