@@ -4,6 +4,7 @@
 #include <cmath>
 #include <cstdint>
 #include <stdexcept>
+#include <tuple>
 #include <unordered_map>
 
 #include "cloud_analysis/boxes.hpp"
@@ -92,10 +93,18 @@ Indices drop_outliers(const std::vector<Eigen::Vector3f>& pts, const Indices& id
     return kept.size() >= static_cast<std::size_t>(s.min_points) ? kept : idx;
 }
 
+/// Pieces of a split blob; at_gaps when every cut fell in a clear gap (a bin with at most
+/// kGapFraction of the median occupied bin's points): the pieces are then distinct objects.
+struct Split {
+    std::vector<Indices> parts;
+    bool at_gaps = false;
+};
+constexpr double kGapFraction = 0.25;
+
 /// Splits the points of a merged blob along the unit direction (dir_x, dir_z) into pieces of
 /// about `prior_m`, cutting at the emptiest place near each even cut (touching parked cars).
-std::vector<Indices> split_along(const std::vector<Eigen::Vector3f>& pts, const Indices& idx,
-                                 double dir_x, double dir_z, double extent_m, double prior_m) {
+Split split_along(const std::vector<Eigen::Vector3f>& pts, const Indices& idx, double dir_x,
+                  double dir_z, double extent_m, double prior_m) {
     const int pieces = std::max(2, static_cast<int>(std::lround(extent_m / prior_m)));
     std::vector<double> along(idx.size());
     double lo = 1e300, hi = -1e300;
@@ -109,6 +118,14 @@ std::vector<Indices> split_along(const std::vector<Eigen::Vector3f>& pts, const 
     const int bins = std::max(1, static_cast<int>(std::ceil((hi - lo) / bin)) + 1);
     std::vector<int> hist(static_cast<std::size_t>(bins), 0);
     for (double a : along) ++hist[static_cast<std::size_t>((a - lo) / bin)];
+    std::vector<int> occupied;
+    for (int h : hist) {
+        if (h > 0) occupied.push_back(h);
+    }
+    std::nth_element(occupied.begin(), occupied.begin() + occupied.size() / 2, occupied.end());
+    const double gap_count = kGapFraction * occupied[occupied.size() / 2];
+    Split split;
+    split.at_gaps = true;
     std::vector<double> cuts;
     const double piece = (hi - lo) / pieces;
     for (int k = 1; k < pieces; ++k) {
@@ -119,22 +136,23 @@ std::vector<Indices> split_along(const std::vector<Eigen::Vector3f>& pts, const 
             if (hist[static_cast<std::size_t>(b)] < hist[static_cast<std::size_t>(best)]) best = b;
         }
         cuts.push_back(lo + (best + 0.5) * bin);
+        if (hist[static_cast<std::size_t>(best)] > gap_count) split.at_gaps = false;
     }
     std::sort(cuts.begin(), cuts.end());
-    std::vector<Indices> parts(cuts.size() + 1);
+    split.parts.resize(cuts.size() + 1);
     for (std::size_t k = 0; k < idx.size(); ++k) {
         const auto part = static_cast<std::size_t>(
             std::upper_bound(cuts.begin(), cuts.end(), along[k]) - cuts.begin());
-        parts[part].push_back(idx[k]);
+        split.parts[part].push_back(idx[k]);
     }
-    return parts;
+    return split;
 }
 
 /// Pieces of a thing whose box is much longer or wider than its prior (a parked row, or
 /// cars side by side merged by the semantic image); {idx} when it fits the prior.
-std::vector<Indices> split_oversized(const std::vector<Eigen::Vector3f>& pts, const Indices& idx,
-                                     const OrientedBox& box, const ClassSettings& s) {
-    if (!s.has_prior()) return {idx};
+Split split_oversized(const std::vector<Eigen::Vector3f>& pts, const Indices& idx,
+                      const OrientedBox& box, const ClassSettings& s) {
+    if (!s.has_prior()) return {{idx}};
     const double c = std::cos(box.theta), sn = std::sin(box.theta);
     if (box.L_m > s.split_factor * s.prior_L_m) {
         return split_along(pts, idx, c, -sn, box.L_m, s.prior_L_m);
@@ -143,7 +161,7 @@ std::vector<Indices> split_oversized(const std::vector<Eigen::Vector3f>& pts, co
     if (box.W_m > std::max(s.split_factor, 1.9) * s.prior_W_m) {
         return split_along(pts, idx, sn, c, box.W_m, s.prior_W_m);
     }
-    return {idx};
+    return {{idx}};
 }
 
 scene_schema::Entity make_entity(const ClassInfo& info, const OrientedBox& box,
@@ -182,14 +200,16 @@ struct PixelGrid {
 struct Candidate {
     OrientedBox box;
     Indices members;
-    double range_m = 0.0;  ///< mean bird's-eye range of the points
+    double range_m = 0.0;   ///< mean bird's-eye range of the points
+    std::size_t group = 0;  ///< pieces cut from one 3D cluster at clear gaps share a group
 };
 
 /// Image-space suppression of "shadows": candidates whose pixels mostly lie within radius_px
 /// of the pixels of a nearer candidate of the same class (nearer by more than min_gap_m). A
 /// real object behind another is occluded there and shows only beside it; pixels interleaved
 /// with a nearer object's are wrong matches on it (dark, textureless car bodies) reprojected
-/// too far.
+/// too far. Pieces of one group (a parked row cut at clear gaps) never suppress each other:
+/// each is a distinct object and the row is connected in space, which a shadow is not.
 std::vector<Candidate> suppress_shadows(std::vector<Candidate> candidates,
                                         const std::vector<std::uint32_t>& pixels,
                                         const PixelGrid& grid, double min_gap_m,
@@ -197,13 +217,21 @@ std::vector<Candidate> suppress_shadows(std::vector<Candidate> candidates,
     if (!grid.valid() || candidates.size() < 2) return candidates;
     std::stable_sort(candidates.begin(), candidates.end(),
                      [](const auto& a, const auto& b) { return a.range_m < b.range_m; });
-    // Nearest accepted range covering each pixel (dilated by radius_px).
-    std::vector<float> cover(static_cast<std::size_t>(grid.width_px) * grid.height_px, 1e30f);
+    // Per pixel (dilated by radius_px): the nearest accepted range, its group, and the nearest
+    // accepted range of any other group, so that a candidate is tested against other groups.
+    struct Cover {
+        float nearest = 1e30f;
+        std::size_t group = static_cast<std::size_t>(-1);
+        float other = 1e30f;
+    };
+    std::vector<Cover> cover(static_cast<std::size_t>(grid.width_px) * grid.height_px);
     std::vector<Candidate> kept;
     for (auto& c : candidates) {
         std::size_t shared = 0;
         for (std::size_t i : c.members) {
-            if (double{cover[pixels[i]]} + min_gap_m < c.range_m) ++shared;
+            const Cover& slot = cover[pixels[i]];
+            const float nearest = slot.group == c.group ? slot.other : slot.nearest;
+            if (double{nearest} + min_gap_m < c.range_m) ++shared;
         }
         if (static_cast<double>(shared) >
             max_shared_fraction * static_cast<double>(c.members.size())) {
@@ -217,8 +245,16 @@ std::vector<Candidate> suppress_shadows(std::vector<Candidate> candidates,
                  v <= std::min(grid.height_px - 1, v0 + radius_px); ++v) {
                 for (int u = std::max(0, u0 - radius_px);
                      u <= std::min(grid.width_px - 1, u0 + radius_px); ++u) {
-                    float& slot = cover[static_cast<std::size_t>(v) * grid.width_px + u];
-                    slot = std::min(slot, range);
+                    Cover& slot = cover[static_cast<std::size_t>(v) * grid.width_px + u];
+                    if (slot.group == c.group) {
+                        slot.nearest = std::min(slot.nearest, range);
+                    } else if (range < slot.nearest) {
+                        slot.other = slot.nearest;
+                        slot.nearest = range;
+                        slot.group = c.group;
+                    } else {
+                        slot.other = std::min(slot.other, range);
+                    }
                 }
             }
         }
@@ -322,20 +358,26 @@ std::vector<scene_schema::Entity> instances_of_class(const ClassInfo& info,
         }
     }
     std::vector<Candidate> candidates;
-    for (auto& members : clusters) {
+    std::size_t next_group = clusters.size();
+    for (std::size_t cluster = 0; cluster < clusters.size(); ++cluster) {
+        Indices& members = clusters[cluster];
         if (members.size() < static_cast<std::size_t>(s.min_points)) continue;
         if (s.thing) members = drop_outliers(pts, members, s, ground, options.outlier_margin_m);
         // Fit, split oversized blobs (at most two levels: rows, then side by side), refit.
-        std::vector<std::pair<Indices, int>> work = {{members, 0}};
+        // Work items: points, split depth, shadow group.
+        std::vector<std::tuple<Indices, int, std::size_t>> work = {{members, 0, cluster}};
         while (!work.empty()) {
-            auto [part, depth] = std::move(work.back());
+            auto [part, depth, group] = std::move(work.back());
             work.pop_back();
             if (part.size() < static_cast<std::size_t>(s.min_points)) continue;
             const OrientedBox box = fit_upright_box(gather(pts, part), ground, fit);
             if (s.thing && depth < 2) {
-                auto pieces = split_oversized(pts, part, box, s);
-                if (pieces.size() > 1) {
-                    for (auto& piece : pieces) work.emplace_back(std::move(piece), depth + 1);
+                Split split = split_oversized(pts, part, box, s);
+                if (split.parts.size() > 1) {
+                    for (auto& piece : split.parts) {
+                        work.emplace_back(std::move(piece), depth + 1,
+                                          split.at_gaps ? group : next_group++);
+                    }
                     continue;
                 }
             }
@@ -344,7 +386,7 @@ std::vector<scene_schema::Entity> instances_of_class(const ClassInfo& info,
                 box.H_m < options.min_height_fraction * s.prior_H_m) {
                 continue;
             }
-            Candidate c{box, std::move(part), 0.0};
+            Candidate c{box, std::move(part), 0.0, group};
             for (std::size_t i : c.members)
                 c.range_m += std::hypot(double{pts[i].x()}, double{pts[i].z()});
             c.range_m /= static_cast<double>(c.members.size());

@@ -1,4 +1,6 @@
+#include <algorithm>
 #include <cmath>
+#include <vector>
 
 #include <catch2/catch.hpp>
 
@@ -253,4 +255,30 @@ TEST_CASE("a fragment whose box centre falls inside a larger car is dropped", "[
     const auto doc = extract_entities(cloud, test_palette(), StereoCamera{},
                                       options_with_bundled_config("instances"));
     CHECK(count_class(doc, "car") == 2);
+}
+
+TEST_CASE("a parked row cut at clear gaps keeps every car although each hides the next",
+          "[entities]") {
+    LabeledCloud cloud;
+    for (float x = -6.0f; x <= 6.0f; x += 0.25f) {
+        for (float z = 3.0f; z <= 40.0f; z += 0.25f) add_point(cloud, {x, 1.65f, z}, 0);
+    }
+    // Three cars parked along z, 0.5 m apart (one blob for the clustering), right sides seen:
+    // in the image each farther car lies right beside the nearer one, as a shadow would.
+    const float starts[] = {8.0f, 12.7f, 17.4f};
+    for (float start : starts) {
+        for (float y = 0.15f; y <= 1.65f; y += 0.05f) {
+            for (float z = start; z <= start + 4.2f; z += 0.05f) add_point(cloud, {-1.1f, y, z}, 2);
+        }
+    }
+    project_pixels(cloud);
+    const auto doc = extract_entities(cloud, test_palette(), StereoCamera{},
+                                      options_with_bundled_config("instances"));
+    std::vector<double> centres;
+    for (const auto& e : doc.entities) {
+        if (e.class_name == "car") centres.push_back(e.z);
+    }
+    std::sort(centres.begin(), centres.end());
+    REQUIRE(centres.size() == 3);
+    for (std::size_t k = 0; k < 3; ++k) CHECK(centres[k] == Approx(starts[k] + 2.1).margin(0.3));
 }
