@@ -16,48 +16,59 @@ mkdir -p "$out"
 outputs=()
 note() { outputs+=("$(printf '%-34s %s' "$1" "$2")"); }
 
-# 1. cloud-analysis on the bundled synthetic street: clouds, disparity, entities.
-s="$samples/synthetic"
-inputs=(--left "$s/left.png" --right "$s/right.png" --semantic "$s/semantic.png"
-        --calib "$s/calib.yaml" --frame synthetic-street)
-echo "== cloud-analysis: synthetic street (instances)" >&2
-"$analyse" "${inputs[@]}" -o "$out/synthetic-instances.json" \
-    --xyz "$out/synthetic.xyz" --pcd "$out/synthetic.pcd" --ply "$out/synthetic.ply" \
-    --disparity-png "$out/synthetic-disparity.png" --timings
-note "entities (instances)" "$out/synthetic-instances.json"
-note "cloud for CloudCompare" "$out/synthetic.xyz"
-note "cloud for PCL" "$out/synthetic.pcd"
-note "cloud for MeshLab/CloudCompare" "$out/synthetic.ply"
-note "disparity (8-bit)" "$out/synthetic-disparity.png"
+# 1. cloud-analysis on the rendered street (samples/rendered: made by scene-render sensors from
+#    a known scene): clouds in three formats, disparity, entities by the default extractor and by
+#    the thesis's one-entity-per-class extractors.
+r="$samples/rendered"
+street=(--kitti-root "$r/street" --frame 000000)
+echo "== cloud-analysis: rendered street (instances)" >&2
+"$analyse" "${street[@]}" -o "$out/street-instances.json" \
+    --xyz "$out/street.xyz" --pcd "$out/street.pcd" --ply "$out/street.ply" \
+    --disparity-png "$out/street-disparity.png" --timings
+note "entities (instances)" "$out/street-instances.json"
+note "cloud for CloudCompare" "$out/street.xyz"
+note "cloud for PCL" "$out/street.pcd"
+note "cloud for MeshLab/CloudCompare" "$out/street.ply"
+note "disparity (8-bit)" "$out/street-disparity.png"
 for method in centroid variance; do
-    echo "== cloud-analysis: synthetic street (thesis extractor: $method)" >&2
-    "$analyse" "${inputs[@]}" --method "$method" -o "$out/synthetic-$method.json"
-    note "entities ($method, thesis)" "$out/synthetic-$method.json"
+    echo "== cloud-analysis: rendered street (thesis extractor: $method)" >&2
+    "$analyse" "${street[@]}" --method "$method" -o "$out/street-$method.json"
+    note "entities ($method, thesis)" "$out/street-$method.json"
 done
 
-# 2. scene-render: the crafted baseline and the analysis in camera, chase and BEV views.
+# 2. The closed loop on every rendered scene: analyse, then score against the scene's truth.
+for scene in thesis-one-car street parking-row; do
+    [ "$scene" = street ] || "$analyse" --kitti-root "$r/$scene" --frame 000000 \
+        -o "$out/$scene-instances.json"
+    echo "== evaluate: $scene against its truth" >&2
+    "$analyse" evaluate --entities "$out/$scene-instances.json" \
+        --reference "$r/scenes/$scene.json" --json "$out/$scene-eval.json" >&2
+    note "scores, $scene" "$out/$scene-eval.json"
+done
+
+# 3. scene-render: the crafted baseline and the analysis in camera, chase and BEV views.
 for view in camera chase bev; do
     "$render" "$samples/baselines/street.json" --view "$view" -o "$out/baseline-$view.png"
     note "baseline, $view view" "$out/baseline-$view.png"
-    "$render" "$out/synthetic-instances.json" --view "$view" -o "$out/synthetic-$view.png"
-    note "synthetic analysis, $view view" "$out/synthetic-$view.png"
+    "$render" "$out/street-instances.json" --view "$view" -o "$out/street-$view.png"
+    note "street analysis, $view view" "$out/street-$view.png"
 done
-"$render" "$out/synthetic-instances.json" --view camera --background "$s/left.png" \
-    -o "$out/synthetic-camera-over-left.png"
-note "analysis over the left image" "$out/synthetic-camera-over-left.png"
-"$render" "$out/synthetic-instances.json" --view chase --cloud "$out/synthetic.ply" \
-    -o "$out/synthetic-chase-cloud.png"
-note "analysis + point cloud, chase" "$out/synthetic-chase-cloud.png"
-"$render" grid --inputs "$s/truth.json" "$out/synthetic-centroid.json" \
-    "$out/synthetic-variance.json" "$out/synthetic-instances.json" \
+"$render" "$out/street-instances.json" --view camera --background "$r/street/image_2/000000.png" \
+    -o "$out/street-camera-over-left.png"
+note "analysis over the left image" "$out/street-camera-over-left.png"
+"$render" "$out/street-instances.json" --view chase --cloud "$out/street.ply" \
+    -o "$out/street-chase-cloud.png"
+note "analysis + point cloud, chase" "$out/street-chase-cloud.png"
+"$render" grid --inputs "$r/scenes/street.json" "$out/street-centroid.json" \
+    "$out/street-variance.json" "$out/street-instances.json" \
     --labels "truth" "centre of mass" "variance" "instances" --view bev \
-    -o "$out/synthetic-comparison.png"
-note "comparison grid (BEV)" "$out/synthetic-comparison.png"
+    -o "$out/street-comparison.png"
+note "comparison grid (BEV)" "$out/street-comparison.png"
 "$render" "$samples/baselines/street.json" --view chase --export-glb "$out/baseline.glb" \
     -o "$out/baseline-chase.png"
 note "baseline scene as glTF" "$out/baseline.glb"
 
-# 3. A real KITTI frame, when the shared data is beside the project (never bundled).
+# 4. A real KITTI frame, when the shared data is beside the project (never bundled).
 kitti="$STEREOSCENE_ROOT/../shared/data/kitti15"
 if [ -d "$kitti/image_2" ]; then
     echo "== cloud-analysis: KITTI 2015 frame 000000_10 (from ../shared/data)" >&2
