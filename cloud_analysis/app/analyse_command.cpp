@@ -53,7 +53,7 @@ void add_settings_flags(CLI::App& cmd, AnalyseArgs& a) {
     const std::string sg = "Disparity (cv::StereoSGBM)";
     cmd.add_option("--preset", a.preset,
                    "starting values: tuned (KITTI-tuned defaults), fast (half-resolution "
-                   "matching), quality (5-path SGBM + WLS) or opencv-sample "
+                   "matching), quality (tuned + WLS) or opencv-sample "
                    "(samples/cpp/stereo_match.cpp); flags below override (docs/performance.md)")
         ->check(CLI::IsMember({"tuned", "fast", "quality", "opencv-sample"}))
         ->capture_default_str()

@@ -171,7 +171,7 @@ TEST_CASE("the speed presets differ as documented and an unknown one is refused"
           "[disparity][preset]") {
     CHECK(disparity_preset("tuned").downscale == 1);
     CHECK(disparity_preset("fast").downscale == 2);
-    CHECK(disparity_preset("quality").mode == "sgbm");
+    CHECK(disparity_preset("quality").mode == disparity_preset("tuned").mode);
     CHECK(disparity_preset("quality").wls);
     CHECK(disparity_preset("opencv-sample").block_size == 3);
     CHECK_THROWS_WITH(disparity_preset("turbo"), Catch::Contains("preset"));

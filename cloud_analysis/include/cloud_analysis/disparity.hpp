@@ -46,7 +46,7 @@ struct DisparityOptions {
 DisparityOptions opencv_sample_disparity_options();
 
 /// Speed presets (docs/performance.md): "tuned" (the defaults above), "fast" (half-resolution
-/// matching with 64 disparities, upsampled), "quality" (full 5-path SGBM + WLS) and
+/// matching with 64 disparities, upsampled), "quality" (the tuned matcher + WLS filtering) and
 /// "opencv-sample". Throws std::invalid_argument for another name.
 DisparityOptions disparity_preset(const std::string& name);
 
