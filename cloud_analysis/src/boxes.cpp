@@ -122,6 +122,9 @@ void BoxFitOptions::validate() const {
     if (!(trim_fraction >= 0.0 && trim_fraction < 0.2)) {
         throw std::invalid_argument("box.trim_fraction: must be in [0, 0.2)");
     }
+    if (yaw_rad && !std::isfinite(*yaw_rad)) {
+        throw std::invalid_argument("box.yaw_rad: must be finite");
+    }
 }
 
 double normalize_angle(double radians) {
@@ -163,7 +166,11 @@ OrientedBox fit_upright_box(const std::vector<Eigen::Vector3f>& points_m,
     // The angle search costs 90 passes: run it on at most kMaxSearchPoints evenly strided points.
     constexpr std::size_t kMaxSearchPoints = 3000;
     double angle = 0.0;
-    if (ab.size() > kMaxSearchPoints) {
+    if (options.yaw_rad) {
+        // Heading (cos t, -sin t) in camera x-z, expressed in the ground frame's axes.
+        const Eigen::Vector3d heading(std::cos(*options.yaw_rad), 0.0, -std::sin(*options.yaw_rad));
+        angle = std::atan2(frame.ez.dot(heading), frame.ex.dot(heading));
+    } else if (ab.size() > kMaxSearchPoints) {
         std::vector<Eigen::Vector2d> sample;
         const std::size_t stride = ab.size() / kMaxSearchPoints + 1;
         for (std::size_t i = 0; i < ab.size(); i += stride) sample.push_back(ab[i]);
@@ -185,8 +192,8 @@ OrientedBox fit_upright_box(const std::vector<Eigen::Vector3f>& points_m,
     double lo2 = quantile(c2, t), hi2 = quantile(c2, 1.0 - t);
 
     // Axis 1 becomes the length axis; swap when axis 2 should be.
-    bool swap = (hi2 - lo2) > (hi1 - lo1);
-    if (options.prior_L_m > 0.0 && options.prior_W_m > 0.0) {
+    bool swap = !options.yaw_rad && (hi2 - lo2) > (hi1 - lo1);
+    if (!options.yaw_rad && options.prior_L_m > 0.0 && options.prior_W_m > 0.0) {
         const double longest = std::max(hi1 - lo1, hi2 - lo2);
         if (longest <= 1.3 * options.prior_W_m) {
             // Only a short face is seen: it is most likely the rear or front, so the length

@@ -98,13 +98,18 @@ Indices drop_outliers(const std::vector<Eigen::Vector3f>& pts, const Indices& id
 struct Split {
     std::vector<Indices> parts;
     bool at_gaps = false;
+    std::optional<double> yaw_rad;  ///< heading imposed on the pieces (cars side by side)
 };
 constexpr double kGapFraction = 0.25;
+constexpr double kHalfPi = 1.57079632679489661923;
 
 /// Splits the points of a merged blob along the unit direction (dir_x, dir_z) into pieces of
 /// about `prior_m`, cutting at the emptiest place near each even cut (touching parked cars).
+/// With `from_near_end`, the cuts are walked from the end nearer the camera instead, each at
+/// the emptiest place about `prior_m` beyond the previous one: the far end of a long row is
+/// seen sparsely, so its extent (and an even division of it) is unreliable.
 Split split_along(const std::vector<Eigen::Vector3f>& pts, const Indices& idx, double dir_x,
-                  double dir_z, double extent_m, double prior_m) {
+                  double dir_z, double extent_m, double prior_m, bool from_near_end = false) {
     const int pieces = std::max(2, static_cast<int>(std::lround(extent_m / prior_m)));
     std::vector<double> along(idx.size());
     double lo = 1e300, hi = -1e300;
@@ -127,16 +132,27 @@ Split split_along(const std::vector<Eigen::Vector3f>& pts, const Indices& idx, d
     Split split;
     split.at_gaps = true;
     std::vector<double> cuts;
-    const double piece = (hi - lo) / pieces;
-    for (int k = 1; k < pieces; ++k) {
-        const int centre = static_cast<int>(k * piece / bin);
-        const int reach = static_cast<int>(0.25 * prior_m / bin);
-        int best = centre;
+    const int reach = static_cast<int>(0.25 * prior_m / bin);
+    const auto emptiest = [&](int centre) {
+        int best = std::clamp(centre, 0, bins - 1);
         for (int b = std::max(0, centre - reach); b <= std::min(bins - 1, centre + reach); ++b) {
             if (hist[static_cast<std::size_t>(b)] < hist[static_cast<std::size_t>(best)]) best = b;
         }
+        return best;
+    };
+    const int step = static_cast<int>(std::lround(prior_m / bin));
+    const auto add_cut = [&](int best) {
         cuts.push_back(lo + (best + 0.5) * bin);
         if (hist[static_cast<std::size_t>(best)] > gap_count) split.at_gaps = false;
+    };
+    if (from_near_end && std::abs(hi) < std::abs(lo)) {
+        for (int b = emptiest(bins - 1 - step); b >= step / 2; b = emptiest(b - step)) add_cut(b);
+    } else if (from_near_end) {
+        for (int b = emptiest(step); b < bins - step / 2; b = emptiest(b + step)) add_cut(b);
+    }
+    const double piece = (hi - lo) / pieces;
+    for (int k = 1; k < pieces && !from_near_end; ++k) {
+        add_cut(emptiest(static_cast<int>(k * piece / bin)));
     }
     std::sort(cuts.begin(), cuts.end());
     split.parts.resize(cuts.size() + 1);
@@ -148,12 +164,79 @@ Split split_along(const std::vector<Eigen::Vector3f>& pts, const Indices& idx, d
     return split;
 }
 
+/// Value at fraction q (0..1) of the values (reordered).
+double quantile_of(std::vector<double>& values, double q) {
+    const auto k = static_cast<std::ptrdiff_t>(q * static_cast<double>(values.size() - 1) + 0.5);
+    std::nth_element(values.begin(), values.begin() + k, values.end());
+    return values[static_cast<std::size_t>(k)];
+}
+
+/// Whether a long blob is a row of things side by side seen front-on (or from behind) rather
+/// than one thing seen side-on: its length along the box heading spans at least two prior
+/// widths, and across the heading, from the camera's side, its top stays below
+/// low_fraction * its highest top for at least low_extent_m (the bonnets in front of the
+/// windscreens). A thing seen side-on shows its roof line over its whole visible width.
+bool front_on_row(const std::vector<Eigen::Vector3f>& pts, const Indices& idx,
+                  const OrientedBox& box, const ClassSettings& s, const GroundPlane& ground,
+                  const ExtractOptions& options) {
+    if (idx.size() < 20) return false;
+    const double c = std::cos(box.theta), sn = std::sin(box.theta);
+    std::vector<double> along, across;
+    along.reserve(idx.size());
+    across.reserve(idx.size());
+    for (std::size_t i : idx) {
+        along.push_back(double{pts[i].x()} * c - double{pts[i].z()} * sn);
+        across.push_back(double{pts[i].x()} * sn + double{pts[i].z()} * c);
+    }
+    const double length = quantile_of(along, 0.98) - quantile_of(along, 0.02);
+    if (length < 2.0 * s.prior_W_m) return false;
+    std::vector<double> sorted = across;
+    const double lo = quantile_of(sorted, 0.02), hi = quantile_of(sorted, 0.98);
+    // Top (95 % height) per 0.1 m bin across, walked from the end nearer the camera.
+    constexpr double kBin = 0.1;
+    const int bins = static_cast<int>((hi - lo) / kBin) + 1;
+    if (bins < 3) return false;
+    std::vector<std::vector<double>> heights(static_cast<std::size_t>(bins));
+    for (std::size_t k = 0; k < idx.size(); ++k) {
+        const int b = static_cast<int>((across[k] - lo) / kBin);
+        if (b < 0 || b >= bins) continue;
+        heights[static_cast<std::size_t>(b)].push_back(ground.height(pts[idx[k]].cast<double>()));
+    }
+    constexpr std::size_t kMinBinPoints = 5;
+    std::vector<double> top(static_cast<std::size_t>(bins), -1.0);
+    double highest = 0.0;
+    for (int b = 0; b < bins; ++b) {
+        auto& h = heights[static_cast<std::size_t>(b)];
+        if (h.size() < kMinBinPoints) continue;
+        top[static_cast<std::size_t>(b)] = quantile_of(h, 0.95);
+        highest = std::max(highest, top[static_cast<std::size_t>(b)]);
+    }
+    if (highest <= 0.0) return false;
+    const bool near_is_lo = std::abs(lo) <= std::abs(hi);
+    double low_extent = 0.0;
+    for (int k = 0; k < bins; ++k) {
+        const double t = top[static_cast<std::size_t>(near_is_lo ? k : bins - 1 - k)];
+        if (t < 0.0) continue;
+        if (t >= options.row_low_fraction * highest) break;
+        low_extent = (k + 1) * kBin;
+    }
+    return low_extent >= options.row_low_extent_m;
+}
+
 /// Pieces of a thing whose box is much longer or wider than its prior (a parked row, or
 /// cars side by side merged by the semantic image); {idx} when it fits the prior.
 Split split_oversized(const std::vector<Eigen::Vector3f>& pts, const Indices& idx,
-                      const OrientedBox& box, const ClassSettings& s) {
+                      const OrientedBox& box, const ClassSettings& s,
+                      const std::optional<GroundPlane>& ground, const ExtractOptions& options) {
     if (!s.has_prior()) return {{idx}};
     const double c = std::cos(box.theta), sn = std::sin(box.theta);
+    if (ground && options.row_low_fraction > 0.0 &&
+        front_on_row(pts, idx, box, s, *ground, options)) {
+        // Side by side: cut along the box's length at the row's pitch; each piece heads across.
+        Split split = split_along(pts, idx, c, -sn, box.L_m, s.prior_W_m + options.row_gap_m, true);
+        split.yaw_rad = normalize_angle(box.theta + kHalfPi);
+        return split;
+    }
     if (box.L_m > s.split_factor * s.prior_L_m) {
         return split_along(pts, idx, c, -sn, box.L_m, s.prior_L_m);
     }
@@ -364,19 +447,21 @@ std::vector<scene_schema::Entity> instances_of_class(const ClassInfo& info,
         if (members.size() < static_cast<std::size_t>(s.min_points)) continue;
         if (s.thing) members = drop_outliers(pts, members, s, ground, options.outlier_margin_m);
         // Fit, split oversized blobs (at most two levels: rows, then side by side), refit.
-        // Work items: points, split depth, shadow group.
-        std::vector<std::tuple<Indices, int, std::size_t>> work = {{members, 0, cluster}};
+        // Work items: points, split depth, shadow group, imposed heading.
+        std::vector<std::tuple<Indices, int, std::size_t, std::optional<double>>> work = {
+            {members, 0, cluster, std::nullopt}};
         while (!work.empty()) {
-            auto [part, depth, group] = std::move(work.back());
+            auto [part, depth, group, yaw] = std::move(work.back());
             work.pop_back();
             if (part.size() < static_cast<std::size_t>(s.min_points)) continue;
+            fit.yaw_rad = yaw;
             const OrientedBox box = fit_upright_box(gather(pts, part), ground, fit);
-            if (s.thing && depth < 2) {
-                Split split = split_oversized(pts, part, box, s);
+            if (s.thing && depth < 2 && !yaw) {
+                Split split = split_oversized(pts, part, box, s, ground, options);
                 if (split.parts.size() > 1) {
                     for (auto& piece : split.parts) {
                         work.emplace_back(std::move(piece), depth + 1,
-                                          split.at_gaps ? group : next_group++);
+                                          split.at_gaps ? group : next_group++, split.yaw_rad);
                     }
                     continue;
                 }
@@ -435,6 +520,11 @@ void ExtractOptions::validate() const {
     if (!(min_height_fraction >= 0.0 && min_height_fraction < 1.0)) {
         throw std::invalid_argument("min_height_fraction: must be in [0, 1)");
     }
+    if (!(row_low_fraction >= 0.0 && row_low_fraction < 1.0)) {
+        throw std::invalid_argument("row_low_fraction: must be in [0, 1)");
+    }
+    if (!(row_low_extent_m > 0.0)) throw std::invalid_argument("row_low_extent_m: must be > 0");
+    if (!(row_gap_m >= 0.0)) throw std::invalid_argument("row_gap_m: must be >= 0");
 }
 
 scene_schema::EntityDocument extract_entities(const LabeledCloud& cloud, const Palette& palette,

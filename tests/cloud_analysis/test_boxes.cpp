@@ -145,3 +145,23 @@ TEST_CASE("angles are wrapped to [-pi, pi]", "[boxes]") {
     CHECK(normalize_angle(-3.0 * kPi / 2.0) == Approx(kPi / 2.0));
     CHECK(normalize_angle(0.5) == Approx(0.5));
 }
+
+TEST_CASE("an imposed heading replaces the L-shape search and is validated", "[boxes]") {
+    // A 4 m x 1 m strip of points along z: the L-shape search heads along z, the imposed yaw
+    // (heading along x) makes the 4 m side the width.
+    std::vector<Eigen::Vector3f> pts;
+    for (float z = 10.0f; z <= 14.0f; z += 0.05f) {
+        for (float x = 2.0f; x <= 3.0f; x += 0.05f) pts.emplace_back(x, 1.0f, z);
+    }
+    BoxFitOptions options;
+    options.trim_fraction = 0.0;  // extents are the full point spans
+    const OrientedBox searched = fit_upright_box(pts, std::nullopt, options);
+    CHECK(searched.theta == Approx(-kPi / 2.0).margin(0.02));
+    options.yaw_rad = 0.0;
+    const OrientedBox imposed = fit_upright_box(pts, std::nullopt, options);
+    CHECK(std::abs(std::sin(imposed.theta)) < 0.02);
+    CHECK(imposed.L_m == Approx(1.0).margin(0.1));
+    CHECK(imposed.W_m == Approx(4.0).margin(0.1));
+    options.yaw_rad = std::nan("");
+    CHECK_THROWS_WITH(options.validate(), Catch::Contains("yaw_rad"));
+}

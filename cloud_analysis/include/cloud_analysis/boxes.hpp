@@ -25,13 +25,15 @@ struct OrientedBox {
 
 /// Settings of fit_upright_box.
 struct BoxFitOptions {
-    double prior_L_m = 0.0;       ///< class length prior, metres (0 = no completion)
-    double prior_W_m = 0.0;       ///< class width prior, metres (0 = no completion)
-    double prior_H_m = 0.0;       ///< class height prior, metres (0 = observed height)
-    double angle_step_deg = 1.0;  ///< L-shape search step, degrees, in (0, 10]
-    double min_extent_m = 0.05;   ///< smallest box side, metres, > 0
-    double trim_fraction = 0.02;  ///< fraction of points trimmed at each end per axis, [0, 0.2)
-    bool rest_on_ground = true;   ///< bottom on the plane (else the lowest point)
+    double prior_L_m = 0.0;         ///< class length prior, metres (0 = no completion)
+    double prior_W_m = 0.0;         ///< class width prior, metres (0 = no completion)
+    double prior_H_m = 0.0;         ///< class height prior, metres (0 = observed height)
+    double angle_step_deg = 1.0;    ///< L-shape search step, degrees, in (0, 10]
+    double min_extent_m = 0.05;     ///< smallest box side, metres, > 0
+    double trim_fraction = 0.02;    ///< fraction of points trimmed at each end per axis, [0, 0.2)
+    bool rest_on_ground = true;     ///< bottom on the plane (else the lowest point)
+    std::optional<double> yaw_rad;  ///< heading imposed instead of the L-shape search, radians
+                                    ///< (cars cut from a row seen front-on), finite
     /// Throws std::invalid_argument naming the bad field.
     void validate() const;
 };

@@ -33,6 +33,13 @@ struct ExtractOptions {
     int shadow_radius_px = 10;         ///< neighbourhood of that test, pixels, >= 0
     double min_height_fraction = 0.3;  ///< things lower than this * prior_H_m above the ground
                                        ///< are mislabelled ground, [0, 1)
+    double row_low_fraction = 0.7;     ///< a thing blob at least two prior widths long whose top
+                                       ///< stays below this * its highest top for row_low_extent_m
+                                       ///< across it from the camera's side (bonnets) is a row side
+                                       ///< by side seen front-on, [0, 1), 0 = off
+    double row_low_extent_m = 0.6;     ///< that low extent, metres, > 0
+    double row_gap_m = 0.6;            ///< gap between things side by side (row pitch = prior W +
+                                       ///< this), metres, >= 0
     /// Throws std::invalid_argument naming the bad field.
     void validate() const;
 };
