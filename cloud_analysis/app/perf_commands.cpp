@@ -307,57 +307,64 @@ int run_bench(const BenchArgs& a) {
         throw std::runtime_error("cannot write output: no such folder (" + a.work_dir.string() +
                                  ", --work-dir)");
     }
-    // The floor: the OpenCV matcher call alone, on the views compute() prepares.
+    // The floor: the OpenCV matcher call alone, on the views compute() prepares. It is timed
+    // interleaved with the rows (matcher, row 1, row 2, matcher, ...) so that all of them see
+    // the same load of the machine over time.
     const LoadedInputs in = load_inputs(a.analyse.paths, a.analyse.options);
     DisparityMatcher matcher(a.analyse.options.disparity);
     std::vector<double> matcher_ms;
-    for (int i = 0; i < a.warmup + a.runs; ++i) {
-        const double ms = matcher.time_matcher_only_ms(in.left, in.right);
-        if (i >= a.warmup) matcher_ms.push_back(ms);
-    }
-    const double floor_ms = median(matcher_ms);
 
     struct Row {
         std::string name;
-        bool clouds;
-    };
-    nlohmann::json rows = nlohmann::json::array();
-    for (const Row& row : {Row{"entities", false}, Row{"entities + xyz/pcd/ply", true}}) {
-        AnalyseArgs run = a.analyse;
-        run.timings = false;
-        run.entities = (a.work_dir / "bench.json").string();
-        if (row.clouds) {
-            run.xyz = a.work_dir / "bench.xyz";
-            run.pcd = a.work_dir / "bench.pcd";
-            run.ply = a.work_dir / "bench.ply";
-        }
+        AnalyseArgs args;
         std::map<std::string, std::vector<double>> stages;
         std::vector<std::string> order;
         std::vector<double> totals;
         std::size_t points = 0;
-        for (int i = 0; i < a.warmup + a.runs; ++i) {
+    };
+    std::vector<Row> rows(2);
+    rows[0].name = "entities";
+    rows[1].name = "entities + xyz/pcd/ply";
+    for (Row& row : rows) {
+        row.args = a.analyse;
+        row.args.timings = false;
+        row.args.entities = (a.work_dir / "bench.json").string();
+    }
+    rows[1].args.xyz = a.work_dir / "bench.xyz";
+    rows[1].args.pcd = a.work_dir / "bench.pcd";
+    rows[1].args.ply = a.work_dir / "bench.ply";
+
+    for (int i = 0; i < a.warmup + a.runs; ++i) {
+        const bool timed = i >= a.warmup;
+        const double ms = matcher.time_matcher_only_ms(in.left, in.right);
+        if (timed) matcher_ms.push_back(ms);
+        for (Row& row : rows) {
             const auto t0 = Clock::now();
-            const RunReport report = analyse_and_write(run);
+            const RunReport report = analyse_and_write(row.args);
             const double total = ms_between(t0, Clock::now());
-            points = report.points;
-            if (i < a.warmup) continue;
-            totals.push_back(total);
+            row.points = report.points;
+            if (!timed) continue;
+            row.totals.push_back(total);
             for (const auto& s : report.timings) {
-                if (stages.count(s.stage) == 0) order.push_back(s.stage);
-                stages[s.stage].push_back(s.ms);
+                if (row.stages.count(s.stage) == 0) row.order.push_back(s.stage);
+                row.stages[s.stage].push_back(s.ms);
             }
         }
+    }
+    const double floor_ms = median(matcher_ms);
+    nlohmann::json rows_json = nlohmann::json::array();
+    for (Row& row : rows) {
         nlohmann::json stage_json = nlohmann::json::array();
-        for (const auto& name : order) {
-            stage_json.push_back({{"stage", name}, {"ms", median(stages[name])}});
+        for (const auto& name : row.order) {
+            stage_json.push_back({{"stage", name}, {"ms", median(row.stages[name])}});
         }
-        const double total_ms = median(totals);
-        rows.push_back({{"row", row.name},
-                        {"stages", stage_json},
-                        {"total_ms", total_ms},
-                        {"fps", 1000.0 / total_ms},
-                        {"ratio_to_matcher", total_ms / floor_ms},
-                        {"points", points}});
+        const double total_ms = median(row.totals);
+        rows_json.push_back({{"row", row.name},
+                             {"stages", stage_json},
+                             {"total_ms", total_ms},
+                             {"fps", 1000.0 / total_ms},
+                             {"ratio_to_matcher", total_ms / floor_ms},
+                             {"points", row.points}});
     }
     const auto& d = a.analyse.options.disparity;
     const nlohmann::json result = {{"frame", in.paths.frame_id},
@@ -371,7 +378,7 @@ int run_bench(const BenchArgs& a) {
                                    {"runs", a.runs},
                                    {"warmup", a.warmup},
                                    {"matcher_ms", floor_ms},
-                                   {"rows", rows},
+                                   {"rows", rows_json},
                                    {"peak_rss_mb", peak_rss_mb()}};
     write_output({a.json, result.dump(1) + "\n", "--json"});
     return 0;
