@@ -85,7 +85,7 @@ double yaw_of(Eigen::Vector2d heading_xz) {
 /// Interval [lo, hi] grown to `size` away from the camera (at coordinate 0 on the axis).
 void complete_away(double& lo, double& hi, double size) {
     if (hi - lo >= size) return;
-    if (std::abs(lo) <= std::abs(hi)) {
+    if (lo + hi >= 0.0) {
         hi = lo + size;
     } else {
         lo = hi - size;

@@ -146,9 +146,9 @@ Split split_along(const std::vector<Eigen::Vector3f>& pts, const Indices& idx, d
         if (hist[static_cast<std::size_t>(best)] > gap_count) split.at_gaps = false;
     };
     if (from_near_end && std::abs(hi) < std::abs(lo)) {
-        for (int b = emptiest(bins - 1 - step); b >= step / 2; b = emptiest(b - step)) add_cut(b);
+        for (int b = emptiest(bins - 1 - step); b >= step / 4; b = emptiest(b - step)) add_cut(b);
     } else if (from_near_end) {
-        for (int b = emptiest(step); b < bins - step / 2; b = emptiest(b + step)) add_cut(b);
+        for (int b = emptiest(step); b < bins - step / 4; b = emptiest(b + step)) add_cut(b);
     }
     const double piece = (hi - lo) / pieces;
     for (int k = 1; k < pieces && !from_near_end; ++k) {
@@ -235,9 +235,14 @@ Split split_oversized(const std::vector<Eigen::Vector3f>& pts, const Indices& id
         // Side by side: cut along the box's length at the row's pitch; each piece heads across.
         Split split = split_along(pts, idx, c, -sn, box.L_m, s.prior_W_m + options.row_gap_m, true);
         split.yaw_rad = normalize_angle(box.theta + kHalfPi);
+        split.at_gaps = true;  // a row of distinct things, whatever the density at the cuts
         return split;
     }
     if (box.L_m > s.split_factor * s.prior_L_m) {
+        // Parked end to end: walk the gaps from the near end when there are gaps (the far end
+        // is seen sparsely, so its extent is unreliable); touching things are cut evenly.
+        Split walk = split_along(pts, idx, c, -sn, box.L_m, s.prior_L_m + options.row_gap_m, true);
+        if (walk.at_gaps && walk.parts.size() > 1) return walk;
         return split_along(pts, idx, c, -sn, box.L_m, s.prior_L_m);
     }
     // Across the heading only for a clear double width: smear and oblique views widen single cars.

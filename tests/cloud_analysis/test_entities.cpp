@@ -356,3 +356,30 @@ TEST_CASE("a car seen side-on, its roof right behind the door line, is not cut a
     o.row_low_extent_m = 0.1;  // a low band this narrow would count as bonnets
     CHECK(count_class(extract_entities(cloud, test_palette(), StereoCamera{}, o), "car") == 2);
 }
+
+TEST_CASE("a parked row whose far car is half hidden is cut at its gaps walked from the near end",
+          "[entities][split]") {
+    LabeledCloud cloud;
+    for (float x = -6.0f; x <= 6.0f; x += 0.25f) {
+        for (float z = 3.0f; z <= 40.0f; z += 0.25f) add_point(cloud, {x, 1.65f, z}, 0);
+    }
+    // Sides of three cars 0.45 m apart (one blob); only the first 2 m of the third are seen.
+    // An even division of the seen 11.4 m would cut the second car short.
+    const float starts[] = {8.0f, 12.65f, 17.3f};
+    const float ends[] = {12.2f, 16.85f, 19.3f};
+    for (int k = 0; k < 3; ++k) {
+        for (float y = 0.15f; y <= 1.65f; y += 0.05f) {
+            for (float z = starts[k]; z <= ends[k]; z += 0.05f) add_point(cloud, {-1.1f, y, z}, 2);
+        }
+    }
+    project_pixels(cloud);
+    const auto doc = extract_entities(cloud, test_palette(), StereoCamera{},
+                                      options_with_bundled_config("instances"));
+    std::vector<double> centres;
+    for (const auto& e : doc.entities) {
+        if (e.class_name == "car") centres.push_back(e.z);
+    }
+    std::sort(centres.begin(), centres.end());
+    REQUIRE(centres.size() == 3);
+    for (int k = 0; k < 3; ++k) CHECK(centres[k] == Approx(starts[k] + 2.1).margin(0.3));
+}
