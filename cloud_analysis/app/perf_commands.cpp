@@ -116,7 +116,8 @@ Finished finish_frame(FinishJob job) {
 std::vector<std::string> read_frame_list(const std::filesystem::path& path) {
     std::ifstream in(path);
     if (!in)
-        throw std::runtime_error("cannot read frame list: no such file (" + path.string() + ")");
+        throw std::runtime_error("cannot read frame list: no such file (" + path.string() +
+                                 ", --list)");
     std::vector<std::string> frames;
     std::string line;
     while (std::getline(in, line)) {
@@ -165,6 +166,13 @@ int run_batch(const BatchArgs& a) {
     if (!std::filesystem::is_directory(a.out_dir)) {
         throw std::runtime_error("cannot write output: no such folder (" + a.out_dir.string() +
                                  ", --out-dir)");
+    }
+    if (!a.report.empty() && a.report != "-") {
+        const std::filesystem::path folder = a.report.parent_path();
+        if (!folder.empty() && !std::filesystem::is_directory(folder)) {
+            throw std::runtime_error("cannot write output: no such folder (" + folder.string() +
+                                     ", --report)");
+        }
     }
     if (!std::filesystem::is_directory(a.kitti_root)) {
         throw std::runtime_error("cannot read frames: no such folder (" + a.kitti_root.string() +
