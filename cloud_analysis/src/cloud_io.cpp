@@ -3,6 +3,8 @@
 #include <charconv>
 #include <cmath>
 #include <cstring>
+#include <future>
+#include <memory>
 #include <stdexcept>
 
 namespace cloud_analysis {
@@ -50,8 +52,12 @@ char* put_unsigned(char* p, std::uint64_t v) {
 /// Writes v with 3 decimals (millimetres) at p; returns the end. Fixed point: no locale, no
 /// exponent. Non-finite values never reach here (reprojection drops them).
 char* put_fixed3(char* p, float value) {
+    // A float times 1000 is exact in a double, so ties are exact: round them to even as
+    // printf("%.3f") does.
     const double scaled = static_cast<double>(value) * 1000.0;
-    std::int64_t milli = static_cast<std::int64_t>(scaled < 0.0 ? scaled - 0.5 : scaled + 0.5);
+    auto milli = static_cast<std::int64_t>(scaled);  // toward zero; the rest is exact
+    const double rest = std::abs(scaled - static_cast<double>(milli));
+    if (rest > 0.5 || (rest == 0.5 && (milli & 1) != 0)) milli += scaled < 0.0 ? -1 : 1;
     if (milli < 0) {
         *p++ = '-';
         milli = -milli;
@@ -90,15 +96,18 @@ CloudFormat cloud_format_from_path(const std::filesystem::path& path) {
     throw std::invalid_argument("unknown cloud extension '" + ext + "' (want .xyz, .pcd, .ply)");
 }
 
-std::string format_xyz(const LabeledCloud& cloud, const Palette& palette) {
-    static constexpr char kHeader[] = "//X Y Z R G B Class Intensity\n";
-    std::string out;
+namespace {
+
+/// The .xyz lines of points [begin, end) (no header).
+std::string xyz_lines(const LabeledCloud& cloud, const Palette& palette, std::size_t begin,
+                      std::size_t end) {
     // Worst case per line: 3 coordinates of 24 chars, 3 colours, class, intensity, separators.
-    out.resize(sizeof(kHeader) + cloud.size() * 120);
-    char* p = out.data();
-    std::memcpy(p, kHeader, sizeof(kHeader) - 1);
-    p += sizeof(kHeader) - 1;
-    for (std::size_t i = 0; i < cloud.size(); ++i) {
+    // Left uninitialised (unlike std::string::resize): the pages of the unused worst-case tail
+    // are never touched, so a cloud costs its real size (~45 bytes a point), not 120.
+    const std::unique_ptr<char[]> buffer(new char[(end - begin) * 120 + 1]);
+    char* const start = buffer.get();
+    char* p = start;
+    for (std::size_t i = begin; i < end; ++i) {
         const auto& xyz = cloud.xyz_m[i];
         const auto& c = cloud.colour[i];
         p = put_fixed3(p, xyz.x());
@@ -118,7 +127,26 @@ std::string format_xyz(const LabeledCloud& cloud, const Palette& palette) {
             p, static_cast<std::uint8_t>((299 * c[0] + 587 * c[1] + 114 * c[2] + 500) / 1000));
         *p++ = '\n';
     }
-    out.resize(static_cast<std::size_t>(p - out.data()));
+    return std::string(start, p);
+}
+
+}  // namespace
+
+std::string format_xyz(const LabeledCloud& cloud, const Palette& palette) {
+    static constexpr char kHeader[] = "//X Y Z R G B Class Intensity\n";
+    // ASCII formatting is the costliest writer: the second half of a large cloud is formatted
+    // on a helper thread (2 cores), then the halves are joined.
+    constexpr std::size_t kParallelFrom = 100000;
+    const std::size_t n = cloud.size();
+    std::string out(kHeader);
+    if (n < kParallelFrom) return out + xyz_lines(cloud, palette, 0, n);
+    auto second =
+        std::async(std::launch::async, [&] { return xyz_lines(cloud, palette, n / 2, n); });
+    const std::string first = xyz_lines(cloud, palette, 0, n / 2);
+    const std::string last = second.get();
+    out.reserve(out.size() + first.size() + last.size());
+    out += first;
+    out += last;
     return out;
 }
 
