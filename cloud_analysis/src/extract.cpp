@@ -458,7 +458,12 @@ std::vector<scene_schema::Entity> instances_of_class(const ClassInfo& info,
         while (!work.empty()) {
             auto [part, depth, group, yaw] = std::move(work.back());
             work.pop_back();
-            if (part.size() < static_cast<std::size_t>(s.min_points)) continue;
+            // A piece of a row (cut at clear gaps or at a front-on row's pitch) is a thing
+            // because the row is: half the minimum suffices for its sparse far end.
+            const bool row_piece = depth > 0 && group < clusters.size();
+            const auto min_points =
+                static_cast<std::size_t>(row_piece ? s.min_points / 2 : s.min_points);
+            if (part.size() < std::max<std::size_t>(min_points, 1)) continue;
             fit.yaw_rad = yaw;
             const OrientedBox box = fit_upright_box(gather(pts, part), ground, fit);
             if (s.thing && depth < 2 && !yaw) {

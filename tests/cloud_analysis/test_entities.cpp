@@ -383,3 +383,31 @@ TEST_CASE("a parked row whose far car is half hidden is cut at its gaps walked f
     REQUIRE(centres.size() == 3);
     for (int k = 0; k < 3; ++k) CHECK(centres[k] == Approx(starts[k] + 2.1).margin(0.3));
 }
+
+TEST_CASE("the sparse far car of a parked row needs only half the class's minimum of points",
+          "[entities][split]") {
+    LabeledCloud cloud;
+    for (float x = -6.0f; x <= 6.0f; x += 0.25f) {
+        for (float z = 3.0f; z <= 40.0f; z += 0.25f) add_point(cloud, {x, 1.65f, z}, 0);
+    }
+    // Two cars seen densely, 0.45 m apart, then 66 points (< 100, the car minimum) of a third.
+    for (float y = 0.15f; y <= 1.65f; y += 0.05f) {
+        for (float z = 8.0f; z <= 12.2f; z += 0.05f) add_point(cloud, {-1.1f, y, z}, 2);
+        for (float z = 12.65f; z <= 16.85f; z += 0.05f) add_point(cloud, {-1.1f, y, z}, 2);
+    }
+    for (int i = 0; i < 6; ++i) {
+        for (int k = 0; k < 11; ++k) {
+            add_point(cloud, {-1.1f, 0.3f + 0.25f * static_cast<float>(i), 17.3f + 0.2f * k}, 2);
+        }
+    }
+    project_pixels(cloud);
+    const auto doc = extract_entities(cloud, test_palette(), StereoCamera{},
+                                      options_with_bundled_config("instances"));
+    std::vector<double> centres;
+    for (const auto& e : doc.entities) {
+        if (e.class_name == "car") centres.push_back(e.z);
+    }
+    std::sort(centres.begin(), centres.end());
+    REQUIRE(centres.size() == 3);
+    CHECK(centres[2] == Approx(17.3 + 2.1).margin(0.3));
+}
