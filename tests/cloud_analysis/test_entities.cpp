@@ -169,6 +169,15 @@ TEST_CASE("extract options name the bad field", "[entities]") {
     o.method = "instances";
     o.max_range_m = 0.0;
     CHECK_THROWS_WITH(o.validate(), Catch::Contains("max_range_m"));
+    o.max_range_m = 60.0;
+    o.row_low_fraction = 1.0;
+    CHECK_THROWS_WITH(o.validate(), Catch::Contains("row_low_fraction"));
+    o.row_low_fraction = 0.7;
+    o.row_low_extent_m = 0.0;
+    CHECK_THROWS_WITH(o.validate(), Catch::Contains("row_low_extent_m"));
+    o.row_low_extent_m = 0.6;
+    o.row_gap_m = -0.1;
+    CHECK_THROWS_WITH(o.validate(), Catch::Contains("row_gap_m"));
 }
 
 TEST_CASE("image-space clustering also separates two cars and keeps each whole", "[entities]") {

@@ -38,8 +38,8 @@ struct ExtractOptions {
                                        ///< across it from the camera's side (bonnets) is a row side
                                        ///< by side seen front-on, [0, 1), 0 = off
     double row_low_extent_m = 0.6;     ///< that low extent, metres, > 0
-    double row_gap_m = 0.6;            ///< gap between things side by side (row pitch = prior W +
-                                       ///< this), metres, >= 0
+    double row_gap_m = 0.6;            ///< gap between things in a row: pitch = prior W + this
+                                       ///< side by side, prior L + this end to end, metres, >= 0
     /// Throws std::invalid_argument naming the bad field.
     void validate() const;
 };
