@@ -5,36 +5,11 @@
 #include <map>
 #include <stdexcept>
 
-#include <opencv2/core.hpp>
-#include <opencv2/imgcodecs.hpp>
-
 #include "cloud_analysis/io.hpp"
 #include "cloud_analysis/semantic.hpp"
 
 namespace cloud_analysis {
 namespace {
-
-cv::Mat read_u16(const std::filesystem::path& path) {
-    std::error_code ec;
-    if (!std::filesystem::is_regular_file(path, ec)) {
-        throw std::runtime_error("cannot read image: no such file (" + path.string() + ")");
-    }
-    cv::Mat m;
-    try {
-        m = cv::imread(path.string(), cv::IMREAD_UNCHANGED);
-    } catch (const cv::Exception& e) {
-        throw std::runtime_error("cannot decode image: " + std::string(e.what()) + " (" +
-                                 path.string() + ")");
-    }
-    if (m.empty()) {
-        throw std::runtime_error("cannot decode image: unreadable or corrupt (" + path.string() +
-                                 ")");
-    }
-    if (m.type() != CV_16UC1) {
-        throw std::runtime_error("not a 16-bit single-channel PNG (" + path.string() + ")");
-    }
-    return m;
-}
 
 /// Pixel (u, v) with disparity d to the camera frame (rectified pinhole, Q of Hartley &
 /// Zisserman / OpenCV stereoRectify).
@@ -183,25 +158,26 @@ std::vector<GtCar> load_gt_cars(const std::filesystem::path& instance_png,
                                 const std::filesystem::path& disparity_png,
                                 const StereoCamera& camera, int car_label_id) {
     check_camera(camera);
-    const cv::Mat instance = read_u16(instance_png);
-    const cv::Mat disparity = read_u16(disparity_png);
-    if (instance.size() != disparity.size()) {
-        throw std::runtime_error("instance image is " + std::to_string(instance.cols) + "x" +
-                                 std::to_string(instance.rows) + " but the GT disparity is " +
-                                 std::to_string(disparity.cols) + "x" +
-                                 std::to_string(disparity.rows) + " (" + instance_png.string() +
-                                 ")");
+    const ImageU16 instance = read_png_u16(instance_png);
+    const ImageU16 disparity = read_png_u16(disparity_png);
+    if (instance.width_px != disparity.width_px || instance.height_px != disparity.height_px) {
+        throw std::runtime_error("instance image is " + std::to_string(instance.width_px) + "x" +
+                                 std::to_string(instance.height_px) + " but the GT disparity is " +
+                                 std::to_string(disparity.width_px) + "x" +
+                                 std::to_string(disparity.height_px) + " (" +
+                                 instance_png.string() + ")");
     }
     std::map<int, GtCar> by_instance;
-    for (int v = 0; v < instance.rows; ++v) {
-        for (int u = 0; u < instance.cols; ++u) {
-            const int value = instance.at<std::uint16_t>(v, u);
+    for (int v = 0; v < instance.height_px; ++v) {
+        for (int u = 0; u < instance.width_px; ++u) {
+            const std::size_t i = static_cast<std::size_t>(v) * instance.width_px + u;
+            const int value = instance.values[i];
             if ((value >> 8) != car_label_id) continue;
             GtCar& car = by_instance[value & 0xff];
             car.instance = value & 0xff;
-            car.image_width_px = instance.cols;
-            car.image_pixels.push_back(static_cast<std::uint32_t>(v * instance.cols + u));
-            const int d16 = disparity.at<std::uint16_t>(v, u);
+            car.image_width_px = instance.width_px;
+            car.image_pixels.push_back(static_cast<std::uint32_t>(v * instance.width_px + u));
+            const int d16 = disparity.values[i];
             if (d16 == 0) continue;
             car.points_m.push_back(reproject_pixel(camera, u, v, d16 / 256.0));
         }

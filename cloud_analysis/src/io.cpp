@@ -79,22 +79,31 @@ std::string encode_png(const ImageU8& image) {
     return encode(bgr);
 }
 
-DisparityMap read_kitti_disparity(const std::filesystem::path& path) {
+ImageU16 read_png_u16(const std::filesystem::path& path) {
     const cv::Mat m = read_raw(path, cv::IMREAD_UNCHANGED);
     if (m.type() != CV_16UC1) {
-        throw std::runtime_error("cannot use disparity: not a 16-bit grey KITTI PNG (" +
-                                 path.string() + ")");
+        throw std::runtime_error("not a 16-bit single-channel PNG (" + path.string() + ")");
     }
-    DisparityMap out;
+    ImageU16 out;
     out.width_px = m.cols;
     out.height_px = m.rows;
-    out.disparity_px.resize(static_cast<std::size_t>(m.cols) * m.rows);
+    out.values.resize(static_cast<std::size_t>(m.cols) * m.rows);
     for (int v = 0; v < m.rows; ++v) {
         const auto* row = m.ptr<std::uint16_t>(v);
-        float* dst = out.disparity_px.data() + static_cast<std::size_t>(v) * m.cols;
-        for (int u = 0; u < m.cols; ++u) {
-            dst[u] = row[u] == 0 ? kNoDisparity : static_cast<float>(row[u]) / 256.0f;
-        }
+        std::copy(row, row + m.cols, out.values.data() + static_cast<std::size_t>(v) * m.cols);
+    }
+    return out;
+}
+
+DisparityMap read_kitti_disparity(const std::filesystem::path& path) {
+    const ImageU16 raw = read_png_u16(path);
+    DisparityMap out;
+    out.width_px = raw.width_px;
+    out.height_px = raw.height_px;
+    out.disparity_px.resize(raw.values.size());
+    for (std::size_t i = 0; i < raw.values.size(); ++i) {
+        out.disparity_px[i] =
+            raw.values[i] == 0 ? kNoDisparity : static_cast<float>(raw.values[i]) / 256.0f;
     }
     return out;
 }

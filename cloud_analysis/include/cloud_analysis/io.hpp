@@ -30,6 +30,13 @@ struct DisparityMap {
     std::size_t valid_count() const;  ///< pixels holding a value
 };
 
+/// Single-channel 16-bit image, row-major (KITTI disparity and instance PNGs).
+struct ImageU16 {
+    int width_px = 0;                   ///< columns
+    int height_px = 0;                  ///< rows
+    std::vector<std::uint16_t> values;  ///< width_px * height_px samples
+};
+
 /// Marker of a pixel without disparity (any value <= 0 is treated as missing).
 inline constexpr float kNoDisparity = -1.0f;
 
@@ -45,6 +52,10 @@ std::string encode_png(const ImageU8& image);
 
 /// Reads a KITTI disparity PNG (uint16, d = v / 256, 0 = no value).
 DisparityMap read_kitti_disparity(const std::filesystem::path& path);
+
+/// Reads a 16-bit single-channel PNG; throws std::runtime_error naming the file when it is
+/// missing, corrupt or of another type.
+ImageU16 read_png_u16(const std::filesystem::path& path);
 
 /// KITTI 16-bit disparity PNG bytes: v = round(d * 256) clamped to 65535, 0 where missing.
 std::string encode_kitti_disparity_png(const DisparityMap& disparity);
