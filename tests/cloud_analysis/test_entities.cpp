@@ -274,7 +274,7 @@ TEST_CASE("a parked row cut at clear gaps keeps every car although each hides th
     }
     // Three cars parked along z, 0.5 m apart (one blob for the clustering), right sides seen:
     // in the image each farther car lies right beside the nearer one, as a shadow would.
-    const float starts[] = {8.0f, 12.7f, 17.4f};
+    const double starts[] = {8.0, 12.7, 17.4};
     for (float start : starts) {
         for (float y = 0.15f; y <= 1.65f; y += 0.05f) {
             for (float z = start; z <= start + 4.2f; z += 0.05f) add_point(cloud, {-1.1f, y, z}, 2);
@@ -374,7 +374,7 @@ TEST_CASE("a parked row whose far car is half hidden is cut at its gaps walked f
     }
     // Sides of three cars 0.45 m apart (one blob); only the first 2 m of the third are seen.
     // An even division of the seen 11.4 m would cut the second car short.
-    const float starts[] = {8.0f, 12.65f, 17.3f};
+    const double starts[] = {8.0, 12.65, 17.3};
     const float ends[] = {12.2f, 16.85f, 19.3f};
     for (int k = 0; k < 3; ++k) {
         for (float y = 0.15f; y <= 1.65f; y += 0.05f) {
