@@ -31,24 +31,13 @@ class LoadError : public std::runtime_error {
     using std::runtime_error::runtime_error;
 };
 
-/// Reads a whole file in one call, sized by seeking to its end.
-bool slurp(const std::filesystem::path& path, std::vector<unsigned char>& out) {
-    std::ifstream in(path, std::ios::binary | std::ios::ate);
-    if (!in) return false;
-    const std::streamoff size = in.tellg();
-    if (size < 0) return false;
-    out.resize(static_cast<std::size_t>(size));
-    in.seekg(0);
-    return size == 0 || static_cast<bool>(in.read(reinterpret_cast<char*>(out.data()), size));
-}
-
 std::vector<unsigned char> read_bytes(const fs::path& path) {
     std::error_code ec;
     if (!fs::is_regular_file(path, ec)) {
         throw LoadError(fs::exists(path, ec) ? "not a regular file" : "file not found");
     }
     std::vector<unsigned char> bytes;
-    if (!slurp(path, bytes)) {
+    if (!read_file_bytes(path, bytes)) {
         throw LoadError("cannot read the file");
     }
     return bytes;
@@ -208,7 +197,7 @@ bool guard_read(std::vector<unsigned char>* out, std::string* err, const std::st
         if (err != nullptr) *err += "refused: outside the model's folder";
         return false;
     }
-    if (!slurp(path, *out)) {
+    if (!read_file_bytes(path, *out)) {
         if (err != nullptr) *err += "cannot read " + path;
         return false;
     }

@@ -11,17 +11,6 @@
 namespace scene_viewer {
 namespace {
 
-/// Reads a whole file in one call, sized by seeking to its end.
-bool slurp(const std::filesystem::path& path, std::vector<unsigned char>& out) {
-    std::ifstream in(path, std::ios::binary | std::ios::ate);
-    if (!in) return false;
-    const std::streamoff size = in.tellg();
-    if (size < 0) return false;
-    out.resize(static_cast<std::size_t>(size));
-    in.seekg(0);
-    return size == 0 || static_cast<bool>(in.read(reinterpret_cast<char*>(out.data()), size));
-}
-
 void put_u32(std::vector<unsigned char>& out, std::uint32_t v) {
     for (int s = 24; s >= 0; s -= 8) out.push_back(static_cast<unsigned char>(v >> s));
 }
@@ -37,6 +26,16 @@ void put_chunk(std::vector<unsigned char>& out, const char* type, const unsigned
 }
 
 }  // namespace
+
+bool read_file_bytes(const std::filesystem::path& path, std::vector<unsigned char>& out) {
+    std::ifstream in(path, std::ios::binary | std::ios::ate);
+    if (!in) return false;
+    const std::streamoff size = in.tellg();
+    if (size < 0) return false;
+    out.resize(static_cast<std::size_t>(size));
+    in.seekg(0);
+    return size == 0 || static_cast<bool>(in.read(reinterpret_cast<char*>(out.data()), size));
+}
 
 std::vector<unsigned char> encode_png(const ImageRgba8& image, int zlib_level) {
     if (image.width <= 0 || image.height <= 0) {
@@ -121,7 +120,7 @@ ImageRgba8 decode_image_memory(const unsigned char* bytes, std::size_t size,
 
 ImageRgba8 decode_image(const std::filesystem::path& path) {
     std::vector<unsigned char> bytes;
-    if (!slurp(path, bytes)) {
+    if (!read_file_bytes(path, bytes)) {
         throw std::runtime_error(path.string() + ": cannot read image");
     }
     return decode_image_memory(bytes.data(), bytes.size(), path.string());

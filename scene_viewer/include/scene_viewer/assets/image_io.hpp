@@ -13,6 +13,10 @@
 
 namespace scene_viewer {
 
+/// Reads a whole file in one call, sized by seeking to its end; false when it cannot be opened
+/// or read (the caller names the file in its error).
+bool read_file_bytes(const std::filesystem::path& path, std::vector<unsigned char>& out);
+
 /// Encodes an RGBA8 image (rows top to bottom) as PNG bytes; zlib_level 0..9 (1 is fast).
 /// Throws std::invalid_argument for an empty or inconsistent image or a bad level.
 std::vector<unsigned char> encode_png(const ImageRgba8& image, int zlib_level = 6);
