@@ -2,13 +2,92 @@
 
 #include <algorithm>
 #include <cmath>
+#include <cstdint>
+#include <limits>
 #include <stdexcept>
 
-#include <pcl/kdtree/kdtree_flann.h>
-#include <pcl/point_cloud.h>
-#include <pcl/point_types.h>
-
 namespace cloud_analysis {
+namespace {
+
+/// Open-addressing hash map from a 64-bit key to a 32-bit value (linear probing, at most half
+/// full).
+class CellTable {
+  public:
+    explicit CellTable(std::size_t expected) { resize(expected); }
+    /// Value of key, inserting next_value when absent; `inserted` says which.
+    std::uint32_t find_or_insert(std::uint64_t key, std::uint32_t next_value, bool& inserted) {
+        if (2 * (size_ + 1) > keys_.size()) grow();
+        for (std::size_t slot = hash(key) & mask_;; slot = (slot + 1) & mask_) {
+            if (keys_[slot] == key) {
+                inserted = false;
+                return values_[slot];
+            }
+            if (keys_[slot] == kEmpty) {
+                keys_[slot] = key;
+                values_[slot] = next_value;
+                ++size_;
+                inserted = true;
+                return next_value;
+            }
+        }
+    }
+    /// Index of key, or kNone.
+    std::uint32_t find(std::uint64_t key) const {
+        for (std::size_t slot = hash(key) & mask_;; slot = (slot + 1) & mask_) {
+            if (keys_[slot] == key) return values_[slot];
+            if (keys_[slot] == kEmpty) return kNone;
+        }
+    }
+    static constexpr std::uint32_t kNone = std::numeric_limits<std::uint32_t>::max();
+
+  private:
+    void resize(std::size_t expected) {
+        std::size_t slots = 64;
+        while (slots < 2 * expected) slots *= 2;
+        keys_.assign(slots, kEmpty);
+        values_.assign(slots, 0);
+        mask_ = slots - 1;
+        size_ = 0;
+    }
+    void grow() {
+        const std::vector<std::uint64_t> keys = std::move(keys_);
+        const std::vector<std::uint32_t> values = std::move(values_);
+        resize(keys.size());
+        for (std::size_t k = 0; k < keys.size(); ++k) {
+            if (keys[k] == kEmpty) continue;
+            bool inserted = false;
+            find_or_insert(keys[k], values[k], inserted);
+        }
+    }
+    static constexpr std::uint64_t kEmpty = std::numeric_limits<std::uint64_t>::max();
+    static std::size_t hash(std::uint64_t key) {
+        key ^= key >> 33;
+        key *= 0xff51afd7ed558ccdULL;
+        key ^= key >> 33;
+        return static_cast<std::size_t>(key);
+    }
+    std::vector<std::uint64_t> keys_;
+    std::vector<std::uint32_t> values_;
+    std::size_t mask_ = 0;
+    std::size_t size_ = 0;
+};
+
+/// Key of cell (x, y, z) of grid level `level`: 4 bits of level, 3 x 20 bits of coordinates.
+/// Coordinates wrap beyond +-2^19 cells; a wrapped cell only adds candidates, every link is
+/// still decided by the distance test.
+std::uint64_t cell_key(int level, std::int64_t x, std::int64_t y, std::int64_t z) {
+    constexpr std::int64_t kMask = (1 << 20) - 1;
+    return (static_cast<std::uint64_t>(level) << 60) |
+           (static_cast<std::uint64_t>(x & kMask) << 40) |
+           (static_cast<std::uint64_t>(y & kMask) << 20) | static_cast<std::uint64_t>(z & kMask);
+}
+
+/// floor(x / 2^shift) for any sign.
+std::int64_t floor_shift(std::int64_t x, int shift) {
+    return x >= 0 ? x >> shift : -((-x - 1) >> shift) - 1;
+}
+
+}  // namespace
 
 void ClusterOptions::validate() const {
     if (!(distance_at_10m_m > 0.0))
@@ -16,6 +95,9 @@ void ClusterOptions::validate() const {
     if (!(growth >= 0.0)) throw std::invalid_argument("cluster.growth: must be >= 0");
     if (!(distance_max_m >= distance_at_10m_m)) {
         throw std::invalid_argument("cluster.distance_max_m: must be >= distance_at_10m_m");
+    }
+    if (distance_max_m > 1000.0 * distance_at_10m_m) {
+        throw std::invalid_argument("cluster.distance_max_m: must be <= 1000 * distance_at_10m_m");
     }
     if (min_points < 1) throw std::invalid_argument("cluster.min_points: must be >= 1");
 }
@@ -29,35 +111,126 @@ std::vector<std::vector<std::size_t>> euclidean_clusters(
     const std::vector<Eigen::Vector3f>& points_m, const ClusterOptions& options) {
     options.validate();
     std::vector<std::vector<std::size_t>> clusters;
-    if (points_m.empty()) return clusters;
+    const std::size_t n = points_m.size();
+    if (n == 0) return clusters;
+    if (n >= CellTable::kNone) throw std::invalid_argument("euclidean_clusters: too many points");
 
-    auto cloud = pcl::make_shared<pcl::PointCloud<pcl::PointXYZ>>();
-    cloud->reserve(points_m.size());
-    for (const auto& p : points_m) cloud->push_back(pcl::PointXYZ(p.x(), p.y(), p.z()));
-    pcl::KdTreeFLANN<pcl::PointXYZ> tree;
-    tree.setInputCloud(cloud);
+    // Hierarchical grid (levels of cell size h0 * 2^l, nested): a point whose linking distance
+    // is r sits in the finest level whose cell is at least r. Two points link within the
+    // smaller of their distances, which is at most the cell size of the level of the point
+    // that has it, so each neighbour of a point lies in the 27 cells around it on some level.
+    // The cells are a little larger than the distances so that rounding cannot lose a link.
+    const double base_m = options.distance_at_10m_m;
+    int levels = 1;
+    while (base_m * static_cast<double>(1 << (levels - 1)) < options.distance_max_m) ++levels;
+    const double cell0_m = base_m * (1.0 + 1e-5);
+    std::vector<double> radius(n);
+    std::vector<std::int64_t> base_cell(3 * n);
+    std::vector<std::uint8_t> level(n);
+    for (std::size_t i = 0; i < n; ++i) {
+        radius[i] = options.distance_at(double{points_m[i].z()});
+        int l = 0;
+        while (l + 1 < levels && base_m * static_cast<double>(1 << l) < radius[i]) ++l;
+        level[i] = static_cast<std::uint8_t>(l);
+        for (int a = 0; a < 3; ++a) {
+            const double c = std::floor(double{points_m[i][a]} / cell0_m);
+            base_cell[3 * i + a] = static_cast<std::int64_t>(
+                std::clamp(c, -4.0e15, 4.0e15));  // finite for any finite input
+        }
+    }
+    // Points of each cell, contiguous (cell_start), in index order; the unvisited ones first
+    // (cell_left counts them) so that visited points leave the candidate lists.
+    CellTable cells(n);
+    std::vector<std::uint32_t> cell_of(n);
+    std::vector<std::uint32_t> cell_count;
+    for (std::size_t i = 0; i < n; ++i) {
+        const int l = level[i];
+        const std::uint64_t key =
+            cell_key(l, floor_shift(base_cell[3 * i], l), floor_shift(base_cell[3 * i + 1], l),
+                     floor_shift(base_cell[3 * i + 2], l));
+        bool inserted = false;
+        cell_of[i] =
+            cells.find_or_insert(key, static_cast<std::uint32_t>(cell_count.size()), inserted);
+        if (inserted) cell_count.push_back(0);
+        ++cell_count[cell_of[i]];
+    }
+    std::vector<std::uint32_t> cell_start(cell_count.size() + 1, 0);
+    for (std::size_t c = 0; c < cell_count.size(); ++c) {
+        cell_start[c + 1] = cell_start[c] + cell_count[c];
+    }
+    std::vector<std::uint32_t> members(n);
+    std::vector<std::uint32_t> slot_of(n);
+    std::vector<std::uint32_t> cell_left(cell_count.size(), 0);
+    for (std::size_t i = 0; i < n; ++i) {
+        const std::uint32_t c = cell_of[i];
+        const std::uint32_t slot = cell_start[c] + cell_left[c]++;
+        members[slot] = static_cast<std::uint32_t>(i);
+        slot_of[i] = slot;
+    }
+    const auto remove = [&](std::uint32_t i) {
+        const std::uint32_t c = cell_of[i];
+        const std::uint32_t last = cell_start[c] + --cell_left[c];
+        const std::uint32_t moved = members[last];
+        members[slot_of[i]] = moved;
+        slot_of[moved] = slot_of[i];
+        members[last] = i;
+        slot_of[i] = last;
+    };
 
-    // Region growing: a neighbour joins when closer than the distance at the nearer depth.
-    std::vector<char> visited(points_m.size(), 0);
-    std::vector<int> found;
-    std::vector<float> sq_dist;
+    // Occupied cells around each base cell on every level, listed once per base cell.
+    CellTable base_ids(n);
+    std::vector<std::uint32_t> near_begin, near_end, near_cells;
+    const auto cells_near = [&](std::size_t i) {
+        const std::int64_t* b = &base_cell[3 * i];
+        bool inserted = false;
+        const std::uint32_t id = base_ids.find_or_insert(
+            cell_key(0, b[0], b[1], b[2]), static_cast<std::uint32_t>(near_begin.size()), inserted);
+        if (inserted) {
+            near_begin.push_back(static_cast<std::uint32_t>(near_cells.size()));
+            for (int l = 0; l < levels; ++l) {
+                const std::int64_t x = floor_shift(b[0], l), y = floor_shift(b[1], l),
+                                   z = floor_shift(b[2], l);
+                for (std::int64_t dx = -1; dx <= 1; ++dx) {
+                    for (std::int64_t dy = -1; dy <= 1; ++dy) {
+                        for (std::int64_t dz = -1; dz <= 1; ++dz) {
+                            const std::uint32_t c = cells.find(cell_key(l, x + dx, y + dy, z + dz));
+                            if (c != CellTable::kNone) near_cells.push_back(c);
+                        }
+                    }
+                }
+            }
+            near_end.push_back(static_cast<std::uint32_t>(near_cells.size()));
+        }
+        return id;
+    };
+
+    // Region growing from each unvisited point in index order; a neighbour joins when closer
+    // than the distance at the nearer depth, i.e. the smaller of the two points' distances.
+    std::vector<char> visited(n, 0);
     std::vector<std::size_t> queue;
-    for (std::size_t seed = 0; seed < points_m.size(); ++seed) {
+    for (std::size_t seed = 0; seed < n; ++seed) {
         if (visited[seed]) continue;
         visited[seed] = 1;
+        remove(static_cast<std::uint32_t>(seed));
         queue.assign(1, seed);
         for (std::size_t head = 0; head < queue.size(); ++head) {
             const std::size_t i = queue[head];
-            const double zi = points_m[i].z();
-            const double radius = options.distance_at(zi);
-            tree.radiusSearch(static_cast<int>(i), radius, found, sq_dist);
-            for (std::size_t k = 0; k < found.size(); ++k) {
-                const auto j = static_cast<std::size_t>(found[k]);
-                if (visited[j]) continue;
-                const double link = options.distance_at(std::min(zi, double{points_m[j].z()}));
-                if (double{sq_dist[k]} > link * link) continue;
-                visited[j] = 1;
-                queue.push_back(j);
+            const Eigen::Vector3f p = points_m[i];
+            const double ri = radius[i];
+            const std::uint32_t id = cells_near(i);
+            for (std::uint32_t k = near_begin[id]; k < near_end[id]; ++k) {
+                const std::uint32_t c = near_cells[k];
+                for (std::uint32_t slot = cell_start[c]; slot < cell_start[c] + cell_left[c];) {
+                    const std::uint32_t j = members[slot];
+                    const double link = std::min(ri, radius[j]);
+                    if (double{(points_m[j] - p).squaredNorm()} > link * link) {
+                        ++slot;
+                        continue;
+                    }
+                    visited[j] = 1;
+                    remove(j);  // moves another unvisited point into this slot
+                    queue.push_back(j);
+                }
             }
         }
         if (queue.size() >= options.min_points) clusters.push_back(queue);
@@ -65,6 +238,50 @@ std::vector<std::vector<std::size_t>> euclidean_clusters(
     std::stable_sort(clusters.begin(), clusters.end(),
                      [](const auto& a, const auto& b) { return a.size() > b.size(); });
     return clusters;
+}
+
+VoxelGrid voxelize(const std::vector<Eigen::Vector3f>& points_m, double voxel_m) {
+    VoxelGrid v;
+    const std::size_t n = points_m.size();
+    if (n >= CellTable::kNone) throw std::invalid_argument("voxelize: too many points");
+    v.voxel_of.resize(n);
+    if (voxel_m <= 0.0) {
+        v.centroid_m = points_m;
+        for (std::size_t i = 0; i < n; ++i) v.voxel_of[i] = static_cast<std::uint32_t>(i);
+        return v;
+    }
+    const auto cell = [voxel_m](float c) {
+        return static_cast<std::uint64_t>(
+                   static_cast<std::int64_t>(std::floor(double{c} / voxel_m)) + (1 << 20)) &
+               0x1FFFFF;
+    };
+    CellTable index(std::min<std::size_t>(n, 1 << 16));
+    std::vector<Eigen::Vector3d> sums;
+    std::vector<std::uint32_t> counts;
+    // Points arrive in pixel order, so neighbours often share the previous point's voxel.
+    std::uint64_t last_key = ~std::uint64_t{0};
+    std::uint32_t last = 0;
+    for (std::size_t i = 0; i < n; ++i) {
+        const Eigen::Vector3f& p = points_m[i];
+        const std::uint64_t key = (cell(p.x()) << 42) | (cell(p.y()) << 21) | cell(p.z());
+        if (key != last_key) {
+            bool inserted = false;
+            last = index.find_or_insert(key, static_cast<std::uint32_t>(sums.size()), inserted);
+            if (inserted) {
+                sums.emplace_back(Eigen::Vector3d::Zero());
+                counts.push_back(0);
+            }
+            last_key = key;
+        }
+        sums[last] += p.cast<double>();
+        ++counts[last];
+        v.voxel_of[i] = last;
+    }
+    v.centroid_m.reserve(sums.size());
+    for (std::size_t k = 0; k < sums.size(); ++k) {
+        v.centroid_m.push_back((sums[k] / static_cast<double>(counts[k])).cast<float>());
+    }
+    return v;
 }
 
 }  // namespace cloud_analysis

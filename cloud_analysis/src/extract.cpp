@@ -13,46 +13,24 @@
 namespace cloud_analysis {
 namespace {
 
-/// Voxel centroids and the member points of each voxel (indices into the input).
-struct Voxels {
-    std::vector<Eigen::Vector3f> centroid;
-    std::vector<std::vector<std::size_t>> members;
-};
-
-Voxels voxelize(const std::vector<Eigen::Vector3f>& pts, double voxel_m) {
-    Voxels v;
-    if (voxel_m <= 0.0) {
-        v.centroid = pts;
-        v.members.resize(pts.size());
-        for (std::size_t i = 0; i < pts.size(); ++i) v.members[i].push_back(i);
-        return v;
-    }
-    std::unordered_map<std::uint64_t, std::size_t> index;
-    const auto cell = [voxel_m](float c) {
-        return static_cast<std::uint64_t>(
-                   static_cast<std::int64_t>(std::floor(double{c} / voxel_m)) + (1 << 20)) &
-               0x1FFFFF;
-    };
-    std::vector<Eigen::Vector3d> sums;
-    for (std::size_t i = 0; i < pts.size(); ++i) {
-        const std::uint64_t key =
-            (cell(pts[i].x()) << 42) | (cell(pts[i].y()) << 21) | cell(pts[i].z());
-        auto [it, inserted] = index.emplace(key, sums.size());
-        if (inserted) {
-            sums.emplace_back(Eigen::Vector3d::Zero());
-            v.members.emplace_back();
-        }
-        sums[it->second] += pts[i].cast<double>();
-        v.members[it->second].push_back(i);
-    }
-    v.centroid.reserve(sums.size());
-    for (std::size_t k = 0; k < sums.size(); ++k) {
-        v.centroid.push_back((sums[k] / static_cast<double>(v.members[k].size())).cast<float>());
-    }
-    return v;
-}
-
 using Indices = std::vector<std::size_t>;
+
+/// The points of clusters of voxels, in point order (not the order the clustering visited
+/// them in, so that strided samples of a cluster are spread evenly over its pixels).
+std::vector<Indices> points_of(const std::vector<Indices>& voxel_clusters,
+                               const VoxelGrid& voxels) {
+    constexpr auto kNone = static_cast<std::size_t>(-1);
+    std::vector<std::size_t> cluster_of(voxels.centroid_m.size(), kNone);
+    for (std::size_t c = 0; c < voxel_clusters.size(); ++c) {
+        for (std::size_t v : voxel_clusters[c]) cluster_of[v] = c;
+    }
+    std::vector<Indices> out(voxel_clusters.size());
+    for (std::size_t i = 0; i < voxels.voxel_of.size(); ++i) {
+        const std::size_t c = cluster_of[voxels.voxel_of[i]];
+        if (c != kNone) out[c].push_back(i);
+    }
+    return out;
+}
 
 std::vector<Eigen::Vector3f> gather(const std::vector<Eigen::Vector3f>& pts, const Indices& idx) {
     std::vector<Eigen::Vector3f> out;
@@ -436,14 +414,8 @@ std::vector<scene_schema::Entity> instances_of_class(const ClassInfo& info,
     if (s.thing && options.clustering == "image" && grid.valid()) {
         clusters = image_components(pts, pixels, grid, co, options.image_radius_px);
     } else {
-        const Voxels voxels = voxelize(pts, s.voxel_m);
-        for (const auto& cluster : euclidean_clusters(voxels.centroid, co)) {
-            Indices members;
-            for (std::size_t v : cluster) {
-                members.insert(members.end(), voxels.members[v].begin(), voxels.members[v].end());
-            }
-            clusters.push_back(std::move(members));
-        }
+        const VoxelGrid voxels = voxelize(pts, s.voxel_m);
+        clusters = points_of(euclidean_clusters(voxels.centroid_m, co), voxels);
     }
     std::vector<Candidate> candidates;
     std::size_t next_group = clusters.size();

@@ -1,3 +1,8 @@
+#include <algorithm>
+#include <array>
+#include <random>
+#include <vector>
+
 #include <catch2/catch.hpp>
 
 #include "cloud_analysis/cluster.hpp"
@@ -63,4 +68,100 @@ TEST_CASE("clusters below min_points are dropped", "[cluster]") {
     CHECK(clusters[0].size() == pts.size() - 1);
     o.distance_max_m = 0.1;
     CHECK_THROWS_WITH(o.validate(), Catch::Contains("distance_max_m"));
+}
+
+namespace {
+
+/// Clusters of a brute-force reference: every pair tested, union-find, as sorted index sets.
+std::vector<std::vector<std::size_t>> reference_clusters(const std::vector<Eigen::Vector3f>& pts,
+                                                         const ClusterOptions& o) {
+    std::vector<std::size_t> parent(pts.size());
+    for (std::size_t i = 0; i < pts.size(); ++i) parent[i] = i;
+    const auto root = [&](std::size_t i) {
+        while (parent[i] != i) i = parent[i] = parent[parent[i]];
+        return i;
+    };
+    for (std::size_t i = 0; i < pts.size(); ++i) {
+        for (std::size_t j = i + 1; j < pts.size(); ++j) {
+            const double link = o.distance_at(std::min(double{pts[i].z()}, double{pts[j].z()}));
+            if (double{(pts[i] - pts[j]).squaredNorm()} <= link * link) parent[root(i)] = root(j);
+        }
+    }
+    std::vector<std::vector<std::size_t>> by_root(pts.size());
+    for (std::size_t i = 0; i < pts.size(); ++i) by_root[root(i)].push_back(i);
+    std::vector<std::vector<std::size_t>> out;
+    for (auto& c : by_root) {
+        if (c.size() >= o.min_points) out.push_back(std::move(c));
+    }
+    std::sort(out.begin(), out.end());
+    return out;
+}
+
+std::vector<std::vector<std::size_t>> as_sorted_sets(std::vector<std::vector<std::size_t>> c) {
+    for (auto& members : c) std::sort(members.begin(), members.end());
+    std::sort(c.begin(), c.end());
+    return c;
+}
+
+/// Random blobs of random size and spread at depths 2-60 m, some overlapping.
+std::vector<Eigen::Vector3f> random_blobs(std::uint32_t seed, int blobs, int points_per_blob) {
+    std::mt19937 rng(seed);
+    std::uniform_real_distribution<float> x(-20.0f, 20.0f), y(-3.0f, 2.0f), z(2.0f, 60.0f);
+    std::uniform_real_distribution<float> spread(0.05f, 1.5f);
+    std::normal_distribution<float> unit(0.0f, 1.0f);
+    std::vector<Eigen::Vector3f> pts;
+    for (int b = 0; b < blobs; ++b) {
+        const Eigen::Vector3f c(x(rng), y(rng), z(rng));
+        const float s = spread(rng);
+        for (int k = 0; k < points_per_blob; ++k) {
+            pts.push_back(c + s * Eigen::Vector3f(unit(rng), unit(rng), unit(rng)));
+        }
+    }
+    std::shuffle(pts.begin(), pts.end(), rng);
+    return pts;
+}
+
+}  // namespace
+
+TEST_CASE("the grid clustering finds the clusters of a brute-force reference on random blobs",
+          "[cluster]") {
+    // Settings of cars, of stuff classes, of small things, without growth, and a cap far
+    // above the distance at 10 m (many grid levels).
+    const std::vector<std::array<double, 3>> settings = {
+        {0.4, 2.0, 1.5}, {1.0, 1.0, 2.0}, {0.3, 2.0, 1.0}, {0.5, 0.0, 0.5}, {0.2, 3.0, 5.0}};
+    for (std::uint32_t seed = 1; seed <= 4; ++seed) {
+        const auto pts = random_blobs(seed, 40, 60);
+        for (const auto& [d10, growth, cap] : settings) {
+            ClusterOptions o;
+            o.distance_at_10m_m = d10;
+            o.growth = growth;
+            o.distance_max_m = cap;
+            o.min_points = seed % 2 == 0 ? 1 : 5;
+            const auto clusters = euclidean_clusters(pts, o);
+            // Largest first, and the same partition as the reference.
+            for (std::size_t k = 1; k < clusters.size(); ++k) {
+                CHECK(clusters[k - 1].size() >= clusters[k].size());
+            }
+            const auto expected = reference_clusters(pts, o);
+            INFO("seed " << seed << ", d10 " << d10 << ", growth " << growth << ", cap " << cap);
+            CHECK(expected.size() > 3);
+            CHECK(as_sorted_sets(clusters) == expected);
+        }
+    }
+}
+
+TEST_CASE("points exactly one clustering distance apart link, a little farther do not",
+          "[cluster]") {
+    // A chain along x at 5 m depth (distance 0.5 m): steps of 0.5 m link, 0.5001 m does not;
+    // the chain straddles zero so that negative grid cells are crossed too.
+    ClusterOptions o;
+    o.distance_at_10m_m = 0.5;
+    std::vector<Eigen::Vector3f> pts;
+    for (int k = -4; k <= 4; ++k) pts.emplace_back(0.5f * static_cast<float>(k), 0.0f, 5.0f);
+    CHECK(euclidean_clusters(pts, o).size() == 1);
+    pts.emplace_back(2.0f + 0.5001f, 0.0f, 5.0f);
+    const auto clusters = euclidean_clusters(pts, o);
+    REQUIRE(clusters.size() == 2);
+    CHECK(clusters[0].size() == 9);
+    CHECK(clusters[1] == std::vector<std::size_t>{9});
 }

@@ -4,6 +4,7 @@
 /// dz = z^2 / (f B) * d_err, so the clustering distance is d10 * max(1, (z / 10 m)^growth).
 
 #include <cstddef>
+#include <cstdint>
 #include <vector>
 
 #include <Eigen/Core>
@@ -23,8 +24,22 @@ struct ClusterOptions {
 };
 
 /// Groups points: two points are linked when closer than the distance at the nearer one's
-/// depth. Returns clusters (indices into points_m) sorted by size, largest first.
+/// depth. Returns clusters (indices into points_m) sorted by size, largest first (ties in the
+/// order of their first point). Neighbours are found on a hierarchical hash grid (cells of
+/// distance_at_10m_m * 2^level, a point in the finest level whose cell holds its distance);
+/// cost about linear in the number of points.
 std::vector<std::vector<std::size_t>> euclidean_clusters(
     const std::vector<Eigen::Vector3f>& points_m, const ClusterOptions& options);
+
+/// Points grouped by cubic voxels: the centroid of each occupied voxel, voxels numbered in the
+/// order of their first point.
+struct VoxelGrid {
+    std::vector<Eigen::Vector3f> centroid_m;  ///< mean of the voxel's points, metres
+    std::vector<std::uint32_t> voxel_of;      ///< voxel of each input point
+};
+
+/// Voxelizes points with voxels of voxel_m metres (axis-aligned, origin at 0); voxel_m <= 0
+/// gives one voxel per point.
+VoxelGrid voxelize(const std::vector<Eigen::Vector3f>& points_m, double voxel_m);
 
 }  // namespace cloud_analysis
