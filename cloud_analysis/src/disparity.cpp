@@ -25,16 +25,9 @@ int sgbm_mode(const std::string& mode) {
     bad("mode", "must be sgbm, hh, sgbm_3way or hh4");
 }
 
-cv::Mat to_matcher_input(const ImageU8& img, bool colour) {
-    const cv::Mat wrap(img.height_px, img.width_px, CV_8UC(img.channels),
-                       const_cast<std::uint8_t*>(img.data.data()));
-    cv::Mat out;
-    if (img.channels == 3 && !colour) {
-        cv::cvtColor(wrap, out, cv::COLOR_RGB2GRAY);
-    } else {
-        out = wrap;
-    }
-    return out;
+cv::Mat wrap(const ImageU8& img) {
+    return cv::Mat(img.height_px, img.width_px, CV_8UC(img.channels),
+                   const_cast<std::uint8_t*>(img.data.data()));
 }
 
 }  // namespace
@@ -104,9 +97,9 @@ DisparityOptions disparity_preset(const std::string& name) {
 struct DisparityMatcher::Impl {
     DisparityOptions options;
     cv::Ptr<cv::StereoSGBM> sgbm;
-    cv::Ptr<cv::StereoMatcher> right_matcher;           // lr-check / WLS only
-    cv::Ptr<cv::ximgproc::DisparityWLSFilter> wls;      // WLS only
-    cv::Mat lp, rp, raw_left, raw_right, filtered, up;  // reused buffers
+    cv::Ptr<cv::StereoMatcher> right_matcher;                 // lr-check / WLS only
+    cv::Ptr<cv::ximgproc::DisparityWLSFilter> wls;            // WLS only
+    cv::Mat lp, rp, raw_left, raw_right, filtered, up, grey;  // reused buffers
 
     int pad() const {
         return options.pad_left ? std::max(0, options.min_disparity + matched_disparities()) : 0;
@@ -117,7 +110,9 @@ struct DisparityMatcher::Impl {
         return std::max(16, (n + 15) / 16 * 16);
     }
 
-    /// Grey (unless colour), scaled and left-padded views into lp and rp.
+    /// Grey (unless colour), scaled and left-padded views into lp and rp. The views are
+    /// written straight into the padded buffers, which are allocated and zeroed only when the
+    /// frame size changes: no per-frame copy for the padding.
     void prepare(const ImageU8& left, const ImageU8& right) {
         if (left.width_px != right.width_px || left.height_px != right.height_px) {
             throw std::invalid_argument("left and right images differ in size");
@@ -126,27 +121,41 @@ struct DisparityMatcher::Impl {
             throw std::invalid_argument("left and right images differ in channel count");
         }
         if (left.empty()) throw std::invalid_argument("empty images");
-        cv::Mat l = to_matcher_input(left, options.colour);
-        cv::Mat r = to_matcher_input(right, options.colour);
-        if (options.downscale > 1) {
-            const cv::Size size(left.width_px / options.downscale,
-                                left.height_px / options.downscale);
-            cv::Mat ls, rs;
-            cv::resize(l, ls, size, 0, 0, cv::INTER_AREA);
-            cv::resize(r, rs, size, 0, 0, cv::INTER_AREA);
-            l = ls;
-            r = rs;
-        }
+        const bool to_grey = left.channels == 3 && !options.colour;
+        const int type = CV_8UC(to_grey ? 1 : left.channels);
+        const int width = left.width_px / options.downscale;
+        const int height = left.height_px / options.downscale;
         // StereoSGBM leaves the first min + num disparities columns empty. Padding both views
         // on the left with black lets those pixels match wherever their partner is in view.
         const int p = pad();
-        if (p > 0) {
-            cv::copyMakeBorder(l, lp, 0, 0, p, 0, cv::BORDER_CONSTANT, cv::Scalar::all(0));
-            cv::copyMakeBorder(r, rp, 0, 0, p, 0, cv::BORDER_CONSTANT, cv::Scalar::all(0));
-        } else {
-            lp = l;
-            rp = r;
+        if (lp.rows != height || lp.cols != width + p || lp.type() != type) {
+            lp.create(height, width + p, type);
+            rp.create(height, width + p, type);
+            lp.setTo(cv::Scalar::all(0));
+            rp.setTo(cv::Scalar::all(0));
         }
+        const cv::Rect view(p, 0, width, height);
+        fill(left, to_grey, lp(view));
+        fill(right, to_grey, rp(view));
+    }
+
+    /// Converts (grey) and scales `img` into `dst`, a view of the padded buffer.
+    void fill(const ImageU8& img, bool to_grey, cv::Mat dst) {
+        const cv::Mat src = wrap(img);
+        if (options.downscale == 1) {
+            if (to_grey) {
+                cv::cvtColor(src, dst, cv::COLOR_RGB2GRAY);
+            } else {
+                src.copyTo(dst);
+            }
+            return;
+        }
+        const cv::Mat* scaled_from = &src;
+        if (to_grey) {
+            cv::cvtColor(src, grey, cv::COLOR_RGB2GRAY);
+            scaled_from = &grey;
+        }
+        cv::resize(*scaled_from, dst, dst.size(), 0, 0, cv::INTER_AREA);
     }
 };
 
@@ -220,25 +229,31 @@ DisparityMap DisparityMatcher::compute(const ImageU8& left, const ImageU8& right
     const int invalid_raw = (options.min_disparity - 1) * 16;
     const float to_px = static_cast<float>(scale) / 16.0f;
 
+    // Every element is written once: kNoDisparity or the value in px.
     DisparityMap out;
     out.width_px = left.width_px;
     out.height_px = left.height_px;
-    out.disparity_px.assign(static_cast<std::size_t>(out.width_px) * out.height_px, kNoDisparity);
+    out.disparity_px.resize(static_cast<std::size_t>(out.width_px) * out.height_px);
+    const std::int16_t lowest_valid = static_cast<std::int16_t>(std::max(invalid_raw, 0) + 1);
+    const float lr_max_diff = static_cast<float>(options.lr_max_diff_px);
     for (int v = 0; v < raw_left.rows; ++v) {
         const auto* row = raw_left.ptr<std::int16_t>(v);
         const std::int16_t* row_r = options.lr_check ? raw_right.ptr<std::int16_t>(v) : nullptr;
         float* dst = out.disparity_px.data() + static_cast<std::size_t>(v) * out.width_px;
-        for (int u = 0; u < raw_left.cols; ++u) {
-            if (row[u] <= invalid_raw || row[u] <= 0) continue;
-            const float d = static_cast<float>(row[u]) * to_px;
-            if (row_r != nullptr) {
-                const int ur = static_cast<int>(std::lround(static_cast<float>(u) - d));
-                if (ur < 0) continue;
-                const float dr = -static_cast<float>(row_r[ur]) * to_px;
-                if (!(dr > 0.0f) || std::abs(dr - d) > static_cast<float>(options.lr_max_diff_px)) {
-                    continue;
-                }
+        if (row_r == nullptr) {
+            for (int u = 0; u < raw_left.cols; ++u) {
+                dst[u] = row[u] >= lowest_valid ? static_cast<float>(row[u]) * to_px : kNoDisparity;
             }
+            continue;
+        }
+        for (int u = 0; u < raw_left.cols; ++u) {
+            dst[u] = kNoDisparity;
+            if (row[u] < lowest_valid) continue;
+            const float d = static_cast<float>(row[u]) * to_px;
+            const int ur = static_cast<int>(std::lround(static_cast<float>(u) - d));
+            if (ur < 0) continue;
+            const float dr = -static_cast<float>(row_r[ur]) * to_px;
+            if (!(dr > 0.0f) || std::abs(dr - d) > lr_max_diff) continue;
             dst[u] = d;
         }
     }

@@ -155,14 +155,21 @@ AnalyseResult analyse(const LoadedInputs& in, const AnalyseOptions& options,
         semantic = &rect_semantic;
         watch.lap("rectify");
     }
+    // The class lookup does not depend on the disparity: it runs beside the matcher, and the
+    // "semantic" lap below is only the wait for it.
+    std::future<ClassImage> classes;
+    if (!semantic->empty()) {
+        classes = std::async(std::launch::async,
+                             [semantic, &in] { return classify_pixels(*semantic, in.palette); });
+    }
     r.disparity = matcher.compute(*left, *right);
     watch.lap("disparity");
+    if (classes.valid()) r.classes = classes.get();
+    watch.lap("semantic");
     if (r.disparity.valid_count() == 0) {
         throw std::runtime_error("empty disparity: no pixel has a valid disparity (" +
                                  in.paths.left.string() + ")");
     }
-    if (!semantic->empty()) r.classes = classify_pixels(*semantic, in.palette);
-    watch.lap("semantic");
     r.cloud = reproject(r.disparity, r.camera, *left, r.classes, options.reproject);
     watch.lap("reproject");
     if (r.cloud.size() == 0) {

@@ -2,6 +2,7 @@
 
 #include <cmath>
 #include <stdexcept>
+#include <vector>
 
 #include "cloud_analysis/calibration.hpp"
 
@@ -28,38 +29,66 @@ LabeledCloud reproject(const DisparityMap& disparity, const StereoCamera& camera
     if (!(camera.baseline_m > 0.0) || !(camera.fx_px > 0.0) || !(camera.fy_px > 0.0)) {
         throw std::invalid_argument("camera: fx, fy and baseline must be > 0");
     }
+    // (X, Y, Z, W) = Q (u, v, d, 1) with OpenCV's Q (reprojection_matrix): X = u - cx,
+    // Y = (v - cy) fx / fy, Z = fx, W = (d - (cx - cx_right)) / B. Only W depends on d, so the
+    // 4x4 product reduces to one reciprocal per point; rows and columns are precomputed.
     const Eigen::Matrix4d Q = reprojection_matrix(camera);
+    const double w_per_px = Q(3, 2);
+    const double w_offset = Q(3, 3);
+    const double z_num = Q(2, 3);
+    std::vector<double> x_num(static_cast<std::size_t>(w));
+    for (int u = 0; u < w; ++u) x_num[static_cast<std::size_t>(u)] = Q(0, 0) * u + Q(0, 3);
     const double max_range_sq = options.max_range_m * options.max_range_m;
+    const double min_d = options.min_disparity_px;
 
+    // Written through raw pointers into arrays sized for every valid pixel, trimmed at the end:
+    // no per-point capacity checks.
     LabeledCloud cloud;
     cloud.width_px = w;
     cloud.height_px = h;
     const std::size_t capacity = disparity.valid_count();
-    cloud.xyz_m.reserve(capacity);
-    cloud.colour.reserve(capacity);
-    cloud.class_index.reserve(capacity);
-    cloud.pixel.reserve(capacity);
+    cloud.xyz_m.resize(capacity);
+    cloud.colour.resize(capacity);
+    cloud.class_index.resize(capacity);
+    cloud.pixel.resize(capacity);
+    Eigen::Vector3f* xyz = cloud.xyz_m.data();
+    Rgb* colour = cloud.colour.data();
+    std::uint16_t* cls_out = cloud.class_index.data();
+    std::uint32_t* pixel = cloud.pixel.data();
+    std::size_t n = 0;
+    const bool grey = left.channels != 3;
     for (int v = 0; v < h; ++v) {
-        const std::size_t row = static_cast<std::size_t>(v) * w;
+        const std::size_t row = static_cast<std::size_t>(v) * static_cast<std::size_t>(w);
+        const float* d_row = disparity.disparity_px.data() + row;
+        const std::uint16_t* c_row = labelled ? classes.class_index.data() + row : nullptr;
+        const std::uint8_t* img_row =
+            left.data.data() + row * static_cast<std::size_t>(left.channels);
+        const double y_num = Q(1, 1) * v + Q(1, 3);
         for (int u = 0; u < w; ++u) {
-            const std::size_t i = row + static_cast<std::size_t>(u);
-            const double d = disparity.disparity_px[i];
-            if (!(d > options.min_disparity_px)) continue;
-            const std::uint16_t cls = labelled ? classes.class_index[i] : kVoidClass;
+            const double d = d_row[u];
+            if (!(d > min_d)) continue;
+            const std::uint16_t cls = labelled ? c_row[u] : kVoidClass;
             if (cls == kVoidClass && !options.keep_void) continue;
-            // (X, Y, Z, W) = Q (u, v, d, 1)
-            const Eigen::Vector4d p = Q * Eigen::Vector4d(u, v, d, 1.0);
-            if (!(p[3] > 0.0)) continue;  // at or beyond infinity
-            const Eigen::Vector3d xyz = p.head<3>() / p[3];
-            if (!(xyz.squaredNorm() <= max_range_sq)) continue;
-            cloud.xyz_m.push_back(xyz.cast<float>());
-            const std::uint8_t* c = left.at(u, v);
-            cloud.colour.push_back(left.channels == 3 ? Rgb{c[0], c[1], c[2]}
-                                                      : Rgb{c[0], c[0], c[0]});
-            cloud.class_index.push_back(cls);
-            cloud.pixel.push_back(static_cast<std::uint32_t>(i));
+            const double w_h = w_per_px * d + w_offset;
+            if (!(w_h > 0.0)) continue;  // at or beyond infinity
+            const double inv = 1.0 / w_h;
+            const double x = x_num[static_cast<std::size_t>(u)] * inv;
+            const double y = y_num * inv;
+            const double z = z_num * inv;
+            if (!(x * x + y * y + z * z <= max_range_sq)) continue;
+            xyz[n] = Eigen::Vector3f(static_cast<float>(x), static_cast<float>(y),
+                                     static_cast<float>(z));
+            const std::uint8_t* c = grey ? img_row + u : img_row + 3 * static_cast<std::size_t>(u);
+            colour[n] = grey ? Rgb{c[0], c[0], c[0]} : Rgb{c[0], c[1], c[2]};
+            cls_out[n] = cls;
+            pixel[n] = static_cast<std::uint32_t>(row + static_cast<std::size_t>(u));
+            ++n;
         }
     }
+    cloud.xyz_m.resize(n);
+    cloud.colour.resize(n);
+    cloud.class_index.resize(n);
+    cloud.pixel.resize(n);
     return cloud;
 }
 

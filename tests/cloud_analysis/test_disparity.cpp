@@ -179,3 +179,26 @@ TEST_CASE("the speed presets differ as documented and an unknown one is refused"
     o.downscale = 3;
     CHECK_THROWS_WITH(o.validate(), Catch::Contains("downscale"));
 }
+
+TEST_CASE("an RGB pair of grey pixels matches exactly like the grey pair, at both scales",
+          "[disparity]") {
+    auto [left, right] = random_dot_pair(160, 80, 12, 9);
+    const auto to_rgb = [](const ImageU8& g) {
+        ImageU8 c{g.width_px, g.height_px, 3, std::vector<std::uint8_t>(g.data.size() * 3)};
+        for (std::size_t i = 0; i < g.data.size(); ++i) {
+            c.data[3 * i] = c.data[3 * i + 1] = c.data[3 * i + 2] = g.data[i];
+        }
+        return c;
+    };
+    const ImageU8 left_rgb = to_rgb(left), right_rgb = to_rgb(right);
+    for (const int downscale : {1, 2}) {
+        DisparityOptions options;
+        options.num_disparities = 32;
+        options.downscale = downscale;
+        DisparityMatcher matcher(options);
+        const DisparityMap grey = matcher.compute(left, right);
+        const DisparityMap colour = matcher.compute(left_rgb, right_rgb);
+        CHECK(colour.disparity_px == grey.disparity_px);
+        CHECK(grey.valid_count() > 160 * 80 / 2);
+    }
+}
