@@ -246,14 +246,7 @@ std::string entity_json(const cloud_analysis::LoadedInputs& in,
     return scene_schema::dump(doc);
 }
 
-RunReport analyse_and_write(const AnalyseArgs& a) {
-    using Clock = std::chrono::steady_clock;
-    const auto ms_since = [](Clock::time_point t) {
-        return std::chrono::duration<double, std::milli>(Clock::now() - t).count();
-    };
-    auto t = Clock::now();
-    std::vector<cloud_analysis::StageTiming> timings;
-
+LoadedRun load_run(const AnalyseArgs& a) {
     // Validate everything before the expensive stages.
     const std::vector<std::pair<std::filesystem::path, const char*>> clouds = {
         {a.xyz, "--xyz"}, {a.pcd, "--pcd"}, {a.ply, "--ply"}};
@@ -287,27 +280,37 @@ RunReport analyse_and_write(const AnalyseArgs& a) {
                                      ", " + flag + ")");
         }
     }
-    const cloud_analysis::ExtractOptions extract = extract_options(a);
-    const cloud_analysis::LoadedInputs in = cloud_analysis::load_inputs(a.paths, a.options);
-    std::optional<cloud_analysis::DisparityMap> gt;
+    LoadedRun run{{}, extract_options(a), std::nullopt};
+    run.inputs = cloud_analysis::load_inputs(a.paths, a.options);
     if (!a.gt_disparity.empty()) {
-        gt = cloud_analysis::read_kitti_disparity(a.gt_disparity);
-        const auto& cam = in.calibration.camera;
-        if (gt->width_px != cam.width_px || gt->height_px != cam.height_px) {
+        run.gt_disparity = cloud_analysis::read_kitti_disparity(a.gt_disparity);
+        const auto& gt = *run.gt_disparity;
+        const auto& cam = run.inputs.calibration.camera;
+        if (gt.width_px != cam.width_px || gt.height_px != cam.height_px) {
             throw std::runtime_error(
-                "inputs do not match: GT disparity is " + std::to_string(gt->width_px) + "x" +
-                std::to_string(gt->height_px) + ", rectified images are " +
+                "inputs do not match: GT disparity is " + std::to_string(gt.width_px) + "x" +
+                std::to_string(gt.height_px) + ", rectified images are " +
                 std::to_string(cam.width_px) + "x" + std::to_string(cam.height_px) + " (" +
                 a.gt_disparity.string() + ")");
         }
     }
-    timings.push_back({"load", ms_since(t)});
+    return run;
+}
+
+RunReport analyse_loaded_and_write(const LoadedRun& run, const AnalyseArgs& a,
+                                   cloud_analysis::DisparityMatcher& matcher) {
+    using Clock = std::chrono::steady_clock;
+    const auto ms_since = [](Clock::time_point t) {
+        return std::chrono::duration<double, std::milli>(Clock::now() - t).count();
+    };
+    const cloud_analysis::LoadedInputs& in = run.inputs;
+    std::vector<cloud_analysis::StageTiming> timings;
     if (!in.calibration.note.empty()) {
         std::cerr << kTool << ": warning: " << in.calibration.note << " (" << in.calibration.source
                   << ")\n";
     }
 
-    cloud_analysis::AnalyseResult r = cloud_analysis::analyse(in, a.options);
+    cloud_analysis::AnalyseResult r = cloud_analysis::analyse(in, a.options, matcher);
     timings.insert(timings.end(), r.timings.begin(), r.timings.end());
     if (in.semantic.empty()) {
         std::cerr << kTool << ": warning: no semantic image: every point is void\n";
@@ -316,8 +319,8 @@ RunReport analyse_and_write(const AnalyseArgs& a) {
                   << " semantic pixels have colours not in palette '" << in.palette.name
                   << "' and count as void (" << a.paths.semantic.string() << ")\n";
     }
-    if (gt) {
-        const auto s = cloud_analysis::score_disparity(r.disparity, *gt);
+    if (run.gt_disparity) {
+        const auto s = cloud_analysis::score_disparity(r.disparity, *run.gt_disparity);
         std::fprintf(stderr,
                      "%s: disparity vs %s: D1-all %.2f %%, D1-valid %.2f %%, EPE %.3f px, "
                      "density %.2f %% (%zu GT px)\n",
@@ -326,11 +329,13 @@ RunReport analyse_and_write(const AnalyseArgs& a) {
     }
 
     std::vector<PendingOutput> outputs;
+    auto t = Clock::now();
     if (!a.entities.empty()) {
-        t = Clock::now();
-        outputs.push_back({a.entities, entity_json(in, r, a, extract), "--entities"});
+        outputs.push_back({a.entities, entity_json(in, r, a, run.extract), "--entities"});
         timings.push_back({"entities", ms_since(t)});
     }
+    const std::vector<std::pair<std::filesystem::path, const char*>> clouds = {
+        {a.xyz, "--xyz"}, {a.pcd, "--pcd"}, {a.ply, "--ply"}};
     for (const auto& [path, flag] : clouds) {
         if (path.empty()) continue;
         t = Clock::now();
@@ -373,6 +378,21 @@ RunReport analyse_and_write(const AnalyseArgs& a) {
     }
 
     return {timings, r.cloud.size()};
+}
+
+RunReport analyse_and_write(const AnalyseArgs& a, cloud_analysis::DisparityMatcher& matcher) {
+    const auto start = std::chrono::steady_clock::now();
+    const LoadedRun run = load_run(a);
+    const double load_ms =
+        std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - start).count();
+    RunReport report = analyse_loaded_and_write(run, a, matcher);
+    report.timings.insert(report.timings.begin(), {"load", load_ms});
+    return report;
+}
+
+RunReport analyse_and_write(const AnalyseArgs& a) {
+    cloud_analysis::DisparityMatcher matcher(a.options.disparity);
+    return analyse_and_write(a, matcher);
 }
 
 int run_analyse(const AnalyseArgs& a) {

@@ -4,11 +4,13 @@
 /// one analysis, their resolution into options, and one run from files to written outputs.
 
 #include <filesystem>
+#include <optional>
 #include <string>
 #include <vector>
 
 #include <CLI/CLI.hpp>
 
+#include "cloud_analysis/disparity.hpp"
 #include "cloud_analysis/extract.hpp"
 #include "cloud_analysis/pipeline.hpp"
 
@@ -67,7 +69,29 @@ struct RunReport {
     std::size_t points = 0;                            ///< points in the cloud
 };
 
-/// One analysis from files to written outputs. Throws on failure, leaving no output behind.
+/// What a run reads before its expensive stages: the decoded frame, the extraction settings
+/// and the optional GT disparity.
+struct LoadedRun {
+    cloud_analysis::LoadedInputs inputs;                       ///< decoded images, calibration
+    cloud_analysis::ExtractOptions extract;                    ///< with the class config read
+    std::optional<cloud_analysis::DisparityMap> gt_disparity;  ///< --gt-disparity, when given
+};
+
+/// Checks the output flags and folders, reads the class config and the GT disparity, and
+/// decodes and checks the inputs. Throws before anything expensive or written.
+LoadedRun load_run(const AnalyseArgs& a);
+
+/// The stages after decoding (disparity ... entity file and clouds written), with a matcher
+/// kept across frames: a frame already in memory, as from a camera. Throws on failure, leaving
+/// no output behind.
+RunReport analyse_loaded_and_write(const LoadedRun& run, const AnalyseArgs& a,
+                                   cloud_analysis::DisparityMatcher& matcher);
+
+/// One analysis from files to written outputs (load_run, then analyse_loaded_and_write); the
+/// first timing is "load". Throws on failure, leaving no output behind.
+RunReport analyse_and_write(const AnalyseArgs& a, cloud_analysis::DisparityMatcher& matcher);
+
+/// As above with a matcher of the run's own.
 RunReport analyse_and_write(const AnalyseArgs& a);
 
 /// `analyse`: analyse_and_write, then --timings to stderr. Returns the exit code.

@@ -320,32 +320,45 @@ int run_bench(const BenchArgs& a) {
         throw std::runtime_error("cannot write output: no such folder (" + a.work_dir.string() +
                                  ", --work-dir)");
     }
-    // The floor: the OpenCV matcher call alone, on the views compute() prepares. It is timed
-    // interleaved with the rows (matcher, row 1, row 2, matcher, ...) so that all of them see
-    // the same load of the machine over time.
-    const LoadedInputs in = load_inputs(a.analyse.paths, a.analyse.options);
+    // Two definitions of a frame's pipeline, measured side by side in one process:
+    //  - memory: the frame is already decoded (as a camera delivers it); the stages after
+    //    decoding, from the matcher to the written entity file (and clouds);
+    //  - files: the same plus reading and decoding the PNG files and the class config.
+    // The floor is the OpenCV matcher call alone, on the views compute() prepares. It is timed
+    // interleaved with the rows (matcher, row 1, ..., row 4, matcher, ...) so that all of them
+    // see the same load of the machine over time. One matcher serves every row, as in a batch.
     DisparityMatcher matcher(a.analyse.options.disparity);
     std::vector<double> matcher_ms;
 
     struct Row {
+        std::string input;  // "memory" or "files"
         std::string name;
         AnalyseArgs args;
+        std::optional<LoadedRun> loaded;  // memory rows: decoded once, before timing
         std::map<std::string, std::vector<double>> stages;
         std::vector<std::string> order;
         std::vector<double> totals;
         std::size_t points = 0;
     };
-    std::vector<Row> rows(2);
-    rows[0].name = "entities";
-    rows[1].name = "entities + xyz/pcd/ply";
-    for (Row& row : rows) {
-        row.args = a.analyse;
-        row.args.timings = false;
-        row.args.entities = (a.work_dir / "bench.json").string();
+    std::vector<Row> rows;
+    for (const char* input : {"memory", "files"}) {
+        for (const bool clouds : {false, true}) {
+            Row row;
+            row.input = input;
+            row.name = clouds ? "entities + xyz/pcd/ply" : "entities";
+            row.args = a.analyse;
+            row.args.timings = false;
+            row.args.entities = (a.work_dir / "bench.json").string();
+            if (clouds) {
+                row.args.xyz = a.work_dir / "bench.xyz";
+                row.args.pcd = a.work_dir / "bench.pcd";
+                row.args.ply = a.work_dir / "bench.ply";
+            }
+            if (row.input == "memory") row.loaded = load_run(row.args);
+            rows.push_back(std::move(row));
+        }
     }
-    rows[1].args.xyz = a.work_dir / "bench.xyz";
-    rows[1].args.pcd = a.work_dir / "bench.pcd";
-    rows[1].args.ply = a.work_dir / "bench.ply";
+    const LoadedInputs& in = rows.front().loaded->inputs;
 
     for (int i = 0; i < a.warmup + a.runs; ++i) {
         const bool timed = i >= a.warmup;
@@ -353,14 +366,16 @@ int run_bench(const BenchArgs& a) {
         if (timed) matcher_ms.push_back(ms);
         for (Row& row : rows) {
             const auto t0 = Clock::now();
-            const RunReport report = analyse_and_write(row.args);
+            const RunReport report = row.loaded
+                                         ? analyse_loaded_and_write(*row.loaded, row.args, matcher)
+                                         : analyse_and_write(row.args, matcher);
             const double total = ms_between(t0, Clock::now());
             row.points = report.points;
             if (!timed) continue;
             row.totals.push_back(total);
-            for (const auto& s : report.timings) {
-                if (row.stages.count(s.stage) == 0) row.order.push_back(s.stage);
-                row.stages[s.stage].push_back(s.ms);
+            for (const auto& st : report.timings) {
+                if (row.stages.count(st.stage) == 0) row.order.push_back(st.stage);
+                row.stages[st.stage].push_back(st.ms);
             }
         }
     }
@@ -372,7 +387,8 @@ int run_bench(const BenchArgs& a) {
             stage_json.push_back({{"stage", name}, {"ms", median(row.stages[name])}});
         }
         const double total_ms = median(row.totals);
-        rows_json.push_back({{"row", row.name},
+        rows_json.push_back({{"input", row.input},
+                             {"row", row.name},
                              {"stages", stage_json},
                              {"total_ms", total_ms},
                              {"fps", 1000.0 / total_ms},
@@ -380,19 +396,23 @@ int run_bench(const BenchArgs& a) {
                              {"points", row.points}});
     }
     const auto& d = a.analyse.options.disparity;
-    const nlohmann::json result = {{"frame", in.paths.frame_id},
-                                   {"width", in.left.width_px},
-                                   {"height", in.left.height_px},
-                                   {"preset", a.analyse.preset},
-                                   {"num_disparities", d.num_disparities},
-                                   {"block_size", d.block_size},
-                                   {"mode", d.mode},
-                                   {"downscale", d.downscale},
-                                   {"runs", a.runs},
-                                   {"warmup", a.warmup},
-                                   {"matcher_ms", floor_ms},
-                                   {"rows", rows_json},
-                                   {"peak_rss_mb", peak_rss_mb()}};
+    const nlohmann::json result = {
+        {"frame", in.paths.frame_id},
+        {"width", in.left.width_px},
+        {"height", in.left.height_px},
+        {"preset", a.analyse.preset},
+        {"num_disparities", d.num_disparities},
+        {"block_size", d.block_size},
+        {"mode", d.mode},
+        {"downscale", d.downscale},
+        {"runs", a.runs},
+        {"warmup", a.warmup},
+        {"inputs",
+         {{"memory", "frames from memory (as from a camera): stages after decoding"},
+          {"files", "frames from PNG files (including decode)"}}},
+        {"matcher_ms", floor_ms},
+        {"rows", rows_json},
+        {"peak_rss_mb", peak_rss_mb()}};
     write_output({a.json, result.dump(1) + "\n", "--json"});
     return 0;
 }

@@ -326,7 +326,8 @@ TEST_CASE("batch without frames or with both --frames and --list is a usage erro
     CHECK(run(base + " --frames a --preset turbo", dir).code == 2);
 }
 
-TEST_CASE("bench reports the pipeline's stages beside the matcher alone as JSON", "[cli][bench]") {
+TEST_CASE("bench reports frames from memory and from files beside the matcher alone as JSON",
+          "[cli][bench]") {
     const auto dir = scratch("bench");
     const Run r = run(tool() + " bench" + sample_inputs() + " --runs 1 --warmup 0 --work-dir " +
                           quote(dir.string()),
@@ -335,18 +336,36 @@ TEST_CASE("bench reports the pipeline's stages beside the matcher alone as JSON"
     const auto j = nlohmann::json::parse(r.out);
     const double matcher = j["matcher_ms"];
     CHECK(matcher > 0.0);
-    REQUIRE(j["rows"].size() == 2);
+    CHECK(j["inputs"]["memory"].get<std::string>().find("camera") != std::string::npos);
+    CHECK(j["inputs"]["files"].get<std::string>().find("decode") != std::string::npos);
+    REQUIRE(j["rows"].size() == 4);
+    const auto stage_names = [](const nlohmann::json& row) {
+        std::vector<std::string> names;
+        for (const auto& s : row["stages"]) names.push_back(s["stage"]);
+        return names;
+    };
     for (const auto& row : j["rows"]) {
         const double total = row["total_ms"];
         CHECK(row["ratio_to_matcher"].get<double>() == Approx(total / matcher));
-        CHECK(row["stages"][1]["stage"] == "disparity");
+        const auto names = stage_names(row);
+        // From memory the frame is decoded already: the first stage is the matcher's; from
+        // files the load (PNG decode) comes first.
+        const bool from_files = row["input"] == "files";
+        REQUIRE(names.size() >= 2);
+        CHECK(names[0] == (from_files ? "load" : "disparity"));
+        CHECK(names[from_files ? 1 : 0] == "disparity");
+        CHECK(std::count(names.begin(), names.end(), "write --entities") == 1);
     }
-    CHECK(j["rows"][1]["stages"].size() > j["rows"][0]["stages"].size());
+    CHECK(j["rows"][0]["input"] == "memory");
+    CHECK(j["rows"][2]["input"] == "files");
+    CHECK(stage_names(j["rows"][1]).size() > stage_names(j["rows"][0]).size());
+    CHECK(stage_names(j["rows"][3]).size() > stage_names(j["rows"][2]).size());
     CHECK(j["peak_rss_mb"].get<double>() > 10.0);
     CHECK(fs::exists(dir / "bench.ply"));
 }
 
-TEST_CASE("the palette flag takes a palette file path as well as a bundled name", "[cli][semantic]") {
+TEST_CASE("the palette flag takes a palette file path as well as a bundled name",
+          "[cli][semantic]") {
     const auto dir = scratch("palette_path");
     const fs::path file = fs::path(STEREOSCENE_SOURCE_DIR) / "assets/palettes/cityscapes.json";
     const Run by_name = run(tool() + sample_inputs() + " --palette cityscapes -o -", dir);
