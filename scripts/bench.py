@@ -4,12 +4,13 @@
 usage: scripts/bench.py --build BUILD_DIR [--out out/bench] [--runs 5] [--batch-frames 100]
                         [--parts table,batch,presets,scaling] [--plots docs/images]
 
-table    per-stage medians of `cloud-analysis bench` (entities; entities + three clouds) beside
-         the OpenCV matcher alone on the same input in the same process, the ratio, fps, peak
-         RSS; for a KITTI-size synthetic pair made on the fly and ../shared/data/kitti15 frames;
-         plus `scene-render bench` rows (50 entities, 1280x720).
-batch    `cloud-analysis batch` over BATCH_FRAMES frames (the available frames repeated): fps and
-         resident memory per frame.
+table    per-stage medians of `cloud-analysis bench` (entities; entities + three clouds), for
+         frames from memory (as from a camera: the stages after decoding) and from PNG files
+         (including decode), beside the OpenCV matcher alone on the same input in the same
+         process, the ratio, fps, peak RSS; for a KITTI-size synthetic pair made on the fly and
+         ../shared/data/kitti15 frames; plus `scene-render bench` rows (50 entities, 1280x720).
+batch    `cloud-analysis batch` over BATCH_FRAMES frames (the available frames repeated): fps,
+         resident memory per frame and its mean per block of 10 frames.
 presets  tuned / fast / quality: D1-all on kitti15 (--gt-disparity) and the car numbers of
          `cloud-analysis evaluate`, beside the matcher and pipeline time.
 scaling  time vs pixels (1/4, 1/2, 1, 2 x KITTI) and vs disparities (64..256); scene-render vs
@@ -107,16 +108,22 @@ def part_table(a, tool, render, result):
         table.append(b)
     result["cloud_analysis"] = table
     print("\n### cloud-analysis, one frame (median of %d runs after a warm-up)\n" % a.runs)
-    print("| input | output | load | matcher alone | disparity stage | entities | clouds "
-          "(format+write) | total ms | fps | pipeline / matcher | peak RSS MB |")
-    print("|---|---|---|---|---|---|---|---|---|---|---|")
+    print("memory = frames from memory (as from a camera): stages after decoding; "
+          "files = frames from PNG files (including decode). Same process, same matcher floor.\n")
+    print("| input | frames from | output | load | matcher alone | disparity stage | "
+          "semantic + reproject | entities | entity write | clouds (format+write) | total ms | "
+          "fps | pipeline / matcher | peak RSS MB |")
+    print("|---|---|---|---|---|---|---|---|---|---|---|---|---|---|")
     for b in table:
         for row in b["rows"]:
             clouds = sum(s["ms"] for s in row["stages"]
                          if s["stage"].startswith(("format --", "write --x", "write --p")))
-            print(f"| {b['input']} | {row['row']} | {stage(row, 'load'):.1f} | "
+            load = f"{stage(row, 'load'):.1f}" if row["input"] == "files" else "-"
+            print(f"| {b['input']} | {row['input']} | {row['row']} | {load} | "
                   f"{b['matcher_ms']:.1f} | {stage(row, 'disparity'):.1f} | "
-                  f"{stage(row, 'entities'):.1f} | {clouds:.1f} | {row['total_ms']:.1f} | "
+                  f"{stage(row, 'semantic') + stage(row, 'reproject'):.1f} | "
+                  f"{stage(row, 'entities'):.1f} | {stage(row, 'write --entities'):.1f} | "
+                  f"{clouds:.1f} | {row['total_ms']:.1f} | "
                   f"{row['fps']:.1f} | {row['ratio_to_matcher']:.2f} | {b['peak_rss_mb']:.0f} |")
     if render:
         rows = render_bench(render, 50, a.render_frames)
@@ -158,8 +165,18 @@ def part_batch(a, tool, result):
             rep_short.update(root=str(root), method=method, rss_mb=rss)
             result["batch"].append(rep_short)
             src = "synthetic 1242x375" if "synthetic" in str(root) else "kitti15 " + "+".join(frames)
+            rep_short["label"] = f"{src}, {preset}, {method}"
             print(f"| {src} | {preset} | {method} | {rep['fps']:.2f} | {rss[0]:.0f} / "
                   f"{statistics.median(rss):.0f} / {rss[-1]:.0f} | {rep['peak_rss_mb']:.0f} |")
+    blocks = (a.batch_frames + 9) // 10
+    print("\nMean RSS per block of 10 frames, MB\n")
+    print("| row | " + " | ".join(f"{10 * k + 1}-{min(10 * k + 10, a.batch_frames)}"
+                                  for k in range(blocks)) + " |")
+    print("|---|" + "---|" * blocks)
+    for rep in result["batch"]:
+        rss = rep["rss_mb"]
+        means = [statistics.mean(rss[10 * k:10 * k + 10]) for k in range(blocks)]
+        print(f"| {rep['label']} | " + " | ".join(f"{m:.0f}" for m in means) + " |")
 
 
 def part_presets(a, tool, result):
@@ -168,8 +185,8 @@ def part_presets(a, tool, result):
         return
     result["presets"] = []
     print("\n### presets on kitti15 (accuracy from --gt-disparity and `evaluate`)\n")
-    print("| preset | frame | matcher ms | pipeline ms (entities) | D1-all % | density % | "
-          "car recall | car precision (scorable) | centre dist m |")
+    print("| preset | frame | matcher ms | pipeline ms (entities, from memory) | D1-all % | "
+          "density % | car recall | car precision (scorable) | centre dist m |")
     print("|---|---|---|---|---|---|---|---|---|")
     out = a.out / "presets"
     out.mkdir(parents=True, exist_ok=True)
@@ -227,11 +244,11 @@ def part_scaling(a, tool, render, result):
                 scaling["entities"].append({"entities": n, **lit[0]})
     result["scaling"] = scaling
     print("\n### scaling\n")
-    print("| image | pixels | matcher ms | pipeline ms (entities) |")
+    print("| image | pixels | matcher ms | pipeline ms (entities, from memory) |")
     print("|---|---|---|---|")
     for s in scaling["size"]:
         print(f"| {s['label']} | {s['pixels']} | {s['matcher_ms']:.1f} | {s['total_ms']:.1f} |")
-    print("\n| disparities | matcher ms | pipeline ms (entities) |")
+    print("\n| disparities | matcher ms | pipeline ms (entities, from memory) |")
     print("|---|---|---|")
     for s in scaling["disparities"]:
         print(f"| {s['num_disparities']} | {s['matcher_ms']:.1f} | {s['total_ms']:.1f} |")
@@ -254,7 +271,8 @@ def plot(scaling, folder):
     fig, ax = plt.subplots(figsize=(5, 3.5))
     px = [s["pixels"] / 1e3 for s in scaling["size"]]
     ax.plot(px, [s["matcher_ms"] for s in scaling["size"]], "o-", label="matcher alone")
-    ax.plot(px, [s["total_ms"] for s in scaling["size"]], "s-", label="pipeline (entities)")
+    ax.plot(px, [s["total_ms"] for s in scaling["size"]], "s-",
+            label="pipeline (entities, from memory)")
     ax.set_xlabel("image size, kilopixels (1/4, 1/2, 1, 2 x KITTI)")
     ax.set_ylabel("ms per frame")
     ax.set_title("cloud-analysis vs image size (128 disparities)")
@@ -267,7 +285,7 @@ def plot(scaling, folder):
     nd = [s["num_disparities"] for s in scaling["disparities"]]
     ax.plot(nd, [s["matcher_ms"] for s in scaling["disparities"]], "o-", label="matcher alone")
     ax.plot(nd, [s["total_ms"] for s in scaling["disparities"]], "s-",
-            label="pipeline (entities)")
+            label="pipeline (entities, from memory)")
     ax.set_xlabel("number of disparities")
     ax.set_ylabel("ms per frame")
     ax.set_title("cloud-analysis vs disparities (1242x375)")

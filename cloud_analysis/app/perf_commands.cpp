@@ -301,7 +301,9 @@ CLI::App* add_bench_command(CLI::App& app, BenchArgs& a) {
     CLI::App* cmd = app.add_subcommand(
         "bench",
         "time one frame: per-stage medians of the real run (entities; entities + all three "
-        "clouds) beside cv::StereoSGBM::compute alone on the same input, as JSON");
+        "clouds), for frames from memory (as from a camera: the stages after decoding) and "
+        "from PNG files (including decode), beside cv::StereoSGBM::compute alone on the same "
+        "input in the same process, as JSON");
     add_input_flags(*cmd, a.analyse);
     add_settings_flags(*cmd, a.analyse);
     cmd->add_option("--runs", a.runs, "timed runs per row (median)")
@@ -338,6 +340,7 @@ int run_bench(const BenchArgs& a) {
         std::map<std::string, std::vector<double>> stages;
         std::vector<std::string> order;
         std::vector<double> totals;
+        std::vector<double> writes;  // fsync'ed atomic writes: disk latency, not computation
         std::size_t points = 0;
     };
     std::vector<Row> rows;
@@ -373,10 +376,13 @@ int run_bench(const BenchArgs& a) {
             row.points = report.points;
             if (!timed) continue;
             row.totals.push_back(total);
+            double writes = 0.0;
             for (const auto& st : report.timings) {
+                if (st.stage.rfind("write ", 0) == 0) writes += st.ms;
                 if (row.stages.count(st.stage) == 0) row.order.push_back(st.stage);
                 row.stages[st.stage].push_back(st.ms);
             }
+            row.writes.push_back(writes);
         }
     }
     const double floor_ms = median(matcher_ms);
@@ -393,6 +399,7 @@ int run_bench(const BenchArgs& a) {
                              {"total_ms", total_ms},
                              {"fps", 1000.0 / total_ms},
                              {"ratio_to_matcher", total_ms / floor_ms},
+                             {"writes_ms", median(row.writes)},
                              {"points", row.points}});
     }
     const auto& d = a.analyse.options.disparity;

@@ -2,8 +2,9 @@
 
 /// `cloud-analysis batch` (many frames in one process: matcher, buffers, calibration and palette
 /// kept; the next frame decoded and the previous one written while the current one is matched)
-/// and `cloud-analysis bench` (per-stage medians of the real run beside the OpenCV matcher
-/// alone on the same input, as JSON). See docs/performance.md.
+/// and `cloud-analysis bench` (per-stage medians of the real run, for a frame already in memory
+/// and for one read from PNG files, beside the OpenCV matcher alone on the same input, as JSON).
+/// See docs/performance.md.
 
 #include <filesystem>
 #include <string>
