@@ -262,6 +262,74 @@ struct PixelGrid {
     bool valid() const { return width_px > 0 && height_px > 0; }
 };
 
+/// Scratch buffers of for_each_dilated, kept across calls.
+struct Dilation {
+    std::vector<std::uint8_t> mask;
+    std::vector<std::uint8_t> rows;
+    std::vector<int> prefix;
+    std::vector<int> column;
+};
+
+/// Calls visit(pixel index) once for every pixel within radius_px (Chebyshev distance) of
+/// the pixels of members: a square dilation, done separably (rows, then a running column
+/// count) over the members' bounding box, so its cost follows the box area rather than
+/// members x (2 radius_px + 1)^2.
+template <typename Visit>
+void for_each_dilated(const std::vector<std::uint32_t>& pixels, const Indices& members,
+                      const PixelGrid& grid, int radius_px, Dilation& d, Visit&& visit) {
+    if (members.empty()) return;
+    const auto width = static_cast<std::uint32_t>(grid.width_px);
+    int u_lo = grid.width_px, u_hi = -1, v_lo = grid.height_px, v_hi = -1;
+    for (std::size_t i : members) {
+        const int u = static_cast<int>(pixels[i] % width), v = static_cast<int>(pixels[i] / width);
+        u_lo = std::min(u_lo, u);
+        u_hi = std::max(u_hi, u);
+        v_lo = std::min(v_lo, v);
+        v_hi = std::max(v_hi, v);
+    }
+    u_lo = std::max(0, u_lo - radius_px);
+    u_hi = std::min(grid.width_px - 1, u_hi + radius_px);
+    v_lo = std::max(0, v_lo - radius_px);
+    v_hi = std::min(grid.height_px - 1, v_hi + radius_px);
+    const int bw = u_hi - u_lo + 1, bh = v_hi - v_lo + 1;
+    const auto at = [bw](int x, int y) {
+        return static_cast<std::size_t>(y) * static_cast<std::size_t>(bw) +
+               static_cast<std::size_t>(x);
+    };
+    d.mask.assign(static_cast<std::size_t>(bw) * static_cast<std::size_t>(bh), 0);
+    for (std::size_t i : members) {
+        d.mask[at(static_cast<int>(pixels[i] % width) - u_lo,
+                  static_cast<int>(pixels[i] / width) - v_lo)] = 1;
+    }
+    // Rows: a pixel is set when its row holds a member within radius_px.
+    d.rows.assign(d.mask.size(), 0);
+    d.prefix.resize(static_cast<std::size_t>(bw) + 1);
+    for (int y = 0; y < bh; ++y) {
+        d.prefix[0] = 0;
+        for (int x = 0; x < bw; ++x) d.prefix[x + 1] = d.prefix[x] + d.mask[at(x, y)];
+        for (int x = 0; x < bw; ++x) {
+            d.rows[at(x, y)] =
+                d.prefix[std::min(bw, x + radius_px + 1)] > d.prefix[std::max(0, x - radius_px)];
+        }
+    }
+    // Columns: a running count of set row pixels within radius_px above and below.
+    d.column.assign(static_cast<std::size_t>(bw), 0);
+    for (int y = 0; y < std::min(bh, radius_px); ++y) {
+        for (int x = 0; x < bw; ++x) d.column[x] += d.rows[at(x, y)];
+    }
+    for (int y = 0; y < bh; ++y) {
+        const int enter = y + radius_px, leave = y - radius_px - 1;
+        for (int x = 0; x < bw; ++x) {
+            if (enter < bh) d.column[x] += d.rows[at(x, enter)];
+            if (leave >= 0) d.column[x] -= d.rows[at(x, leave)];
+            if (d.column[x] > 0) {
+                visit(static_cast<std::size_t>(v_lo + y) * width +
+                      static_cast<std::size_t>(u_lo + x));
+            }
+        }
+    }
+}
+
 /// One thing instance before it becomes an entity.
 struct Candidate {
     OrientedBox box;
@@ -292,6 +360,7 @@ std::vector<Candidate> suppress_shadows(std::vector<Candidate> candidates,
     };
     std::vector<Cover> cover(static_cast<std::size_t>(grid.width_px) * grid.height_px);
     std::vector<Candidate> kept;
+    Dilation dilation;
     for (auto& c : candidates) {
         std::size_t shared = 0;
         for (std::size_t i : c.members) {
@@ -304,26 +373,20 @@ std::vector<Candidate> suppress_shadows(std::vector<Candidate> candidates,
             continue;
         }
         const auto range = static_cast<float>(c.range_m);
-        for (std::size_t i : c.members) {
-            const int u0 = static_cast<int>(pixels[i] % static_cast<std::uint32_t>(grid.width_px));
-            const int v0 = static_cast<int>(pixels[i] / static_cast<std::uint32_t>(grid.width_px));
-            for (int v = std::max(0, v0 - radius_px);
-                 v <= std::min(grid.height_px - 1, v0 + radius_px); ++v) {
-                for (int u = std::max(0, u0 - radius_px);
-                     u <= std::min(grid.width_px - 1, u0 + radius_px); ++u) {
-                    Cover& slot = cover[static_cast<std::size_t>(v) * grid.width_px + u];
-                    if (slot.group == c.group) {
-                        slot.nearest = std::min(slot.nearest, range);
-                    } else if (range < slot.nearest) {
-                        slot.other = slot.nearest;
-                        slot.nearest = range;
-                        slot.group = c.group;
-                    } else {
-                        slot.other = std::min(slot.other, range);
-                    }
-                }
+        // Applying one candidate's update twice to a slot changes nothing, so each pixel of
+        // the dilated footprint is updated once.
+        for_each_dilated(pixels, c.members, grid, radius_px, dilation, [&](std::size_t px) {
+            Cover& slot = cover[px];
+            if (slot.group == c.group) {
+                slot.nearest = std::min(slot.nearest, range);
+            } else if (range < slot.nearest) {
+                slot.other = slot.nearest;
+                slot.nearest = range;
+                slot.group = c.group;
+            } else {
+                slot.other = std::min(slot.other, range);
             }
-        }
+        });
         kept.push_back(std::move(c));
     }
     return kept;
