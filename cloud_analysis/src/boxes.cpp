@@ -56,27 +56,31 @@ std::pair<double, double> quantiles(std::vector<double>& values, double q_lo, do
 }
 
 /// Angle in [0, pi/2) of the first rectangle axis maximising Zhang et al.'s closeness score.
-/// Vectorised (Eigen arrays): about 3x faster than a loop over points per angle.
+/// Vectorised in single precision (Eigen arrays, 4 lanes): the coordinates are taken
+/// relative to the points' mean, so floats keep micrometres.
 double best_lshape_angle(const std::vector<Eigen::Vector2d>& pts, double step_deg) {
     const int steps = std::max(1, static_cast<int>(std::lround(90.0 / step_deg)));
     const auto n = static_cast<Eigen::Index>(pts.size());
-    Eigen::ArrayXd x(n), y(n);
+    Eigen::Vector2d mean = Eigen::Vector2d::Zero();
+    for (const auto& p : pts) mean += p;
+    mean /= static_cast<double>(std::max<Eigen::Index>(n, 1));
+    Eigen::ArrayXf x(n), y(n);
     for (Eigen::Index i = 0; i < n; ++i) {
-        x[i] = pts[static_cast<std::size_t>(i)].x();
-        y[i] = pts[static_cast<std::size_t>(i)].y();
+        x[i] = static_cast<float>(pts[static_cast<std::size_t>(i)].x() - mean.x());
+        y[i] = static_cast<float>(pts[static_cast<std::size_t>(i)].y() - mean.y());
     }
-    Eigen::ArrayXd c1(n), c2(n);
+    Eigen::ArrayXf c1(n), c2(n);
     double best_angle = 0.0;
-    double best_score = -1.0;
+    float best_score = -1.0f;
     for (int s = 0; s < steps; ++s) {
         const double a = s * (kPi / 2.0) / steps;
-        const double ca = std::cos(a), sa = std::sin(a);
+        const auto ca = static_cast<float>(std::cos(a)), sa = static_cast<float>(std::sin(a));
         c1 = x * ca + y * sa;  // along (cos a, sin a)
         c2 = y * ca - x * sa;  // along (-sin a, cos a)
-        const double min1 = c1.minCoeff(), max1 = c1.maxCoeff();
-        const double min2 = c2.minCoeff(), max2 = c2.maxCoeff();
-        const double score =
-            ((max1 - c1).min(c1 - min1).min((max2 - c2).min(c2 - min2)).max(0.01).inverse()).sum();
+        const float min1 = c1.minCoeff(), max1 = c1.maxCoeff();
+        const float min2 = c2.minCoeff(), max2 = c2.maxCoeff();
+        const float score =
+            ((max1 - c1).min(c1 - min1).min((max2 - c2).min(c2 - min2)).max(0.01f).inverse()).sum();
         if (score > best_score) {
             best_score = score;
             best_angle = a;
