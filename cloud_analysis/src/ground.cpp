@@ -1,5 +1,6 @@
 #include "cloud_analysis/ground.hpp"
 
+#include <algorithm>
 #include <cmath>
 #include <random>
 #include <stdexcept>
@@ -58,6 +59,13 @@ std::optional<GroundPlane> fit_ground_plane(const std::vector<Eigen::Vector3f>& 
     if (pts.size() < 3 || pts.size() < std::min<std::size_t>(options.min_inliers, 3)) {
         return std::nullopt;
     }
+    std::vector<double> px(pts.size()), py(pts.size()), pz(pts.size());
+    for (std::size_t i = 0; i < pts.size(); ++i) {
+        px[i] = pts[i].x();
+        py[i] = pts[i].y();
+        pz[i] = pts[i].z();
+    }
+    constexpr std::size_t kBlock = 1024;
     const double cos_max_tilt = std::cos(options.max_tilt_deg * kPi / 180.0);
     std::mt19937 rng(options.seed);
     std::uniform_int_distribution<std::size_t> pick(0, pts.size() - 1);
@@ -75,9 +83,18 @@ std::optional<GroundPlane> fit_ground_plane(const std::vector<Eigen::Vector3f>& 
         if (n.y() > 0.0) n = -n;
         if (-n.y() < cos_max_tilt) continue;
         const double d = -n.dot(a);
+        // Counted in blocks (vectorised over px/py/pz); a hypothesis that can no longer beat
+        // the best one stops early.
+        const double nx = n.x(), ny = n.y(), nz = n.z(), tol = options.inlier_distance_m;
         std::size_t count = 0;
-        for (const auto& p : pts) {
-            if (std::abs(n.dot(p) + d) < options.inlier_distance_m) ++count;
+        for (std::size_t begin = 0; begin < pts.size(); begin += kBlock) {
+            if (count + (pts.size() - begin) <= best_count) break;
+            const std::size_t end = std::min(pts.size(), begin + kBlock);
+            std::size_t block = 0;
+            for (std::size_t i = begin; i < end; ++i) {
+                block += std::abs(nx * px[i] + ny * py[i] + nz * pz[i] + d) < tol ? 1 : 0;
+            }
+            count += block;
         }
         if (count > best_count) {
             best_count = count;
