@@ -149,6 +149,18 @@ double quantile_of(std::vector<double>& values, double q) {
     return values[static_cast<std::size_t>(k)];
 }
 
+/// Vertical extent of points (2 % to 98 % height quantiles above the ground, or along -y
+/// without a ground plane), metres.
+double height_spread(const std::vector<Eigen::Vector3f>& pts, const Indices& idx,
+                     const std::optional<GroundPlane>& ground) {
+    std::vector<double> h;
+    h.reserve(idx.size());
+    for (std::size_t i : idx) {
+        h.push_back(ground ? ground->height(pts[i].cast<double>()) : -double{pts[i].y()});
+    }
+    return quantile_of(h, 0.98) - quantile_of(h, 0.02);
+}
+
 /// Whether a long blob is a row of things side by side seen front-on (or from behind) rather
 /// than one thing seen side-on: its length along the box heading spans at least two prior
 /// widths, and across the heading, from the camera's side, its top stays below
@@ -206,7 +218,7 @@ bool front_on_row(const std::vector<Eigen::Vector3f>& pts, const Indices& idx,
 Split split_oversized(const std::vector<Eigen::Vector3f>& pts, const Indices& idx,
                       const OrientedBox& box, const ClassSettings& s,
                       const std::optional<GroundPlane>& ground, const ExtractOptions& options) {
-    if (!s.has_prior()) return {{idx}};
+    if (!s.has_prior()) return {{idx}, false, std::nullopt};
     const double c = std::cos(box.theta), sn = std::sin(box.theta);
     if (ground && options.row_low_fraction > 0.0 &&
         front_on_row(pts, idx, box, s, *ground, options)) {
@@ -227,7 +239,7 @@ Split split_oversized(const std::vector<Eigen::Vector3f>& pts, const Indices& id
     if (box.W_m > std::max(s.split_factor, 1.9) * s.prior_W_m) {
         return split_along(pts, idx, sn, c, box.W_m, s.prior_W_m);
     }
-    return {{idx}};
+    return {{idx}, false, std::nullopt};
 }
 
 scene_schema::Entity make_entity(const ClassInfo& info, const OrientedBox& box,
@@ -262,88 +274,27 @@ struct PixelGrid {
     bool valid() const { return width_px > 0 && height_px > 0; }
 };
 
-/// Scratch buffers of for_each_dilated, kept across calls.
-struct Dilation {
-    std::vector<std::uint8_t> mask;
-    std::vector<std::uint8_t> rows;
-    std::vector<int> prefix;
-    std::vector<int> column;
-};
-
-/// Calls visit(pixel index) once for every pixel within radius_px (Chebyshev distance) of
-/// the pixels of members: a square dilation, done separably (rows, then a running column
-/// count) over the members' bounding box, so its cost follows the box area rather than
-/// members x (2 radius_px + 1)^2.
-template <typename Visit>
-void for_each_dilated(const std::vector<std::uint32_t>& pixels, const Indices& members,
-                      const PixelGrid& grid, int radius_px, Dilation& d, Visit&& visit) {
-    if (members.empty()) return;
-    const auto width = static_cast<std::uint32_t>(grid.width_px);
-    int u_lo = grid.width_px, u_hi = -1, v_lo = grid.height_px, v_hi = -1;
-    for (std::size_t i : members) {
-        const int u = static_cast<int>(pixels[i] % width), v = static_cast<int>(pixels[i] / width);
-        u_lo = std::min(u_lo, u);
-        u_hi = std::max(u_hi, u);
-        v_lo = std::min(v_lo, v);
-        v_hi = std::max(v_hi, v);
-    }
-    u_lo = std::max(0, u_lo - radius_px);
-    u_hi = std::min(grid.width_px - 1, u_hi + radius_px);
-    v_lo = std::max(0, v_lo - radius_px);
-    v_hi = std::min(grid.height_px - 1, v_hi + radius_px);
-    const int bw = u_hi - u_lo + 1, bh = v_hi - v_lo + 1;
-    const auto at = [bw](int x, int y) {
-        return static_cast<std::size_t>(y) * static_cast<std::size_t>(bw) +
-               static_cast<std::size_t>(x);
-    };
-    d.mask.assign(static_cast<std::size_t>(bw) * static_cast<std::size_t>(bh), 0);
-    for (std::size_t i : members) {
-        d.mask[at(static_cast<int>(pixels[i] % width) - u_lo,
-                  static_cast<int>(pixels[i] / width) - v_lo)] = 1;
-    }
-    // Rows: a pixel is set when its row holds a member within radius_px.
-    d.rows.assign(d.mask.size(), 0);
-    d.prefix.resize(static_cast<std::size_t>(bw) + 1);
-    for (int y = 0; y < bh; ++y) {
-        d.prefix[0] = 0;
-        for (int x = 0; x < bw; ++x) d.prefix[x + 1] = d.prefix[x] + d.mask[at(x, y)];
-        for (int x = 0; x < bw; ++x) {
-            d.rows[at(x, y)] =
-                d.prefix[std::min(bw, x + radius_px + 1)] > d.prefix[std::max(0, x - radius_px)];
-        }
-    }
-    // Columns: a running count of set row pixels within radius_px above and below.
-    d.column.assign(static_cast<std::size_t>(bw), 0);
-    for (int y = 0; y < std::min(bh, radius_px); ++y) {
-        for (int x = 0; x < bw; ++x) d.column[x] += d.rows[at(x, y)];
-    }
-    for (int y = 0; y < bh; ++y) {
-        const int enter = y + radius_px, leave = y - radius_px - 1;
-        for (int x = 0; x < bw; ++x) {
-            if (enter < bh) d.column[x] += d.rows[at(x, enter)];
-            if (leave >= 0) d.column[x] -= d.rows[at(x, leave)];
-            if (d.column[x] > 0) {
-                visit(static_cast<std::size_t>(v_lo + y) * width +
-                      static_cast<std::size_t>(u_lo + x));
-            }
-        }
-    }
-}
-
 /// One thing instance before it becomes an entity.
 struct Candidate {
     OrientedBox box;
     Indices members;
     double range_m = 0.0;   ///< mean bird's-eye range of the points
     std::size_t group = 0;  ///< pieces cut from one 3D cluster at clear gaps share a group
+    bool fragment = false;  ///< short (a strip) or sparse (under min_points): edge smear?
 };
 
-/// Image-space suppression of "shadows": candidates whose pixels mostly lie within radius_px
-/// of the pixels of a nearer candidate of the same class (nearer by more than min_gap_m). A
-/// real object behind another is occluded there and shows only beside it; pixels interleaved
-/// with a nearer object's are wrong matches on it (dark, textureless car bodies) reprojected
-/// too far. Pieces of one group (a parked row cut at clear gaps) never suppress each other:
-/// each is a distinct object and the row is connected in space, which a shadow is not.
+/// Image-space suppression of "shadows" (candidates visited nearest first, tested against the
+/// accepted ones of other groups nearer by more than min_gap_m):
+/// - a candidate with most of its pixels inside the row extents of a nearer candidate (its
+///   leftmost to rightmost pixel on each row) is dropped: pixels
+///   interleaved with a nearer object's are wrong matches on it (dark, textureless car bodies,
+///   holes in its disparity) reprojected too far. A real object behind another is occluded
+///   there and shows only beside it, so a candidate beside a nearer one is kept;
+/// - a fragment (short or sparse) is dropped when most of its pixels lie within radius_px of
+///   those extents on any row within radius_px above or below: stereo smear along a nearer
+///   object's edges (roof lines matched to the background) is a thin strip beside it.
+/// Pieces of one group (a parked row cut at clear gaps) never suppress each other: each is a
+/// distinct object and the row is connected in space, which a shadow is not.
 std::vector<Candidate> suppress_shadows(std::vector<Candidate> candidates,
                                         const std::vector<std::uint32_t>& pixels,
                                         const PixelGrid& grid, double min_gap_m,
@@ -351,42 +302,50 @@ std::vector<Candidate> suppress_shadows(std::vector<Candidate> candidates,
     if (!grid.valid() || candidates.size() < 2) return candidates;
     std::stable_sort(candidates.begin(), candidates.end(),
                      [](const auto& a, const auto& b) { return a.range_m < b.range_m; });
-    // Per pixel (dilated by radius_px): the nearest accepted range, its group, and the nearest
-    // accepted range of any other group, so that a candidate is tested against other groups.
-    struct Cover {
-        float nearest = 1e30f;
-        std::size_t group = static_cast<std::size_t>(-1);
-        float other = 1e30f;
+    // Per image row, the column extent of every accepted candidate's pixels on that row.
+    struct Extent {
+        int lo_px;
+        int hi_px;
+        float range_m;
+        std::size_t group;
     };
-    std::vector<Cover> cover(static_cast<std::size_t>(grid.width_px) * grid.height_px);
+    std::vector<std::vector<Extent>> rows(static_cast<std::size_t>(grid.height_px));
+    const auto width = static_cast<std::uint32_t>(grid.width_px);
     std::vector<Candidate> kept;
-    Dilation dilation;
     for (auto& c : candidates) {
+        const int reach = c.fragment ? radius_px : 0;
         std::size_t shared = 0;
         for (std::size_t i : c.members) {
-            const Cover& slot = cover[pixels[i]];
-            const float nearest = slot.group == c.group ? slot.other : slot.nearest;
-            if (double{nearest} + min_gap_m < c.range_m) ++shared;
+            const int u = static_cast<int>(pixels[i] % width);
+            const int v = static_cast<int>(pixels[i] / width);
+            bool inside = false;
+            for (int r = std::max(0, v - reach);
+                 r <= std::min(grid.height_px - 1, v + reach) && !inside; ++r) {
+                for (const Extent& e : rows[static_cast<std::size_t>(r)]) {
+                    if (e.group != c.group && double{e.range_m} + min_gap_m < c.range_m &&
+                        u >= e.lo_px - reach && u <= e.hi_px + reach) {
+                        inside = true;
+                        break;
+                    }
+                }
+            }
+            shared += inside ? 1 : 0;
         }
         if (static_cast<double>(shared) >
             max_shared_fraction * static_cast<double>(c.members.size())) {
             continue;
         }
-        const auto range = static_cast<float>(c.range_m);
-        // Applying one candidate's update twice to a slot changes nothing, so each pixel of
-        // the dilated footprint is updated once.
-        for_each_dilated(pixels, c.members, grid, radius_px, dilation, [&](std::size_t px) {
-            Cover& slot = cover[px];
-            if (slot.group == c.group) {
-                slot.nearest = std::min(slot.nearest, range);
-            } else if (range < slot.nearest) {
-                slot.other = slot.nearest;
-                slot.nearest = range;
-                slot.group = c.group;
-            } else {
-                slot.other = std::min(slot.other, range);
-            }
-        });
+        std::vector<int> lo(rows.size(), grid.width_px), hi(rows.size(), -1);
+        for (std::size_t i : c.members) {
+            const int u = static_cast<int>(pixels[i] % width);
+            const std::size_t v = pixels[i] / width;
+            lo[v] = std::min(lo[v], u);
+            hi[v] = std::max(hi[v], u);
+        }
+        for (std::size_t v = 0; v < rows.size(); ++v) {
+            if (hi[v] >= 0)
+                rows[v].push_back({lo[v], hi[v], static_cast<float>(c.range_m), c.group});
+        }
         kept.push_back(std::move(c));
     }
     return kept;
@@ -517,6 +476,11 @@ std::vector<scene_schema::Entity> instances_of_class(const ClassInfo& info,
                 continue;
             }
             Candidate c{box, std::move(part), 0.0, group};
+            if (s.thing && s.has_prior()) {
+                c.fragment = c.members.size() < static_cast<std::size_t>(s.min_points) ||
+                             height_spread(pts, c.members, ground) <
+                                 options.fragment_height_fraction * s.prior_H_m;
+            }
             for (std::size_t i : c.members)
                 c.range_m += std::hypot(double{pts[i].x()}, double{pts[i].z()});
             c.range_m /= static_cast<double>(c.members.size());
@@ -562,6 +526,9 @@ void ExtractOptions::validate() const {
         throw std::invalid_argument("shadow_fraction: must be in (0, 1]");
     }
     if (shadow_radius_px < 0) throw std::invalid_argument("shadow_radius_px: must be >= 0");
+    if (!(fragment_height_fraction >= 0.0 && fragment_height_fraction <= 1.0)) {
+        throw std::invalid_argument("fragment_height_fraction: must be in [0, 1]");
+    }
     if (!(min_height_fraction >= 0.0 && min_height_fraction < 1.0)) {
         throw std::invalid_argument("min_height_fraction: must be in [0, 1)");
     }

@@ -253,6 +253,88 @@ TEST_CASE("wrong matches interleaved with a near car's pixels are not a second c
     CHECK(count_class(extract_entities(cloud, test_palette(), StereoCamera{}, o), "car") == 2);
 }
 
+namespace {
+
+/// Road y = 1.65 from z 3 to 40, x -6..6.
+void add_road(LabeledCloud& cloud) {
+    for (float x = -6.0f; x <= 6.0f; x += 0.25f) {
+        for (float z = 3.0f; z <= 40.0f; z += 0.25f) add_point(cloud, {x, 1.65f, z}, 0);
+    }
+}
+
+/// The rear face of a car 10 m ahead (x -0.9..0.9, 1.5 m high): pixels u 955-1045 and
+/// v 1007-1082 for project_pixels' camera; optionally with a hole in x -0.7..0.7, y 0.4..1.4
+/// (u 965-1035, v 1020-1070), where the dark body gave no disparity.
+void add_near_rear(LabeledCloud& cloud, bool with_hole) {
+    for (float y = 0.15f; y <= 1.65f; y += 0.02f) {
+        for (float x = -0.9f; x <= 0.9f; x += 0.02f) {
+            if (with_hole && std::abs(x) < 0.7f && y > 0.4f && y < 1.4f) continue;
+            add_point(cloud, {x, y, 10.0f}, 2);
+        }
+    }
+}
+
+}  // namespace
+
+TEST_CASE("wrong matches inside a hole of a nearer car's pixels are not a second car",
+          "[entities][shadow]") {
+    LabeledCloud cloud;
+    add_road(cloud);
+    add_near_rear(cloud, true);
+    // Points 4 m behind, seen through the middle of the hole (u 975-1025, v 1030-1060): every
+    // pixel at least 10 px from the car's own, but inside its extent on every row.
+    for (float y = 0.84f; y <= 1.65f; y += 0.02f) {
+        for (float x = -0.7f; x <= 0.7f; x += 0.02f) add_point(cloud, {x, y, 14.0f}, 2);
+    }
+    project_pixels(cloud);
+    ExtractOptions o = options_with_bundled_config("instances");
+    CHECK(count_class(extract_entities(cloud, test_palette(), StereoCamera{}, o), "car") == 1);
+    o.shadow_fraction = 1.0;  // never suppress: the wrong matches become a second car
+    CHECK(count_class(extract_entities(cloud, test_palette(), StereoCamera{}, o), "car") == 2);
+}
+
+TEST_CASE("a car partly hidden by a nearer one, seen right beside it, is kept",
+          "[entities][shadow]") {
+    LabeledCloud cloud;
+    add_road(cloud);
+    add_near_rear(cloud, false);
+    // The rear of a car 18 m ahead, its right part hidden: only x -2.2..-1.65 is seen, 16 px
+    // immediately left of the nearer car (u 939-954), a real object beside an occluder.
+    for (float y = 0.15f; y <= 1.65f; y += 0.05f) {
+        for (float x = -2.2f; x <= -1.65f; x += 0.02f) add_point(cloud, {x, y, 18.0f}, 2);
+    }
+    project_pixels(cloud);
+    ExtractOptions o = options_with_bundled_config("instances");
+    std::vector<scene_schema::Entity> cars;
+    for (const auto& e : extract_entities(cloud, test_palette(), StereoCamera{}, o).entities) {
+        if (e.class_name == "car") cars.push_back(e);
+    }
+    REQUIRE(cars.size() == 2);
+    std::sort(cars.begin(), cars.end(), [](const auto& a, const auto& b) { return a.z < b.z; });
+    CHECK(cars[1].z > 18.0);
+    o.fragment_height_fraction = 1.0;  // every candidate a fragment: beside counts as a shadow
+    CHECK(count_class(extract_entities(cloud, test_palette(), StereoCamera{}, o), "car") == 1);
+}
+
+TEST_CASE("a thin strip of roof-line smear just above a nearer car is not a car",
+          "[entities][shadow]") {
+    LabeledCloud cloud;
+    add_road(cloud);
+    add_near_rear(cloud, false);
+    // The pixels right above the car's roof (v 1001-1006, u 958-1042), matched to the
+    // background 8 m behind: a strip 0.18 m high at roof height, 900 points.
+    for (float y = 0.036f; y <= 0.216f; y += 0.03f) {
+        for (float x = -1.5f; x <= 1.5f; x += 0.02f) add_point(cloud, {x, y, 18.0f}, 2);
+    }
+    project_pixels(cloud);
+    ExtractOptions o = options_with_bundled_config("instances");
+    CHECK(count_class(extract_entities(cloud, test_palette(), StereoCamera{}, o), "car") == 1);
+    o.fragment_height_fraction = 0.0;  // no fragments: the strip lies on no row of the car
+    CHECK(count_class(extract_entities(cloud, test_palette(), StereoCamera{}, o), "car") == 2);
+    o.fragment_height_fraction = 1.5;
+    CHECK_THROWS_WITH(o.validate(), Catch::Contains("fragment_height_fraction"));
+}
+
 TEST_CASE("a fragment whose box centre falls inside a larger car is dropped", "[entities]") {
     LabeledCloud cloud = test_scene();
     // A blob of car points 1 m behind the visible side of the first car (inside its body).

@@ -25,21 +25,26 @@ struct ExtractOptions {
     int image_radius_px = 2;               ///< "image": pixel neighbourhood linked, >= 1
     double max_range_m = 60.0;             ///< points farther than this (z) are ignored, metres
     std::vector<std::string> ground_classes = {"road", "sidewalk", "parking"};  ///< plane votes
-    double outlier_margin_m = 0.5;     ///< thing points farther than near + prior diagonal +
-                                       ///< this (bird's-eye range) are stereo smear, metres
-    double shadow_fraction = 0.5;      ///< a thing cluster with more of its pixels than this
-                                       ///< within shadow_radius_px of a nearer same-class
-                                       ///< cluster's pixels is a wrong-match shadow, (0, 1]
-    int shadow_radius_px = 10;         ///< neighbourhood of that test, pixels, >= 0
-    double min_height_fraction = 0.3;  ///< things lower than this * prior_H_m above the ground
-                                       ///< are mislabelled ground, [0, 1)
-    double row_low_fraction = 0.7;     ///< a thing blob at least two prior widths long whose top
-                                       ///< stays below this * its highest top for row_low_extent_m
-                                       ///< across it from the camera's side (bonnets) is a row side
-                                       ///< by side seen front-on, [0, 1), 0 = off
-    double row_low_extent_m = 0.6;     ///< that low extent, metres, > 0
-    double row_gap_m = 0.6;            ///< gap between things in a row: pitch = prior W + this
-                                       ///< side by side, prior L + this end to end, metres, >= 0
+    double outlier_margin_m = 0.5;          ///< thing points farther than near + prior diagonal +
+                                            ///< this (bird's-eye range) are stereo smear, metres
+    double shadow_fraction = 0.5;           ///< a thing cluster with more of its pixels than this
+                                            ///< inside a nearer same-class cluster's row extents
+                                            ///< (fragments: next to them) is a wrong-match shadow,
+                                            ///< (0, 1]
+    int shadow_radius_px = 10;              ///< margin of those extents, columns (and, for
+                                            ///< fragments, rows above and below), pixels, >= 0
+    double fragment_height_fraction = 0.3;  ///< a thing cluster whose points span less than
+                                            ///< this * prior_H_m vertically (or with fewer than
+                                            ///< min_points, a row piece) is a fragment, [0, 1]
+    double min_height_fraction = 0.3;       ///< things lower than this * prior_H_m above the ground
+                                            ///< are mislabelled ground, [0, 1)
+    double row_low_fraction = 0.7;  ///< a thing blob at least two prior widths long whose top
+                                    ///< stays below this * its highest top for row_low_extent_m
+                                    ///< across it from the camera's side (bonnets) is a row side
+                                    ///< by side seen front-on, [0, 1), 0 = off
+    double row_low_extent_m = 0.6;  ///< that low extent, metres, > 0
+    double row_gap_m = 0.6;         ///< gap between things in a row: pitch = prior W + this
+                                    ///< side by side, prior L + this end to end, metres, >= 0
     /// Throws std::invalid_argument naming the bad field.
     void validate() const;
 };
