@@ -144,8 +144,9 @@ def part_batch(a, tool, result):
         roots.append((KITTI, KITTI_FRAMES))
     result["batch"] = []
     print(f"\n### cloud-analysis batch, {a.batch_frames} frames\n")
-    print("| frames from | preset | method | fps | RSS first / median / last frame MB | peak RSS MB |")
-    print("|---|---|---|---|---|---|")
+    print("| frames from | preset | method | fps | CPU ms per frame | cores busy % | "
+          "load average | RSS first / median / last frame MB | peak RSS MB |")
+    print("|---|---|---|---|---|---|---|---|---|")
     for root, frames in roots:
         for preset, method in [("tuned", "instances"), ("tuned", "centroid"),
                                ("fast", "instances")]:
@@ -155,6 +156,7 @@ def part_batch(a, tool, result):
             listing.write_text("\n".join(frames[i % len(frames)]
                                          for i in range(a.batch_frames)) + "\n")
             report = out / "report.json"
+            load = os.getloadavg()[0]
             r = run([tool, "batch", "--kitti-root", root, "--list", listing, "--out-dir", out,
                      "--preset", preset, "--method", method, "--report", report])
             if r.returncode != 0:
@@ -162,11 +164,13 @@ def part_batch(a, tool, result):
             rep = json.loads(report.read_text())
             rss = [f["rss_mb"] for f in rep["per_frame"]]
             rep_short = {k: v for k, v in rep.items() if k != "per_frame"}
-            rep_short.update(root=str(root), method=method, rss_mb=rss)
+            rep_short.update(root=str(root), method=method, rss_mb=rss, load_average=load)
             result["batch"].append(rep_short)
             src = "synthetic 1242x375" if "synthetic" in str(root) else "kitti15 " + "+".join(frames)
             rep_short["label"] = f"{src}, {preset}, {method}"
-            print(f"| {src} | {preset} | {method} | {rep['fps']:.2f} | {rss[0]:.0f} / "
+            print(f"| {src} | {preset} | {method} | {rep['fps']:.2f} | "
+                  f"{rep['cpu_ms_per_frame']:.0f} | {100 * rep['cores_busy']:.0f} | {load:.1f} | "
+                  f"{rss[0]:.0f} / "
                   f"{statistics.median(rss):.0f} / {rss[-1]:.0f} | {rep['peak_rss_mb']:.0f} |")
     blocks = (a.batch_frames + 9) // 10
     print("\nMean RSS per block of 10 frames, MB\n")

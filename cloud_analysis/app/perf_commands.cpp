@@ -12,6 +12,7 @@
 #include <future>
 #include <map>
 #include <optional>
+#include <thread>
 
 #include <nlohmann/json.hpp>
 #include <scene_schema/entities.hpp>
@@ -33,6 +34,16 @@ double peak_rss_mb() {
     rusage usage{};
     getrusage(RUSAGE_SELF, &usage);
     return static_cast<double>(usage.ru_maxrss) / 1024.0;
+}
+
+/// CPU time of this process so far (all threads, user + system), seconds.
+double cpu_seconds() {
+    rusage usage{};
+    getrusage(RUSAGE_SELF, &usage);
+    const auto seconds = [](const timeval& t) {
+        return static_cast<double>(t.tv_sec) + static_cast<double>(t.tv_usec) / 1e6;
+    };
+    return seconds(usage.ru_utime) + seconds(usage.ru_stime);
 }
 
 /// Current resident set, MB (VmRSS of /proc/self/status; 0 when unavailable).
@@ -239,6 +250,7 @@ int run_batch(const BatchArgs& a) {
         }
     };
     const auto start = Clock::now();
+    const double cpu_start = cpu_seconds();
     for (std::size_t i = 0; i < n; ++i) {
         LoadedFrame frame = next.get();
         if (i + 1 < n) next = std::async(std::launch::async, load, i + 1);
@@ -281,15 +293,25 @@ int run_batch(const BatchArgs& a) {
     collect();
     const double seconds = ms_between(start, Clock::now()) / 1000.0;
     const double fps = static_cast<double>(n) / seconds;
+    // CPU time per frame does not depend on what else runs on the machine; the busy share
+    // (CPU time over wall time times cores) says whether the overlap keeps every core working.
+    const double cpu_ms_per_frame = 1000.0 * (cpu_seconds() - cpu_start) / static_cast<double>(n);
+    const unsigned cores = std::max(1u, std::thread::hardware_concurrency());
+    const double busy = cpu_ms_per_frame * fps / (1000.0 * cores);
     std::fprintf(stderr,
-                 "%s%s: batch: %zu frames in %.2f s (%.2f fps), %zu failed, peak RSS %.0f MB\n",
-                 tty ? "\n" : "", kTool, n, seconds, fps, failed, peak_rss_mb());
+                 "%s%s: batch: %zu frames in %.2f s (%.2f fps), %zu failed, peak RSS %.0f MB, "
+                 "%.0f ms CPU per frame, cores %.0f %% busy\n",
+                 tty ? "\n" : "", kTool, n, seconds, fps, failed, peak_rss_mb(), cpu_ms_per_frame,
+                 100.0 * busy);
     if (!a.report.empty()) {
         const nlohmann::json report = {{"frames", n},
                                        {"failed", failed},
                                        {"seconds", seconds},
                                        {"fps", fps},
                                        {"peak_rss_mb", peak_rss_mb()},
+                                       {"cpu_ms_per_frame", cpu_ms_per_frame},
+                                       {"cores", cores},
+                                       {"cores_busy", busy},
                                        {"preset", a.settings.preset},
                                        {"per_frame", per_frame}};
         write_output({a.report.string(), report.dump(1) + "\n", "--report"});
