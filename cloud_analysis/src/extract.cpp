@@ -261,6 +261,33 @@ scene_schema::Entity make_entity(const ClassInfo& info, const OrientedBox& box,
     return e;
 }
 
+/// Share of the bird's-eye footprint of `e` (sampled on a kSamples x kSamples grid of cell
+/// centres) inside the footprint of any of `things`.
+double footprint_share_inside(const scene_schema::Entity& e,
+                              const std::vector<scene_schema::Entity>& things) {
+    constexpr int kSamples = 10;
+    const double c = std::cos(e.theta), sn = std::sin(e.theta);
+    int inside = 0;
+    for (int i = 0; i < kSamples; ++i) {
+        for (int j = 0; j < kSamples; ++j) {
+            // Heading (cos t, -sin t) in x-z; across it (sin t, cos t).
+            const double a = ((i + 0.5) / kSamples - 0.5) * e.L;
+            const double b = ((j + 0.5) / kSamples - 0.5) * e.W;
+            const double x = e.x + a * c + b * sn, z = e.z - a * sn + b * c;
+            for (const auto& t : things) {
+                const double dx = x - t.x, dz = z - t.z;
+                const double ct = std::cos(t.theta), st = std::sin(t.theta);
+                if (std::abs(dx * ct - dz * st) <= t.L / 2.0 &&
+                    std::abs(dx * st + dz * ct) <= t.W / 2.0) {
+                    ++inside;
+                    break;
+                }
+            }
+        }
+    }
+    return static_cast<double>(inside) / (kSamples * kSamples);
+}
+
 /// confidence = n / (n + 2 * min_points): 1/3 at the minimum, -> 1 with many points.
 double confidence_of(std::size_t n, const ClassSettings& s) {
     const double dn = static_cast<double>(n);
@@ -537,6 +564,9 @@ void ExtractOptions::validate() const {
     }
     if (!(row_low_extent_m > 0.0)) throw std::invalid_argument("row_low_extent_m: must be > 0");
     if (!(row_gap_m >= 0.0)) throw std::invalid_argument("row_gap_m: must be >= 0");
+    if (!(stuff_on_thing_fraction > 0.0 && stuff_on_thing_fraction <= 1.0)) {
+        throw std::invalid_argument("stuff_on_thing_fraction: must be in (0, 1]");
+    }
 }
 
 scene_schema::EntityDocument extract_entities(const LabeledCloud& cloud, const Palette& palette,
@@ -587,14 +617,16 @@ scene_schema::EntityDocument extract_entities(const LabeledCloud& cloud, const P
         }
     }
 
+    std::vector<std::vector<scene_schema::Entity>> made(palette.classes.size());
+    std::vector<char> is_thing(palette.classes.size(), 0);
     for (std::size_t k = 0; k < palette.classes.size(); ++k) {
         const ClassInfo& info = palette.classes[k];
         const ClassSettings s = options.classes.find(info.name);
+        is_thing[k] = s.thing ? 1 : 0;
         const auto& pts = per_class[k];
         if (!s.entity || pts.size() < static_cast<std::size_t>(s.min_points)) continue;
-        std::vector<scene_schema::Entity> made;
         if (options.method == "instances") {
-            made = instances_of_class(info, pts, per_class_pixels[k], grid, s, ground, options);
+            made[k] = instances_of_class(info, pts, per_class_pixels[k], grid, s, ground, options);
         } else {
             OrientedBox box;
             if (options.method == "centroid") {
@@ -607,14 +639,32 @@ scene_schema::EntityDocument extract_entities(const LabeledCloud& cloud, const P
             } else {
                 box = variance_box(pts);
             }
-            made.push_back(
+            made[k].push_back(
                 make_entity(info, box, pts.size(), confidence_of(pts.size(), s), options.method));
         }
-        for (std::size_t n = 0; n < made.size(); ++n) {
-            std::string stem = info.name;
-            std::replace(stem.begin(), stem.end(), ' ', '-');
-            made[n].id = stem + "-" + std::to_string(n + 1);
-            doc.entities.push_back(std::move(made[n]));
+    }
+    if (options.method == "instances" && options.stuff_on_thing_fraction < 1.0) {
+        std::vector<scene_schema::Entity> things;
+        for (std::size_t k = 0; k < made.size(); ++k) {
+            if (is_thing[k]) things.insert(things.end(), made[k].begin(), made[k].end());
+        }
+        for (std::size_t k = 0; k < made.size(); ++k) {
+            if (is_thing[k]) continue;
+            auto& list = made[k];
+            list.erase(std::remove_if(list.begin(), list.end(),
+                                      [&](const scene_schema::Entity& e) {
+                                          return footprint_share_inside(e, things) >
+                                                 options.stuff_on_thing_fraction;
+                                      }),
+                       list.end());
+        }
+    }
+    for (std::size_t k = 0; k < made.size(); ++k) {
+        std::string stem = palette.classes[k].name;
+        std::replace(stem.begin(), stem.end(), ' ', '-');
+        for (std::size_t n = 0; n < made[k].size(); ++n) {
+            made[k][n].id = stem + "-" + std::to_string(n + 1);
+            doc.entities.push_back(std::move(made[k][n]));
         }
     }
     return doc;

@@ -502,3 +502,33 @@ TEST_CASE("the sparse far car of a parked row needs only half the class's minimu
     REQUIRE(centres.size() == 3);
     CHECK(centres[2] == Approx(17.3 + 2.1).margin(0.3));
 }
+
+TEST_CASE("stuff points smeared onto a thing do not become a stuff entity on it",
+          "[entities][stuff]") {
+    Palette palette = test_palette();
+    palette.classes.push_back({"building", 11, false, {70, 70, 70}});
+    LabeledCloud cloud = test_scene();
+    // A real building front along x = -8, and 1014 building points inside the first car's box
+    // (x -3.5, z 12): the building's label spilling over the car's silhouette, at its depth.
+    for (float z = 5.0f; z <= 25.0f; z += 0.25f) {
+        for (float y = -3.0f; y <= 1.65f; y += 0.25f) add_point(cloud, {-8.0f, y, z}, 3);
+    }
+    for (float x = -3.8f; x <= -3.2f; x += 0.05f) {
+        for (float z = 11.7f; z <= 12.3f; z += 0.05f) {
+            for (float y = 0.65f; y <= 1.15f; y += 0.1f) add_point(cloud, {x, y, z}, 3);
+        }
+    }
+    ExtractOptions o = options_with_bundled_config("instances");
+    auto doc = extract_entities(cloud, palette, StereoCamera{}, o);
+    REQUIRE(count_class(doc, "building") == 1);
+    CHECK(count_class(doc, "car") == 2);
+    for (const auto& e : doc.entities) {
+        if (e.class_name != "building") continue;
+        CHECK(e.id == "building-1");
+        CHECK(e.x == Approx(-8.0).margin(0.3));
+    }
+    o.stuff_on_thing_fraction = 1.0;  // off: the spilled points make a second building
+    CHECK(count_class(extract_entities(cloud, palette, StereoCamera{}, o), "building") == 2);
+    o.stuff_on_thing_fraction = 0.0;
+    CHECK_THROWS_WITH(o.validate(), Catch::Contains("stuff_on_thing_fraction"));
+}

@@ -45,6 +45,10 @@ struct ExtractOptions {
     double row_low_extent_m = 0.6;  ///< that low extent, metres, > 0
     double row_gap_m = 0.6;         ///< gap between things in a row: pitch = prior W + this
                                     ///< side by side, prior L + this end to end, metres, >= 0
+    double stuff_on_thing_fraction = 0.5;  ///< a stuff entity with more than this share of its
+                                           ///< footprint inside thing boxes is dropped (stuff
+                                           ///< smeared onto a thing's silhouette), (0, 1],
+                                           ///< 1 = off
     /// Throws std::invalid_argument naming the bad field.
     void validate() const;
 };
