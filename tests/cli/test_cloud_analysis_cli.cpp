@@ -1,6 +1,7 @@
 #include <catch2/catch.hpp>
 
 #include <sys/wait.h>
+#include <unistd.h>
 
 #include <algorithm>
 #include <cmath>
@@ -35,12 +36,24 @@ std::string slurp(const fs::path& p) {
 
 std::string quote(const std::string& s) { return "'" + s + "'"; }
 
-/// A fresh empty folder for one test.
-fs::path scratch(const std::string& name) {
-    const fs::path dir = fs::temp_directory_path() / ("stereoscene_cli_" + name);
-    fs::remove_all(dir);
-    fs::create_directories(dir);
-    return dir;
+/// A fresh empty folder for one test, removed when the test ends. The process id keeps runs of
+/// the suite from other worktrees on the same machine out of each other's folders.
+struct ScratchDir : fs::path {
+    explicit ScratchDir(const fs::path& p) : fs::path(p) {
+        fs::remove_all(*this);
+        fs::create_directories(*this);
+    }
+    ScratchDir(const ScratchDir&) = delete;
+    ScratchDir& operator=(const ScratchDir&) = delete;
+    ~ScratchDir() {
+        std::error_code ignored;
+        fs::remove_all(*this, ignored);
+    }
+};
+
+ScratchDir scratch(const std::string& name) {
+    return ScratchDir(fs::temp_directory_path() /
+                      ("stereoscene_cli_" + name + "_" + std::to_string(::getpid())));
 }
 
 /// Runs a shell command line with stdout and stderr captured in files of `dir`.
@@ -237,7 +250,7 @@ TEST_CASE("CloudCompare loads our .xyz and .ply with every point and PCL reads o
 
     for (const char* name : {"c.xyz", "c.ply"}) {
         INFO(name);
-        const fs::path sub = scratch(std::string("clients_") + name);
+        const auto sub = scratch(std::string("clients_") + name);
         fs::copy_file(dir / name, sub / name);
         const Run cc = run("QT_QPA_PLATFORM=offscreen " + quote(CLOUDCOMPARE_EXE) + " -SILENT -O " +
                                quote((sub / name).string()) + " -C_EXPORT_FMT ASC -SAVE_CLOUDS",
