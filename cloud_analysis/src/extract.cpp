@@ -3,6 +3,7 @@
 #include <algorithm>
 #include <cmath>
 #include <cstdint>
+#include <limits>
 #include <stdexcept>
 #include <tuple>
 #include <unordered_map>
@@ -587,6 +588,14 @@ scene_schema::EntityDocument extract_entities(const LabeledCloud& cloud, const P
             if (px >= static_cast<std::uint64_t>(grid.width_px) * grid.height_px)
                 grid = PixelGrid{};
         }
+    }
+    std::vector<std::size_t> class_size(palette.classes.size(), 0);
+    for (const auto k : cloud.class_index) {
+        if (k < palette.classes.size()) ++class_size[k];
+    }
+    for (std::size_t k = 0; k < palette.classes.size(); ++k) {
+        per_class[k].reserve(class_size[k]);
+        per_class_pixels[k].reserve(class_size[k]);
     }
     for (std::size_t i = 0; i < cloud.size(); ++i) {
         const auto k = cloud.class_index[i];
