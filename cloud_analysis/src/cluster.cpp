@@ -82,6 +82,15 @@ std::uint64_t cell_key(int level, std::int64_t x, std::int64_t y, std::int64_t z
            (static_cast<std::uint64_t>(y & kMask) << 20) | static_cast<std::uint64_t>(z & kMask);
 }
 
+/// floor(x) as an integer, without a call into libm (SSE2 has no rounding instruction);
+/// clamped to +-4e15 (NaN gives 0), so any input is defined.
+std::int64_t floor_int(double x) {
+    if (!(x == x)) return 0;
+    x = std::clamp(x, -4.0e15, 4.0e15);
+    const auto t = static_cast<std::int64_t>(x);
+    return x < static_cast<double>(t) ? t - 1 : t;
+}
+
 /// floor(x / 2^shift) for any sign.
 std::int64_t floor_shift(std::int64_t x, int shift) {
     return x >= 0 ? x >> shift : -((-x - 1) >> shift) - 1;
@@ -132,11 +141,8 @@ std::vector<std::vector<std::size_t>> euclidean_clusters(
         int l = 0;
         while (l + 1 < levels && base_m * static_cast<double>(1 << l) < radius[i]) ++l;
         level[i] = static_cast<std::uint8_t>(l);
-        for (int a = 0; a < 3; ++a) {
-            const double c = std::floor(double{points_m[i][a]} / cell0_m);
-            base_cell[3 * i + a] = static_cast<std::int64_t>(
-                std::clamp(c, -4.0e15, 4.0e15));  // finite for any finite input
-        }
+        for (int a = 0; a < 3; ++a)
+            base_cell[3 * i + a] = floor_int(double{points_m[i][a]} / cell0_m);
     }
     // Points of each cell, contiguous (cell_start), in index order; the unvisited ones first
     // (cell_left counts them) so that visited points leave the candidate lists.
@@ -206,6 +212,7 @@ std::vector<std::vector<std::size_t>> euclidean_clusters(
 
     // Region growing from each unvisited point in index order; a neighbour joins when closer
     // than the distance at the nearer depth, i.e. the smaller of the two points' distances.
+    // The visiting order within a cluster depends on the grid; the clusters do not.
     std::vector<char> visited(n, 0);
     std::vector<std::size_t> queue;
     for (std::size_t seed = 0; seed < n; ++seed) {
@@ -218,8 +225,13 @@ std::vector<std::vector<std::size_t>> euclidean_clusters(
             const Eigen::Vector3f p = points_m[i];
             const double ri = radius[i];
             const std::uint32_t id = cells_near(i);
-            for (std::uint32_t k = near_begin[id]; k < near_end[id]; ++k) {
+            for (std::uint32_t k = near_begin[id]; k < near_end[id];) {
                 const std::uint32_t c = near_cells[k];
+                if (cell_left[c] == 0) {  // exhausted for good: drop it from the list
+                    near_cells[k] = near_cells[--near_end[id]];
+                    continue;
+                }
+                ++k;
                 for (std::uint32_t slot = cell_start[c]; slot < cell_start[c] + cell_left[c];) {
                     const std::uint32_t j = members[slot];
                     const double link = std::min(ri, radius[j]);
@@ -251,9 +263,7 @@ VoxelGrid voxelize(const std::vector<Eigen::Vector3f>& points_m, double voxel_m)
         return v;
     }
     const auto cell = [voxel_m](float c) {
-        return static_cast<std::uint64_t>(
-                   static_cast<std::int64_t>(std::floor(double{c} / voxel_m)) + (1 << 20)) &
-               0x1FFFFF;
+        return static_cast<std::uint64_t>(floor_int(double{c} / voxel_m) + (1 << 20)) & 0x1FFFFF;
     };
     CellTable index(std::min<std::size_t>(n, 1 << 16));
     std::vector<Eigen::Vector3d> sums;
