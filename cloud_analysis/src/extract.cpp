@@ -33,10 +33,12 @@ std::vector<Indices> points_of(const std::vector<Indices>& voxel_clusters,
     return out;
 }
 
-std::vector<Eigen::Vector3f> gather(const std::vector<Eigen::Vector3f>& pts, const Indices& idx) {
+/// The points idx[0], idx[stride], idx[2 stride], ...
+std::vector<Eigen::Vector3f> gather(const std::vector<Eigen::Vector3f>& pts, const Indices& idx,
+                                    std::size_t stride = 1) {
     std::vector<Eigen::Vector3f> out;
-    out.reserve(idx.size());
-    for (std::size_t i : idx) out.push_back(pts[i]);
+    out.reserve(idx.size() / stride + 1);
+    for (std::size_t k = 0; k < idx.size(); k += stride) out.push_back(pts[idx[k]]);
     return out;
 }
 
@@ -487,7 +489,12 @@ std::vector<scene_schema::Entity> instances_of_class(const ClassInfo& info,
                 static_cast<std::size_t>(row_piece ? s.min_points / 2 : s.min_points);
             if (part.size() < std::max<std::size_t>(min_points, 1)) continue;
             fit.yaw_rad = yaw;
-            const OrientedBox box = fit_upright_box(gather(pts, part), ground, fit);
+            // Stuff extents are quantiles: an even sample of a large cluster gives them.
+            const std::size_t stride =
+                !s.thing && options.stuff_fit_points > 0 && part.size() > options.stuff_fit_points
+                    ? (part.size() + options.stuff_fit_points - 1) / options.stuff_fit_points
+                    : 1;
+            const OrientedBox box = fit_upright_box(gather(pts, part, stride), ground, fit);
             if (s.thing && depth < 2 && !yaw) {
                 Split split = split_oversized(pts, part, box, s, ground, options);
                 if (split.parts.size() > 1) {

@@ -20,7 +20,7 @@ struct ExtractOptions {
     std::string method = "instances";      ///< "instances" | "centroid" | "average" | "variance"
     ClassConfig classes;                   ///< per-class settings (load_class_config)
     GroundOptions ground;                  ///< RANSAC settings of the ground plane
-    std::string clustering = "euclidean";  ///< things: "euclidean" (3D, PCL kd-tree) or "image"
+    std::string clustering = "euclidean";  ///< things: "euclidean" (3D, hash grid) or "image"
                                            ///< (pixel components refined by depth)
     int image_radius_px = 2;               ///< "image": pixel neighbourhood linked, >= 1
     double max_range_m = 60.0;             ///< points farther than this (z) are ignored, metres
@@ -49,6 +49,10 @@ struct ExtractOptions {
                                            ///< footprint inside thing boxes is dropped (stuff
                                            ///< smeared onto a thing's silhouette), (0, 1],
                                            ///< 1 = off
+    std::size_t stuff_fit_points = 10000;  ///< boxes of stuff clusters with more points are
+                                           ///< fitted to every k-th point (pixel order), about
+                                           ///< this many: their extents are quantiles, which an
+                                           ///< even sample keeps; 0 = all points
     /// Throws std::invalid_argument naming the bad field.
     void validate() const;
 };
