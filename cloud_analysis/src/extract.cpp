@@ -6,7 +6,6 @@
 #include <limits>
 #include <stdexcept>
 #include <tuple>
-#include <unordered_map>
 
 #include "cloud_analysis/boxes.hpp"
 #include "cloud_analysis/cluster.hpp"
@@ -50,21 +49,22 @@ Indices drop_outliers(const std::vector<Eigen::Vector3f>& pts, const Indices& id
                       double margin_m) {
     if (!s.has_prior() || idx.size() < 10) return idx;
     constexpr double kBinRad = 0.5 * 3.14159265358979323846 / 180.0;
+    constexpr long kBins = 360;  // |atan2| <= pi is at most 360 bins either side
     std::vector<double> range(idx.size());
     std::vector<long> bin(idx.size());
-    std::unordered_map<long, double> nearest;
+    std::vector<double> nearest(2 * kBins + 1, std::numeric_limits<double>::infinity());
     for (std::size_t k = 0; k < idx.size(); ++k) {
         const double x = pts[idx[k]].x(), z = pts[idx[k]].z();
         range[k] = std::hypot(x, z);
-        bin[k] = std::lround(std::atan2(x, z) / kBinRad);
-        auto [it, inserted] = nearest.emplace(bin[k], range[k]);
-        if (!inserted) it->second = std::min(it->second, range[k]);
+        bin[k] = std::clamp(std::lround(std::atan2(x, z) / kBinRad), -kBins, kBins) + kBins;
+        double& n = nearest[static_cast<std::size_t>(bin[k])];
+        n = std::min(n, range[k]);
     }
     const double depth = std::hypot(s.prior_L_m, s.prior_W_m) + margin_m;
     Indices kept;
     kept.reserve(idx.size());
     for (std::size_t k = 0; k < idx.size(); ++k) {
-        if (range[k] > nearest[bin[k]] + depth) continue;
+        if (range[k] > nearest[static_cast<std::size_t>(bin[k])] + depth) continue;
         if (ground) {
             const double h = ground->height(pts[idx[k]].cast<double>());
             if (h < -0.5 || h > 1.5 * s.prior_H_m + 0.5) continue;
