@@ -145,8 +145,9 @@ def part_batch(a, tool, result):
     result["batch"] = []
     print(f"\n### cloud-analysis batch, {a.batch_frames} frames\n")
     print("| frames from | preset | method | fps | CPU ms per frame | cores busy % | "
-          "load average | RSS first / median / last frame MB | peak RSS MB |")
-    print("|---|---|---|---|---|---|---|---|---|")
+          "load average | main thread waited ms per frame (loader / finisher) | "
+          "RSS first / median / last frame MB | peak RSS MB |")
+    print("|---|---|---|---|---|---|---|---|---|---|")
     for root, frames in roots:
         for preset, method in [("tuned", "instances"), ("tuned", "centroid"),
                                ("fast", "instances")]:
@@ -164,12 +165,16 @@ def part_batch(a, tool, result):
             rep = json.loads(report.read_text())
             rss = [f["rss_mb"] for f in rep["per_frame"]]
             rep_short = {k: v for k, v in rep.items() if k != "per_frame"}
-            rep_short.update(root=str(root), method=method, rss_mb=rss, load_average=load)
+            waits = [sum(f.get(k, 0.0) for f in rep["per_frame"]) / len(rep["per_frame"])
+                     for k in ("wait_load_ms", "wait_finish_ms")]
+            rep_short.update(root=str(root), method=method, rss_mb=rss, load_average=load,
+                             wait_load_ms=waits[0], wait_finish_ms=waits[1])
             result["batch"].append(rep_short)
             src = "synthetic 1242x375" if "synthetic" in str(root) else "kitti15 " + "+".join(frames)
             rep_short["label"] = f"{src}, {preset}, {method}"
             print(f"| {src} | {preset} | {method} | {rep['fps']:.2f} | "
                   f"{rep['cpu_ms_per_frame']:.0f} | {100 * rep['cores_busy']:.0f} | {load:.1f} | "
+                  f"{waits[0]:.1f} / {waits[1]:.1f} | "
                   f"{rss[0]:.0f} / "
                   f"{statistics.median(rss):.0f} / {rss[-1]:.0f} | {rep['peak_rss_mb']:.0f} |")
     blocks = (a.batch_frames + 9) // 10

@@ -252,10 +252,16 @@ int run_batch(const BatchArgs& a) {
     const auto start = Clock::now();
     const double cpu_start = cpu_seconds();
     for (std::size_t i = 0; i < n; ++i) {
+        // The waits show whether the overlap works: with the loader and the finishing thread
+        // keeping up, the main thread never waits for them and the frame period is the
+        // matching stage's, whatever else runs on the machine.
+        const auto wait_start = Clock::now();
         LoadedFrame frame = next.get();
         if (i + 1 < n) next = std::async(std::launch::async, load, i + 1);
         const auto t0 = Clock::now();
-        nlohmann::json record = {{"frame", frame.frame}, {"load_ms", frame.ms}};
+        nlohmann::json record = {{"frame", frame.frame},
+                                 {"load_ms", frame.ms},
+                                 {"wait_load_ms", ms_between(wait_start, t0)}};
         std::optional<FinishJob> job;
         if (!frame.inputs) {
             fail(frame.frame, frame.error);
@@ -277,7 +283,9 @@ int run_batch(const BatchArgs& a) {
         record["rss_mb"] = current_rss_mb();
         per_frame.push_back(record);
         // One frame finishing at a time: frame n-1 must be done before frame n is handed over.
+        const auto collect_start = Clock::now();
         collect();
+        per_frame.back()["wait_finish_ms"] = ms_between(collect_start, Clock::now());
         if (job) {
             finishing_frame = frame.frame;
             finishing_record = per_frame.size() - 1;
