@@ -1,10 +1,14 @@
 #include "cloud_analysis/extract.hpp"
 
 #include <algorithm>
+#include <atomic>
 #include <cmath>
 #include <cstdint>
+#include <exception>
 #include <limits>
+#include <mutex>
 #include <stdexcept>
+#include <thread>
 #include <tuple>
 
 #include "cloud_analysis/boxes.hpp"
@@ -540,6 +544,37 @@ std::vector<scene_schema::Entity> instances_of_class(const ClassInfo& info,
     return out;
 }
 
+/// Calls run(k) for every class k on `threads` threads (largest classes first, each class on
+/// one thread); rethrows the first exception once all threads have stopped.
+template <typename Run>
+void for_each_class(const std::vector<std::vector<Eigen::Vector3f>>& per_class, int threads,
+                    Run&& run) {
+    std::vector<std::size_t> order(per_class.size());
+    for (std::size_t k = 0; k < order.size(); ++k) order[k] = k;
+    std::stable_sort(order.begin(), order.end(), [&](std::size_t a, std::size_t b) {
+        return per_class[a].size() > per_class[b].size();
+    });
+    std::atomic<std::size_t> next{0};
+    std::mutex failure_mutex;
+    std::exception_ptr failure;
+    const auto work = [&] {
+        for (std::size_t n = next++; n < order.size(); n = next++) {
+            try {
+                run(order[n]);
+            } catch (...) {
+                const std::lock_guard<std::mutex> lock(failure_mutex);
+                if (!failure) failure = std::current_exception();
+                next = order.size();
+            }
+        }
+    };
+    std::vector<std::thread> helpers;
+    for (int t = 1; t < threads; ++t) helpers.emplace_back(work);
+    work();
+    for (auto& h : helpers) h.join();
+    if (failure) std::rethrow_exception(failure);
+}
+
 }  // namespace
 
 void ExtractOptions::validate() const {
@@ -572,6 +607,7 @@ void ExtractOptions::validate() const {
     }
     if (!(row_low_extent_m > 0.0)) throw std::invalid_argument("row_low_extent_m: must be > 0");
     if (!(row_gap_m >= 0.0)) throw std::invalid_argument("row_gap_m: must be >= 0");
+    if (threads < 1) throw std::invalid_argument("threads: must be >= 1");
     if (!(stuff_on_thing_fraction > 0.0 && stuff_on_thing_fraction <= 1.0)) {
         throw std::invalid_argument("stuff_on_thing_fraction: must be in (0, 1]");
     }
@@ -636,11 +672,14 @@ scene_schema::EntityDocument extract_entities(const LabeledCloud& cloud, const P
     std::vector<std::vector<scene_schema::Entity>> made(palette.classes.size());
     std::vector<char> is_thing(palette.classes.size(), 0);
     for (std::size_t k = 0; k < palette.classes.size(); ++k) {
+        is_thing[k] = options.classes.find(palette.classes[k].name).thing ? 1 : 0;
+    }
+    // Classes are independent once the ground plane is known.
+    for_each_class(per_class, options.threads, [&](std::size_t k) {
         const ClassInfo& info = palette.classes[k];
         const ClassSettings s = options.classes.find(info.name);
-        is_thing[k] = s.thing ? 1 : 0;
         const auto& pts = per_class[k];
-        if (!s.entity || pts.size() < static_cast<std::size_t>(s.min_points)) continue;
+        if (!s.entity || pts.size() < static_cast<std::size_t>(s.min_points)) return;
         if (options.method == "instances") {
             made[k] = instances_of_class(info, pts, per_class_pixels[k], grid, s, ground, options);
         } else {
@@ -658,7 +697,7 @@ scene_schema::EntityDocument extract_entities(const LabeledCloud& cloud, const P
             made[k].push_back(
                 make_entity(info, box, pts.size(), confidence_of(pts.size(), s), options.method));
         }
-    }
+    });
     if (options.method == "instances" && options.stuff_on_thing_fraction < 1.0) {
         std::vector<scene_schema::Entity> things;
         for (std::size_t k = 0; k < made.size(); ++k) {

@@ -53,6 +53,8 @@ struct ExtractOptions {
                                            ///< fitted to every k-th point (pixel order), about
                                            ///< this many: their extents are quantiles, which an
                                            ///< even sample keeps; 0 = all points
+    int threads = 2;  ///< classes are extracted on this many threads (each class on one; the
+                      ///< result does not depend on it), >= 1
     /// Throws std::invalid_argument naming the bad field.
     void validate() const;
 };
