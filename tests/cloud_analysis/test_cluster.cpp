@@ -165,3 +165,53 @@ TEST_CASE("points exactly one clustering distance apart link, a little farther d
     CHECK(clusters[0].size() == 9);
     CHECK(clusters[1] == std::vector<std::size_t>{9});
 }
+
+TEST_CASE("voxelize numbers voxels by first point and gives each the mean of its points",
+          "[cluster]") {
+    const std::vector<Eigen::Vector3f> pts = {{0.05f, 0.05f, 0.05f}, {0.35f, 0.05f, 0.05f},
+                                              {0.15f, 0.05f, 0.05f}, {-0.05f, 0.05f, 0.05f},
+                                              {0.25f, 0.25f, 0.25f}, {0.39f, 0.01f, 0.01f}};
+    const auto v = cloud_analysis::voxelize(pts, 0.2);
+    // Voxels: [0, 0.2)^3 holds points 0 and 2; [0.2, 0.4) x [0, 0.2)^2 points 1 and 5;
+    // x in [-0.2, 0) point 3; [0.2, 0.4)^3 point 4.
+    REQUIRE(v.centroid_m.size() == 4);
+    CHECK(v.voxel_of == std::vector<std::uint32_t>{0, 1, 0, 2, 3, 1});
+    CHECK(v.centroid_m[0].isApprox(Eigen::Vector3f(0.1f, 0.05f, 0.05f)));
+    CHECK(v.centroid_m[1].isApprox(Eigen::Vector3f(0.37f, 0.03f, 0.03f)));
+    CHECK(v.centroid_m[2].isApprox(pts[3]));
+    CHECK(v.centroid_m[3].isApprox(pts[4]));
+    // voxel_m <= 0: one voxel per point.
+    const auto same = cloud_analysis::voxelize(pts, 0.0);
+    CHECK(same.centroid_m.size() == pts.size());
+    CHECK(same.voxel_of[5] == 5);
+}
+
+TEST_CASE(
+    "voxelize and clustering keep every voxel when there are more than their tables start with",
+    "[cluster]") {
+    // 120,000 points 0.3 m apart on a plane, each in its own 0.1 m voxel (more than the 65,536
+    // voxels the voxel table starts with): one cluster at 0.5 m, none linked at 0.25 m.
+    std::vector<Eigen::Vector3f> pts;
+    for (int a = 0; a < 400; ++a) {
+        for (int b = 0; b < 300; ++b) {
+            pts.emplace_back(0.3f * static_cast<float>(a) - 60.0f, 1.5f,
+                             0.3f * static_cast<float>(b) + 1.0f);
+        }
+    }
+    const auto v = cloud_analysis::voxelize(pts, 0.1);
+    REQUIRE(v.centroid_m.size() == pts.size());
+    for (std::size_t i = 0; i < pts.size(); i += 997) {
+        CHECK(v.voxel_of[i] == i);
+        CHECK(v.centroid_m[i] == pts[i]);
+    }
+    ClusterOptions o;
+    o.distance_at_10m_m = 0.5;
+    o.growth = 0.0;
+    o.distance_max_m = 0.5;
+    const auto one = euclidean_clusters(v.centroid_m, o);
+    REQUIRE(one.size() == 1);
+    CHECK(one[0].size() == pts.size());
+    o.distance_at_10m_m = 0.25;
+    o.distance_max_m = 0.25;
+    CHECK(euclidean_clusters(v.centroid_m, o).size() == pts.size());
+}
