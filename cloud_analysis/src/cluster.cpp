@@ -91,6 +91,16 @@ std::int64_t floor_int(double x) {
     return x < static_cast<double>(t) ? t - 1 : t;
 }
 
+/// floor(x / size) with a multiplication by inverse = 1 / size; the division is made only
+/// when the product lies within 1e-6 of an integer, where the two could round differently.
+std::int64_t floor_div(double x, double size, double inverse) {
+    const double q = x * inverse;
+    const std::int64_t k = floor_int(q);
+    const double above = q - static_cast<double>(k);
+    if (above > 1e-6 && above < 1.0 - 1e-6) return k;
+    return floor_int(x / size);
+}
+
 /// floor(x / 2^shift) for any sign.
 std::int64_t floor_shift(std::int64_t x, int shift) {
     return x >= 0 ? x >> shift : -((-x - 1) >> shift) - 1;
@@ -142,7 +152,7 @@ std::vector<std::vector<std::size_t>> euclidean_clusters(
         while (l + 1 < levels && base_m * static_cast<double>(1 << l) < radius[i]) ++l;
         level[i] = static_cast<std::uint8_t>(l);
         for (int a = 0; a < 3; ++a)
-            base_cell[3 * i + a] = floor_int(double{points_m[i][a]} / cell0_m);
+            base_cell[3 * i + a] = floor_div(double{points_m[i][a]}, cell0_m, 1.0 / cell0_m);
     }
     // Points of each cell, contiguous (cell_start), in index order; the unvisited ones first
     // (cell_left counts them) so that visited points leave the candidate lists.
@@ -262,8 +272,10 @@ VoxelGrid voxelize(const std::vector<Eigen::Vector3f>& points_m, double voxel_m)
         for (std::size_t i = 0; i < n; ++i) v.voxel_of[i] = static_cast<std::uint32_t>(i);
         return v;
     }
-    const auto cell = [voxel_m](float c) {
-        return static_cast<std::uint64_t>(floor_int(double{c} / voxel_m) + (1 << 20)) & 0x1FFFFF;
+    const double inverse = 1.0 / voxel_m;
+    const auto cell = [voxel_m, inverse](float c) {
+        return static_cast<std::uint64_t>(floor_div(double{c}, voxel_m, inverse) + (1 << 20)) &
+               0x1FFFFF;
     };
     CellTable index(std::min<std::size_t>(n, 1 << 16));
     std::vector<Eigen::Vector3d> sums;
