@@ -59,7 +59,7 @@ Indices drop_outliers(const std::vector<Eigen::Vector3f>& pts, const Indices& id
     std::vector<double> nearest(2 * kBins + 1, std::numeric_limits<double>::infinity());
     for (std::size_t k = 0; k < idx.size(); ++k) {
         const double x = pts[idx[k]].x(), z = pts[idx[k]].z();
-        range[k] = std::hypot(x, z);
+        range[k] = std::sqrt(x * x + z * z);  // float inputs: no overflow for hypot to guard
         bin[k] = std::clamp(std::lround(std::atan2(x, z) / kBinRad), -kBins, kBins) + kBins;
         double& n = nearest[static_cast<std::size_t>(bin[k])];
         n = std::min(n, range[k]);
@@ -520,8 +520,10 @@ std::vector<scene_schema::Entity> instances_of_class(const ClassInfo& info,
                              height_spread(pts, c.members, ground) <
                                  options.fragment_height_fraction * s.prior_H_m;
             }
-            for (std::size_t i : c.members)
-                c.range_m += std::hypot(double{pts[i].x()}, double{pts[i].z()});
+            for (std::size_t i : c.members) {
+                const double x = pts[i].x(), z = pts[i].z();
+                c.range_m += std::sqrt(x * x + z * z);
+            }
             c.range_m /= static_cast<double>(c.members.size());
             candidates.push_back(std::move(c));
         }
