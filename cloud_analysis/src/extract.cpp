@@ -546,16 +546,14 @@ std::vector<scene_schema::Entity> instances_of_class(const ClassInfo& info,
     return out;
 }
 
-/// Calls run(k) for every class k on `threads` threads (largest classes first, each class on
-/// one thread); rethrows the first exception once all threads have stopped.
+/// Calls run(k) for every class k on `threads` threads (costliest first, each class on one
+/// thread); rethrows the first exception once all threads have stopped.
 template <typename Run>
-void for_each_class(const std::vector<std::vector<Eigen::Vector3f>>& per_class, int threads,
-                    Run&& run) {
-    std::vector<std::size_t> order(per_class.size());
+void for_each_class(const std::vector<double>& cost, int threads, Run&& run) {
+    std::vector<std::size_t> order(cost.size());
     for (std::size_t k = 0; k < order.size(); ++k) order[k] = k;
-    std::stable_sort(order.begin(), order.end(), [&](std::size_t a, std::size_t b) {
-        return per_class[a].size() > per_class[b].size();
-    });
+    std::stable_sort(order.begin(), order.end(),
+                     [&](std::size_t a, std::size_t b) { return cost[a] > cost[b]; });
     std::atomic<std::size_t> next{0};
     std::mutex failure_mutex;
     std::exception_ptr failure;
@@ -677,7 +675,13 @@ scene_schema::EntityDocument extract_entities(const LabeledCloud& cloud, const P
         is_thing[k] = options.classes.find(palette.classes[k].name).thing ? 1 : 0;
     }
     // Classes are independent once the ground plane is known.
-    for_each_class(per_class, options.threads, [&](std::size_t k) {
+    // Thing points cost about four times stuff points (smear removal, splits, refits): the
+    // costliest classes start first so that no thread is left with a big one at the end.
+    std::vector<double> cost(per_class.size());
+    for (std::size_t k = 0; k < cost.size(); ++k) {
+        cost[k] = static_cast<double>(per_class[k].size()) * (is_thing[k] ? 4.0 : 1.0);
+    }
+    for_each_class(cost, options.threads, [&](std::size_t k) {
         const ClassInfo& info = palette.classes[k];
         const ClassSettings s = options.classes.find(info.name);
         const auto& pts = per_class[k];
