@@ -215,3 +215,12 @@ TEST_CASE(
     o.distance_max_m = 0.25;
     CHECK(euclidean_clusters(v.centroid_m, o).size() == pts.size());
 }
+
+TEST_CASE("a cap over 1000 times the distance at 10 m is refused, naming the field", "[cluster]") {
+    ClusterOptions o;
+    o.distance_at_10m_m = 0.01;
+    o.distance_max_m = 10.0;
+    CHECK_NOTHROW(o.validate());
+    o.distance_max_m = 10.5;
+    CHECK_THROWS_WITH(o.validate(), Catch::Contains("distance_max_m"));
+}

@@ -15,7 +15,8 @@ namespace cloud_analysis {
 struct ClusterOptions {
     double distance_at_10m_m = 0.5;  ///< clustering distance at 10 m depth, metres, > 0
     double growth = 2.0;             ///< exponent of the growth with z beyond 10 m, >= 0
-    double distance_max_m = 3.0;     ///< cap of the grown distance, metres, >= distance_at_10m_m
+    double distance_max_m = 3.0;     ///< cap of the grown distance, metres, in
+                                     ///< [distance_at_10m_m, 1000 * distance_at_10m_m]
     std::size_t min_points = 1;      ///< smaller clusters are dropped, >= 1
     /// Throws std::invalid_argument naming the bad field.
     void validate() const;
