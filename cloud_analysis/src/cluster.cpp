@@ -92,12 +92,16 @@ std::int64_t floor_int(double x) {
 }
 
 /// floor(x / size) with a multiplication by inverse = 1 / size; the division is made only
-/// when the product lies within 1e-6 of an integer, where the two could round differently.
-std::int64_t floor_div(double x, double size, double inverse) {
+/// when the product lies within 1e-6 of an integer, where the two could round differently
+/// (or beyond +-1e15, or NaN).
+inline std::int64_t floor_div(double x, double size, double inverse) {
     const double q = x * inverse;
-    const std::int64_t k = floor_int(q);
-    const double above = q - static_cast<double>(k);
-    if (above > 1e-6 && above < 1.0 - 1e-6) return k;
+    if (q > -1.0e15 && q < 1.0e15) {
+        const auto t = static_cast<std::int64_t>(q);
+        const std::int64_t k = q < static_cast<double>(t) ? t - 1 : t;
+        const double above = q - static_cast<double>(k);
+        if (above > 1e-6 && above < 1.0 - 1e-6) return k;
+    }
     return floor_int(x / size);
 }
 
