@@ -30,6 +30,14 @@ void check_camera(const StereoCamera& cam) {
 
 double GtCar::range_m() const { return std::hypot(centroid_m.x(), centroid_m.z()); }
 
+void GtCarOptions::validate() const {
+    if (car_label_id < 0 || car_label_id > 255)
+        throw std::invalid_argument("car_label_id: must be in 0..255");
+    if (!(occluder_gap_m >= 0.0)) throw std::invalid_argument("occluder_gap_m: must be >= 0");
+    if (!(min_surface_share > 0.0 && min_surface_share <= 1.0))
+        throw std::invalid_argument("min_surface_share: must be in (0, 1]");
+}
+
 void CarMatchOptions::validate() const {
     if (car_class.empty()) throw std::invalid_argument("car_class: must not be empty");
     if (!(footprint_margin_m >= 0.0))
@@ -40,6 +48,8 @@ void CarMatchOptions::validate() const {
     if (!(max_footprint_area_m2 > 0.0))
         throw std::invalid_argument("max_footprint_area_m2: must be > 0");
     if (!(max_range_m > 0.0)) throw std::invalid_argument("max_range_m: must be > 0");
+    if (!(fallback_min_iou > 0.0 && fallback_min_iou <= 1.0))
+        throw std::invalid_argument("fallback_min_iou: must be in (0, 1]");
 }
 
 double CarEvaluation::recall() const {
@@ -81,6 +91,63 @@ double footprint_inside_fraction(const scene_schema::Entity& entity,
     return static_cast<double>(inside) / static_cast<double>(points_m.size());
 }
 
+std::optional<Eigen::Vector4d> projected_box_px(const scene_schema::Entity& entity,
+                                                const StereoCamera& camera, int width_px,
+                                                int height_px) {
+    const double c = std::cos(entity.theta), s = std::sin(entity.theta);
+    // Length along the heading (cos t, 0, -sin t), width along (sin t, 0, cos t).
+    const Eigen::Vector3d along(c, 0.0, -s), across(s, 0.0, c),
+        centre(entity.x, entity.y, entity.z);
+    double u0 = 1e300, v0 = 1e300, u1 = -1e300, v1 = -1e300;
+    for (int corner = 0; corner < 8; ++corner) {
+        const Eigen::Vector3d p =
+            centre + ((corner & 1) ? 0.5 : -0.5) * entity.L * along +
+            ((corner & 2) ? 0.5 : -0.5) * entity.W * across +
+            Eigen::Vector3d(0.0, (corner & 4) ? 0.5 * entity.H : -0.5 * entity.H, 0.0);
+        if (p.z() < 0.1) return std::nullopt;
+        // Pixel centres at integer u, v: the pixel-edge coordinate is u + 0.5.
+        const double u = camera.fx_px * p.x() / p.z() + camera.cx_px + 0.5;
+        const double v = camera.fy_px * p.y() / p.z() + camera.cy_px + 0.5;
+        u0 = std::min(u0, u);
+        u1 = std::max(u1, u);
+        v0 = std::min(v0, v);
+        v1 = std::max(v1, v);
+    }
+    u0 = std::clamp(u0, 0.0, double(width_px));
+    u1 = std::clamp(u1, 0.0, double(width_px));
+    v0 = std::clamp(v0, 0.0, double(height_px));
+    v1 = std::clamp(v1, 0.0, double(height_px));
+    if (!(u1 > u0 && v1 > v0)) return std::nullopt;
+    return Eigen::Vector4d(u0, v0, u1, v1);
+}
+
+double rect_iou(const Eigen::Vector4d& a, const Eigen::Vector4d& b) {
+    const auto area = [](const Eigen::Vector4d& r) {
+        return std::max(0.0, r[2] - r[0]) * std::max(0.0, r[3] - r[1]);
+    };
+    const Eigen::Vector4d inter(std::max(a[0], b[0]), std::max(a[1], b[1]), std::min(a[2], b[2]),
+                                std::min(a[3], b[3]));
+    const double i = area(inter), u = area(a) + area(b) - i;
+    return u > 0.0 ? i / u : 0.0;
+}
+
+float own_surface_min_depth_m(std::vector<float> depths_m, const GtCarOptions& options) {
+    options.validate();
+    if (depths_m.empty() || options.occluder_gap_m == 0.0) return 0.0f;
+    std::sort(depths_m.begin(), depths_m.end());
+    const double need = options.min_surface_share * static_cast<double>(depths_m.size());
+    // Walk the groups from the far end; the first one large enough is the car's own surface.
+    std::size_t end = depths_m.size();
+    while (end > 0) {
+        std::size_t begin = end - 1;
+        while (begin > 0 && double{depths_m[begin] - depths_m[begin - 1]} <= options.occluder_gap_m)
+            --begin;
+        if (static_cast<double>(end - begin) >= need) return depths_m[begin];
+        end = begin;
+    }
+    return depths_m.front();
+}
+
 CarEvaluation evaluate_cars(const std::vector<scene_schema::Entity>& entities,
                             const std::vector<GtCar>& gt_cars, const CarMatchOptions& options,
                             const StereoCamera* camera) {
@@ -116,6 +183,42 @@ CarEvaluation evaluate_cars(const std::vector<scene_schema::Entity>& entities,
     std::stable_sort(candidates.begin(), candidates.end(), [](const auto& a, const auto& b) {
         return a.inside_fraction > b.inside_fraction;
     });
+    // KITTI's 2D criterion for GT cars the footprint rule cannot judge, after every footprint
+    // pair, so it never takes a car or an entity the footprint rule would match.
+    if (camera) {
+        std::vector<CarMatch> fallback;
+        for (std::size_t i : cars) {
+            const auto& e = entities[i];
+            const double area =
+                (e.L + 2.0 * options.footprint_margin_m) * (e.W + 2.0 * options.footprint_margin_m);
+            if (area > options.max_footprint_area_m2) continue;
+            for (std::size_t g = 0; g < gt_cars.size(); ++g) {
+                const GtCar& car = gt_cars[g];
+                if (car.pixel_count > options.fallback_max_points || car.image_pixels.empty())
+                    continue;
+                const auto box =
+                    projected_box_px(e, *camera, car.image_width_px, car.image_height_px);
+                if (!box) continue;
+                const double iou = rect_iou(*box, car.mask_box_px);
+                if (iou < options.fallback_min_iou) continue;
+                CarMatch m;
+                m.entity = i;
+                m.gt = g;
+                m.fallback = true;
+                m.iou_2d = iou;
+                if (car.pixel_count > 0) {
+                    m.inside_fraction =
+                        footprint_inside_fraction(e, car.points_m, options.footprint_margin_m);
+                    m.centre_distance_m =
+                        std::hypot(e.x - car.centroid_m.x(), e.z - car.centroid_m.z());
+                }
+                fallback.push_back(m);
+            }
+        }
+        std::stable_sort(fallback.begin(), fallback.end(),
+                         [](const auto& a, const auto& b) { return a.iou_2d > b.iou_2d; });
+        candidates.insert(candidates.end(), fallback.begin(), fallback.end());
+    }
     std::vector<char> entity_used(entities.size(), 0), gt_used(gt_cars.size(), 0);
     for (const auto& m : candidates) {
         if (entity_used[m.entity] || gt_used[m.gt]) continue;
@@ -135,12 +238,15 @@ CarEvaluation evaluate_cars(const std::vector<scene_schema::Entity>& entities,
         if (std::hypot(e.x, e.z) > options.max_range_m) continue;
         if (entity_used[i]) {
             ++result.entities_matched;
+            for (const auto& m : result.matches) {
+                if (m.entity == i && m.fallback) ++result.fallback_matched;
+            }
         } else if (camera && e.z > 0.0 && camera->fx_px > 0.0) {
             const long u = std::lround(camera->fx_px * e.x / e.z + camera->cx_px);
             const long v = std::lround(camera->fy_px * e.y / e.z + camera->cy_px);
             for (const auto& car : gt_cars) {
-                if (car.pixel_count > 0 || car.image_width_px <= 0 || u < 0 ||
-                    u >= car.image_width_px || v < 0) {
+                if (car.pixel_count > options.fallback_max_points || car.image_width_px <= 0 ||
+                    u < 0 || u >= car.image_width_px || v < 0) {
                     continue;
                 }
                 const auto px = static_cast<std::uint32_t>(v * car.image_width_px + u);
@@ -156,8 +262,9 @@ CarEvaluation evaluate_cars(const std::vector<scene_schema::Entity>& entities,
 
 std::vector<GtCar> load_gt_cars(const std::filesystem::path& instance_png,
                                 const std::filesystem::path& disparity_png,
-                                const StereoCamera& camera, int car_label_id) {
+                                const StereoCamera& camera, const GtCarOptions& options) {
     check_camera(camera);
+    options.validate();
     const ImageU16 instance = read_png_u16(instance_png);
     const ImageU16 disparity = read_png_u16(disparity_png);
     if (instance.width_px != disparity.width_px || instance.height_px != disparity.height_px) {
@@ -172,11 +279,17 @@ std::vector<GtCar> load_gt_cars(const std::filesystem::path& instance_png,
         for (int u = 0; u < instance.width_px; ++u) {
             const std::size_t i = static_cast<std::size_t>(v) * instance.width_px + u;
             const int value = instance.values[i];
-            if ((value >> 8) != car_label_id) continue;
+            if ((value >> 8) != options.car_label_id) continue;
             GtCar& car = by_instance[value & 0xff];
+            if (car.image_pixels.empty()) car.mask_box_px = Eigen::Vector4d(u, v, u + 1, v + 1);
             car.instance = value & 0xff;
             car.image_width_px = instance.width_px;
+            car.image_height_px = instance.height_px;
             car.image_pixels.push_back(static_cast<std::uint32_t>(v * instance.width_px + u));
+            car.mask_box_px = Eigen::Vector4d(std::min<double>(car.mask_box_px[0], u),
+                                              std::min<double>(car.mask_box_px[1], v),
+                                              std::max<double>(car.mask_box_px[2], u + 1),
+                                              std::max<double>(car.mask_box_px[3], v + 1));
             const int d16 = disparity.values[i];
             if (d16 == 0) continue;
             car.points_m.push_back(reproject_pixel(camera, u, v, d16 / 256.0));
@@ -184,14 +297,20 @@ std::vector<GtCar> load_gt_cars(const std::filesystem::path& instance_png,
     }
     std::vector<GtCar> cars;
     for (auto& [id, car] : by_instance) {
+        std::vector<float> depths;
+        for (const auto& p : car.points_m) depths.push_back(p.z());
+        const float nearest = own_surface_min_depth_m(depths, options);
+        const auto occluders =
+            std::remove_if(car.points_m.begin(), car.points_m.end(),
+                           [nearest](const Eigen::Vector3f& p) { return p.z() < nearest; });
+        car.occluder_pixel_count = static_cast<std::size_t>(car.points_m.end() - occluders);
+        car.points_m.erase(occluders, car.points_m.end());
         car.pixel_count = car.points_m.size();
-        if (car.points_m.empty()) {
-            cars.push_back(std::move(car));
-            continue;
+        if (!car.points_m.empty()) {
+            Eigen::Vector3d sum = Eigen::Vector3d::Zero();
+            for (const auto& p : car.points_m) sum += p.cast<double>();
+            car.centroid_m = sum / static_cast<double>(car.points_m.size());
         }
-        Eigen::Vector3d sum = Eigen::Vector3d::Zero();
-        for (const auto& p : car.points_m) sum += p.cast<double>();
-        car.centroid_m = sum / static_cast<double>(car.points_m.size());
         cars.push_back(std::move(car));
     }
     return cars;

@@ -168,3 +168,129 @@ TEST_CASE("an unmatched entity on a GT car without GT disparity is unscorable, n
     // Without a camera nothing is unscorable.
     CHECK(evaluate_cars(entities, gt, CarMatchOptions{}).entities_unscorable == 0);
 }
+
+TEST_CASE("a car's own surface is the farthest depth group with a quarter of its GT points",
+          "[evaluate]") {
+    GtCarOptions o;  // gap 1.5 m, share 0.25
+    // Three occluder points at 10 m (a van in front, inside the mask), four on the car at 19-20 m.
+    const std::vector<float> occluded = {19.0f, 10.2f, 19.5f, 10.0f, 20.0f, 10.4f, 20.3f};
+    CHECK(own_surface_min_depth_m(occluded, o) == 19.0f);
+    // One background point far behind is edge bleed, not the surface: the car stays at 20 m.
+    CHECK(own_surface_min_depth_m({20.0f, 20.3f, 20.6f, 21.0f, 45.0f}, o) == 20.0f);
+    // Groups closer than the gap are one surface (a car seen along its length).
+    CHECK(own_surface_min_depth_m({12.0f, 13.4f, 14.8f, 16.2f}, o) == 12.0f);
+    // No group is large enough: everything is kept.
+    o.min_surface_share = 0.6;
+    CHECK(own_surface_min_depth_m(occluded, o) == 10.0f);
+    // Gap 0 is the old rule: keep every point.
+    o.occluder_gap_m = 0.0;
+    CHECK(own_surface_min_depth_m(occluded, o) == 0.0f);
+    CHECK(own_surface_min_depth_m({}, GtCarOptions{}) == 0.0f);
+    o.min_surface_share = 0.0;
+    CHECK_THROWS_WITH(o.validate(), Catch::Contains("min_surface_share"));
+}
+
+TEST_CASE("GT car pixels on a nearer occluder are dropped and counted", "[evaluate]") {
+    const auto dir = std::filesystem::temp_directory_path() / "stereoscene_test_evaluate_occl";
+    std::filesystem::create_directories(dir);
+    cv::Mat instance(4, 8, CV_16UC1, cv::Scalar((26 << 8) | 2));
+    cv::Mat disparity(4, 8, CV_16UC1, cv::Scalar(0));
+    StereoCamera cam;
+    cam.fx_px = cam.fy_px = 500.0;
+    cam.cx_px = cam.cx_right_px = 4.0;
+    cam.cy_px = 2.0;
+    cam.baseline_m = 0.5;
+    // Columns 0-5: the car at z = 250 / 12.5 = 20 m; columns 6-7: the van in front, 10 m.
+    for (int v = 0; v < 4; ++v) {
+        for (int u = 0; u < 8; ++u) disparity.at<std::uint16_t>(v, u) = u < 6 ? 3200 : 6400;
+    }
+    REQUIRE(cv::imwrite((dir / "instance.png").string(), instance));
+    REQUIRE(cv::imwrite((dir / "disp.png").string(), disparity));
+    auto cars = load_gt_cars(dir / "instance.png", dir / "disp.png", cam);
+    REQUIRE(cars.size() == 1);
+    CHECK(cars[0].pixel_count == 24);
+    CHECK(cars[0].occluder_pixel_count == 8);
+    CHECK(cars[0].centroid_m.z() == Approx(20.0));
+    CHECK(cars[0].mask_box_px == Eigen::Vector4d(0, 0, 8, 4));
+    GtCarOptions keep_all;
+    keep_all.occluder_gap_m = 0.0;
+    cars = load_gt_cars(dir / "instance.png", dir / "disp.png", cam, keep_all);
+    CHECK(cars[0].pixel_count == 32);
+    CHECK(cars[0].occluder_pixel_count == 0);
+    std::filesystem::remove_all(dir);
+}
+
+TEST_CASE("a box projects to the rectangle of its eight corners, clipped to the image",
+          "[evaluate]") {
+    StereoCamera cam;
+    cam.fx_px = cam.fy_px = 500.0;
+    cam.cx_px = 200.0;
+    cam.cy_px = 100.0;
+    // 4.2 m along z from 17.9 to 22.1 m, 1.8 m wide, 1.5 m high, centred on the optical axis:
+    // the near face spans u = 200 +- 500 * 0.9 / 17.9, v = 100 +- 500 * 0.75 / 17.9 (+ 0.5).
+    auto e = car_entity(0.0, 20.0, -kPi / 2.0);
+    e.y = 0.0;
+    const auto box = projected_box_px(e, cam, 400, 200);
+    REQUIRE(box);
+    CHECK((*box)[0] == Approx(200.5 - 450.0 / 17.9));
+    CHECK((*box)[2] == Approx(200.5 + 450.0 / 17.9));
+    CHECK((*box)[1] == Approx(100.5 - 375.0 / 17.9));
+    CHECK((*box)[3] == Approx(100.5 + 375.0 / 17.9));
+    // Clipped at the image border; a box reaching behind the camera has no rectangle.
+    CHECK((*projected_box_px(e, cam, 210, 200))[2] == 210.0);
+    e.z = 1.0;
+    CHECK_FALSE(projected_box_px(e, cam, 400, 200));
+    CHECK(rect_iou({0, 0, 10, 10}, {5, 0, 15, 10}) == Approx(50.0 / 150.0));
+    CHECK(rect_iou({0, 0, 10, 10}, {20, 0, 30, 10}) == 0.0);
+    CHECK(rect_iou({0, 0, 10, 10}, {0, 0, 10, 10}) == 1.0);
+}
+
+TEST_CASE("an entity on a GT car without GT points matches by KITTI's 2D criterion", "[evaluate]") {
+    StereoCamera cam;
+    cam.fx_px = cam.fy_px = 500.0;
+    cam.cx_px = cam.cx_right_px = 200.0;
+    cam.cy_px = 100.0;
+    cam.baseline_m = 0.5;
+    // GT car 17: mask columns 175-225, rows 80-121 of a 400 x 200 image, no GT points.
+    GtCar blind;
+    blind.instance = 17;
+    blind.image_width_px = 400;
+    blind.image_height_px = 200;
+    for (int v = 80; v <= 121; ++v) {
+        for (int u = 175; u <= 225; ++u)
+            blind.image_pixels.push_back(static_cast<std::uint32_t>(v * 400 + u));
+    }
+    blind.mask_box_px = Eigen::Vector4d(175, 80, 226, 122);
+    const std::vector<GtCar> gt = {gt_car(1, -4.0, 12.0, 400), blind};
+    auto on = car_entity(0.0, 20.0, -kPi / 2.0);  // projects onto the mask rectangle
+    on.y = 0.0;
+    auto beside = on;  // 1.5 m to the right: IoU about 0.1
+    beside.x = 1.5;
+    auto row = on;  // on it, but 10 m long: a parked row, not a car
+    row.L = 10.0;
+    const std::vector<scene_schema::Entity> entities = {car_entity(-4.0, 12.0, -kPi / 2.0), on, on,
+                                                        beside, row};
+    const auto ev = evaluate_cars(entities, gt, CarMatchOptions{}, &cam);
+    REQUIRE(ev.matches.size() == 2);
+    CHECK_FALSE(ev.matches[0].fallback);
+    CHECK(ev.matches[1].fallback);
+    CHECK(ev.matches[1].entity == 1);  // one entity per GT car: the duplicate stays unmatched
+    CHECK(ev.matches[1].gt == 1);
+    CHECK(ev.matches[1].iou_2d > 0.9);
+    CHECK(ev.entities_matched == 2);
+    CHECK(ev.fallback_matched == 1);
+    CHECK(ev.entities_in_range == 5);
+    // Without a camera the rule cannot project: only the footprint match remains.
+    const auto no_camera = evaluate_cars(entities, gt, CarMatchOptions{});
+    CHECK(no_camera.entities_matched == 1);
+    CHECK(no_camera.fallback_matched == 0);
+    // A GT car with more points than fallback_max_points is judged by its points only.
+    CarMatchOptions strict;
+    strict.fallback_max_points = 0;
+    GtCar few = blind;
+    few.points_m.assign(3, Eigen::Vector3f(9.0f, 1.0f, 30.0f));
+    few.pixel_count = 3;
+    few.centroid_m = Eigen::Vector3d(9.0, 1.0, 30.0);
+    CHECK(evaluate_cars(entities, {few}, strict, &cam).entities_matched == 0);
+    CHECK(evaluate_cars(entities, {few}, CarMatchOptions{}, &cam).fallback_matched == 1);
+}
