@@ -177,6 +177,41 @@ TEST_CASE("Two cars get distinct KITTI instance ids, stuff gets instance 0", "[s
     CHECK(f.instance.values[at(f.rig, 0, 0)] == 0);
 }
 
+TEST_CASE("A car half hidden behind another is about half visible; stuff has no record",
+          "[sensors][gl]") {
+    // car-near (1.8 x 1.5 m front face at 7.7 m) ends at u = 160 + 300 * 0.9 / 7.7 = 195;
+    // car-far's front face (3.6 x 0.75 m at 15.7 m, x 0..3.6 m) spans u 160..229 and rows inside
+    // car-near's: about half of it is hidden.
+    const auto doc = scene({box("building-1", "building", 11, 0.0, -1.0, 40.0, 30.0, 10.0, 4.0),
+                            box("car-near", "car", 26, 0.0, 0.5, 8.0, 1.8, 1.5, 0.6),
+                            box("car-far", "car", 26, 1.8, 0.5, 16.0, 3.6, 0.75, 0.6),
+                            box("person-1", "person", 24, -40.0, 0.0, 10.0, 0.6, 1.7, 0.6)});
+    const StereoFrame f = render(doc, small_options());
+    REQUIRE(f.visibility.size() == 3);  // the building is stuff
+    const EntityVisibility& near = f.visibility[0];
+    const EntityVisibility& far = f.visibility[1];
+    const EntityVisibility& person = f.visibility[2];
+    CHECK(near.id == "car-near");
+    CHECK(near.instance == (26 << 8 | 1));
+    CHECK(far.instance == (26 << 8 | 2));
+    CHECK(near.visible_px == near.unoccluded_px);
+    CHECK(near.visible_fraction() == 1.0);
+    // Far car alone: about 69 x 14 px.
+    CHECK(far.unoccluded_px > 800);
+    CHECK(far.visible_fraction() == Approx(0.5).margin(0.08));
+    std::size_t far_in_image = 0;
+    for (const auto v : f.instance.values) far_in_image += v == far.instance;
+    CHECK(far.visible_px == far_in_image);
+    // The person is outside the image: no pixels either way.
+    CHECK(person.unoccluded_px == 0);
+    CHECK(person.visible_fraction() == 0.0);
+    const std::string json = format_visibility_json(f);
+    CHECK(json.find("\"id\": \"car-far\"") != std::string::npos);
+    CHECK(json.find("\"unoccluded_px\": " + std::to_string(far.unoccluded_px)) !=
+          std::string::npos);
+    CHECK(kitti_layout_files(f, "000007").count("visibility/000007.json") == 1);
+}
+
 TEST_CASE("KITTI instance ids count per class in file order", "[sensors]") {
     const std::vector<std::uint16_t> ids = kitti_instance_ids({26, 7, 26, 24, 26, 11});
     const std::vector<std::uint16_t> expected = {26 << 8 | 1, 7 << 8,      26 << 8 | 2,
@@ -313,17 +348,19 @@ TEST_CASE("The sensor pipeline runs on the null backend: all sky, no disparity",
     SceneRenderer renderer(device);
     const auto doc = scene({box("car-1", "car", 26, 1.0, 0.5, 12.0, 1.8, 1.5, 4.2)});
     const StereoFrame f = render_stereo_frame(renderer, doc, small_options());
-    CHECK(device.frames_begun == 4);  // left, right, semantic, instance
+    CHECK(device.frames_begun == 5);  // left, right, semantic, instance, car-1 alone
     CHECK(f.left.width == 320);
     CHECK(rgb(f.semantic, 160, 80) == Rgb8{70, 130, 180});
     CHECK(std::all_of(f.disparity.values.begin(), f.disparity.values.end(),
                       [](std::uint16_t v) { return v == 0; }));
     CHECK(std::all_of(f.instance.values.begin(), f.instance.values.end(),
                       [](std::uint16_t v) { return v == 0; }));
-    // The last frame was the instance pass: one draw, coloured (26, 1, 0) / 255.
+    // The last frame was car-1's instance pass alone: one draw, coloured (26, 1, 0) / 255.
     REQUIRE(device.draws.size() == 1);
     CHECK(device.draws[0].colour.r * 255.0f == Approx(26.0f));
     CHECK(device.draws[0].colour.g * 255.0f == Approx(1.0f));
+    REQUIRE(f.visibility.size() == 1);
+    CHECK(f.visibility[0].unoccluded_px == 0);  // the null device draws nothing
 }
 
 TEST_CASE("Where nothing is drawn the colour images show the sky gradient", "[sensors][gl]") {

@@ -1,9 +1,12 @@
+#include <cmath>
 #include <cstdio>
 #include <map>
 #include <sstream>
 #include <stdexcept>
 #include <string>
 #include <vector>
+
+#include <nlohmann/json.hpp>
 
 #include "scene_schema/entities.hpp"
 #include "scene_viewer/assets/image_io.hpp"
@@ -109,6 +112,24 @@ void check_frame_name(const std::string& frame_name) {
         throw std::invalid_argument("frame name '" + frame_name + "' must be a plain file stem");
 }
 
+std::string format_visibility_json(const StereoFrame& frame) {
+    nlohmann::ordered_json entities = nlohmann::ordered_json::array();
+    for (const auto& v : frame.visibility) {
+        entities.push_back(
+            {{"id", v.id},
+             {"class", v.class_name},
+             {"class_id", v.class_id},
+             {"instance", v.instance},
+             {"visible_px", v.visible_px},
+             {"unoccluded_px", v.unoccluded_px},
+             {"visible_fraction", std::round(v.visible_fraction() * 10000.0) / 10000.0}});
+    }
+    nlohmann::ordered_json out = {{"width_px", frame.rig.width_px},
+                                  {"height_px", frame.rig.height_px},
+                                  {"entities", entities}};
+    return out.dump(2) + "\n";
+}
+
 std::map<std::string, std::string> kitti_layout_files(const StereoFrame& frame,
                                                       const std::string& frame_name) {
     check_frame_name(frame_name);
@@ -119,6 +140,7 @@ std::map<std::string, std::string> kitti_layout_files(const StereoFrame& frame,
             {"instance/" + png, as_text(encode_png_u16(frame.instance))},
             {"disp_occ_0/" + png, as_text(encode_png_u16(frame.disparity))},
             {"depth/" + png, as_text(encode_png_u16(frame.depth_mm))},
+            {"visibility/" + frame_name + ".json", format_visibility_json(frame)},
             {"calib/calib_cam_to_cam.txt", format_kitti_calib(frame.rig)}};
 }
 

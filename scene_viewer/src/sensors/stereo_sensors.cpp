@@ -2,6 +2,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <map>
 #include <stdexcept>
 #include <string>
 
@@ -48,6 +49,12 @@ ImageRgb8 composite_sky(const ImageRgba8& render, double cy_px) {
 }
 
 }  // namespace
+
+double EntityVisibility::visible_fraction() const {
+    return unoccluded_px == 0
+               ? 0.0
+               : static_cast<double>(visible_px) / static_cast<double>(unoccluded_px);
+}
 
 void StereoRig::validate() const {
     if (width_px < 1 || width_px > kMaxImageSide)
@@ -209,6 +216,28 @@ StereoFrame render_stereo_frame(SceneRenderer& renderer,
             const long mm = std::lround(z * 1000.0);
             frame.depth_mm.values[i] = mm <= 65535 ? static_cast<std::uint16_t>(mm) : 0;
         }
+    }
+
+    // Visibility of every thing entity: its pixels in the instance image, and alone.
+    std::vector<int> class_ids;
+    for (const auto& e : scene.entities) class_ids.push_back(e.class_id);
+    const std::vector<std::uint16_t> ids = kitti_instance_ids(class_ids);
+    std::map<std::uint16_t, std::size_t> visible;
+    for (const std::uint16_t v : frame.instance.values) ++visible[v];
+    for (std::size_t e = 0; e < document.entities.size(); ++e) {
+        const auto& entity = document.entities[e];
+        if (!has_instances(entity.class_id)) continue;
+        scene_schema::EntityDocument alone = document;
+        alone.entities = {entity};
+        const ImageRgba8 solo = renderer.render(alone, nullptr, o);
+        EntityVisibility record;
+        record.id = entity.id;
+        record.class_name = entity.class_name;
+        record.class_id = entity.class_id;
+        record.instance = ids[e];
+        record.visible_px = visible[ids[e]];
+        for (std::size_t i = 0; i < count; ++i) record.unoccluded_px += solo.pixels[i * 4 + 3] != 0;
+        frame.visibility.push_back(record);
     }
     return frame;
 }

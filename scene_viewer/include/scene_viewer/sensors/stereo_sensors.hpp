@@ -78,6 +78,20 @@ struct SensorOptions {
     void validate() const;
 };
 
+/// How much of one thing entity (a class with instances) the left camera sees: its pixels in
+/// the instance image, and its pixels when rendered alone (no occluders, same camera; pixels
+/// outside the image count in neither, so truncation is not occlusion).
+struct EntityVisibility {
+    std::string id;                 ///< entity id in the scene file
+    std::string class_name;         ///< class name in the scene file
+    int class_id = 0;               ///< Cityscapes labelId
+    std::uint16_t instance = 0;     ///< its value in the instance image (labelId << 8 | n)
+    std::size_t visible_px = 0;     ///< pixels in the instance image
+    std::size_t unoccluded_px = 0;  ///< pixels when rendered alone
+    /// visible_px / unoccluded_px (0 when it is not in the image at all).
+    double visible_fraction() const;
+};
+
 /// One frame of the synthetic rig.
 struct StereoFrame {
     StereoRig rig;               ///< the rig that saw it
@@ -88,10 +102,12 @@ struct StereoFrame {
     ImageU16 disparity;          ///< KITTI disparity of the left view: round(d * 256), 0 none
     ImageU16 depth_mm;           ///< left view depth (z), millimetres, 0 none or beyond 65.535 m
     std::vector<float> depth_m;  ///< left view depth (z), metres, 0 where nothing was drawn
+    std::vector<EntityVisibility> visibility;  ///< every thing entity, in file order
 };
 
-/// Renders the rig's view of `document` with `renderer` (class models already set). The
-/// renderer's loaded world is replaced.
+/// Renders the rig's view of `document` with `renderer` (class models already set), plus one
+/// instance render of every thing entity alone for its visibility. The renderer's loaded world
+/// is replaced.
 StereoFrame render_stereo_frame(SceneRenderer& renderer,
                                 const scene_schema::EntityDocument& document,
                                 const SensorOptions& options);
@@ -120,9 +136,14 @@ std::vector<unsigned char> encode_png_u16(const ImageU16& image);
 /// Throws std::invalid_argument unless `frame_name` is a plain file stem (no folders).
 void check_frame_name(const std::string& frame_name);
 
+/// JSON text of a frame's visibility records (docs/sensors.md "Visibility"): the image size
+/// and, per thing entity, id, class, class_id, instance, visible_px, unoccluded_px and
+/// visible_fraction (4 decimals).
+std::string format_visibility_json(const StereoFrame& frame);
+
 /// The files of a frame in a KITTI-like layout, relative path -> bytes: image_2/F.png,
 /// image_3/F.png, semantic_rgb/F.png, instance/F.png, disp_occ_0/F.png, depth/F.png (uint16
-/// millimetres), calib/calib_cam_to_cam.txt.
+/// millimetres), visibility/F.json, calib/calib_cam_to_cam.txt.
 std::map<std::string, std::string> kitti_layout_files(const StereoFrame& frame,
                                                       const std::string& frame_name);
 
