@@ -1,5 +1,6 @@
 #include "evaluate_command.hpp"
 
+#include <algorithm>
 #include <cmath>
 #include <cstdio>
 #include <iostream>
@@ -24,7 +25,7 @@ namespace fs = std::filesystem;
 
 /// Input paths after applying the KITTI layout defaults.
 struct ResolvedPaths {
-    fs::path gt_disparity, instance, calib;
+    fs::path gt_disparity, instance, calib, visibility;
 };
 
 bool entity_mode(const EvaluateArgs& args) {
@@ -32,7 +33,7 @@ bool entity_mode(const EvaluateArgs& args) {
 }
 
 ResolvedPaths resolve(const EvaluateArgs& args) {
-    ResolvedPaths p{args.gt_disparity, args.instance, args.calib};
+    ResolvedPaths p{args.gt_disparity, args.instance, args.calib, args.visibility};
     if (!args.reference.empty() && !args.labels.empty()) {
         throw CLI::ValidationError("--reference/--labels", "give one reference, not both");
     }
@@ -61,6 +62,17 @@ ResolvedPaths resolve(const EvaluateArgs& args) {
                                            "and --frame)");
             }
             inputs.push_back(p.instance);
+        }
+        if (args.min_visible_fraction > 0.0) {
+            if (p.visibility.empty() && !args.kitti_root.empty() && !args.frame.empty()) {
+                p.visibility = args.kitti_root / "visibility" / (args.frame + ".json");
+            }
+            if (p.visibility.empty() || args.reference.empty()) {
+                throw CLI::ValidationError("--min-visible-fraction",
+                                           "needs --reference and --visibility (or --kitti-root "
+                                           "and --frame)");
+            }
+            inputs.push_back(p.visibility);
         }
         if (!args.disparity.empty()) {
             if (p.gt_disparity.empty() && !args.kitti_root.empty() && !args.frame.empty()) {
@@ -140,6 +152,17 @@ CLI::App* add_evaluate_command(CLI::App& app, EvaluateArgs& args) {
     sub->add_option("--min-gt-pixels", args.min_gt_pixels,
                     "GT cars with fewer GT disparity pixels are not owed (recall)")
         ->check(CLI::NonNegativeNumber);
+    sub->add_option("--occluder-gap", args.occluder_gap_m,
+                    "GT car depths split at gaps larger than this; nearer groups than the car's "
+                    "own surface are occluders inside its mask and dropped, metres (0 = keep "
+                    "every GT pixel)")
+        ->check(CLI::NonNegativeNumber)
+        ->capture_default_str();
+    sub->add_option("--fallback-max-points", args.fallback_max_points,
+                    "GT cars with at most this many GT points are matched by KITTI's 2D "
+                    "criterion (projected box vs mask rectangle, IoU >= 0.5; -1 = never)")
+        ->check(CLI::Range(-1, 1 << 30))
+        ->capture_default_str();
     const std::string ee = "Entity-to-entity (--reference or --labels)";
     sub->add_option("--reference", args.reference,
                     "reference entity file (e.g. a rendered scene's truth): score --entities "
@@ -175,6 +198,18 @@ CLI::App* add_evaluate_command(CLI::App& app, EvaluateArgs& args) {
                     "(0 = score all)")
         ->check(CLI::NonNegativeNumber)
         ->capture_default_str()
+        ->group(ee);
+    sub->add_option("--min-visible-fraction", args.min_visible_fraction,
+                    "reference things of which less than this share is visible (visible / "
+                    "unoccluded pixels in --visibility, from scene-render sensors) are not "
+                    "scored, like KITTI's occlusion level 2 in the moderate setting (0 = score "
+                    "all)")
+        ->check(CLI::Range(0.0, 1.0))
+        ->capture_default_str()
+        ->group(ee);
+    sub->add_option("--visibility", args.visibility,
+                    "visibility JSON of the reference (overrides "
+                    "<kitti-root>/visibility/<frame>.json)")
         ->group(ee);
     const std::string bg = "Bars (exit 3 when one is missed; off unless given)";
     auto& b = args.bars;
@@ -275,16 +310,27 @@ std::vector<std::string> evaluate_entity_files(const EvaluateArgs& args, const R
         reference = scene_schema::read_file(args.reference).entities;
         reference_name = args.reference.string();
     }
-    std::vector<bool> ignored;
+    std::vector<bool> ignored(reference.size(), false);
     std::vector<std::size_t> visible;
     if (args.min_visible_pixels > 0) {
         visible = visible_instance_pixels(paths.instance, reference);
-        for (const auto v : visible) {
-            ignored.push_back(v < static_cast<std::size_t>(args.min_visible_pixels));
+        for (std::size_t i = 0; i < visible.size(); ++i) {
+            if (visible[i] < static_cast<std::size_t>(args.min_visible_pixels)) ignored[i] = true;
+        }
+    }
+    std::vector<std::optional<ReferenceVisibility>> visibility;
+    if (args.min_visible_fraction > 0.0) {
+        visibility = load_reference_visibility(paths.visibility, reference, args.entity_eval);
+        for (std::size_t i = 0; i < visibility.size(); ++i) {
+            if (visibility[i] && visibility[i]->visible_fraction < args.min_visible_fraction)
+                ignored[i] = true;
         }
     }
     const EntityEvaluation ev =
         evaluate_entities(reference, doc.entities, args.entity_eval, ignored);
+    // The same scores with every reference scored, so the filter hides nothing.
+    const EntityEvaluation unfiltered =
+        evaluate_entities(reference, doc.entities, args.entity_eval);
     const auto& o = ev.options;
     table << "entities " << args.entities.string() << " vs reference " << reference_name << "\n"
           << "  matching: same class, greedy by bird's-eye centre distance <= "
@@ -325,11 +371,35 @@ std::vector<std::string> evaluate_entity_files(const EvaluateArgs& args, const R
     if (!ev.spurious.empty()) table << "  spurious: " << spurious.dump() << "\n";
     nlohmann::json not_scored = nlohmann::json::array();
     for (const auto r : ev.ignored) {
-        not_scored.push_back({{"id", reference[r].id}, {"visible_pixels", visible[r]}});
+        nlohmann::json row = {{"id", reference[r].id}};
+        if (!visible.empty()) row["visible_pixels"] = visible[r];
+        if (!visibility.empty() && visibility[r]) {
+            row["visible_px"] = visibility[r]->visible_px;
+            row["unoccluded_px"] = visibility[r]->unoccluded_px;
+            row["visible_fraction"] = visibility[r]->visible_fraction;
+        }
+        not_scored.push_back(row);
     }
+    const ClassBinScore all = unfiltered.within(args.bars.class_name, args.bars.max_range_m);
+    nlohmann::json unfiltered_json = {{"class", args.bars.class_name},
+                                      {"max_range_m", args.bars.max_range_m},
+                                      {"reference", all.reference},
+                                      {"matched", all.matched},
+                                      {"recall", all.recall()},
+                                      {"good_iou", all.good_iou},
+                                      {"good_iou_fraction", all.good_iou_fraction()}};
     if (!ev.ignored.empty()) {
-        table << "  not scored (< " << args.min_visible_pixels
-              << " visible pixels): " << not_scored.dump() << "\n";
+        table << "  not scored (";
+        if (args.min_visible_pixels > 0) table << "< " << args.min_visible_pixels << " visible px";
+        if (args.min_visible_pixels > 0 && args.min_visible_fraction > 0.0) table << " or ";
+        if (args.min_visible_fraction > 0.0)
+            table << "visible fraction < " << fixed(args.min_visible_fraction, 2);
+        table << "): " << not_scored.dump() << "\n";
+        table << "  unfiltered (every reference scored): " << args.bars.class_name << " within "
+              << fixed(args.bars.max_range_m, 0) << " m recall " << all.matched << "/"
+              << all.reference << " = " << fixed(all.recall(), 3)
+              << ", BEV IoU >= " << fixed(o.iou_threshold, 2) << " for " << all.good_iou << "/"
+              << all.reference << "\n";
     }
 
     std::vector<std::string> missed_bars;
@@ -360,7 +430,9 @@ std::vector<std::string> evaluate_entity_files(const EvaluateArgs& args, const R
                        {"missed", missed},
                        {"spurious", spurious},
                        {"min_visible_pixels", args.min_visible_pixels},
-                       {"not_scored", not_scored}};
+                       {"min_visible_fraction", args.min_visible_fraction},
+                       {"not_scored", not_scored},
+                       {"unfiltered", unfiltered_json}};
     if (args.bars.any()) out["bars"] = bars;
     return missed_bars;
 }
@@ -402,17 +474,26 @@ int run_evaluate(const EvaluateArgs& args) {
     } else if (!args.entities.empty()) {
         const scene_schema::EntityDocument doc = scene_schema::read_file(args.entities);
         const Calibration calib = load_calibration(paths.calib);
+        GtCarOptions gt_options;
+        gt_options.occluder_gap_m = args.occluder_gap_m;
         const std::vector<GtCar> gt =
-            load_gt_cars(paths.instance, paths.gt_disparity, calib.camera);
+            load_gt_cars(paths.instance, paths.gt_disparity, calib.camera, gt_options);
         CarMatchOptions options;
         options.max_range_m = args.max_range_m;
         options.min_gt_pixels = static_cast<std::size_t>(args.min_gt_pixels);
-        const CarEvaluation ev = evaluate_cars(doc.entities, gt, options, &calib.camera);
+        const bool with_fallback = args.fallback_max_points >= 0;
+        options.fallback_max_points =
+            static_cast<std::size_t>(std::max(0, args.fallback_max_points));
+        const CarEvaluation ev =
+            evaluate_cars(doc.entities, gt, options, with_fallback ? &calib.camera : nullptr);
 
         nlohmann::json cars = nlohmann::json::array();
         table << "cars within " << fixed(options.max_range_m, 0)
-              << " m (GT owed: >= " << options.min_gt_pixels << " GT disparity px)\n";
-        table << "  GT inst   pixels  range_m  matched_entity  inside  centre_dist_m\n";
+              << " m (GT owed: >= " << options.min_gt_pixels
+              << " GT disparity px of the car's own surface; occluder gap "
+              << fixed(gt_options.occluder_gap_m, 2) << " m)\n";
+        table << "  GT inst   pixels occluder  range_m  matched_entity  rule  inside  iou_2d  "
+                 "centre_dist_m\n";
         for (std::size_t g = 0; g < gt.size(); ++g) {
             const GtCar& car = gt[g];
             const CarMatch* match = nullptr;
@@ -422,22 +503,30 @@ int run_evaluate(const EvaluateArgs& args) {
             const bool no_points = car.pixel_count == 0;
             const bool in_range = !no_points && car.range_m() <= options.max_range_m;
             const bool owed = in_range && car.pixel_count >= options.min_gt_pixels;
+            const char* rule = match ? (match->fallback ? "2d" : "bev") : "";
             nlohmann::json row = {
                 {"instance", car.instance},
                 {"pixels", car.pixel_count},
+                {"occluder_pixels", car.occluder_pixel_count},
+                {"mask_pixels", car.image_pixels.size()},
                 {"range_m", no_points ? nlohmann::json() : nlohmann::json(car.range_m())},
                 {"owed", owed},
                 {"entity", match ? doc.entities[match->entity].id : ""},
+                {"rule", rule},
                 {"inside_fraction", match ? match->inside_fraction : 0.0},
+                {"iou_2d", match ? match->iou_2d : 0.0},
                 {"centre_distance_m", match ? match->centre_distance_m : 0.0}};
             cars.push_back(row);
-            if (!in_range) continue;
-            char line[160];
-            std::snprintf(line, sizeof line, "  %7d %8zu %8.1f  %-14s %6s %14s%s\n", car.instance,
-                          car.pixel_count, car.range_m(),
-                          match ? doc.entities[match->entity].id.c_str() : "-",
-                          match ? fixed(match->inside_fraction, 2).c_str() : "-",
-                          match ? fixed(match->centre_distance_m, 2).c_str() : "-",
+            // Cars without points have no range: listed when an entity matched them.
+            if (!in_range && !(no_points && match)) continue;
+            char line[200];
+            std::snprintf(line, sizeof line, "  %7d %8zu %8zu %8s  %-14s %4s %7s %7s %14s%s\n",
+                          car.instance, car.pixel_count, car.occluder_pixel_count,
+                          no_points ? "-" : fixed(car.range_m(), 1).c_str(),
+                          match ? doc.entities[match->entity].id.c_str() : "-", match ? rule : "-",
+                          match && !no_points ? fixed(match->inside_fraction, 2).c_str() : "-",
+                          match && match->fallback ? fixed(match->iou_2d, 2).c_str() : "-",
+                          match && !no_points ? fixed(match->centre_distance_m, 2).c_str() : "-",
                           owed ? "" : "  (not owed)");
             table << line;
         }
@@ -447,22 +536,35 @@ int run_evaluate(const EvaluateArgs& args) {
               << fixed(100.0 * ev.precision(), 1) << " %   (scorable: " << ev.entities_matched
               << "/" << ev.entities_in_range - ev.entities_unscorable << " = "
               << fixed(100.0 * ev.precision_scorable(), 1) << " %; " << ev.entities_unscorable
-              << " entities lie on GT cars without GT disparity)\n";
+              << " entities lie on GT cars without GT points)\n";
+        if (with_fallback) {
+            table << "  matched by the 2D fallback (GT cars with <= " << options.fallback_max_points
+                  << " GT points, IoU >= " << fixed(options.fallback_min_iou, 2)
+                  << "): " << ev.fallback_matched << " of " << ev.entities_matched << "\n";
+        } else {
+            table << "  2D fallback off\n";
+        }
         table << "  mean centre distance " << fixed(ev.mean_centre_distance_m(), 2)
               << " m (entity centre to GT visible-point centroid, bird's-eye)\n";
-        out["cars"] = {{"entities_file", args.entities.string()},
-                       {"max_range_m", options.max_range_m},
-                       {"min_gt_pixels", options.min_gt_pixels},
-                       {"gt_owed", ev.gt_owed},
-                       {"gt_owed_matched", ev.gt_owed_matched},
-                       {"entities_in_range", ev.entities_in_range},
-                       {"entities_matched", ev.entities_matched},
-                       {"recall", ev.recall()},
-                       {"precision", ev.precision()},
-                       {"entities_unscorable", ev.entities_unscorable},
-                       {"precision_scorable", ev.precision_scorable()},
-                       {"mean_centre_distance_m", ev.mean_centre_distance_m()},
-                       {"gt_cars", cars}};
+        out["cars"] = {
+            {"entities_file", args.entities.string()},
+            {"max_range_m", options.max_range_m},
+            {"min_gt_pixels", options.min_gt_pixels},
+            {"gt_owed", ev.gt_owed},
+            {"gt_owed_matched", ev.gt_owed_matched},
+            {"entities_in_range", ev.entities_in_range},
+            {"entities_matched", ev.entities_matched},
+            {"recall", ev.recall()},
+            {"precision", ev.precision()},
+            {"entities_unscorable", ev.entities_unscorable},
+            {"precision_scorable", ev.precision_scorable()},
+            {"occluder_gap_m", gt_options.occluder_gap_m},
+            {"fallback_max_points",
+             with_fallback ? nlohmann::json(options.fallback_max_points) : nlohmann::json()},
+            {"fallback_min_iou", options.fallback_min_iou},
+            {"fallback_matched", ev.fallback_matched},
+            {"mean_centre_distance_m", ev.mean_centre_distance_m()},
+            {"gt_cars", cars}};
         if (doc.extra.contains("ground_plane")) {
             const double h = doc.extra["ground_plane"].value("camera_height_m", 0.0);
             out["ground_plane"] = doc.extra["ground_plane"];

@@ -21,15 +21,19 @@ struct EvaluateArgs {
     std::filesystem::path kitti_root;  ///< --kitti-root: folder with calib/, instance/, ...
     std::string frame;                 ///< --frame: frame id, e.g. 000000_10
     std::filesystem::path
-        gt_disparity;                 ///< --gt-disparity: overrides <root>/disp_occ_0/<frame>.png
-    std::filesystem::path instance;   ///< --instance: overrides <root>/instance/<frame>.png
-    std::filesystem::path calib;      ///< --calib: overrides <root>/calib/calib_cam_to_cam.txt
-    std::filesystem::path json;       ///< --json: also write the scores as JSON ("-" = stdout)
-    double max_range_m = 30.0;        ///< --max-range: cars farther than this are ignored, m
-    int min_gt_pixels = 200;          ///< --min-gt-pixels: GT cars owed for recall
-    std::filesystem::path reference;  ///< --reference: reference entity file (entity-to-entity)
-    std::filesystem::path labels;     ///< --labels: KITTI label_2 file as the reference
-    int min_visible_pixels = 0;       ///< --min-visible-pixels: fewer in --instance = not scored
+        gt_disparity;                   ///< --gt-disparity: overrides <root>/disp_occ_0/<frame>.png
+    std::filesystem::path instance;     ///< --instance: overrides <root>/instance/<frame>.png
+    std::filesystem::path calib;        ///< --calib: overrides <root>/calib/calib_cam_to_cam.txt
+    std::filesystem::path json;         ///< --json: also write the scores as JSON ("-" = stdout)
+    double max_range_m = 30.0;          ///< --max-range: cars farther than this are ignored, m
+    int min_gt_pixels = 200;            ///< --min-gt-pixels: GT cars owed for recall
+    double occluder_gap_m = 1.5;        ///< --occluder-gap: GT depth gap, m; 0 = old rule
+    int fallback_max_points = 9;        ///< --fallback-max-points: 2D criterion up to this many
+    std::filesystem::path reference;    ///< --reference: reference entity file (entity-to-entity)
+    std::filesystem::path labels;       ///< --labels: KITTI label_2 file as the reference
+    int min_visible_pixels = 0;         ///< --min-visible-pixels: fewer in --instance = not scored
+    double min_visible_fraction = 0.0;  ///< --min-visible-fraction: less visible = not scored
+    std::filesystem::path visibility;   ///< --visibility: overrides <root>/visibility/<frame>.json
     cloud_analysis::EntityEvalOptions entity_eval;  ///< --match-distance, --eval-range, ...
     cloud_analysis::EvalBars bars;                  ///< --require-recall, ... (exit 3)
 };

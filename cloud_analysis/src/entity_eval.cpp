@@ -3,10 +3,12 @@
 #include <algorithm>
 #include <cmath>
 #include <cstdio>
+#include <fstream>
 #include <map>
 #include <set>
 #include <stdexcept>
 
+#include <nlohmann/json.hpp>
 #include <opencv2/imgcodecs.hpp>
 
 namespace cloud_analysis {
@@ -333,6 +335,43 @@ std::vector<std::size_t> visible_instance_pixels(
         visible[i] = count_of_id[static_cast<std::size_t>(c << 8 | n)];
     }
     return visible;
+}
+
+std::vector<std::optional<ReferenceVisibility>> load_reference_visibility(
+    const std::filesystem::path& visibility_json,
+    const std::vector<scene_schema::Entity>& reference, const EntityEvalOptions& options) {
+    const auto fail = [&](const std::string& what) {
+        return std::runtime_error("cannot read visibility: " + what + " (" +
+                                  visibility_json.string() + ")");
+    };
+    std::ifstream in(visibility_json, std::ios::binary);
+    if (!in) throw fail("no such file");
+    std::map<std::string, ReferenceVisibility> by_id;
+    try {
+        const nlohmann::json doc = nlohmann::json::parse(in);
+        for (const auto& r : doc.at("entities")) {
+            ReferenceVisibility v;
+            v.visible_px = r.at("visible_px").get<std::size_t>();
+            v.unoccluded_px = r.at("unoccluded_px").get<std::size_t>();
+            v.visible_fraction = v.unoccluded_px == 0 ? 0.0
+                                                      : static_cast<double>(v.visible_px) /
+                                                            static_cast<double>(v.unoccluded_px);
+            by_id[r.at("id").get<std::string>()] = v;
+        }
+    } catch (const nlohmann::json::exception& e) {
+        throw fail(e.what());
+    }
+    std::vector<std::optional<ReferenceVisibility>> out(reference.size());
+    for (std::size_t i = 0; i < reference.size(); ++i) {
+        if (!options.is_thing(reference[i].class_name)) continue;
+        const auto it = by_id.find(reference[i].id);
+        if (it == by_id.end()) {
+            throw fail("no record of reference entity '" + reference[i].id +
+                       "' (rendered from another scene file?)");
+        }
+        out[i] = it->second;
+    }
+    return out;
 }
 
 void EvalBars::validate() const {

@@ -1,5 +1,6 @@
 #include <cmath>
 #include <filesystem>
+#include <fstream>
 #include <string>
 #include <vector>
 
@@ -317,4 +318,36 @@ TEST_CASE("visible pixels follow the renderer's instance ids: labelId << 8 | ord
     CHECK(visible == std::vector<std::size_t>{0, 0, 2, 3});
     CHECK_THROWS_WITH(cloud_analysis::visible_instance_pixels(path, reference),
                       Catch::Contains("stereoscene_visible_test.png"));
+}
+
+TEST_CASE("visibility records are matched to the reference's things by id", "[entity_eval]") {
+    const auto path = std::filesystem::temp_directory_path() / "stereoscene_visibility_test.json";
+    std::vector<Entity> reference = {box("car", 0.0, 10.0, 0.0), box("road", 0.0, 20.0, 0.0),
+                                     box("car", 4.0, 20.0, 0.0)};
+    reference[0].id = "car-1";
+    reference[2].id = "car-2";
+    {
+        std::ofstream out(path);
+        out << R"({"width_px": 621, "height_px": 188, "entities": [
+            {"id": "car-2", "visible_px": 85, "unoccluded_px": 850},
+            {"id": "car-1", "visible_px": 400, "unoccluded_px": 400},
+            {"id": "car-9", "visible_px": 0, "unoccluded_px": 0}]})";
+    }
+    const auto v = cloud_analysis::load_reference_visibility(path, reference, EntityEvalOptions{});
+    REQUIRE(v.size() == 3);
+    REQUIRE(v[0]);
+    CHECK(v[0]->visible_fraction == 1.0);
+    CHECK_FALSE(v[1]);  // road is stuff
+    REQUIRE(v[2]);
+    CHECK(v[2]->visible_px == 85);
+    CHECK(v[2]->visible_fraction == Approx(0.1));
+    // A thing without a record means the file belongs to another scene.
+    reference[0].id = "car-7";
+    CHECK_THROWS_WITH(
+        cloud_analysis::load_reference_visibility(path, reference, EntityEvalOptions{}),
+        Catch::Contains("car-7") && Catch::Contains("stereoscene_visibility_test.json"));
+    std::filesystem::remove(path);
+    CHECK_THROWS_WITH(
+        cloud_analysis::load_reference_visibility(path, reference, EntityEvalOptions{}),
+        Catch::Contains("no such file"));
 }

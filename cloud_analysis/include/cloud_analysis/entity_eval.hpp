@@ -8,6 +8,7 @@
 
 #include <array>
 #include <filesystem>
+#include <optional>
 #include <string>
 #include <vector>
 
@@ -138,6 +139,21 @@ EntityEvaluation evaluate_entities(const std::vector<scene_schema::Entity>& refe
 /// instances. Throws std::runtime_error naming the file.
 std::vector<std::size_t> visible_instance_pixels(
     const std::filesystem::path& instance_png, const std::vector<scene_schema::Entity>& reference);
+
+/// How much of a reference thing the camera sees, from `scene-render sensors`'
+/// visibility/<frame>.json (docs/sensors.md "Visibility").
+struct ReferenceVisibility {
+    std::size_t visible_px = 0;     ///< pixels in the instance image
+    std::size_t unoccluded_px = 0;  ///< pixels when rendered alone (no occluders)
+    double visible_fraction = 0.0;  ///< visible_px / unoccluded_px, 0 when not in the image
+};
+
+/// The visibility record of each reference entity, matched by id, from a visibility JSON file
+/// written for the same reference file; nullopt for classes that are not things. Throws
+/// std::runtime_error naming the file when it cannot be read or lacks a thing of `reference`.
+std::vector<std::optional<ReferenceVisibility>> load_reference_visibility(
+    const std::filesystem::path& visibility_json,
+    const std::vector<scene_schema::Entity>& reference, const EntityEvalOptions& options);
 
 /// Pass bars of the closed loop; a negative value switches a bar off.
 struct EvalBars {
