@@ -32,13 +32,22 @@ set(STEREOSCENE_CLOSED_LOOP_BARS
     --bar-class car --bar-range 30 --require-recall 1.0 --max-spurious 0
     --max-stuff-on-things 0 --max-median-centre-error 0.5 --max-median-heading-error 10
     --min-good-iou-fraction 0.7)
+# KITTI's moderate setting does not owe largely occluded objects (occlusion level 2): references
+# of which less than a quarter is visible (visibility/<frame>.json of scene-render sensors) are
+# not scored, like DontCare. The evaluation also prints the unfiltered recall.
+set(STEREOSCENE_CLOSED_LOOP_VISIBILITY --min-visible-fraction 0.25)
+# Scenes whose hidden cars are found today too: a third test owes them every car within 30 m,
+# unfiltered, so the visibility rule cannot hide a regression there (parking-row: 4 of its 11
+# cars are less than a quarter visible, behind the cars beside them, and all are found).
+set(STEREOSCENE_CLOSED_LOOP_ALL_CARS_FOUND parking-row thesis-one-car)
 
-# street: a car ~90 % hidden behind another at 17 m, and a crossing car at 26 m merged by stereo
-# smear with the car at 22 m, are missed: recall 4/6 and BEV IoU >= 0.5 for 3/6 (issue: 6/6, 70 %).
+# street: the crossing car at 26 m (car-6) is merged by stereo smear with the car at 22 m
+# (car-5): recall 4/5 and BEV IoU >= 0.5 for 3/5 of the scored cars (issue: 5/5, 70 %). car-4,
+# 95 % hidden behind car-1, is not scored (unfiltered: 4/6, 3/6).
 set(STEREOSCENE_CLOSED_LOOP_BARS_street
-    --bar-class car --bar-range 30 --require-recall 0.66 --max-spurious 0
+    --bar-class car --bar-range 30 --require-recall 0.8 --max-spurious 0
     --max-stuff-on-things 0 --max-median-centre-error 0.5 --max-median-heading-error 10
-    --min-good-iou-fraction 0.5)
+    --min-good-iou-fraction 0.6)
 
 file(GLOB _loop_calibs LIST_DIRECTORIES false
     ${_loop_samples}/*/calib/calib_cam_to_cam.txt)
@@ -74,10 +83,20 @@ foreach(_calib IN LISTS _loop_calibs)
         endif()
         add_test(NAME "closed loop ${_name}: cars within 30 m meet the bars"
             COMMAND $<TARGET_FILE:cloud-analysis> evaluate --entities ${_entities}
-                --reference ${_truth} ${_bars}
+                --reference ${_truth} ${_bars} ${STEREOSCENE_CLOSED_LOOP_VISIBILITY}
+                --kitti-root ${_dir} --frame ${_frame}
                 --json ${_loop_out}/${_scene}-${_frame}-eval.json)
         set_tests_properties("closed loop ${_name}: cars within 30 m meet the bars"
             PROPERTIES FIXTURES_REQUIRED "closed_loop_${_scene}_${_frame}" LABELS closed_loop)
+        if(_scene IN_LIST STEREOSCENE_CLOSED_LOOP_ALL_CARS_FOUND)
+            add_test(NAME "closed loop ${_name}: every car within 30 m is found, hidden ones too"
+                COMMAND $<TARGET_FILE:cloud-analysis> evaluate --entities ${_entities}
+                    --reference ${_truth} --bar-class car --bar-range 30 --require-recall 1.0)
+            set_tests_properties(
+                "closed loop ${_name}: every car within 30 m is found, hidden ones too"
+                PROPERTIES FIXTURES_REQUIRED "closed_loop_${_scene}_${_frame}"
+                LABELS closed_loop)
+        endif()
         list(APPEND STEREOSCENE_CLOSED_LOOP_SCENES ${_name})
     endforeach()
 endforeach()
@@ -126,3 +145,7 @@ closed_loop_cli_test("evaluate --min-visible-pixels without an instance image is
     ARGS evaluate --entities ${_syn}/truth.json --reference ${_syn}/truth.json
         --min-visible-pixels 100
     CODE 2 STDERR "--min-visible-pixels")
+closed_loop_cli_test("evaluate --min-visible-fraction without a visibility file is a usage error"
+    ARGS evaluate --entities ${_syn}/truth.json --reference ${_syn}/truth.json
+        --min-visible-fraction 0.25
+    CODE 2 STDERR "--min-visible-fraction")
