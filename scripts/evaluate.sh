@@ -45,6 +45,10 @@ for f in "${frames[@]}"; do
         "$ca" evaluate --kitti-root "$kitti_root" --frame "$f" \
             --entities "$out_dir/$f-$preset.json" --disparity "$out_dir/$f-$preset-disp.png" \
             --json "$out_dir/$f-$preset-eval.json"
+        # The same entities under the old GT rule (whole masks, no 2D fallback), for comparison.
+        "$ca" evaluate --kitti-root "$kitti_root" --frame "$f" \
+            --entities "$out_dir/$f-$preset.json" --occluder-gap 0 --fallback-max-points -1 \
+            --json "$out_dir/$f-$preset-eval-oldrule.json" >/dev/null
     done
     echo "--- thesis extractors (one entity per class), tuned disparity"
     for method in centroid average variance; do
@@ -66,27 +70,50 @@ echo "=== summary over ${frames[*]} ==="
 /usr/bin/python3 - "$out_dir" "${frames[@]}" <<'PY'
 import json, sys, os
 out, frames = sys.argv[1], sys.argv[2:]
-for preset in ("tuned", "opencv-sample"):
+def cars(preset, suffix=""):
     t = {"gt_owed": 0, "gt_owed_matched": 0, "entities_in_range": 0, "entities_matched": 0,
-         "entities_unscorable": 0}
-    d1, dens, heights = [], [], []
+         "entities_unscorable": 0, "fallback_matched": 0}
     for f in frames:
-        ev = json.load(open(os.path.join(out, f"{f}-{preset}-eval.json")))
+        ev = json.load(open(os.path.join(out, f"{f}-{preset}-eval{suffix}.json")))
         for k in t:
             t[k] += ev["cars"][k]
-        d1.append(ev["disparity"]["d1_all"])
-        dens.append(ev["disparity"]["density"])
-        if "ground_plane" in ev:
-            heights.append(ev["ground_plane"]["camera_height_m"])
     rec = t["gt_owed_matched"] / t["gt_owed"] if t["gt_owed"] else 1.0
     prec = t["entities_matched"] / t["entities_in_range"] if t["entities_in_range"] else 1.0
     scor = t["entities_in_range"] - t["entities_unscorable"]
     prec_s = t["entities_matched"] / scor if scor else 1.0
+    return (f"recall {t['gt_owed_matched']}/{t['gt_owed']} = {100*rec:.1f} %, "
+            f"precision {t['entities_matched']}/{t['entities_in_range']} = {100*prec:.1f} % "
+            f"(scorable {t['entities_matched']}/{scor} = {100*prec_s:.1f} %; "
+            f"{t['fallback_matched']} matched by the 2D fallback)")
+
+for preset in ("tuned", "opencv-sample"):
+    d1, dens, heights = [], [], []
+    for f in frames:
+        ev = json.load(open(os.path.join(out, f"{f}-{preset}-eval.json")))
+        d1.append(ev["disparity"]["d1_all"])
+        dens.append(ev["disparity"]["density"])
+        if "ground_plane" in ev:
+            heights.append(ev["ground_plane"]["camera_height_m"])
     print(f"{preset:14s} D1-all " + " / ".join(f"{100*x:.2f} %" for x in d1) +
           "   density " + " / ".join(f"{100*x:.1f} %" for x in dens))
-    print(f"{'':14s} cars: recall {t['gt_owed_matched']}/{t['gt_owed']} = {100*rec:.1f} %, "
-          f"precision {t['entities_matched']}/{t['entities_in_range']} = {100*prec:.1f} % "
-          f"(scorable {t['entities_matched']}/{scor} = {100*prec_s:.1f} %)")
+    print(f"{'':14s} cars: " + cars(preset))
+    print(f"{'':14s} cars, old GT rule (whole masks, no 2D fallback): " +
+          cars(preset, "-oldrule"))
     print(f"{'':14s} camera height above the fitted road plane: " +
           " / ".join(f"{h:.3f} m" for h in heights))
+
+print("GT cars (docs/evaluation.md 'Cars'): mask pixels, GT disparity pixels kept as the car's "
+      "own surface / dropped as occluders, range of the kept points' centroid")
+for f in frames:
+    ev = json.load(open(os.path.join(out, f"{f}-tuned-eval.json")))
+    old = {c["instance"]: c for c in
+           json.load(open(os.path.join(out, f"{f}-tuned-eval-oldrule.json")))["cars"]["gt_cars"]}
+    for c in ev["cars"]["gt_cars"]:
+        o = old[c["instance"]]
+        rng = f"{c['range_m']:5.1f}" if c["range_m"] is not None else "    -"
+        orng = f"{o['range_m']:5.1f}" if o["range_m"] is not None else "    -"
+        print(f"  {f} car {c['instance']:2d}: mask {c['mask_pixels']:6d}  GT {o['pixels']:5d} -> "
+              f"kept {c['pixels']:5d} dropped {c['occluder_pixels']:4d}  range {orng} -> {rng} m"
+              f"  owed {'yes' if o['owed'] else 'no '} -> {'yes' if c['owed'] else 'no'}"
+              f"  match {o['entity'] or '-'} -> {c['entity'] or '-'} {c['rule']}")
 PY

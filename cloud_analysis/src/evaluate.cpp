@@ -34,8 +34,7 @@ void GtCarOptions::validate() const {
     if (car_label_id < 0 || car_label_id > 255)
         throw std::invalid_argument("car_label_id: must be in 0..255");
     if (!(occluder_gap_m >= 0.0)) throw std::invalid_argument("occluder_gap_m: must be >= 0");
-    if (!(min_surface_share > 0.0 && min_surface_share <= 1.0))
-        throw std::invalid_argument("min_surface_share: must be in (0, 1]");
+    if (min_interior_px < 1) throw std::invalid_argument("min_interior_px: must be >= 1");
 }
 
 void CarMatchOptions::validate() const {
@@ -131,21 +130,58 @@ double rect_iou(const Eigen::Vector4d& a, const Eigen::Vector4d& b) {
     return u > 0.0 ? i / u : 0.0;
 }
 
-float own_surface_min_depth_m(std::vector<float> depths_m, const GtCarOptions& options) {
+float own_surface_min_depth_m(std::vector<GtDepth> points, const GtCarOptions& options) {
     options.validate();
-    if (depths_m.empty() || options.occluder_gap_m == 0.0) return 0.0f;
-    std::sort(depths_m.begin(), depths_m.end());
-    const double need = options.min_surface_share * static_cast<double>(depths_m.size());
-    // Walk the groups from the far end; the first one large enough is the car's own surface.
-    std::size_t end = depths_m.size();
-    while (end > 0) {
-        std::size_t begin = end - 1;
-        while (begin > 0 && double{depths_m[begin] - depths_m[begin - 1]} <= options.occluder_gap_m)
-            --begin;
-        if (static_cast<double>(end - begin) >= need) return depths_m[begin];
-        end = begin;
+    if (points.empty() || options.occluder_gap_m == 0.0) return 0.0f;
+    std::sort(points.begin(), points.end(),
+              [](const GtDepth& a, const GtDepth& b) { return a.z_m < b.z_m; });
+    float best_z = points.front().z_m;
+    std::size_t best_interior = 0, best_size = 0;
+    for (std::size_t begin = 0; begin < points.size();) {
+        std::size_t end = begin + 1, interior = points[begin].interior ? 1 : 0;
+        while (end < points.size() &&
+               double{points[end].z_m - points[end - 1].z_m} <= options.occluder_gap_m) {
+            interior += points[end].interior ? 1 : 0;
+            ++end;
+        }
+        const std::size_t size = end - begin;
+        if (interior > best_interior || (interior == best_interior && size > best_size)) {
+            best_interior = interior;
+            best_size = size;
+            best_z = points[begin].z_m;
+        }
+        begin = end;
     }
-    return depths_m.front();
+    return best_z;
+}
+
+std::vector<int> label_border_distance_px(const std::vector<std::uint16_t>& labels, int width_px,
+                                          int height_px) {
+    const int far = width_px + height_px;
+    std::vector<int> d(labels.size(), far);
+    const auto relax = [&](int u, int v, int nu, int nv) {
+        if (nu < 0 || nv < 0 || nu >= width_px || nv >= height_px) return;
+        const std::size_t i = static_cast<std::size_t>(v) * width_px + u;
+        const std::size_t n = static_cast<std::size_t>(nv) * width_px + nu;
+        d[i] = std::min(d[i], labels[n] != labels[i] ? 1 : d[n] + 1);
+    };
+    for (int v = 0; v < height_px; ++v) {
+        for (int u = 0; u < width_px; ++u) {
+            relax(u, v, u - 1, v - 1);
+            relax(u, v, u, v - 1);
+            relax(u, v, u + 1, v - 1);
+            relax(u, v, u - 1, v);
+        }
+    }
+    for (int v = height_px - 1; v >= 0; --v) {
+        for (int u = width_px - 1; u >= 0; --u) {
+            relax(u, v, u + 1, v + 1);
+            relax(u, v, u, v + 1);
+            relax(u, v, u - 1, v + 1);
+            relax(u, v, u + 1, v);
+        }
+    }
+    return d;
 }
 
 CarEvaluation evaluate_cars(const std::vector<scene_schema::Entity>& entities,
@@ -274,7 +310,10 @@ std::vector<GtCar> load_gt_cars(const std::filesystem::path& instance_png,
                                  std::to_string(disparity.height_px) + " (" +
                                  instance_png.string() + ")");
     }
+    const std::vector<int> border =
+        label_border_distance_px(instance.values, instance.width_px, instance.height_px);
     std::map<int, GtCar> by_instance;
+    std::map<int, std::vector<GtDepth>> depths;
     for (int v = 0; v < instance.height_px; ++v) {
         for (int u = 0; u < instance.width_px; ++u) {
             const std::size_t i = static_cast<std::size_t>(v) * instance.width_px + u;
@@ -293,13 +332,13 @@ std::vector<GtCar> load_gt_cars(const std::filesystem::path& instance_png,
             const int d16 = disparity.values[i];
             if (d16 == 0) continue;
             car.points_m.push_back(reproject_pixel(camera, u, v, d16 / 256.0));
+            depths[car.instance].push_back(
+                {car.points_m.back().z(), border[i] >= options.min_interior_px});
         }
     }
     std::vector<GtCar> cars;
     for (auto& [id, car] : by_instance) {
-        std::vector<float> depths;
-        for (const auto& p : car.points_m) depths.push_back(p.z());
-        const float nearest = own_surface_min_depth_m(depths, options);
+        const float nearest = own_surface_min_depth_m(depths[id], options);
         const auto occluders =
             std::remove_if(car.points_m.begin(), car.points_m.end(),
                            [nearest](const Eigen::Vector3f& p) { return p.z() < nearest; });

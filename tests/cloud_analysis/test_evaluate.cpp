@@ -169,49 +169,79 @@ TEST_CASE("an unmatched entity on a GT car without GT disparity is unscorable, n
     CHECK(evaluate_cars(entities, gt, CarMatchOptions{}).entities_unscorable == 0);
 }
 
-TEST_CASE("a car's own surface is the farthest depth group with a quarter of its GT points",
+TEST_CASE("a car's own surface is the depth group with the most points inside its mask",
           "[evaluate]") {
-    GtCarOptions o;  // gap 1.5 m, share 0.25
-    // Three occluder points at 10 m (a van in front, inside the mask), four on the car at 19-20 m.
-    const std::vector<float> occluded = {19.0f, 10.2f, 19.5f, 10.0f, 20.0f, 10.4f, 20.3f};
+    GtCarOptions o;  // gap 1.5 m
+    // Five points of a van in front on the mask's border strip, three inside on the car.
+    const std::vector<GtDepth> occluded = {{10.0f, false}, {19.0f, true}, {10.2f, false},
+                                           {10.4f, true},  {19.5f, true}, {10.3f, false},
+                                           {20.3f, true},  {10.1f, false}};
     CHECK(own_surface_min_depth_m(occluded, o) == 19.0f);
-    // One background point far behind is edge bleed, not the surface: the car stays at 20 m.
-    CHECK(own_surface_min_depth_m({20.0f, 20.3f, 20.6f, 21.0f, 45.0f}, o) == 20.0f);
-    // Groups closer than the gap are one surface (a car seen along its length).
-    CHECK(own_surface_min_depth_m({12.0f, 13.4f, 14.8f, 16.2f}, o) == 12.0f);
-    // No group is large enough: everything is kept.
-    o.min_surface_share = 0.6;
-    CHECK(own_surface_min_depth_m(occluded, o) == 10.0f);
+    // Background bleed behind is on the border too: the car stays at 20 m.
+    CHECK(own_surface_min_depth_m(
+              {{20.0f, true}, {20.3f, true}, {45.0f, false}, {45.2f, false}, {45.4f, false}}, o) ==
+          20.0f);
+    // Depths closer than the gap are one surface (a car seen along its length).
+    CHECK(own_surface_min_depth_m({{12.0f, true}, {13.4f, false}, {14.8f, true}, {16.2f, false}},
+                                  o) == 12.0f);
+    // A mask too thin for interior points: the largest group.
+    CHECK(own_surface_min_depth_m({{30.0f, false}, {40.0f, false}, {40.5f, false}}, o) == 40.0f);
     // Gap 0 is the old rule: keep every point.
     o.occluder_gap_m = 0.0;
     CHECK(own_surface_min_depth_m(occluded, o) == 0.0f);
     CHECK(own_surface_min_depth_m({}, GtCarOptions{}) == 0.0f);
-    o.min_surface_share = 0.0;
-    CHECK_THROWS_WITH(o.validate(), Catch::Contains("min_surface_share"));
+    o.min_interior_px = 0;
+    CHECK_THROWS_WITH(o.validate(), Catch::Contains("min_interior_px"));
 }
 
-TEST_CASE("GT car pixels on a nearer occluder are dropped and counted", "[evaluate]") {
+TEST_CASE("border distance is the chessboard distance to another label, not to the image edge",
+          "[evaluate]") {
+    // 6 x 3: label 1 on columns 0-4, label 2 on column 5.
+    const std::vector<std::uint16_t> labels = {1, 1, 1, 1, 1, 2,  //
+                                               1, 1, 1, 1, 1, 2,  //
+                                               1, 1, 1, 1, 1, 2};
+    const std::vector<int> d = label_border_distance_px(labels, 6, 3);
+    const std::vector<int> row = {5, 4, 3, 2, 1, 1};
+    for (int v = 0; v < 3; ++v) {
+        for (int u = 0; u < 6; ++u) CHECK(d[static_cast<std::size_t>(v * 6 + u)] == row[u]);
+    }
+    // A diagonal neighbour counts as 1 (8-neighbourhood).
+    const std::vector<int> diag = label_border_distance_px({1, 1, 1, 2}, 2, 2);
+    CHECK(diag == std::vector<int>{1, 1, 1, 1});
+}
+
+TEST_CASE("GT car pixels on a nearer occluder at the mask border are dropped and counted",
+          "[evaluate]") {
     const auto dir = std::filesystem::temp_directory_path() / "stereoscene_test_evaluate_occl";
     std::filesystem::create_directories(dir);
-    cv::Mat instance(4, 8, CV_16UC1, cv::Scalar((26 << 8) | 2));
-    cv::Mat disparity(4, 8, CV_16UC1, cv::Scalar(0));
+    // Car 2 on columns 0-9 of a 12 x 10 image, the van (car 9) in front on columns 10-11. The
+    // car's mask bleeds over the van on columns 8-9: 20 GT pixels at the van's 10 m. The car's
+    // own surface has sparse GT, 12 pixels at 20 m inside the mask (rows 0 and 5, columns 0-5).
+    cv::Mat instance(10, 12, CV_16UC1, cv::Scalar((26 << 8) | 2));
+    cv::Mat disparity(10, 12, CV_16UC1, cv::Scalar(0));
     StereoCamera cam;
     cam.fx_px = cam.fy_px = 500.0;
-    cam.cx_px = cam.cx_right_px = 4.0;
-    cam.cy_px = 2.0;
+    cam.cx_px = cam.cx_right_px = 6.0;
+    cam.cy_px = 5.0;
     cam.baseline_m = 0.5;
-    // Columns 0-5: the car at z = 250 / 12.5 = 20 m; columns 6-7: the van in front, 10 m.
-    for (int v = 0; v < 4; ++v) {
-        for (int u = 0; u < 8; ++u) disparity.at<std::uint16_t>(v, u) = u < 6 ? 3200 : 6400;
+    for (int v = 0; v < 10; ++v) {
+        for (int u = 10; u < 12; ++u) instance.at<std::uint16_t>(v, u) = (26 << 8) | 9;
+        for (int u = 8; u < 12; ++u) disparity.at<std::uint16_t>(v, u) = 25 * 256;  // 10 m
+    }
+    for (int v : {0, 5}) {
+        for (int u = 0; u < 6; ++u) disparity.at<std::uint16_t>(v, u) = 3200;  // 12.5 px: 20 m
     }
     REQUIRE(cv::imwrite((dir / "instance.png").string(), instance));
     REQUIRE(cv::imwrite((dir / "disp.png").string(), disparity));
     auto cars = load_gt_cars(dir / "instance.png", dir / "disp.png", cam);
-    REQUIRE(cars.size() == 1);
-    CHECK(cars[0].pixel_count == 24);
-    CHECK(cars[0].occluder_pixel_count == 8);
+    REQUIRE(cars.size() == 2);
+    CHECK(cars[0].instance == 2);
+    CHECK(cars[0].pixel_count == 12);
+    CHECK(cars[0].occluder_pixel_count == 20);
     CHECK(cars[0].centroid_m.z() == Approx(20.0));
-    CHECK(cars[0].mask_box_px == Eigen::Vector4d(0, 0, 8, 4));
+    CHECK(cars[0].mask_box_px == Eigen::Vector4d(0, 0, 10, 10));
+    CHECK(cars[1].pixel_count == 20);  // the van keeps its own pixels
+    CHECK(cars[1].occluder_pixel_count == 0);
     GtCarOptions keep_all;
     keep_all.occluder_gap_m = 0.0;
     cars = load_gt_cars(dir / "instance.png", dir / "disp.png", cam, keep_all);

@@ -107,25 +107,39 @@ CarEvaluation evaluate_cars(const std::vector<scene_schema::Entity>& entities,
 
 /// How GT cars are read from the instance and disparity images.
 struct GtCarOptions {
-    int car_label_id = 26;            ///< Cityscapes labelId of cars in the instance image
-    double occluder_gap_m = 1.5;      ///< depth gap that splits a car's GT depths into groups,
-                                      ///< metres; 0 = keep every point (the mask as given)
-    double min_surface_share = 0.25;  ///< the car's own surface is the farthest group holding
-                                      ///< at least this share of its GT points, (0, 1]
+    int car_label_id = 26;        ///< Cityscapes labelId of cars in the instance image
+    double occluder_gap_m = 1.5;  ///< depth gap that splits a car's GT depths into groups,
+                                  ///< metres; 0 = keep every point (the mask as given)
+    int min_interior_px = 3;      ///< a GT pixel this far (chessboard) inside its mask's
+                                  ///< border with other labels is interior, pixels, >= 1
     /// Throws std::invalid_argument naming the bad field.
     void validate() const;
 };
 
-/// The nearest depth of a car's own surface among its GT depths (any order): the depths are
-/// split at gaps larger than occluder_gap_m, and the farthest group holding at least
-/// min_surface_share of them is the car's; nearer depths belong to occluders that the
-/// instance mask bleeds over (occluders are in front). Returns 0 for an empty list or when
-/// occluder_gap_m is 0 (keep everything).
-float own_surface_min_depth_m(std::vector<float> depths_m, const GtCarOptions& options);
+/// One GT point of a car for own_surface_min_depth_m.
+struct GtDepth {
+    float z_m = 0.0f;       ///< depth, metres
+    bool interior = false;  ///< at least min_interior_px inside the car's mask
+};
+
+/// The nearest depth of a car's own surface among its GT points (any order). The depths are
+/// split at gaps larger than occluder_gap_m; the car's own surface is the group with the most
+/// interior points (the largest group when no point is interior): a mask that bleeds over an
+/// occluder or the background does so in a thin strip along its border, while the car's own
+/// surface fills its interior. Nearer points belong to occluders (occluders are in front).
+/// Returns 0 for an empty list or when occluder_gap_m is 0 (keep everything).
+float own_surface_min_depth_m(std::vector<GtDepth> points, const GtCarOptions& options);
+
+/// Chessboard distance of every pixel of a w x h label image to the nearest pixel of another
+/// label (8-neighbour chamfer, exact for the chessboard metric); pixels next to another label
+/// get 1. The image border is not a label border. Row-major, like `labels`.
+std::vector<int> label_border_distance_px(const std::vector<std::uint16_t>& labels, int width_px,
+                                          int height_px);
 
 /// GT cars from a KITTI instance PNG (uint16) and a GT disparity PNG (uint16, d * 256, 0 =
-/// none) of the same size, including cars without any GT disparity (no points); pixels nearer
-/// than own_surface_min_depth_m are dropped. Throws std::runtime_error naming the file.
+/// none) of the same size, including cars without any GT disparity (no points); points nearer
+/// than own_surface_min_depth_m are dropped as occluders. Throws std::runtime_error naming the
+/// file.
 std::vector<GtCar> load_gt_cars(const std::filesystem::path& instance_png,
                                 const std::filesystem::path& disparity_png,
                                 const StereoCamera& camera, const GtCarOptions& options = {});
