@@ -84,11 +84,11 @@ sensors_cli_test("with a zero baseline exits 2 and writes nothing" baseline
 sensors_cli_test("without --out exits 2" noout ARGS sensors ${_sensors_scene} CODE 2)
 sensors_cli_test("writes the KITTI layout" good
     ARGS sensors ${_sensors_scene} --out ${_sensors_out}/good --size 310x94 --frame 000007 CODE 0
-    FILES "image_2/000007.png|image_3/000007.png|semantic_rgb/000007.png|instance/000007.png|disp_occ_0/000007.png|depth/000007.png|calib/calib_cam_to_cam.txt")
+    FILES "image_2/000007.png|image_3/000007.png|semantic_rgb/000007.png|instance/000007.png|disp_occ_0/000007.png|depth/000007.png|visibility/000007.json|calib/calib_cam_to_cam.txt")
 sensors_cli_test("takes its rig from a KITTI calibration file" rig
     ARGS sensors ${_sensors_scene} --out ${_sensors_out}/rig
     --rig ${PROJECT_SOURCE_DIR}/samples/rendered/thesis-one-car/calib/calib_cam_to_cam.txt CODE 0
-    FILES "image_2/000000.png|image_3/000000.png|semantic_rgb/000000.png|instance/000000.png|disp_occ_0/000000.png|depth/000000.png|calib/calib_cam_to_cam.txt")
+    FILES "image_2/000000.png|image_3/000000.png|semantic_rgb/000000.png|instance/000000.png|disp_occ_0/000000.png|depth/000000.png|visibility/000000.json|calib/calib_cam_to_cam.txt")
 sensors_cli_test("with an unreadable rig file exits 1 and writes nothing" badrig
     ARGS sensors ${_sensors_scene} --out ${_sensors_out}/badrig --rig ${_sensors_bad} CODE 1
     STDERR "invalid rig: P_rect_02: missing")
