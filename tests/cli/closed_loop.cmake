@@ -149,3 +149,12 @@ closed_loop_cli_test("evaluate --min-visible-fraction without a visibility file 
     ARGS evaluate --entities ${_syn}/truth.json --reference ${_syn}/truth.json
         --min-visible-fraction 0.25
     CODE 2 STDERR "--min-visible-fraction")
+set(_street ${PROJECT_SOURCE_DIR}/samples/rendered/street)
+if(EXISTS ${_street}/visibility/000000.json)
+    closed_loop_cli_test("evaluate --min-visible-fraction leaves the hidden car unscored and prints the unfiltered recall"
+        ARGS evaluate --entities ${PROJECT_SOURCE_DIR}/samples/rendered/scenes/street.json
+            --reference ${PROJECT_SOURCE_DIR}/samples/rendered/scenes/street.json
+            --min-visible-fraction 0.25 --kitti-root ${_street} --frame 000000 --json -
+        CODE 0
+        STDERR "not scored \\(visible fraction < 0.25\\): \\[{\"id\":\"car-4\".*unfiltered \\(every reference scored\\): car within 30 m recall 6/6")
+endif()

@@ -5,6 +5,7 @@
 #include <opencv2/core.hpp>
 #include <opencv2/imgcodecs.hpp>
 
+#include "cloud_analysis/calibration.hpp"
 #include "cloud_analysis/evaluate.hpp"
 
 using namespace cloud_analysis;
@@ -323,4 +324,30 @@ TEST_CASE("an entity on a GT car without GT points matches by KITTI's 2D criteri
     few.centroid_m = Eigen::Vector3d(9.0, 1.0, 30.0);
     CHECK(evaluate_cars(entities, {few}, strict, &cam).entities_matched == 0);
     CHECK(evaluate_cars(entities, {few}, CarMatchOptions{}, &cam).fallback_matched == 1);
+}
+
+TEST_CASE("kitti15 000000_10: the red car's pixels on the van in front are dropped",
+          "[evaluate][kitti]") {
+    const std::filesystem::path root =
+        std::filesystem::path(STEREOSCENE_SHARED_DATA_DIR) / "kitti15";
+    const StereoCamera cam = load_calibration(root / "calib/calib_cam_to_cam.txt").camera;
+    const auto cars =
+        load_gt_cars(root / "instance/000000_10.png", root / "disp_occ_0/000000_10.png", cam);
+    const auto car = [&](int id) -> const GtCar& {
+        for (const auto& c : cars) {
+            if (c.instance == id) return c;
+        }
+        FAIL("no GT car " << id);
+        return cars.front();
+    };
+    // Car 2: 444 GT pixels, 217 on the van (car 9) at 9.6-10.8 m and 50 at 13.7-16.5 m in
+    // front of its own 177 at 18.4-27.1 m (docs/evaluation.md "Cars").
+    CHECK(car(2).pixel_count == 177);
+    CHECK(car(2).occluder_pixel_count == 267);
+    CHECK(car(2).range_m() > 20.0);
+    // The van itself and car 3 keep every pixel; car 17 has none and a mask rectangle.
+    CHECK(car(9).occluder_pixel_count == 0);
+    CHECK(car(3).occluder_pixel_count == 0);
+    CHECK(car(17).pixel_count == 0);
+    CHECK(car(17).mask_box_px == Eigen::Vector4d(904, 195, 1242, 375));
 }
