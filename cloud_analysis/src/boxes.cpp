@@ -5,12 +5,15 @@
 #include <stdexcept>
 #include <utility>
 
+#include <Eigen/Eigenvalues>
 #include <Eigen/Geometry>
 
 namespace cloud_analysis {
 namespace {
 
 constexpr double kPi = 3.14159265358979323846;
+/// A straight face longer than this many prior widths cannot be a thing's front or rear.
+constexpr double kFaceWidths = 1.2;
 
 /// Orthonormal ground-aligned basis: up = plane normal, ex ~ camera x, ez ~ camera z.
 struct GroundFrame {
@@ -89,6 +92,65 @@ double best_lshape_angle(const std::vector<Eigen::Vector2d>& pts, double step_de
     return best_angle;
 }
 
+/// A straight face of points: unit direction, share of the points within the tolerance of
+/// it, and its length (2-98 % extent of those points along it).
+struct Face {
+    Eigen::Vector2d direction;
+    Eigen::Vector2d centre;  ///< mean of the points on it
+    double share = 0.0;
+    double length_m = 0.0;
+};
+
+/// The line through the most points (deterministic RANSAC over point pairs, counted on at
+/// most kFaceSample strided points), refined by the principal axis of its inliers.
+std::optional<Face> dominant_face(const std::vector<Eigen::Vector2d>& pts, double tolerance_m) {
+    constexpr std::size_t kFaceSample = 400;
+    constexpr std::size_t kHypotheses = 64;
+    if (pts.size() < 10) return std::nullopt;
+    const std::size_t stride = pts.size() / kFaceSample + 1;
+    std::size_t best_count = 0;
+    Eigen::Vector2d best_point, best_normal;
+    for (std::size_t k = 0; k < kHypotheses; ++k) {
+        const std::size_t i = (k * 2654435761u) % pts.size();
+        const std::size_t j = (i + pts.size() / 2 + k * 40503u) % pts.size();
+        const Eigen::Vector2d d = pts[j] - pts[i];
+        if (d.norm() < 0.3) continue;
+        const Eigen::Vector2d normal(-d.y() / d.norm(), d.x() / d.norm());
+        std::size_t count = 0;
+        for (std::size_t m = 0; m < pts.size(); m += stride) {
+            if (std::abs(normal.dot(pts[m] - pts[i])) <= tolerance_m) ++count;
+        }
+        if (count > best_count) {
+            best_count = count;
+            best_point = pts[i];
+            best_normal = normal;
+        }
+    }
+    if (best_count == 0) return std::nullopt;
+    std::vector<Eigen::Vector2d> inliers;
+    Eigen::Vector2d mean = Eigen::Vector2d::Zero();
+    for (const auto& p : pts) {
+        if (std::abs(best_normal.dot(p - best_point)) <= tolerance_m) {
+            inliers.push_back(p);
+            mean += p;
+        }
+    }
+    mean /= static_cast<double>(inliers.size());
+    Eigen::Matrix2d cov = Eigen::Matrix2d::Zero();
+    for (const auto& p : inliers) cov += (p - mean) * (p - mean).transpose();
+    const Eigen::SelfAdjointEigenSolver<Eigen::Matrix2d> eig(cov);
+    Face face;
+    face.direction = eig.eigenvectors().col(1);
+    face.centre = mean;
+    face.share = static_cast<double>(inliers.size()) / static_cast<double>(pts.size());
+    std::vector<double> along;
+    along.reserve(inliers.size());
+    for (const auto& p : inliers) along.push_back(face.direction.dot(p));
+    const auto [lo, hi] = quantiles(along, 0.02, 0.98);
+    face.length_m = hi - lo;
+    return face;
+}
+
 /// KITTI yaw of a heading given in ground (x, z) coordinates, front/back resolved to z >= 0.
 double yaw_of(Eigen::Vector2d heading_xz) {
     if (heading_xz.y() < 0.0 || (heading_xz.y() == 0.0 && heading_xz.x() < 0.0)) {
@@ -97,10 +159,16 @@ double yaw_of(Eigen::Vector2d heading_xz) {
     return std::atan2(-heading_xz.y(), heading_xz.x());
 }
 
-/// Interval [lo, hi] grown to `size` away from the camera (at coordinate 0 on the axis).
+/// Interval [lo, hi] grown to `size` away from the camera (at coordinate 0 on the axis); on
+/// both ends alike when the camera faces the interval (a face seen across the viewing ray
+/// and cut short by an occluder or the image edge: the hidden end is unknown).
 void complete_away(double& lo, double& hi, double size) {
     if (hi - lo >= size) return;
-    if (lo + hi >= 0.0) {
+    if (lo < 0.0 && hi > 0.0) {
+        const double grow = (size - (hi - lo)) / 2.0;
+        lo -= grow;
+        hi += grow;
+    } else if (lo + hi >= 0.0) {
         hi = lo + size;
     } else {
         lo = hi - size;
@@ -136,6 +204,10 @@ void BoxFitOptions::validate() const {
     if (!(min_extent_m > 0.0)) throw std::invalid_argument("box.min_extent_m: must be > 0");
     if (!(trim_fraction >= 0.0 && trim_fraction < 0.2)) {
         throw std::invalid_argument("box.trim_fraction: must be in [0, 0.2)");
+    }
+    if (!(face_tolerance_m > 0.0)) throw std::invalid_argument("box.face_tolerance_m: must be > 0");
+    if (!(face_share >= 0.0 && face_share <= 1.0)) {
+        throw std::invalid_argument("box.face_share: must be in [0, 1]");
     }
     if (yaw_rad && !std::isfinite(*yaw_rad)) {
         throw std::invalid_argument("box.yaw_rad: must be finite");
@@ -193,6 +265,21 @@ OrientedBox fit_upright_box(const std::vector<Eigen::Vector3f>& points_m,
     } else {
         angle = best_lshape_angle(ab, options.angle_step_deg);
     }
+    // A straight face across the viewing ray (more than 45 degrees from it) holding most of the
+    // points and longer than a width is a long side: its extent comes from pixel columns, and
+    // at range the closeness criterion follows the smear and stray points around it instead.
+    // (Along the ray a face is no evidence: range smear itself lines points up along rays.)
+    bool face_is_length = false;
+    if (!options.yaw_rad && options.face_share > 0.0 && options.prior_W_m > 0.0 &&
+        options.prior_L_m > kFaceWidths * options.prior_W_m) {
+        const auto face = dominant_face(ab, options.face_tolerance_m);
+        if (face && face->share >= options.face_share &&
+            face->length_m >= kFaceWidths * options.prior_W_m &&
+            std::abs(face->direction.dot(face->centre.normalized())) < std::sqrt(0.5)) {
+            angle = std::atan2(face->direction.y(), face->direction.x());
+            face_is_length = true;
+        }
+    }
     Eigen::Vector2d e1(std::cos(angle), std::sin(angle));
     Eigen::Vector2d e2(-std::sin(angle), std::cos(angle));
     std::vector<double> c1, c2;
@@ -208,7 +295,8 @@ OrientedBox fit_upright_box(const std::vector<Eigen::Vector3f>& points_m,
 
     // Axis 1 becomes the length axis; swap when axis 2 should be.
     bool swap = !options.yaw_rad && (hi2 - lo2) > (hi1 - lo1);
-    if (!options.yaw_rad && options.prior_L_m > 0.0 && options.prior_W_m > 0.0) {
+    if (face_is_length) swap = false;
+    if (!options.yaw_rad && !face_is_length && options.prior_L_m > 0.0 && options.prior_W_m > 0.0) {
         const double longest = std::max(hi1 - lo1, hi2 - lo2);
         if (longest <= 1.3 * options.prior_W_m) {
             // Only a short face is seen: it is most likely the rear or front, so the length

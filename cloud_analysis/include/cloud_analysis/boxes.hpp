@@ -32,6 +32,10 @@ struct BoxFitOptions {
     double min_extent_m = 0.05;     ///< smallest box side, metres, > 0
     double trim_fraction = 0.02;    ///< fraction of points trimmed at each end per axis, [0, 0.2)
     bool rest_on_ground = true;     ///< bottom on the plane (else the lowest point)
+    double face_tolerance_m = 0.2;  ///< distance of a point from a straight face, metres, > 0
+    double face_share = 0.5;        ///< a straight face across the viewing ray holding this
+                                    ///< share of the points and longer than 1.2 prior widths
+                                    ///< is a long side, [0, 1] (0 = off)
     std::optional<double> yaw_rad;  ///< heading imposed instead of the L-shape search, radians
                                     ///< (cars cut from a row seen front-on), finite
     /// Throws std::invalid_argument naming the bad field.
