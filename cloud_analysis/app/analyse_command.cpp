@@ -2,9 +2,7 @@
 
 #include <chrono>
 #include <cstdio>
-#include <future>
 #include <iostream>
-#include <iterator>
 #include <optional>
 #include <set>
 
@@ -305,7 +303,6 @@ RunReport analyse_loaded_and_write(const LoadedRun& run, const AnalyseArgs& a,
     const auto ms_since = [](Clock::time_point t) {
         return std::chrono::duration<double, std::milli>(Clock::now() - t).count();
     };
-    const auto start = Clock::now();
     const cloud_analysis::LoadedInputs& in = run.inputs;
     std::vector<cloud_analysis::StageTiming> timings;
     if (!in.calibration.note.empty()) {
@@ -331,58 +328,38 @@ RunReport analyse_loaded_and_write(const LoadedRun& run, const AnalyseArgs& a,
                      s.epe_px, 100.0 * s.density, s.gt_pixels);
     }
 
-    // The entity extractor runs on one core: the clouds and disparity images are formatted
-    // beside it on a helper thread (their timings overlap the "entities" one).
-    struct Formatted {
-        std::vector<PendingOutput> outputs;
-        std::vector<cloud_analysis::StageTiming> timings;
-    };
-    const auto format_others = [&] {
-        Formatted f;
-        const std::vector<std::pair<std::filesystem::path, const char*>> clouds = {
-            {a.xyz, "--xyz"}, {a.pcd, "--pcd"}, {a.ply, "--ply"}};
-        for (const auto& [path, flag] : clouds) {
-            if (path.empty()) continue;
-            const auto t = Clock::now();
-            f.outputs.push_back(
-                {path.string(),
-                 cloud_analysis::format_cloud(r.cloud, in.palette,
-                                              cloud_analysis::cloud_format_from_path(path)),
-                 flag});
-            f.timings.push_back({std::string("format ") + flag, ms_since(t)});
-        }
-        const auto t = Clock::now();
-        if (!a.disparity_png.empty()) {
-            f.outputs.push_back({a.disparity_png.string(),
-                                 cloud_analysis::encode_disparity_preview_png(
-                                     r.disparity, a.options.disparity.min_disparity +
-                                                      a.options.disparity.num_disparities),
-                                 "--disparity-png"});
-        }
-        if (!a.disparity_kitti.empty()) {
-            f.outputs.push_back({a.disparity_kitti.string(),
-                                 cloud_analysis::encode_kitti_disparity_png(r.disparity),
-                                 "--disparity-kitti"});
-        }
-        if (!a.disparity_png.empty() || !a.disparity_kitti.empty()) {
-            f.timings.push_back({"encode disparity", ms_since(t)});
-        }
-        return f;
-    };
-    const bool others = !a.xyz.empty() || !a.pcd.empty() || !a.ply.empty() ||
-                        !a.disparity_png.empty() || !a.disparity_kitti.empty();
-    std::future<Formatted> formatting;
-    if (others) formatting = std::async(std::launch::async, format_others);
     std::vector<PendingOutput> outputs;
     auto t = Clock::now();
     if (!a.entities.empty()) {
         outputs.push_back({a.entities, entity_json(in, r, a, run.extract), "--entities"});
         timings.push_back({"entities", ms_since(t)});
     }
-    if (formatting.valid()) {
-        Formatted f = formatting.get();
-        std::move(f.outputs.begin(), f.outputs.end(), std::back_inserter(outputs));
-        timings.insert(timings.end(), f.timings.begin(), f.timings.end());
+    const std::vector<std::pair<std::filesystem::path, const char*>> clouds = {
+        {a.xyz, "--xyz"}, {a.pcd, "--pcd"}, {a.ply, "--ply"}};
+    for (const auto& [path, flag] : clouds) {
+        if (path.empty()) continue;
+        t = Clock::now();
+        outputs.push_back({path.string(),
+                           cloud_analysis::format_cloud(
+                               r.cloud, in.palette, cloud_analysis::cloud_format_from_path(path)),
+                           flag});
+        timings.push_back({std::string("format ") + flag, ms_since(t)});
+    }
+    t = Clock::now();
+    if (!a.disparity_png.empty()) {
+        outputs.push_back({a.disparity_png.string(),
+                           cloud_analysis::encode_disparity_preview_png(
+                               r.disparity, a.options.disparity.min_disparity +
+                                                a.options.disparity.num_disparities),
+                           "--disparity-png"});
+    }
+    if (!a.disparity_kitti.empty()) {
+        outputs.push_back({a.disparity_kitti.string(),
+                           cloud_analysis::encode_kitti_disparity_png(r.disparity),
+                           "--disparity-kitti"});
+    }
+    if (!a.disparity_png.empty() || !a.disparity_kitti.empty()) {
+        timings.push_back({"encode disparity", ms_since(t)});
     }
     // Every output exists in memory now: only writing is left.
     std::vector<std::filesystem::path> written;
@@ -400,7 +377,7 @@ RunReport analyse_loaded_and_write(const LoadedRun& run, const AnalyseArgs& a,
         throw;
     }
 
-    return {timings, r.cloud.size(), ms_since(start)};
+    return {timings, r.cloud.size()};
 }
 
 RunReport analyse_and_write(const AnalyseArgs& a, cloud_analysis::DisparityMatcher& matcher) {
@@ -410,7 +387,6 @@ RunReport analyse_and_write(const AnalyseArgs& a, cloud_analysis::DisparityMatch
         std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - start).count();
     RunReport report = analyse_loaded_and_write(run, a, matcher);
     report.timings.insert(report.timings.begin(), {"load", load_ms});
-    report.total_ms += load_ms;
     return report;
 }
 
@@ -422,12 +398,13 @@ RunReport analyse_and_write(const AnalyseArgs& a) {
 int run_analyse(const AnalyseArgs& a) {
     const RunReport report = analyse_and_write(a);
     if (a.timings) {
+        double total = 0.0;
         for (const auto& s : report.timings) {
             std::fprintf(stderr, "%s: timing: %-22s %9.1f ms\n", kTool, s.stage.c_str(), s.ms);
+            total += s.ms;
         }
-        // Wall time: the formatting of clouds overlaps the entities stage.
-        std::fprintf(stderr, "%s: timing: %-22s %9.1f ms (%zu points)\n", kTool, "total",
-                     report.total_ms, report.points);
+        std::fprintf(stderr, "%s: timing: %-22s %9.1f ms (%zu points)\n", kTool, "total", total,
+                     report.points);
     }
     return 0;
 }

@@ -67,7 +67,6 @@ std::string entity_json(const cloud_analysis::LoadedInputs& in,
 struct RunReport {
     std::vector<cloud_analysis::StageTiming> timings;  ///< load, disparity, ..., write per output
     std::size_t points = 0;                            ///< points in the cloud
-    double total_ms = 0.0;  ///< wall time of the run (stages may overlap: not their sum), ms
 };
 
 /// What a run reads before its expensive stages: the decoded frame, the extraction settings
