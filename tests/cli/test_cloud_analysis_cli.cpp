@@ -316,6 +316,15 @@ TEST_CASE("batch writes what analyse writes per frame and names a failed frame, 
     CHECK(report["failed"] == 1);
     CHECK(report["per_frame"].size() == 3);
     CHECK(report["per_frame"][2]["points"].get<std::size_t>() > 50000);
+    // The CPU figures and the main thread's waits, which the machine's load does not hide.
+    CHECK(report["cpu_ms_per_frame"].get<double>() > 1.0);
+    CHECK(report["cores_busy"].get<double>() > 0.0);
+    CHECK(report["cores_busy"].get<double>() <= 1.05);
+    for (const auto& frame : report["per_frame"]) {
+        CHECK(frame["wait_load_ms"].get<double>() >= 0.0);
+        CHECK(frame["wait_finish_ms"].get<double>() >= 0.0);
+    }
+    CHECK(r.err.find("ms CPU per frame, cores") != std::string::npos);
 
     // The same frame through `analyse` gives the same entity file, byte for byte.
     const Run one = run(tool() + " --kitti-root " + quote(root.string()) +
