@@ -126,7 +126,12 @@ void ClusterOptions::validate() const {
 }
 
 double ClusterOptions::distance_at(double z_m) const {
-    const double scale = z_m > 10.0 ? std::pow(z_m / 10.0, growth) : 1.0;
+    double scale = 1.0;
+    if (z_m > 10.0) {
+        // The shipped growths (1 and 2) without a call to pow (once per point).
+        const double r = z_m / 10.0;
+        scale = growth == 1.0 ? r : growth == 2.0 ? r * r : std::pow(r, growth);
+    }
     return std::min(distance_at_10m_m * scale, distance_max_m);
 }
 

@@ -36,12 +36,11 @@ std::vector<Indices> points_of(const std::vector<Indices>& voxel_clusters,
     return out;
 }
 
-/// The points idx[0], idx[stride], idx[2 stride], ...
-std::vector<Eigen::Vector3f> gather(const std::vector<Eigen::Vector3f>& pts, const Indices& idx,
-                                    std::size_t stride = 1) {
+/// The points pts[idx[0]], pts[idx[1]], ...
+std::vector<Eigen::Vector3f> gather(const std::vector<Eigen::Vector3f>& pts, const Indices& idx) {
     std::vector<Eigen::Vector3f> out;
-    out.reserve(idx.size() / stride + 1);
-    for (std::size_t k = 0; k < idx.size(); k += stride) out.push_back(pts[idx[k]]);
+    out.reserve(idx.size());
+    for (std::size_t i : idx) out.push_back(pts[i]);
     return out;
 }
 
@@ -447,6 +446,60 @@ std::vector<Indices> image_components(const std::vector<Eigen::Vector3f>& pts,
     return out;
 }
 
+/// Keeps the `max_entities` entities with the most points, largest first (stable).
+void keep_largest(std::vector<scene_schema::Entity>& entities, int max_entities) {
+    std::stable_sort(entities.begin(), entities.end(),
+                     [](const auto& a, const auto& b) { return a.point_count > b.point_count; });
+    if (entities.size() > static_cast<std::size_t>(max_entities)) {
+        entities.resize(static_cast<std::size_t>(max_entities));
+    }
+}
+
+/// Stuff entities: one box over each cluster, never split. Only the clusters' point counts and
+/// their fit samples (every k-th point in point order, as a strided gather over the members
+/// would take) are collected, in one pass over the voxel index of the points: no member lists.
+std::vector<scene_schema::Entity> stuff_of_class(
+    const ClassInfo& info, const std::vector<Eigen::Vector3f>& pts, const ClassSettings& s,
+    const std::optional<GroundPlane>& ground, const ExtractOptions& options,
+    const ClusterOptions& co, const BoxFitOptions& fit) {
+    const VoxelGrid voxels = voxelize(pts, s.voxel_m);
+    const std::vector<Indices> voxel_clusters = euclidean_clusters(voxels.centroid_m, co);
+    constexpr auto kNone = std::numeric_limits<std::uint32_t>::max();
+    std::vector<std::uint32_t> cluster_of(voxels.centroid_m.size(), kNone);
+    for (std::size_t c = 0; c < voxel_clusters.size(); ++c) {
+        for (std::size_t v : voxel_clusters[c]) cluster_of[v] = static_cast<std::uint32_t>(c);
+    }
+    std::vector<std::size_t> size(voxel_clusters.size(), 0);
+    for (std::uint32_t v : voxels.voxel_of) {
+        if (cluster_of[v] != kNone) ++size[cluster_of[v]];
+    }
+    // Stride of each cluster's fit sample (0: too small for an entity) and a countdown to its
+    // next sampled point.
+    const std::size_t min_points = std::max<std::size_t>(static_cast<std::size_t>(s.min_points), 1);
+    const std::size_t most = options.stuff_fit_points;
+    std::vector<std::size_t> stride(size.size(), 0), countdown(size.size(), 1);
+    std::vector<std::vector<Eigen::Vector3f>> sample(size.size());
+    for (std::size_t c = 0; c < size.size(); ++c) {
+        if (size[c] < min_points) continue;
+        stride[c] = most > 0 && size[c] > most ? (size[c] + most - 1) / most : 1;
+        sample[c].reserve(size[c] / stride[c] + 1);
+    }
+    for (std::size_t i = 0; i < pts.size(); ++i) {
+        const std::uint32_t c = cluster_of[voxels.voxel_of[i]];
+        if (c == kNone || stride[c] == 0 || --countdown[c] > 0) continue;
+        countdown[c] = stride[c];
+        sample[c].push_back(pts[i]);
+    }
+    std::vector<scene_schema::Entity> out;
+    for (std::size_t c = 0; c < size.size(); ++c) {
+        if (stride[c] == 0) continue;
+        out.push_back(make_entity(info, fit_upright_box(sample[c], ground, fit), size[c],
+                                  confidence_of(size[c], s), "instances"));
+    }
+    keep_largest(out, s.max_entities);
+    return out;
+}
+
 std::vector<scene_schema::Entity> instances_of_class(const ClassInfo& info,
                                                      const std::vector<Eigen::Vector3f>& pts,
                                                      const std::vector<std::uint32_t>& pixels,
@@ -465,6 +518,7 @@ std::vector<scene_schema::Entity> instances_of_class(const ClassInfo& info,
         fit.prior_H_m = s.prior_H_m;
     }
     fit.rest_on_ground = s.thing;
+    if (!s.thing) return stuff_of_class(info, pts, s, ground, options, co, fit);
 
     std::vector<Indices> clusters;
     if (s.thing && options.clustering == "image" && grid.valid()) {
@@ -493,12 +547,7 @@ std::vector<scene_schema::Entity> instances_of_class(const ClassInfo& info,
                 static_cast<std::size_t>(row_piece ? s.min_points / 2 : s.min_points);
             if (part.size() < std::max<std::size_t>(min_points, 1)) continue;
             fit.yaw_rad = yaw;
-            // Stuff extents are quantiles: an even sample of a large cluster gives them.
-            const std::size_t stride =
-                !s.thing && options.stuff_fit_points > 0 && part.size() > options.stuff_fit_points
-                    ? (part.size() + options.stuff_fit_points - 1) / options.stuff_fit_points
-                    : 1;
-            const OrientedBox box = fit_upright_box(gather(pts, part, stride), ground, fit);
+            const OrientedBox box = fit_upright_box(gather(pts, part), ground, fit);
             if (s.thing && depth < 2 && !yaw) {
                 Split split = split_oversized(pts, part, box, s, ground, options);
                 if (split.parts.size() > 1) {
@@ -538,11 +587,7 @@ std::vector<scene_schema::Entity> instances_of_class(const ClassInfo& info,
         out.push_back(make_entity(info, c.box, c.members.size(), confidence_of(c.members.size(), s),
                                   "instances"));
     }
-    std::stable_sort(out.begin(), out.end(),
-                     [](const auto& a, const auto& b) { return a.point_count > b.point_count; });
-    if (out.size() > static_cast<std::size_t>(s.max_entities)) {
-        out.resize(static_cast<std::size_t>(s.max_entities));
-    }
+    keep_largest(out, s.max_entities);
     return out;
 }
 
@@ -621,7 +666,11 @@ scene_schema::EntityDocument extract_entities(const LabeledCloud& cloud, const P
     if (cloud.class_index.size() != cloud.xyz_m.size()) {
         throw std::invalid_argument("cloud: class_index and xyz_m differ in size");
     }
-    // Points per palette class, within range.
+    std::vector<char> is_thing(palette.classes.size(), 0);
+    for (std::size_t k = 0; k < palette.classes.size(); ++k) {
+        is_thing[k] = options.classes.find(palette.classes[k].name).thing ? 1 : 0;
+    }
+    // Points per palette class, within range; pixels only for things (the image-space steps).
     std::vector<std::vector<Eigen::Vector3f>> per_class(palette.classes.size());
     std::vector<std::vector<std::uint32_t>> per_class_pixels(palette.classes.size());
     PixelGrid grid;
@@ -638,7 +687,7 @@ scene_schema::EntityDocument extract_entities(const LabeledCloud& cloud, const P
     }
     for (std::size_t k = 0; k < palette.classes.size(); ++k) {
         per_class[k].reserve(class_size[k]);
-        per_class_pixels[k].reserve(class_size[k]);
+        if (is_thing[k]) per_class_pixels[k].reserve(class_size[k]);
     }
     for (std::size_t i = 0; i < cloud.size(); ++i) {
         const auto k = cloud.class_index[i];
@@ -646,7 +695,7 @@ scene_schema::EntityDocument extract_entities(const LabeledCloud& cloud, const P
         if (k == kVoidClass || k >= palette.classes.size()) continue;
         if (!(p.z() > 0.0f && double{p.z()} < options.max_range_m) || !p.allFinite()) continue;
         per_class[k].push_back(p);
-        per_class_pixels[k].push_back(grid.valid() ? cloud.pixel[i] : 0);
+        if (is_thing[k]) per_class_pixels[k].push_back(grid.valid() ? cloud.pixel[i] : 0);
     }
 
     scene_schema::EntityDocument doc;
@@ -670,10 +719,6 @@ scene_schema::EntityDocument extract_entities(const LabeledCloud& cloud, const P
     }
 
     std::vector<std::vector<scene_schema::Entity>> made(palette.classes.size());
-    std::vector<char> is_thing(palette.classes.size(), 0);
-    for (std::size_t k = 0; k < palette.classes.size(); ++k) {
-        is_thing[k] = options.classes.find(palette.classes[k].name).thing ? 1 : 0;
-    }
     // Classes are independent once the ground plane is known.
     // Thing points cost about four times stuff points (smear removal, splits, refits): the
     // costliest classes start first so that no thread is left with a big one at the end.
