@@ -10,21 +10,21 @@ namespace cloud_analysis {
 namespace {
 
 /// Open-addressing hash map from a 64-bit key to a 32-bit value (linear probing, at most half
-/// full).
+/// full; key and value side by side, so that a probe touches one cache line).
 class CellTable {
   public:
     explicit CellTable(std::size_t expected) { resize(expected); }
     /// Value of key, inserting next_value when absent; `inserted` says which.
     std::uint32_t find_or_insert(std::uint64_t key, std::uint32_t next_value, bool& inserted) {
-        if (2 * (size_ + 1) > keys_.size()) grow();
+        if (2 * (size_ + 1) > slots_.size()) grow();
         for (std::size_t slot = hash(key) & mask_;; slot = (slot + 1) & mask_) {
-            if (keys_[slot] == key) {
+            Slot& s = slots_[slot];
+            if (s.key == key) {
                 inserted = false;
-                return values_[slot];
+                return s.value;
             }
-            if (keys_[slot] == kEmpty) {
-                keys_[slot] = key;
-                values_[slot] = next_value;
+            if (s.key == kEmpty) {
+                s = Slot{key, next_value};
                 ++size_;
                 inserted = true;
                 return next_value;
@@ -34,40 +34,42 @@ class CellTable {
     /// Index of key, or kNone.
     std::uint32_t find(std::uint64_t key) const {
         for (std::size_t slot = hash(key) & mask_;; slot = (slot + 1) & mask_) {
-            if (keys_[slot] == key) return values_[slot];
-            if (keys_[slot] == kEmpty) return kNone;
+            const Slot& s = slots_[slot];
+            if (s.key == key) return s.value;
+            if (s.key == kEmpty) return kNone;
         }
     }
     static constexpr std::uint32_t kNone = std::numeric_limits<std::uint32_t>::max();
 
   private:
+    static constexpr std::uint64_t kEmpty = std::numeric_limits<std::uint64_t>::max();
+    struct Slot {
+        std::uint64_t key = kEmpty;
+        std::uint32_t value = 0;
+    };
     void resize(std::size_t expected) {
         std::size_t slots = 64;
         while (slots < 2 * expected) slots *= 2;
-        keys_.assign(slots, kEmpty);
-        values_.assign(slots, 0);
+        slots_.assign(slots, Slot{});
         mask_ = slots - 1;
         size_ = 0;
     }
     void grow() {
-        const std::vector<std::uint64_t> keys = std::move(keys_);
-        const std::vector<std::uint32_t> values = std::move(values_);
-        resize(keys.size());
-        for (std::size_t k = 0; k < keys.size(); ++k) {
-            if (keys[k] == kEmpty) continue;
+        const std::vector<Slot> old = std::move(slots_);
+        resize(old.size());
+        for (const Slot& s : old) {
+            if (s.key == kEmpty) continue;
             bool inserted = false;
-            find_or_insert(keys[k], values[k], inserted);
+            find_or_insert(s.key, s.value, inserted);
         }
     }
-    static constexpr std::uint64_t kEmpty = std::numeric_limits<std::uint64_t>::max();
     static std::size_t hash(std::uint64_t key) {
         key ^= key >> 33;
         key *= 0xff51afd7ed558ccdULL;
         key ^= key >> 33;
         return static_cast<std::size_t>(key);
     }
-    std::vector<std::uint64_t> keys_;
-    std::vector<std::uint32_t> values_;
+    std::vector<Slot> slots_;
     std::size_t mask_ = 0;
     std::size_t size_ = 0;
 };
@@ -282,31 +284,59 @@ VoxelGrid voxelize(const std::vector<Eigen::Vector3f>& points_m, double voxel_m)
         return v;
     }
     const double inverse = 1.0 / voxel_m;
-    const auto cell = [voxel_m, inverse](float c) {
-        return static_cast<std::uint64_t>(floor_div(double{c}, voxel_m, inverse) + (1 << 20)) &
-               0x1FFFFF;
-    };
     CellTable index(std::min<std::size_t>(n, 1 << 16));
     std::vector<Eigen::Vector3d> sums;
     std::vector<std::uint32_t> counts;
-    // Points arrive in pixel order, so neighbours often share the previous point's voxel.
+    // Points arrive in pixel order, so runs of them share a voxel. A run's voxel (cells cx, cy,
+    // cz) keeps its sum and count in registers until the run ends: the same additions in the
+    // same order as into sums[last]. A point lies in the run's cell when its scaled coordinate
+    // is more than 1e-6 inside it on every axis, exactly where floor_div would return that cell
+    // without dividing.
+    const auto inside = [](double q, std::int64_t c) {
+        const double above = q - static_cast<double>(c);
+        return above > 1e-6 && above < 1.0 - 1e-6;
+    };
+    const auto wrap = [](std::int64_t c) {
+        return static_cast<std::uint64_t>(c + (1 << 20)) & 0x1FFFFF;
+    };
+    std::int64_t cx = 0, cy = 0, cz = 0;
     std::uint64_t last_key = ~std::uint64_t{0};
     std::uint32_t last = 0;
+    Eigen::Vector3d run_sum = Eigen::Vector3d::Zero();
+    std::uint32_t run_count = 0;
     for (std::size_t i = 0; i < n; ++i) {
         const Eigen::Vector3f& p = points_m[i];
-        const std::uint64_t key = (cell(p.x()) << 42) | (cell(p.y()) << 21) | cell(p.z());
-        if (key != last_key) {
-            bool inserted = false;
-            last = index.find_or_insert(key, static_cast<std::uint32_t>(sums.size()), inserted);
-            if (inserted) {
-                sums.emplace_back(Eigen::Vector3d::Zero());
-                counts.push_back(0);
+        const double qx = double{p.x()} * inverse, qy = double{p.y()} * inverse,
+                     qz = double{p.z()} * inverse;
+        if (!(inside(qx, cx) && inside(qy, cy) && inside(qz, cz)) ||
+            last_key == ~std::uint64_t{0}) {
+            cx = floor_div(double{p.x()}, voxel_m, inverse);
+            cy = floor_div(double{p.y()}, voxel_m, inverse);
+            cz = floor_div(double{p.z()}, voxel_m, inverse);
+            const std::uint64_t key = (wrap(cx) << 42) | (wrap(cy) << 21) | wrap(cz);
+            if (key != last_key) {
+                if (last_key != ~std::uint64_t{0}) {
+                    sums[last] = run_sum;
+                    counts[last] = run_count;
+                }
+                bool inserted = false;
+                last = index.find_or_insert(key, static_cast<std::uint32_t>(sums.size()), inserted);
+                if (inserted) {
+                    sums.emplace_back(Eigen::Vector3d::Zero());
+                    counts.push_back(0);
+                }
+                run_sum = sums[last];
+                run_count = counts[last];
+                last_key = key;
             }
-            last_key = key;
         }
-        sums[last] += p.cast<double>();
-        ++counts[last];
+        run_sum += p.cast<double>();
+        ++run_count;
         v.voxel_of[i] = last;
+    }
+    if (n > 0) {
+        sums[last] = run_sum;
+        counts[last] = run_count;
     }
     v.centroid_m.reserve(sums.size());
     for (std::size_t k = 0; k < sums.size(); ++k) {
