@@ -5,6 +5,7 @@
 #include <cmath>
 #include <cstdint>
 #include <exception>
+#include <future>
 #include <limits>
 #include <mutex>
 #include <stdexcept>
@@ -18,6 +19,8 @@ namespace cloud_analysis {
 namespace {
 
 using Indices = std::vector<std::size_t>;
+/// The ground plane, fitted on one thread while the classes are clustered on the others.
+using PendingGround = std::shared_future<std::optional<GroundPlane>>;
 
 /// The points of clusters of voxels, in point order (not the order the clustering visited
 /// them in, so that strided samples of a cluster are spread evenly over its pixels).
@@ -460,10 +463,11 @@ void keep_largest(std::vector<scene_schema::Entity>& entities, int max_entities)
 /// would take) are collected, in one pass over the voxel index of the points: no member lists.
 std::vector<scene_schema::Entity> stuff_of_class(
     const ClassInfo& info, const std::vector<Eigen::Vector3f>& pts, const ClassSettings& s,
-    const std::optional<GroundPlane>& ground, const ExtractOptions& options,
-    const ClusterOptions& co, const BoxFitOptions& fit) {
+    const PendingGround& pending_ground, const ExtractOptions& options, const ClusterOptions& co,
+    const BoxFitOptions& fit) {
     const VoxelGrid voxels = voxelize(pts, s.voxel_m);
     const std::vector<Indices> voxel_clusters = euclidean_clusters(voxels.centroid_m, co);
+    const std::optional<GroundPlane>& ground = pending_ground.get();
     constexpr auto kNone = std::numeric_limits<std::uint32_t>::max();
     std::vector<std::uint32_t> cluster_of(voxels.centroid_m.size(), kNone);
     for (std::size_t c = 0; c < voxel_clusters.size(); ++c) {
@@ -504,7 +508,7 @@ std::vector<scene_schema::Entity> instances_of_class(const ClassInfo& info,
                                                      const std::vector<Eigen::Vector3f>& pts,
                                                      const std::vector<std::uint32_t>& pixels,
                                                      const PixelGrid& grid, const ClassSettings& s,
-                                                     const std::optional<GroundPlane>& ground,
+                                                     const PendingGround& pending_ground,
                                                      const ExtractOptions& options) {
     ClusterOptions co;
     co.distance_at_10m_m = s.cluster_distance_m;
@@ -518,7 +522,7 @@ std::vector<scene_schema::Entity> instances_of_class(const ClassInfo& info,
         fit.prior_H_m = s.prior_H_m;
     }
     fit.rest_on_ground = s.thing;
-    if (!s.thing) return stuff_of_class(info, pts, s, ground, options, co, fit);
+    if (!s.thing) return stuff_of_class(info, pts, s, pending_ground, options, co, fit);
 
     std::vector<Indices> clusters;
     if (s.thing && options.clustering == "image" && grid.valid()) {
@@ -527,6 +531,7 @@ std::vector<scene_schema::Entity> instances_of_class(const ClassInfo& info,
         const VoxelGrid voxels = voxelize(pts, s.voxel_m);
         clusters = points_of(euclidean_clusters(voxels.centroid_m, co), voxels);
     }
+    const std::optional<GroundPlane>& ground = pending_ground.get();
     std::vector<Candidate> candidates;
     std::size_t next_group = clusters.size();
     for (std::size_t cluster = 0; cluster < clusters.size(); ++cluster) {
@@ -591,8 +596,22 @@ std::vector<scene_schema::Entity> instances_of_class(const ClassInfo& info,
     return out;
 }
 
-/// Calls run(k) for every class k on `threads` threads (costliest first, each class on one
-/// thread); rethrows the first exception once all threads have stopped.
+/// Ground plane of the points of the ground classes (options.ground_classes).
+std::optional<GroundPlane> fit_ground(const std::vector<std::vector<Eigen::Vector3f>>& per_class,
+                                      const Palette& palette, const ExtractOptions& options) {
+    std::vector<Eigen::Vector3f> ground_pts;
+    for (std::size_t k = 0; k < palette.classes.size(); ++k) {
+        const auto& names = options.ground_classes;
+        if (std::find(names.begin(), names.end(), palette.classes[k].name) != names.end()) {
+            ground_pts.insert(ground_pts.end(), per_class[k].begin(), per_class[k].end());
+        }
+    }
+    return fit_ground_plane(ground_pts, options.ground);
+}
+
+/// Calls run(k) for every task k (the classes, and the ground plane) on `threads` threads,
+/// costliest first, each task on one thread; rethrows the first exception once all threads
+/// have stopped.
 template <typename Run>
 void for_each_class(const std::vector<double>& cost, int threads, Run&& run) {
     std::vector<std::size_t> order(cost.size());
@@ -698,41 +717,37 @@ scene_schema::EntityDocument extract_entities(const LabeledCloud& cloud, const P
         if (is_thing[k]) per_class_pixels[k].push_back(grid.valid() ? cloud.pixel[i] : 0);
     }
 
-    scene_schema::EntityDocument doc;
-    std::optional<GroundPlane> ground;
-    if (options.method == "instances") {
-        std::vector<Eigen::Vector3f> ground_pts;
-        for (std::size_t k = 0; k < palette.classes.size(); ++k) {
-            const auto& names = options.ground_classes;
-            if (std::find(names.begin(), names.end(), palette.classes[k].name) != names.end()) {
-                ground_pts.insert(ground_pts.end(), per_class[k].begin(), per_class[k].end());
-            }
-        }
-        ground = fit_ground_plane(ground_pts, options.ground);
-        if (ground) {
-            doc.extra["ground_plane"] = {
-                {"normal", {ground->normal.x(), ground->normal.y(), ground->normal.z()}},
-                {"d", ground->d},
-                {"camera_height_m", ground->camera_height_m()},
-                {"inliers", ground->inliers}};
-        }
-    }
-
-    std::vector<std::vector<scene_schema::Entity>> made(palette.classes.size());
-    // Classes are independent once the ground plane is known.
-    // Thing points cost about four times stuff points (smear removal, splits, refits): the
-    // costliest classes start first so that no thread is left with a big one at the end.
-    std::vector<double> cost(per_class.size());
-    for (std::size_t k = 0; k < cost.size(); ++k) {
+    // The ground plane is the first task, fitted beside the clustering of the classes (which
+    // does not need it); a class waits for it once clustered. Thing points cost about four
+    // times stuff points (smear removal, splits, refits): the costliest classes start first so
+    // that no thread is left with a big one at the end.
+    std::promise<std::optional<GroundPlane>> ground_promise;
+    const PendingGround pending_ground = ground_promise.get_future().share();
+    const std::size_t ground_task = per_class.size();
+    std::vector<double> cost(per_class.size() + 1, std::numeric_limits<double>::infinity());
+    for (std::size_t k = 0; k < per_class.size(); ++k) {
         cost[k] = static_cast<double>(per_class[k].size()) * (is_thing[k] ? 4.0 : 1.0);
     }
+    std::vector<std::vector<scene_schema::Entity>> made(palette.classes.size());
     for_each_class(cost, options.threads, [&](std::size_t k) {
+        if (k == ground_task) {
+            try {
+                ground_promise.set_value(options.method == "instances"
+                                             ? fit_ground(per_class, palette, options)
+                                             : std::nullopt);
+            } catch (...) {
+                ground_promise.set_exception(std::current_exception());
+                throw;
+            }
+            return;
+        }
         const ClassInfo& info = palette.classes[k];
         const ClassSettings s = options.classes.find(info.name);
         const auto& pts = per_class[k];
         if (!s.entity || pts.size() < static_cast<std::size_t>(s.min_points)) return;
         if (options.method == "instances") {
-            made[k] = instances_of_class(info, pts, per_class_pixels[k], grid, s, ground, options);
+            made[k] = instances_of_class(info, pts, per_class_pixels[k], grid, s, pending_ground,
+                                         options);
         } else {
             OrientedBox box;
             if (options.method == "centroid") {
@@ -749,6 +764,14 @@ scene_schema::EntityDocument extract_entities(const LabeledCloud& cloud, const P
                 make_entity(info, box, pts.size(), confidence_of(pts.size(), s), options.method));
         }
     });
+    scene_schema::EntityDocument doc;
+    if (const std::optional<GroundPlane>& ground = pending_ground.get()) {
+        doc.extra["ground_plane"] = {
+            {"normal", {ground->normal.x(), ground->normal.y(), ground->normal.z()}},
+            {"d", ground->d},
+            {"camera_height_m", ground->camera_height_m()},
+            {"inliers", ground->inliers}};
+    }
     if (options.method == "instances" && options.stuff_on_thing_fraction < 1.0) {
         std::vector<scene_schema::Entity> things;
         for (std::size_t k = 0; k < made.size(); ++k) {
