@@ -694,27 +694,33 @@ scene_schema::EntityDocument extract_entities(const LabeledCloud& cloud, const P
     std::vector<std::vector<std::uint32_t>> per_class_pixels(palette.classes.size());
     PixelGrid grid;
     if (cloud.pixel.size() == cloud.size() && cloud.width_px > 0 && cloud.height_px > 0) {
-        grid = PixelGrid{cloud.width_px, cloud.height_px};
-        for (std::uint32_t px : cloud.pixel) {
-            if (px >= static_cast<std::uint64_t>(grid.width_px) * grid.height_px)
-                grid = PixelGrid{};
+        std::uint32_t last_pixel = 0;
+        for (std::uint32_t px : cloud.pixel) last_pixel = std::max(last_pixel, px);
+        if (last_pixel < static_cast<std::uint64_t>(cloud.width_px) * cloud.height_px) {
+            grid = PixelGrid{cloud.width_px, cloud.height_px};
         }
     }
     std::vector<std::size_t> class_size(palette.classes.size(), 0);
     for (const auto k : cloud.class_index) {
         if (k < palette.classes.size()) ++class_size[k];
     }
+    // Sized for every point of the class, written by index, then cut to the points kept.
     for (std::size_t k = 0; k < palette.classes.size(); ++k) {
-        per_class[k].reserve(class_size[k]);
-        if (is_thing[k]) per_class_pixels[k].reserve(class_size[k]);
+        per_class[k].resize(class_size[k]);
+        if (is_thing[k]) per_class_pixels[k].resize(class_size[k]);
     }
+    std::vector<std::size_t> kept(palette.classes.size(), 0);
     for (std::size_t i = 0; i < cloud.size(); ++i) {
         const auto k = cloud.class_index[i];
         const auto& p = cloud.xyz_m[i];
         if (k == kVoidClass || k >= palette.classes.size()) continue;
         if (!(p.z() > 0.0f && double{p.z()} < options.max_range_m) || !p.allFinite()) continue;
-        per_class[k].push_back(p);
-        if (is_thing[k]) per_class_pixels[k].push_back(grid.valid() ? cloud.pixel[i] : 0);
+        if (is_thing[k]) per_class_pixels[k][kept[k]] = grid.valid() ? cloud.pixel[i] : 0;
+        per_class[k][kept[k]++] = p;
+    }
+    for (std::size_t k = 0; k < palette.classes.size(); ++k) {
+        per_class[k].resize(kept[k]);
+        if (is_thing[k]) per_class_pixels[k].resize(kept[k]);
     }
 
     // The ground plane is the first task, fitted beside the clustering of the classes (which
