@@ -28,6 +28,19 @@ bool refine_plane(const std::vector<Eigen::Vector3d>& pts, Eigen::Vector3d& norm
     return true;
 }
 
+/// Points i in [begin, end) with |nx px[i] + ny py[i] + nz pz[i] + d| < tol. Also compiled for
+/// AVX2, chosen at load time on CPUs that have it: the same operations on each point (no FMA
+/// contraction), so the same count, four doubles at a time instead of two.
+__attribute__((target_clones("avx2", "default"))) std::size_t count_near_plane(
+    const double* px, const double* py, const double* pz, std::size_t begin, std::size_t end,
+    double nx, double ny, double nz, double d, double tol) {
+    std::size_t count = 0;
+    for (std::size_t i = begin; i < end; ++i) {
+        count += std::abs(nx * px[i] + ny * py[i] + nz * pz[i] + d) < tol ? 1 : 0;
+    }
+    return count;
+}
+
 }  // namespace
 
 void GroundOptions::validate() const {
@@ -90,11 +103,8 @@ std::optional<GroundPlane> fit_ground_plane(const std::vector<Eigen::Vector3f>& 
         for (std::size_t begin = 0; begin < pts.size(); begin += kBlock) {
             if (count + (pts.size() - begin) <= best_count) break;
             const std::size_t end = std::min(pts.size(), begin + kBlock);
-            std::size_t block = 0;
-            for (std::size_t i = begin; i < end; ++i) {
-                block += std::abs(nx * px[i] + ny * py[i] + nz * pz[i] + d) < tol ? 1 : 0;
-            }
-            count += block;
+            count +=
+                count_near_plane(px.data(), py.data(), pz.data(), begin, end, nx, ny, nz, d, tol);
         }
         if (count > best_count) {
             best_count = count;
