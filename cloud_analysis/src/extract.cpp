@@ -47,6 +47,49 @@ std::vector<Eigen::Vector3f> gather(const std::vector<Eigen::Vector3f>& pts, con
     return out;
 }
 
+/// Azimuth bin of a point: lround(atan2(x, z) / 0.5 degrees), clamped to +-360, plus 360.
+/// In front of the camera (z > 0, |x / z| < kMaxSlope) the bin comes from the slope x / z
+/// compared with the tangents of the bin boundaries (a uniform grid of slopes finer than any
+/// bin gives the candidate, one or two comparisons settle it) instead of a call to atan2: the
+/// same bins, up to rounding within ~1e-15 of a boundary.
+class AzimuthBins {
+  public:
+    static constexpr double kBinRad = 0.5 * 3.14159265358979323846 / 180.0;
+    static constexpr long kBins = 360;  // |atan2| <= pi is at most 360 bins either side
+
+    AzimuthBins() {
+        // upper_[b + 180] = tan of the upper boundary of bin b, b in [-180, 180).
+        for (long b = -180; b < 180; ++b) upper_.push_back(std::tan((b + 0.5) * kBinRad));
+        const auto cells = static_cast<std::size_t>(2.0 * kMaxSlope / kStep) + 2;
+        for (std::size_t c = 0; c < cells; ++c) {
+            first_.push_back(settle(-180, -kMaxSlope + static_cast<double>(c) * kStep));
+        }
+    }
+    long operator()(double x, double z) const {
+        if (z > 0.0) {
+            const double t = x / z;
+            if (t > -kMaxSlope && t < kMaxSlope) {
+                const auto c = static_cast<std::size_t>((t + kMaxSlope) * (1.0 / kStep));
+                return settle(first_[c], t) + kBins;
+            }
+        }
+        return std::clamp(std::lround(std::atan2(x, z) / kBinRad), -kBins, kBins) + kBins;
+    }
+
+  private:
+    static constexpr double kMaxSlope = 4.0;  // |x / z| below this (76 degrees) is looked up
+    static constexpr double kStep = 0.004;    // slope grid step; a bin spans >= 0.0087
+    /// The bin (in [-180, 180]) of slope t: the first whose upper boundary lies above t,
+    /// walked to from bin b.
+    long settle(long b, double t) const {
+        while (b < 180 && !(t < upper_[static_cast<std::size_t>(b + 180)])) ++b;
+        while (b > -180 && t < upper_[static_cast<std::size_t>(b + 179)]) --b;
+        return b;
+    }
+    std::vector<double> upper_;
+    std::vector<long> first_;  ///< bin of the lower end of each grid cell
+};
+
 /// Drops stereo smear behind a thing: per viewing direction (0.5 degree azimuth bins), points
 /// farther (bird's-eye range) than the nearest one plus the prior's diagonal plus a margin;
 /// and points implausibly high above or below the ground.
@@ -54,15 +97,15 @@ Indices drop_outliers(const std::vector<Eigen::Vector3f>& pts, const Indices& id
                       const ClassSettings& s, const std::optional<GroundPlane>& ground,
                       double margin_m) {
     if (!s.has_prior() || idx.size() < 10) return idx;
-    constexpr double kBinRad = 0.5 * 3.14159265358979323846 / 180.0;
-    constexpr long kBins = 360;  // |atan2| <= pi is at most 360 bins either side
+    static const AzimuthBins azimuth_bin;
     std::vector<double> range(idx.size());
     std::vector<long> bin(idx.size());
-    std::vector<double> nearest(2 * kBins + 1, std::numeric_limits<double>::infinity());
+    std::vector<double> nearest(2 * AzimuthBins::kBins + 1,
+                                std::numeric_limits<double>::infinity());
     for (std::size_t k = 0; k < idx.size(); ++k) {
         const double x = pts[idx[k]].x(), z = pts[idx[k]].z();
         range[k] = std::sqrt(x * x + z * z);  // float inputs: no overflow for hypot to guard
-        bin[k] = std::clamp(std::lround(std::atan2(x, z) / kBinRad), -kBins, kBins) + kBins;
+        bin[k] = azimuth_bin(x, z);
         double& n = nearest[static_cast<std::size_t>(bin[k])];
         n = std::min(n, range[k]);
     }
