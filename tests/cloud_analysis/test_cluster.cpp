@@ -1,5 +1,7 @@
 #include <algorithm>
 #include <array>
+#include <cmath>
+#include <map>
 #include <random>
 #include <vector>
 
@@ -184,6 +186,58 @@ TEST_CASE("voxelize numbers voxels by first point and gives each the mean of its
     const auto same = cloud_analysis::voxelize(pts, 0.0);
     CHECK(same.centroid_m.size() == pts.size());
     CHECK(same.voxel_of[5] == 5);
+}
+
+TEST_CASE("voxelize matches a naive reference on random walks and points on voxel faces",
+          "[cluster]") {
+    // Walks of small steps (runs of points in one voxel, as in pixel order), jumps, and points
+    // on and next to voxel faces (where multiplying by the inverse size and dividing can
+    // round to different cells).
+    const double voxel_m = 0.4;
+    std::mt19937 rng(11);
+    std::uniform_real_distribution<float> step(-0.05f, 0.05f), jump(-20.0f, 20.0f);
+    std::uniform_int_distribution<int> face(-50, 50);
+    std::vector<Eigen::Vector3f> pts;
+    Eigen::Vector3f p(0.1f, 1.3f, 10.0f);
+    for (int i = 0; i < 20000; ++i) {
+        if (i % 500 == 0) p = Eigen::Vector3f(jump(rng), jump(rng), jump(rng) + 20.0f);
+        p += Eigen::Vector3f(step(rng), step(rng), step(rng));
+        pts.push_back(p);
+        if (i % 7 == 0) {
+            // Inside a voxel, then on its face and one float to either side of it.
+            const auto on_face = static_cast<float>(face(rng) * voxel_m);
+            for (const float x : {on_face - 0.01f, on_face, std::nextafter(on_face, -1e9f),
+                                  std::nextafter(on_face, 1e9f), on_face + 0.01f, on_face}) {
+                pts.emplace_back(x, p.y(), p.z());
+            }
+        }
+    }
+    // Reference: cells by division, voxels numbered by first point, sums in point order.
+    std::map<std::array<long long, 3>, std::uint32_t> id;
+    std::vector<std::uint32_t> voxel_of;
+    std::vector<Eigen::Vector3d> sums;
+    std::vector<double> counts;
+    for (const auto& q : pts) {
+        std::array<long long, 3> cell{};
+        for (int a = 0; a < 3; ++a) {
+            cell[static_cast<std::size_t>(a)] =
+                static_cast<long long>(std::floor(double{q[a]} / voxel_m));
+        }
+        const auto [it, inserted] = id.emplace(cell, static_cast<std::uint32_t>(sums.size()));
+        if (inserted) {
+            sums.emplace_back(Eigen::Vector3d::Zero());
+            counts.push_back(0.0);
+        }
+        sums[it->second] += q.cast<double>();
+        counts[it->second] += 1.0;
+        voxel_of.push_back(it->second);
+    }
+    const auto v = cloud_analysis::voxelize(pts, voxel_m);
+    CHECK(v.voxel_of == voxel_of);
+    REQUIRE(v.centroid_m.size() == sums.size());
+    for (std::size_t k = 0; k < sums.size(); ++k) {
+        CHECK(v.centroid_m[k] == (sums[k] / counts[k]).cast<float>());
+    }
 }
 
 TEST_CASE(
