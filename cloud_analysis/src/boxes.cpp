@@ -58,6 +58,31 @@ std::pair<double, double> quantiles(std::vector<double>& values, double q_lo, do
     return {values[lo], value_hi};
 }
 
+/// Values at fractions q_lo <= q_hi (0..1) of weighted values, each value standing for
+/// `weight` equal ones (reordered): the values of ranks round(q * (W - 1)) among the W
+/// values so stood for, as quantiles() takes of the values written out.
+std::pair<double, double> weighted_quantiles(std::vector<std::pair<double, float>>& values,
+                                             double q_lo, double q_hi) {
+    if (values.empty()) return {0.0, 0.0};
+    std::sort(values.begin(), values.end(),
+              [](const auto& a, const auto& b) { return a.first < b.first; });
+    double total = 0.0;
+    for (const auto& v : values) total += double{v.second};
+    const double rank_lo = std::round(std::clamp(q_lo, 0.0, 1.0) * (total - 1.0));
+    const double rank_hi = std::round(std::clamp(q_hi, 0.0, 1.0) * (total - 1.0));
+    double lo = values.back().first, seen = 0.0;
+    bool lo_found = false;
+    for (const auto& [value, weight] : values) {
+        seen += double{weight};
+        if (!lo_found && seen > rank_lo) {
+            lo = value;
+            lo_found = true;
+        }
+        if (seen > rank_hi) return {lo, value};
+    }
+    return {lo, values.back().first};
+}
+
 /// Angle in [0, pi/2) of the first rectangle axis maximising Zhang et al.'s closeness score.
 /// Vectorised in single precision (Eigen arrays, 4 lanes): the coordinates are taken
 /// relative to the points' mean, so floats keep micrometres.
@@ -90,6 +115,59 @@ double best_lshape_angle(const std::vector<Eigen::Vector2d>& pts, double step_de
         }
     }
     return best_angle;
+}
+
+/// As best_lshape_angle for weighted points (each point's closeness term times its weight),
+/// searched coarse to fine: kCoarseStepDeg steps over 90 degrees, then step_deg steps within
+/// one coarse step of the best (29 passes instead of 90 at 1 degree).
+double best_weighted_lshape_angle(const std::vector<Eigen::Vector2d>& pts,
+                                  const std::vector<float>& weights, double step_deg) {
+    constexpr double kCoarseStepDeg = 5.0;
+    const auto n = static_cast<Eigen::Index>(pts.size());
+    Eigen::Vector2d mean = Eigen::Vector2d::Zero();
+    for (const auto& p : pts) mean += p;
+    mean /= static_cast<double>(std::max<Eigen::Index>(n, 1));
+    Eigen::ArrayXf x(n), y(n), w(n);
+    for (Eigen::Index i = 0; i < n; ++i) {
+        const auto k = static_cast<std::size_t>(i);
+        x[i] = static_cast<float>(pts[k].x() - mean.x());
+        y[i] = static_cast<float>(pts[k].y() - mean.y());
+        w[i] = weights[k];
+    }
+    Eigen::ArrayXf c1(n), c2(n);
+    const auto score = [&](double a) {
+        const auto ca = static_cast<float>(std::cos(a)), sa = static_cast<float>(std::sin(a));
+        c1 = x * ca + y * sa;
+        c2 = y * ca - x * sa;
+        const float min1 = c1.minCoeff(), max1 = c1.maxCoeff();
+        const float min2 = c2.minCoeff(), max2 = c2.maxCoeff();
+        return (w * (max1 - c1).min(c1 - min1).min((max2 - c2).min(c2 - min2)).max(0.01f).inverse())
+            .sum();
+    };
+    const double coarse = kCoarseStepDeg * kPi / 180.0;
+    double best_angle = 0.0;
+    float best_score = -1.0f;
+    const auto consider = [&](double a) {
+        const float s = score(a);
+        if (s > best_score) {
+            best_score = s;
+            best_angle = a;
+        }
+    };
+    for (int k = 0; k < static_cast<int>(std::lround(90.0 / kCoarseStepDeg)); ++k) {
+        consider(k * coarse);
+    }
+    const double centre = best_angle;
+    const double step = std::min(step_deg, kCoarseStepDeg) * kPi / 180.0;
+    const int reach =
+        static_cast<int>(std::lround(kCoarseStepDeg / std::min(step_deg, kCoarseStepDeg)));
+    for (int k = -reach; k <= reach; ++k) {
+        if (k != 0) consider(centre + k * step);
+    }
+    // The score repeats every 90 degrees: wrap into [0, pi/2).
+    double a = std::fmod(best_angle, kPi / 2.0);
+    if (a < 0.0) a += kPi / 2.0;
+    return a;
 }
 
 /// A straight face of points: unit direction, share of the points within the tolerance of
@@ -189,6 +267,59 @@ OrientedBox axis_box(const Eigen::Vector3d& lo, const Eigen::Vector3d& hi) {
     box.L_m = std::max(hi.x() - lo.x(), 1e-3);
     box.H_m = std::max(hi.y() - lo.y(), 1e-3);
     box.W_m = std::max(hi.z() - lo.z(), 1e-3);
+    return box;
+}
+
+/// Extents of the points along the footprint axes and of their heights (trimmed quantiles).
+struct Extents {
+    double lo1, hi1;               ///< along e1, metres from the camera's foot
+    double lo2, hi2;               ///< along e2, metres
+    double bottom_seen, top_seen;  ///< heights above the ground plane, metres
+};
+
+/// The box of footprint axes e1, e2 and their extents: picks the length axis (the longer, or
+/// the one closer to the viewing ray when only a short face of a thing is seen, or e1 when it
+/// is a face), completes the sides with the priors away from the camera and returns the box in
+/// the camera frame.
+OrientedBox assemble_box(const GroundFrame& frame, bool has_ground, const BoxFitOptions& options,
+                         bool face_is_length, Eigen::Vector2d e1, Eigen::Vector2d e2, Extents x) {
+    double &lo1 = x.lo1, &hi1 = x.hi1, &lo2 = x.lo2, &hi2 = x.hi2;
+    // Axis 1 becomes the length axis; swap when axis 2 should be.
+    bool swap = !options.yaw_rad && (hi2 - lo2) > (hi1 - lo1);
+    if (face_is_length) swap = false;
+    if (!options.yaw_rad && !face_is_length && options.prior_L_m > 0.0 && options.prior_W_m > 0.0) {
+        const double longest = std::max(hi1 - lo1, hi2 - lo2);
+        if (longest <= 1.3 * options.prior_W_m) {
+            // Only a short face is seen: it is most likely the rear or front, so the length
+            // runs along the viewing ray.
+            const Eigen::Vector2d centre = ((lo1 + hi1) / 2.0) * e1 + ((lo2 + hi2) / 2.0) * e2;
+            const Eigen::Vector2d ray = centre.normalized();
+            swap = std::abs(ray.dot(e2)) > std::abs(ray.dot(e1));
+        }
+    }
+    if (swap) {
+        std::swap(e1, e2);
+        std::swap(lo1, lo2);
+        std::swap(hi1, hi2);
+    }
+    // Coordinates along each axis are relative to the camera (at 0), so complete_away grows
+    // the box away from it.
+    if (options.prior_L_m > 0.0) complete_away(lo1, hi1, options.prior_L_m);
+    if (options.prior_W_m > 0.0) complete_away(lo2, hi2, options.prior_W_m);
+
+    double top = x.top_seen;
+    const double bottom = has_ground && options.rest_on_ground ? 0.0 : x.bottom_seen;
+    if (top - bottom < options.min_extent_m) top = bottom + options.min_extent_m;
+
+    OrientedBox box;
+    box.L_m = std::max(hi1 - lo1, options.min_extent_m);
+    box.W_m = std::max(hi2 - lo2, options.min_extent_m);
+    box.H_m = top - bottom;
+    const Eigen::Vector2d centre_ab = ((lo1 + hi1) / 2.0) * e1 + ((lo2 + hi2) / 2.0) * e2;
+    box.centre_m = frame.to_camera(centre_ab, (top + bottom) / 2.0);
+    // Heading in camera coordinates, projected on the camera's x-z plane.
+    const Eigen::Vector3d heading = e1.x() * frame.ex + e1.y() * frame.ez;
+    box.theta = yaw_of(Eigen::Vector2d(heading.x(), heading.z()));
     return box;
 }
 
@@ -293,44 +424,57 @@ OrientedBox fit_upright_box(const std::vector<Eigen::Vector3f>& points_m,
     auto [lo1, hi1] = quantiles(c1, t, 1.0 - t);
     auto [lo2, hi2] = quantiles(c2, t, 1.0 - t);
 
-    // Axis 1 becomes the length axis; swap when axis 2 should be.
-    bool swap = !options.yaw_rad && (hi2 - lo2) > (hi1 - lo1);
-    if (face_is_length) swap = false;
-    if (!options.yaw_rad && !face_is_length && options.prior_L_m > 0.0 && options.prior_W_m > 0.0) {
-        const double longest = std::max(hi1 - lo1, hi2 - lo2);
-        if (longest <= 1.3 * options.prior_W_m) {
-            // Only a short face is seen: it is most likely the rear or front, so the length
-            // runs along the viewing ray.
-            const Eigen::Vector2d centre = ((lo1 + hi1) / 2.0) * e1 + ((lo2 + hi2) / 2.0) * e2;
-            const Eigen::Vector2d ray = centre.normalized();
-            swap = std::abs(ray.dot(e2)) > std::abs(ray.dot(e1));
+    const auto [bottom_seen, top_seen] = quantiles(heights, t, 1.0 - t);
+    return assemble_box(frame, ground.has_value(), options, face_is_length, e1, e2,
+                        {lo1, hi1, lo2, hi2, bottom_seen, top_seen});
+}
+
+OrientedBox fit_upright_box_weighted(const std::vector<Eigen::Vector3f>& points_m,
+                                     const std::vector<float>& weights,
+                                     const std::optional<GroundPlane>& ground,
+                                     const BoxFitOptions& options) {
+    options.validate();
+    if (points_m.empty()) throw std::invalid_argument("fit_upright_box_weighted: no points");
+    if (weights.size() != points_m.size()) {
+        throw std::invalid_argument("fit_upright_box_weighted: weights and points differ in size");
+    }
+    for (float w : weights) {
+        if (!(w > 0.0f && std::isfinite(w))) {
+            throw std::invalid_argument("fit_upright_box_weighted: weights must be > 0");
         }
     }
-    if (swap) {
-        std::swap(e1, e2);
-        std::swap(lo1, lo2);
-        std::swap(hi1, hi2);
+    const GroundFrame frame(ground);
+    std::vector<Eigen::Vector2d> ab;
+    std::vector<std::pair<double, float>> heights;
+    ab.reserve(points_m.size());
+    heights.reserve(points_m.size());
+    for (std::size_t i = 0; i < points_m.size(); ++i) {
+        const Eigen::Vector3d q = points_m[i].cast<double>();
+        ab.push_back(frame.footprint(q));
+        heights.emplace_back(frame.height(q), weights[i]);
     }
-    // Coordinates along each axis are relative to the camera (at 0), so complete_away grows
-    // the box away from it.
-    if (options.prior_L_m > 0.0) complete_away(lo1, hi1, options.prior_L_m);
-    if (options.prior_W_m > 0.0) complete_away(lo2, hi2, options.prior_W_m);
-
-    const auto [bottom_seen, top_seen] = quantiles(heights, t, 1.0 - t);
-    double top = top_seen;
-    const double bottom = ground && options.rest_on_ground ? 0.0 : bottom_seen;
-    if (top - bottom < options.min_extent_m) top = bottom + options.min_extent_m;
-
-    OrientedBox box;
-    box.L_m = std::max(hi1 - lo1, options.min_extent_m);
-    box.W_m = std::max(hi2 - lo2, options.min_extent_m);
-    box.H_m = top - bottom;
-    const Eigen::Vector2d centre_ab = ((lo1 + hi1) / 2.0) * e1 + ((lo2 + hi2) / 2.0) * e2;
-    box.centre_m = frame.to_camera(centre_ab, (top + bottom) / 2.0);
-    // Heading in camera coordinates, projected on the camera's x-z plane.
-    const Eigen::Vector3d heading = e1.x() * frame.ex + e1.y() * frame.ez;
-    box.theta = yaw_of(Eigen::Vector2d(heading.x(), heading.z()));
-    return box;
+    double angle = 0.0;
+    if (options.yaw_rad) {
+        const Eigen::Vector3d heading(std::cos(*options.yaw_rad), 0.0, -std::sin(*options.yaw_rad));
+        angle = std::atan2(frame.ez.dot(heading), frame.ex.dot(heading));
+    } else {
+        angle = best_weighted_lshape_angle(ab, weights, options.angle_step_deg);
+    }
+    const Eigen::Vector2d e1(std::cos(angle), std::sin(angle));
+    const Eigen::Vector2d e2(-std::sin(angle), std::cos(angle));
+    std::vector<std::pair<double, float>> c1, c2;
+    c1.reserve(ab.size());
+    c2.reserve(ab.size());
+    for (std::size_t i = 0; i < ab.size(); ++i) {
+        c1.emplace_back(ab[i].dot(e1), weights[i]);
+        c2.emplace_back(ab[i].dot(e2), weights[i]);
+    }
+    const double t = options.trim_fraction;
+    const auto [lo1, hi1] = weighted_quantiles(c1, t, 1.0 - t);
+    const auto [lo2, hi2] = weighted_quantiles(c2, t, 1.0 - t);
+    const auto [bottom_seen, top_seen] = weighted_quantiles(heights, t, 1.0 - t);
+    return assemble_box(frame, ground.has_value(), options, false, e1, e2,
+                        {lo1, hi1, lo2, hi2, bottom_seen, top_seen});
 }
 
 OrientedBox centroid_box(const std::vector<Eigen::Vector3f>& points_m,

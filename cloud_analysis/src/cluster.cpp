@@ -280,13 +280,14 @@ VoxelGrid voxelize(const std::vector<Eigen::Vector3f>& points_m, double voxel_m)
     v.voxel_of.resize(n);
     if (voxel_m <= 0.0) {
         v.centroid_m = points_m;
+        v.count.assign(n, 1);
         for (std::size_t i = 0; i < n; ++i) v.voxel_of[i] = static_cast<std::uint32_t>(i);
         return v;
     }
     const double inverse = 1.0 / voxel_m;
     CellTable index(std::min<std::size_t>(n, 1 << 16));
     std::vector<Eigen::Vector3d> sums;
-    std::vector<std::uint32_t> counts;
+    std::vector<std::uint32_t>& counts = v.count;
     // Points arrive in pixel order, so runs of them share a voxel. A run's voxel (cells cx, cy,
     // cz) keeps its sum and count in registers until the run ends: the same additions in the
     // same order as into sums[last]. A point lies in the run's cell when its scaled coordinate

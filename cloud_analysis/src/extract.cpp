@@ -501,47 +501,30 @@ void keep_largest(std::vector<scene_schema::Entity>& entities, int max_entities)
     }
 }
 
-/// Stuff entities: one box over each cluster, never split. Only the clusters' point counts and
-/// their fit samples (every k-th point in point order, as a strided gather over the members
-/// would take) are collected, in one pass over the voxel index of the points: no member lists.
+/// Stuff entities: one box over each cluster, never split, fitted to the cluster's voxel
+/// centroids weighted by their point counts (a stuff cluster costs its voxels, not its points).
 std::vector<scene_schema::Entity> stuff_of_class(
     const ClassInfo& info, const std::vector<Eigen::Vector3f>& pts, const ClassSettings& s,
-    const PendingGround& pending_ground, const ExtractOptions& options, const ClusterOptions& co,
-    const BoxFitOptions& fit) {
+    const PendingGround& pending_ground, const ClusterOptions& co, const BoxFitOptions& fit) {
     const VoxelGrid voxels = voxelize(pts, s.voxel_m);
     const std::vector<Indices> voxel_clusters = euclidean_clusters(voxels.centroid_m, co);
     const std::optional<GroundPlane>& ground = pending_ground.get();
-    constexpr auto kNone = std::numeric_limits<std::uint32_t>::max();
-    std::vector<std::uint32_t> cluster_of(voxels.centroid_m.size(), kNone);
-    for (std::size_t c = 0; c < voxel_clusters.size(); ++c) {
-        for (std::size_t v : voxel_clusters[c]) cluster_of[v] = static_cast<std::uint32_t>(c);
-    }
-    std::vector<std::size_t> size(voxel_clusters.size(), 0);
-    for (std::uint32_t v : voxels.voxel_of) {
-        if (cluster_of[v] != kNone) ++size[cluster_of[v]];
-    }
-    // Stride of each cluster's fit sample (0: too small for an entity) and a countdown to its
-    // next sampled point.
     const std::size_t min_points = std::max<std::size_t>(static_cast<std::size_t>(s.min_points), 1);
-    const std::size_t most = options.stuff_fit_points;
-    std::vector<std::size_t> stride(size.size(), 0), countdown(size.size(), 1);
-    std::vector<std::vector<Eigen::Vector3f>> sample(size.size());
-    for (std::size_t c = 0; c < size.size(); ++c) {
-        if (size[c] < min_points) continue;
-        stride[c] = most > 0 && size[c] > most ? (size[c] + most - 1) / most : 1;
-        sample[c].reserve(size[c] / stride[c] + 1);
-    }
-    for (std::size_t i = 0; i < pts.size(); ++i) {
-        const std::uint32_t c = cluster_of[voxels.voxel_of[i]];
-        if (c == kNone || stride[c] == 0 || --countdown[c] > 0) continue;
-        countdown[c] = stride[c];
-        sample[c].push_back(pts[i]);
-    }
     std::vector<scene_schema::Entity> out;
-    for (std::size_t c = 0; c < size.size(); ++c) {
-        if (stride[c] == 0) continue;
-        out.push_back(make_entity(info, fit_upright_box(sample[c], ground, fit), size[c],
-                                  confidence_of(size[c], s), "instances"));
+    std::vector<Eigen::Vector3f> centroids;
+    std::vector<float> counts;
+    for (const Indices& cluster : voxel_clusters) {
+        std::size_t size = 0;
+        for (std::size_t v : cluster) size += voxels.count[v];
+        if (size < min_points) continue;
+        centroids.clear();
+        counts.clear();
+        for (std::size_t v : cluster) {
+            centroids.push_back(voxels.centroid_m[v]);
+            counts.push_back(static_cast<float>(voxels.count[v]));
+        }
+        out.push_back(make_entity(info, fit_upright_box_weighted(centroids, counts, ground, fit),
+                                  size, confidence_of(size, s), "instances"));
     }
     keep_largest(out, s.max_entities);
     return out;
@@ -565,7 +548,7 @@ std::vector<scene_schema::Entity> instances_of_class(const ClassInfo& info,
         fit.prior_H_m = s.prior_H_m;
     }
     fit.rest_on_ground = s.thing;
-    if (!s.thing) return stuff_of_class(info, pts, s, pending_ground, options, co, fit);
+    if (!s.thing) return stuff_of_class(info, pts, s, pending_ground, co, fit);
 
     std::vector<Indices> clusters;
     if (s.thing && options.clustering == "image" && grid.valid()) {

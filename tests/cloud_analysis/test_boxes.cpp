@@ -1,8 +1,10 @@
 #include <cmath>
+#include <random>
 
 #include <catch2/catch.hpp>
 
 #include "cloud_analysis/boxes.hpp"
+#include "cloud_analysis/cluster.hpp"
 
 using namespace cloud_analysis;
 
@@ -228,4 +230,79 @@ TEST_CASE("range smear lined up along the viewing ray is not taken for a long si
     // test off (taken for a face, it would turn the heading onto the band's principal axis).
     o.face_share = 0.0;
     CHECK(box.theta == Approx(fit_upright_box(pts, flat_ground(1.65), o).theta));
+}
+
+TEST_CASE("a weighted fit to voxel centroids gives the box of the points", "[boxes]") {
+    for (double t : {0.0, -0.3, -1.2, -kPi / 2.0, -2.5}) {
+        const auto pts = box_faces(-3.0, 15.0, t, 12.0, 5.0, 3.0, 1.65, false);
+        const VoxelGrid voxels = voxelize(pts, 0.4);
+        std::vector<float> counts(voxels.count.begin(), voxels.count.end());
+        BoxFitOptions o;
+        o.rest_on_ground = false;
+        const OrientedBox box =
+            fit_upright_box_weighted(voxels.centroid_m, counts, flat_ground(1.65), o);
+        INFO("true yaw " << t << ", fitted " << box.theta);
+        CHECK(yaw_error_mod_pi(box.theta, t) < 0.03);
+        // Centroids lie inside their voxels: extents within a voxel of the points'.
+        CHECK(box.L_m == Approx(12.0).margin(0.4));
+        CHECK(box.W_m == Approx(5.0).margin(0.4));
+        CHECK(box.H_m == Approx(3.0).margin(0.4));
+        CHECK(box.centre_m.x() == Approx(-3.0).margin(0.2));
+        CHECK(box.centre_m.y() == Approx(1.65 - 1.5).margin(0.2));
+        CHECK(box.centre_m.z() == Approx(15.0).margin(0.2));
+    }
+}
+
+TEST_CASE("a point of weight k counts as k copies of it in the weighted fit", "[boxes]") {
+    // Naive reference: the same points written out k times with weight 1.
+    std::mt19937 rng(7);
+    std::uniform_real_distribution<float> x(-4.0f, 4.0f), y(-2.0f, 1.5f), z(8.0f, 20.0f);
+    std::uniform_int_distribution<int> k(1, 5);
+    for (int trial = 0; trial < 5; ++trial) {
+        std::vector<Eigen::Vector3f> pts, copies;
+        std::vector<float> weights;
+        for (int i = 0; i < 200; ++i) {
+            pts.emplace_back(x(rng), y(rng), z(rng));
+            weights.push_back(static_cast<float>(k(rng)));
+            for (int c = 0; c < static_cast<int>(weights.back()); ++c) copies.push_back(pts.back());
+        }
+        const std::vector<float> ones(copies.size(), 1.0f);
+        BoxFitOptions o;
+        o.rest_on_ground = false;
+        const OrientedBox a = fit_upright_box_weighted(pts, weights, flat_ground(1.65), o);
+        const OrientedBox b = fit_upright_box_weighted(copies, ones, flat_ground(1.65), o);
+        CHECK(a.theta == Approx(b.theta).margin(1e-6));
+        CHECK(a.L_m == Approx(b.L_m).margin(1e-6));
+        CHECK(a.W_m == Approx(b.W_m).margin(1e-6));
+        CHECK(a.H_m == Approx(b.H_m).margin(1e-6));
+        CHECK((a.centre_m - b.centre_m).norm() < 1e-6);
+    }
+}
+
+TEST_CASE("weighted fit: extents are the 2/98 % quantiles of the points stood for", "[boxes]") {
+    // Five points on a line along x at z 10 standing for 100 points; the 2 % and 98 %
+    // quantiles are the points of ranks 2 and 97 written out.
+    std::vector<Eigen::Vector3f> pts = {{1.0f, -1.0f, 10.0f},
+                                        {2.0f, -1.0f, 10.0f},
+                                        {3.0f, -1.0f, 10.0f},
+                                        {4.0f, -1.0f, 10.0f},
+                                        {5.0f, -1.0f, 10.0f}};
+    BoxFitOptions o;
+    o.rest_on_ground = false;
+    o.yaw_rad = 0.0;  // heading along x
+    const OrientedBox narrow = fit_upright_box_weighted(pts, {1, 1, 96, 1, 1}, std::nullopt, o);
+    CHECK(narrow.centre_m.x() == Approx(3.0).margin(1e-9));
+    CHECK(narrow.L_m == Approx(o.min_extent_m).margin(1e-9));
+    // Written out: 1 1 2 (48 times) 3 4 (47 times) 5 5: ranks 2 and 97 are 2 and 4.
+    const OrientedBox wide = fit_upright_box_weighted(pts, {2, 48, 1, 47, 2}, std::nullopt, o);
+    CHECK(wide.centre_m.x() == Approx(3.0).margin(1e-9));
+    CHECK(wide.L_m == Approx(2.0).margin(1e-9));
+}
+
+TEST_CASE("the weighted fit rejects weights that are missing or not positive", "[boxes]") {
+    const std::vector<Eigen::Vector3f> pts = {{0.0f, 0.0f, 10.0f}, {1.0f, 0.0f, 10.0f}};
+    CHECK_THROWS_WITH(fit_upright_box_weighted(pts, {1.0f}, std::nullopt, BoxFitOptions{}),
+                      Catch::Contains("weights"));
+    CHECK_THROWS_WITH(fit_upright_box_weighted(pts, {1.0f, 0.0f}, std::nullopt, BoxFitOptions{}),
+                      Catch::Contains("weights"));
 }

@@ -178,6 +178,7 @@ TEST_CASE("voxelize numbers voxels by first point and gives each the mean of its
     // x in [-0.2, 0) point 3; [0.2, 0.4)^3 point 4.
     REQUIRE(v.centroid_m.size() == 4);
     CHECK(v.voxel_of == std::vector<std::uint32_t>{0, 1, 0, 2, 3, 1});
+    CHECK(v.count == std::vector<std::uint32_t>{2, 2, 1, 1});
     CHECK(v.centroid_m[0].isApprox(Eigen::Vector3f(0.1f, 0.05f, 0.05f)));
     CHECK(v.centroid_m[1].isApprox(Eigen::Vector3f(0.37f, 0.03f, 0.03f)));
     CHECK(v.centroid_m[2].isApprox(pts[3]));
@@ -186,6 +187,7 @@ TEST_CASE("voxelize numbers voxels by first point and gives each the mean of its
     const auto same = cloud_analysis::voxelize(pts, 0.0);
     CHECK(same.centroid_m.size() == pts.size());
     CHECK(same.voxel_of[5] == 5);
+    CHECK(same.count == std::vector<std::uint32_t>(pts.size(), 1));
 }
 
 TEST_CASE("voxelize matches a naive reference on random walks and points on voxel faces",
@@ -237,6 +239,7 @@ TEST_CASE("voxelize matches a naive reference on random walks and points on voxe
     REQUIRE(v.centroid_m.size() == sums.size());
     for (std::size_t k = 0; k < sums.size(); ++k) {
         CHECK(v.centroid_m[k] == (sums[k] / counts[k]).cast<float>());
+        CHECK(double{v.count[k]} == counts[k]);
     }
 }
 

@@ -546,27 +546,3 @@ TEST_CASE("classes extracted on several threads give the same entities as on one
     o.threads = 0;
     CHECK_THROWS_WITH(o.validate(), Catch::Contains("threads"));
 }
-
-TEST_CASE("a large stuff cluster fitted to an even sample keeps its extents", "[entities]") {
-    // The road of the test scene has 49 x 149 = 7301 points; a 1000-point sample (every 8th)
-    // gives the same box within the 0.25 m point spacing.
-    ExtractOptions o = options_with_bundled_config("instances");
-    o.stuff_fit_points = 0;
-    const auto all = extract_entities(test_scene(), test_palette(), StereoCamera{}, o);
-    o.stuff_fit_points = 1000;
-    const auto sampled = extract_entities(test_scene(), test_palette(), StereoCamera{}, o);
-    const auto road = [](const scene_schema::EntityDocument& doc) {
-        for (const auto& e : doc.entities) {
-            if (e.class_name == "road") return e;
-        }
-        FAIL("no road entity");
-        return scene_schema::Entity{};
-    };
-    const auto a = road(all), b = road(sampled);
-    CHECK(a.point_count == b.point_count);  // the clusters are not sampled
-    CHECK(b.x == Approx(a.x).margin(0.25));
-    CHECK(b.z == Approx(a.z).margin(0.25));
-    CHECK(b.L == Approx(a.L).margin(0.25));
-    CHECK(b.W == Approx(a.W).margin(0.25));
-    CHECK(std::abs(std::sin(b.theta - a.theta)) < 0.05);  // yaw modulo pi
-}

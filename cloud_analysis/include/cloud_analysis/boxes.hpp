@@ -48,6 +48,16 @@ struct BoxFitOptions {
 OrientedBox fit_upright_box(const std::vector<Eigen::Vector3f>& points_m,
                             const std::optional<GroundPlane>& ground, const BoxFitOptions& options);
 
+/// As fit_upright_box for weighted points, each standing for `weight` points at its place
+/// (voxel centroids weighted by their point counts, so that a stuff cluster costs its voxels,
+/// not its points): closeness terms and quantiles are weighted, and the L-shape angle is
+/// searched in 5 degree steps, then in angle_step_deg steps within 5 degrees of the best. No
+/// straight-face rule (it counts points); weights finite and > 0, one per point.
+OrientedBox fit_upright_box_weighted(const std::vector<Eigen::Vector3f>& points_m,
+                                     const std::vector<float>& weights,
+                                     const std::optional<GroundPlane>& ground,
+                                     const BoxFitOptions& options);
+
 /// Heading yaw (radians, [-pi, 0]) of the best L-shape footprint of points given in the
 /// (x, z) plane; exposed for tests.
 double lshape_yaw(const std::vector<Eigen::Vector2d>& xz_m, double angle_step_deg);

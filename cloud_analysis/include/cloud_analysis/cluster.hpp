@@ -36,6 +36,7 @@ std::vector<std::vector<std::size_t>> euclidean_clusters(
 /// order of their first point.
 struct VoxelGrid {
     std::vector<Eigen::Vector3f> centroid_m;  ///< mean of the voxel's points, metres
+    std::vector<std::uint32_t> count;         ///< number of points in each voxel
     std::vector<std::uint32_t> voxel_of;      ///< voxel of each input point
 };
 

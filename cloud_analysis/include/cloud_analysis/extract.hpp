@@ -49,10 +49,6 @@ struct ExtractOptions {
                                            ///< footprint inside thing boxes is dropped (stuff
                                            ///< smeared onto a thing's silhouette), (0, 1],
                                            ///< 1 = off
-    std::size_t stuff_fit_points = 10000;  ///< boxes of stuff clusters with more points are
-                                           ///< fitted to every k-th point (pixel order), about
-                                           ///< this many: their extents are quantiles, which an
-                                           ///< even sample keeps; 0 = all points
     int threads = 2;  ///< classes are extracted on this many threads (each class on one; the
                       ///< result does not depend on it), >= 1
     /// Throws std::invalid_argument naming the bad field.
