@@ -58,29 +58,42 @@ std::pair<double, double> quantiles(std::vector<double>& values, double q_lo, do
     return {values[lo], value_hi};
 }
 
+using WeightedValues = std::vector<std::pair<double, float>>;
+
+/// The value of rank `rank` (0-based) among weighted values written out (each value standing
+/// for `weight` equal ones), found by halving the range with nth_element (linear time, the
+/// same value as a full sort gives); the values are reordered.
+double weighted_rank_value(WeightedValues::iterator first, WeightedValues::iterator last,
+                           double rank) {
+    const auto by_value = [](const auto& a, const auto& b) { return a.first < b.first; };
+    while (last - first > 1) {
+        const auto mid = first + (last - first) / 2;
+        std::nth_element(first, mid, last, by_value);
+        double below = 0.0;
+        for (auto it = first; it != mid; ++it) below += double{it->second};
+        if (rank < below) {
+            last = mid;
+        } else if (rank < below + double{mid->second}) {
+            return mid->first;
+        } else {
+            rank -= below + double{mid->second};
+            first = mid + 1;
+        }
+    }
+    return first->first;
+}
+
 /// Values at fractions q_lo <= q_hi (0..1) of weighted values, each value standing for
 /// `weight` equal ones (reordered): the values of ranks round(q * (W - 1)) among the W
 /// values so stood for, as quantiles() takes of the values written out.
-std::pair<double, double> weighted_quantiles(std::vector<std::pair<double, float>>& values,
-                                             double q_lo, double q_hi) {
+std::pair<double, double> weighted_quantiles(WeightedValues& values, double q_lo, double q_hi) {
     if (values.empty()) return {0.0, 0.0};
-    std::sort(values.begin(), values.end(),
-              [](const auto& a, const auto& b) { return a.first < b.first; });
     double total = 0.0;
     for (const auto& v : values) total += double{v.second};
     const double rank_lo = std::round(std::clamp(q_lo, 0.0, 1.0) * (total - 1.0));
     const double rank_hi = std::round(std::clamp(q_hi, 0.0, 1.0) * (total - 1.0));
-    double lo = values.back().first, seen = 0.0;
-    bool lo_found = false;
-    for (const auto& [value, weight] : values) {
-        seen += double{weight};
-        if (!lo_found && seen > rank_lo) {
-            lo = value;
-            lo_found = true;
-        }
-        if (seen > rank_hi) return {lo, value};
-    }
-    return {lo, values.back().first};
+    return {weighted_rank_value(values.begin(), values.end(), rank_lo),
+            weighted_rank_value(values.begin(), values.end(), rank_hi)};
 }
 
 /// Angle in [0, pi/2) of the first rectangle axis maximising Zhang et al.'s closeness score.
@@ -445,7 +458,7 @@ OrientedBox fit_upright_box_weighted(const std::vector<Eigen::Vector3f>& points_
     }
     const GroundFrame frame(ground);
     std::vector<Eigen::Vector2d> ab;
-    std::vector<std::pair<double, float>> heights;
+    WeightedValues heights;
     ab.reserve(points_m.size());
     heights.reserve(points_m.size());
     for (std::size_t i = 0; i < points_m.size(); ++i) {
@@ -462,7 +475,7 @@ OrientedBox fit_upright_box_weighted(const std::vector<Eigen::Vector3f>& points_
     }
     const Eigen::Vector2d e1(std::cos(angle), std::sin(angle));
     const Eigen::Vector2d e2(-std::sin(angle), std::cos(angle));
-    std::vector<std::pair<double, float>> c1, c2;
+    WeightedValues c1, c2;
     c1.reserve(ab.size());
     c2.reserve(ab.size());
     for (std::size_t i = 0; i < ab.size(); ++i) {
