@@ -11,6 +11,7 @@
 #include <stdexcept>
 #include <thread>
 #include <tuple>
+#include <utility>
 
 #include "cloud_analysis/boxes.hpp"
 #include "cloud_analysis/cluster.hpp"
@@ -665,6 +666,24 @@ void for_each_class(const std::vector<double>& cost, int threads, Run&& run) {
     if (failure) std::rethrow_exception(failure);
 }
 
+/// Fewest points per thread when the cloud is split by class (below, threads cost more than
+/// they save).
+constexpr std::size_t kMinChunkPoints = 32768;
+
+/// Calls body(c, first, last) for `chunks` contiguous ranges [first, last) of [0, n), chunk 0
+/// on this thread and the others on their own; rethrows the first exception.
+template <typename Body>
+void for_each_chunk(std::size_t n, std::size_t chunks, Body&& body) {
+    const auto bound = [&](std::size_t c) { return n / chunks * c + std::min(c, n % chunks); };
+    std::vector<std::future<void>> helpers;
+    for (std::size_t c = 1; c < chunks; ++c) {
+        helpers.push_back(std::async(std::launch::async,
+                                     [&body, &bound, c] { body(c, bound(c), bound(c + 1)); }));
+    }
+    body(0, bound(0), bound(1));
+    for (auto& h : helpers) h.get();
+}
+
 }  // namespace
 
 void ExtractOptions::validate() const {
@@ -718,35 +737,65 @@ scene_schema::EntityDocument extract_entities(const LabeledCloud& cloud, const P
     // Points per palette class, within range; pixels only for things (the image-space steps).
     std::vector<std::vector<Eigen::Vector3f>> per_class(palette.classes.size());
     std::vector<std::vector<std::uint32_t>> per_class_pixels(palette.classes.size());
-    PixelGrid grid;
-    if (cloud.pixel.size() == cloud.size() && cloud.width_px > 0 && cloud.height_px > 0) {
-        std::uint32_t last_pixel = 0;
-        for (std::uint32_t px : cloud.pixel) last_pixel = std::max(last_pixel, px);
-        if (last_pixel < static_cast<std::uint64_t>(cloud.width_px) * cloud.height_px) {
-            grid = PixelGrid{cloud.width_px, cloud.height_px};
+    // Split on `chunks` threads over contiguous point ranges (each chunk writes its points of a
+    // class after the previous chunks' ones, so the order is the points' order): count, size,
+    // write, then close the gaps the range check left.
+    const std::size_t classes = palette.classes.size();
+    const std::size_t chunks = std::clamp<std::size_t>(cloud.size() / kMinChunkPoints, 1,
+                                                       static_cast<std::size_t>(options.threads));
+    const bool has_pixels = cloud.pixel.size() == cloud.size();
+    std::vector<std::vector<std::size_t>> start(chunks, std::vector<std::size_t>(classes, 0));
+    std::vector<std::uint32_t> last_pixel(chunks, 0);
+    for_each_chunk(cloud.size(), chunks, [&](std::size_t c, std::size_t first, std::size_t last) {
+        auto& size = start[c];
+        for (std::size_t i = first; i < last; ++i) {
+            const auto k = cloud.class_index[i];
+            if (k < classes) ++size[k];
         }
-    }
-    std::vector<std::size_t> class_size(palette.classes.size(), 0);
-    for (const auto k : cloud.class_index) {
-        if (k < palette.classes.size()) ++class_size[k];
+        for (std::size_t i = first; has_pixels && i < last; ++i) {
+            last_pixel[c] = std::max(last_pixel[c], cloud.pixel[i]);
+        }
+    });
+    PixelGrid grid;
+    if (has_pixels && cloud.width_px > 0 && cloud.height_px > 0 &&
+        *std::max_element(last_pixel.begin(), last_pixel.end()) <
+            static_cast<std::uint64_t>(cloud.width_px) * cloud.height_px) {
+        grid = PixelGrid{cloud.width_px, cloud.height_px};
     }
     // Sized for every point of the class, written by index, then cut to the points kept.
-    for (std::size_t k = 0; k < palette.classes.size(); ++k) {
-        per_class[k].resize(class_size[k]);
-        if (is_thing[k]) per_class_pixels[k].resize(class_size[k]);
+    for (std::size_t k = 0; k < classes; ++k) {
+        std::size_t total = 0;
+        for (std::size_t c = 0; c < chunks; ++c) total += std::exchange(start[c][k], total);
+        per_class[k].resize(total);
+        if (is_thing[k]) per_class_pixels[k].resize(total);
     }
-    std::vector<std::size_t> kept(palette.classes.size(), 0);
-    for (std::size_t i = 0; i < cloud.size(); ++i) {
-        const auto k = cloud.class_index[i];
-        const auto& p = cloud.xyz_m[i];
-        if (k == kVoidClass || k >= palette.classes.size()) continue;
-        if (!(p.z() > 0.0f && double{p.z()} < options.max_range_m) || !p.allFinite()) continue;
-        if (is_thing[k]) per_class_pixels[k][kept[k]] = grid.valid() ? cloud.pixel[i] : 0;
-        per_class[k][kept[k]++] = p;
-    }
-    for (std::size_t k = 0; k < palette.classes.size(); ++k) {
-        per_class[k].resize(kept[k]);
-        if (is_thing[k]) per_class_pixels[k].resize(kept[k]);
+    std::vector<std::vector<std::size_t>> end = start;
+    for_each_chunk(cloud.size(), chunks, [&](std::size_t c, std::size_t first, std::size_t last) {
+        auto& at = end[c];
+        for (std::size_t i = first; i < last; ++i) {
+            const auto k = cloud.class_index[i];
+            const auto& p = cloud.xyz_m[i];
+            if (k == kVoidClass || k >= classes) continue;
+            if (!(p.z() > 0.0f && double{p.z()} < options.max_range_m) || !p.allFinite()) continue;
+            if (is_thing[k]) per_class_pixels[k][at[k]] = grid.valid() ? cloud.pixel[i] : 0;
+            per_class[k][at[k]++] = p;
+        }
+    });
+    for (std::size_t k = 0; k < classes; ++k) {
+        std::size_t kept = end[0][k];
+        for (std::size_t c = 1; c < chunks; ++c) {
+            const auto from = static_cast<std::ptrdiff_t>(start[c][k]);
+            const auto to = static_cast<std::ptrdiff_t>(end[c][k]);
+            std::copy(per_class[k].begin() + from, per_class[k].begin() + to,
+                      per_class[k].begin() + static_cast<std::ptrdiff_t>(kept));
+            if (is_thing[k]) {
+                std::copy(per_class_pixels[k].begin() + from, per_class_pixels[k].begin() + to,
+                          per_class_pixels[k].begin() + static_cast<std::ptrdiff_t>(kept));
+            }
+            kept += end[c][k] - start[c][k];
+        }
+        per_class[k].resize(kept);
+        if (is_thing[k]) per_class_pixels[k].resize(kept);
     }
 
     // The ground plane is the first task, fitted beside the clustering of the classes (which
