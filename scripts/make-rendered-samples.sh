@@ -1,16 +1,16 @@
 #!/usr/bin/env bash
 # Regenerates samples/rendered/<scene>/ from samples/rendered/scenes/<scene>.json with
-# `scene-render sensors` (default sensor model, seed 0). The committed samples use KITTI's rig at
-# half size (621x188, intrinsics halved) to keep the repository small; pass --full for KITTI's
-# 1242x375 into another folder.
-# usage: scripts/make-rendered-samples.sh [--full] [OUTPUT_DIR]   (default: samples/rendered)
+# `scene-render sensors` (default sensor model, seed 0) with KITTI's rig (1242x375, the sensors'
+# default), as committed; --half renders KITTI's rig at half size (621x188, intrinsics halved)
+# into another folder.
+# usage: scripts/make-rendered-samples.sh [--half] [OUTPUT_DIR]   (default: samples/rendered)
 #        SCENE_RENDER=<path> skips the build and uses that binary.
 set -euo pipefail
 source "$(dirname "${BASH_SOURCE[0]}")/common.sh"
 
-size=(--size 621x188)
-if [ "${1:-}" = "--full" ]; then
-    size=()
+size=()
+if [ "${1:-}" = "--half" ]; then
+    size=(--size 621x188)
     shift
 fi
 out=${1:-"$STEREOSCENE_ROOT/samples/rendered"}
