@@ -196,13 +196,16 @@ CarEvaluation evaluate_cars(const std::vector<scene_schema::Entity>& entities,
         cars.push_back(i);
         if (std::hypot(e.x, e.z) <= options.max_range_m) ++result.entities_in_range;
     }
+    // A box over a whole parked row is not a car: its grown footprint must stay small.
+    const auto small_enough = [&options](const scene_schema::Entity& e) {
+        const double grow = 2.0 * options.footprint_margin_m;
+        return (e.L + grow) * (e.W + grow) <= options.max_footprint_area_m2;
+    };
     // Candidate pairs that satisfy the footprint rule, best inside fraction first.
     std::vector<CarMatch> candidates;
     for (std::size_t i : cars) {
         const auto& e = entities[i];
-        const double area =
-            (e.L + 2.0 * options.footprint_margin_m) * (e.W + 2.0 * options.footprint_margin_m);
-        if (area > options.max_footprint_area_m2) continue;
+        if (!small_enough(e)) continue;
         for (std::size_t g = 0; g < gt_cars.size(); ++g) {
             const double f =
                 footprint_inside_fraction(e, gt_cars[g].points_m, options.footprint_margin_m);
@@ -225,9 +228,7 @@ CarEvaluation evaluate_cars(const std::vector<scene_schema::Entity>& entities,
         std::vector<CarMatch> fallback;
         for (std::size_t i : cars) {
             const auto& e = entities[i];
-            const double area =
-                (e.L + 2.0 * options.footprint_margin_m) * (e.W + 2.0 * options.footprint_margin_m);
-            if (area > options.max_footprint_area_m2) continue;
+            if (!small_enough(e)) continue;
             for (std::size_t g = 0; g < gt_cars.size(); ++g) {
                 const GtCar& car = gt_cars[g];
                 if (car.pixel_count > options.fallback_max_points || car.image_pixels.empty())
