@@ -2,6 +2,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <cstdint>
 #include <stdexcept>
 #include <utility>
 
@@ -402,10 +403,40 @@ OrientedBox fit_upright_box(const std::vector<Eigen::Vector3f>& points_m,
         const Eigen::Vector3d heading(std::cos(*options.yaw_rad), 0.0, -std::sin(*options.yaw_rad));
         angle = std::atan2(frame.ez.dot(heading), frame.ex.dot(heading));
     } else if (ab.size() > kMaxSearchPoints) {
-        std::vector<Eigen::Vector2d> sample;
-        const std::size_t stride = ab.size() / kMaxSearchPoints + 1;
-        for (std::size_t i = 0; i < ab.size(); i += stride) sample.push_back(ab[i]);
-        angle = best_lshape_angle(sample, options.angle_step_deg);
+        // Points above one another share a footprint position: count them on a fine grid over
+        // the cluster's footprint and search with the counts as weights, which scores like
+        // every point at a fraction of the cost and whatever their order (a strided sample
+        // scored differently and moved headings by degrees).
+        Eigen::Vector2d lo = ab.front(), hi = ab.front();
+        for (const auto& p : ab) {
+            lo = lo.cwiseMin(p);
+            hi = hi.cwiseMax(p);
+        }
+        double cell = 0.02;
+        const auto cells_along = [&](double extent) {
+            return static_cast<std::size_t>(extent / cell) + 1;
+        };
+        while (cells_along(hi.x() - lo.x()) * cells_along(hi.y() - lo.y()) > (1u << 20)) {
+            cell *= 2.0;
+        }
+        const std::size_t na = cells_along(hi.x() - lo.x());
+        const std::size_t nb = cells_along(hi.y() - lo.y());
+        std::vector<std::uint32_t> count(na * nb, 0);
+        std::vector<Eigen::Vector2d> sum(na * nb, Eigen::Vector2d::Zero());
+        for (const auto& p : ab) {
+            const auto a = std::min(na - 1, static_cast<std::size_t>((p.x() - lo.x()) / cell));
+            const auto b = std::min(nb - 1, static_cast<std::size_t>((p.y() - lo.y()) / cell));
+            ++count[a * nb + b];
+            sum[a * nb + b] += p;
+        }
+        std::vector<Eigen::Vector2d> cells;
+        std::vector<float> counts;
+        for (std::size_t k = 0; k < count.size(); ++k) {
+            if (count[k] == 0) continue;
+            cells.push_back(sum[k] / static_cast<double>(count[k]));
+            counts.push_back(static_cast<float>(count[k]));
+        }
+        angle = best_weighted_lshape_angle(cells, counts, options.angle_step_deg);
     } else {
         angle = best_lshape_angle(ab, options.angle_step_deg);
     }

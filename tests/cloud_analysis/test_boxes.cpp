@@ -1,3 +1,4 @@
+#include <algorithm>
 #include <cmath>
 #include <random>
 
@@ -305,4 +306,26 @@ TEST_CASE("the weighted fit rejects weights that are missing or not positive", "
                       Catch::Contains("weights"));
     CHECK_THROWS_WITH(fit_upright_box_weighted(pts, {1.0f, 0.0f}, std::nullopt, BoxFitOptions{}),
                       Catch::Contains("weights"));
+}
+
+TEST_CASE("a dense noisy car over the angle search's point limit gives its heading in any order",
+          "[boxes]") {
+    // The thesis's test car: 12 m ahead, right of the camera, heading along +z; its rear and
+    // left side visible, dense (over the angle search's 3000-point limit), with range noise.
+    auto pts = box_faces(1.8, 12.0, -kPi / 2.0, 4.2, 1.8, 1.5, 1.65, true);
+    std::mt19937 rng(7);
+    std::normal_distribution<float> noise(0.0f, 0.08f);
+    for (auto& p : pts) p *= 1.0f + noise(rng) / p.norm();
+    REQUIRE(pts.size() > 3000);
+    BoxFitOptions o;
+    o.prior_L_m = 4.2;
+    o.prior_W_m = 1.8;
+    o.prior_H_m = 1.5;
+    const OrientedBox first = fit_upright_box(pts, flat_ground(1.65), o);
+    CHECK(yaw_error_mod_pi(first.theta, -kPi / 2.0) < 3.0 * kPi / 180.0);
+    for (unsigned seed : {1u, 2u, 3u}) {
+        std::shuffle(pts.begin(), pts.end(), std::mt19937(seed));
+        const OrientedBox box = fit_upright_box(pts, flat_ground(1.65), o);
+        CHECK(yaw_error_mod_pi(box.theta, first.theta) < 1e-6);
+    }
 }
