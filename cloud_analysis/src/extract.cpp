@@ -550,9 +550,10 @@ std::vector<scene_schema::Entity> instances_of_class(const ClassInfo& info,
     }
     fit.rest_on_ground = s.thing;
     if (!s.thing) return stuff_of_class(info, pts, s, pending_ground, co, fit);
+    // Things from here on.
 
     std::vector<Indices> clusters;
-    if (s.thing && options.clustering == "image" && grid.valid()) {
+    if (options.clustering == "image" && grid.valid()) {
         clusters = image_components(pts, pixels, grid, co, options.image_radius_px);
     } else {
         const VoxelGrid voxels = voxelize(pts, s.voxel_m);
@@ -564,7 +565,7 @@ std::vector<scene_schema::Entity> instances_of_class(const ClassInfo& info,
     for (std::size_t cluster = 0; cluster < clusters.size(); ++cluster) {
         Indices& members = clusters[cluster];
         if (members.size() < static_cast<std::size_t>(s.min_points)) continue;
-        if (s.thing) members = drop_outliers(pts, members, s, ground, options.outlier_margin_m);
+        members = drop_outliers(pts, members, s, ground, options.outlier_margin_m);
         // Fit, split oversized blobs (at most two levels: rows, then side by side), refit.
         // Work items: points, split depth, shadow group, imposed heading.
         std::vector<std::tuple<Indices, int, std::size_t, std::optional<double>>> work = {
@@ -580,7 +581,7 @@ std::vector<scene_schema::Entity> instances_of_class(const ClassInfo& info,
             if (part.size() < std::max<std::size_t>(min_points, 1)) continue;
             fit.yaw_rad = yaw;
             const OrientedBox box = fit_upright_box(gather(pts, part), ground, fit);
-            if (s.thing && depth < 2 && !yaw) {
+            if (depth < 2 && !yaw) {
                 Split split = split_oversized(pts, part, box, s, ground, options);
                 if (split.parts.size() > 1) {
                     for (auto& piece : split.parts) {
@@ -591,12 +592,12 @@ std::vector<scene_schema::Entity> instances_of_class(const ClassInfo& info,
                 }
             }
             // A thing whose points all lie near the ground is mislabelled road, not an object.
-            if (s.thing && s.prior_H_m > 0.0 && ground &&
+            if (s.prior_H_m > 0.0 && ground &&
                 box.H_m < options.min_height_fraction * s.prior_H_m) {
                 continue;
             }
             Candidate c{box, std::move(part), 0.0, group};
-            if (s.thing && s.has_prior()) {
+            if (s.has_prior()) {
                 c.fragment = c.members.size() < static_cast<std::size_t>(s.min_points) ||
                              height_spread(pts, c.members, ground) <
                                  options.fragment_height_fraction * s.prior_H_m;
@@ -609,11 +610,11 @@ std::vector<scene_schema::Entity> instances_of_class(const ClassInfo& info,
             candidates.push_back(std::move(c));
         }
     }
-    if (s.thing && s.has_prior()) {
+    if (s.has_prior()) {
         candidates = suppress_shadows(std::move(candidates), pixels, grid, s.prior_W_m,
                                       options.shadow_fraction, options.shadow_radius_px);
     }
-    if (s.thing) candidates = suppress_nested(std::move(candidates));
+    candidates = suppress_nested(std::move(candidates));
     std::vector<scene_schema::Entity> out;
     for (const auto& c : candidates) {
         out.push_back(make_entity(info, c.box, c.members.size(), confidence_of(c.members.size(), s),
