@@ -239,7 +239,7 @@ TEST_CASE("voxelize matches a naive reference on random walks and points on voxe
     REQUIRE(v.centroid_m.size() == sums.size());
     for (std::size_t k = 0; k < sums.size(); ++k) {
         CHECK(v.centroid_m[k] == (sums[k] / counts[k]).cast<float>());
-        CHECK(double{v.count[k]} == counts[k]);
+        CHECK(static_cast<double>(v.count[k]) == counts[k]);
     }
 }
 
