@@ -42,6 +42,29 @@ set(STEREOSCENE_CLOSED_LOOP_VISIBILITY --min-visible-fraction 0.25)
 # cars are less than a quarter visible, behind the cars beside them, and all are found).
 set(STEREOSCENE_CLOSED_LOOP_ALL_CARS_FOUND parking-row thesis-one-car)
 
+# Two tests for one rendered frame: cloud-analysis reconstructs it into ENTITIES (fixture
+# FIXTURE, itself needing REQUIRES when given), then evaluate scores ENTITIES against TRUTH with
+# BARS and the visibility rule, writing EVAL_JSON.
+function(closed_loop_frame_tests name)
+    cmake_parse_arguments(L "" "DIR;FRAME;TRUTH;ENTITIES;EVAL_JSON;FIXTURE;REQUIRES" "BARS"
+        ${ARGN})
+    add_test(NAME "closed loop ${name}: cloud-analysis reconstructs the scene"
+        COMMAND $<TARGET_FILE:cloud-analysis> --kitti-root ${L_DIR} --frame ${L_FRAME}
+            -o ${L_ENTITIES})
+    set_tests_properties("closed loop ${name}: cloud-analysis reconstructs the scene"
+        PROPERTIES FIXTURES_SETUP ${L_FIXTURE} LABELS closed_loop)
+    if(L_REQUIRES)
+        set_tests_properties("closed loop ${name}: cloud-analysis reconstructs the scene"
+            PROPERTIES FIXTURES_REQUIRED ${L_REQUIRES})
+    endif()
+    add_test(NAME "closed loop ${name}: cars within 30 m meet the bars"
+        COMMAND $<TARGET_FILE:cloud-analysis> evaluate --entities ${L_ENTITIES}
+            --reference ${L_TRUTH} ${L_BARS} ${STEREOSCENE_CLOSED_LOOP_VISIBILITY}
+            --kitti-root ${L_DIR} --frame ${L_FRAME} --json ${L_EVAL_JSON})
+    set_tests_properties("closed loop ${name}: cars within 30 m meet the bars"
+        PROPERTIES FIXTURES_REQUIRED ${L_FIXTURE} LABELS closed_loop)
+endfunction()
+
 file(GLOB _loop_calibs LIST_DIRECTORIES false
     ${_loop_samples}/*/calib/calib_cam_to_cam.txt)
 set(STEREOSCENE_CLOSED_LOOP_SCENES "")
@@ -64,23 +87,14 @@ foreach(_calib IN LISTS _loop_calibs)
         get_filename_component(_frame ${_image} NAME_WE)
         set(_name "${_scene}/${_frame}")
         set(_entities ${_loop_out}/${_scene}-${_frame}.json)
-        add_test(NAME "closed loop ${_name}: cloud-analysis reconstructs the scene"
-            COMMAND $<TARGET_FILE:cloud-analysis> --kitti-root ${_dir} --frame ${_frame}
-                -o ${_entities})
-        set_tests_properties("closed loop ${_name}: cloud-analysis reconstructs the scene"
-            PROPERTIES FIXTURES_SETUP "closed_loop_${_scene}_${_frame}" LABELS closed_loop)
         if(DEFINED STEREOSCENE_CLOSED_LOOP_BARS_${_scene})
             set(_bars ${STEREOSCENE_CLOSED_LOOP_BARS_${_scene}})
         else()
             set(_bars ${STEREOSCENE_CLOSED_LOOP_BARS})
         endif()
-        add_test(NAME "closed loop ${_name}: cars within 30 m meet the bars"
-            COMMAND $<TARGET_FILE:cloud-analysis> evaluate --entities ${_entities}
-                --reference ${_truth} ${_bars} ${STEREOSCENE_CLOSED_LOOP_VISIBILITY}
-                --kitti-root ${_dir} --frame ${_frame}
-                --json ${_loop_out}/${_scene}-${_frame}-eval.json)
-        set_tests_properties("closed loop ${_name}: cars within 30 m meet the bars"
-            PROPERTIES FIXTURES_REQUIRED "closed_loop_${_scene}_${_frame}" LABELS closed_loop)
+        closed_loop_frame_tests("${_name}" DIR ${_dir} FRAME ${_frame} TRUTH ${_truth}
+            ENTITIES ${_entities} EVAL_JSON ${_loop_out}/${_scene}-${_frame}-eval.json
+            FIXTURE "closed_loop_${_scene}_${_frame}" BARS ${_bars})
         if(_scene IN_LIST STEREOSCENE_CLOSED_LOOP_ALL_CARS_FOUND)
             add_test(NAME "closed loop ${_name}: every car within 30 m is found, hidden ones too"
                 COMMAND $<TARGET_FILE:cloud-analysis> evaluate --entities ${_entities}
@@ -111,19 +125,10 @@ if(TARGET scene-render)
                 --seed 0)
         set_tests_properties("closed loop ${_name}: scene-render sensors renders the stereo frame"
             PROPERTIES FIXTURES_SETUP "closed_loop_full_${_scene}_render" LABELS closed_loop)
-        add_test(NAME "closed loop ${_name}: cloud-analysis reconstructs the scene"
-            COMMAND $<TARGET_FILE:cloud-analysis> --kitti-root ${_dir} --frame 000000
-                -o ${_entities})
-        set_tests_properties("closed loop ${_name}: cloud-analysis reconstructs the scene"
-            PROPERTIES FIXTURES_REQUIRED "closed_loop_full_${_scene}_render"
-            FIXTURES_SETUP "closed_loop_full_${_scene}" LABELS closed_loop)
-        add_test(NAME "closed loop ${_name}: cars within 30 m meet the bars"
-            COMMAND $<TARGET_FILE:cloud-analysis> evaluate --entities ${_entities}
-                --reference ${_truth} ${STEREOSCENE_CLOSED_LOOP_BARS}
-                ${STEREOSCENE_CLOSED_LOOP_VISIBILITY} --kitti-root ${_dir} --frame 000000
-                --json ${_loop_out}/full-${_scene}-eval.json)
-        set_tests_properties("closed loop ${_name}: cars within 30 m meet the bars"
-            PROPERTIES FIXTURES_REQUIRED "closed_loop_full_${_scene}" LABELS closed_loop)
+        closed_loop_frame_tests("${_name}" DIR ${_dir} FRAME 000000 TRUTH ${_truth}
+            ENTITIES ${_entities} EVAL_JSON ${_loop_out}/full-${_scene}-eval.json
+            FIXTURE "closed_loop_full_${_scene}" REQUIRES "closed_loop_full_${_scene}_render"
+            BARS ${STEREOSCENE_CLOSED_LOOP_BARS})
     endforeach()
 endif()
 if(NOT STEREOSCENE_CLOSED_LOOP_SCENES)
