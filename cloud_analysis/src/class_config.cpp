@@ -1,5 +1,6 @@
 #include "cloud_analysis/class_config.hpp"
 
+#include <cmath>
 #include <set>
 #include <stdexcept>
 
@@ -24,7 +25,8 @@ void read_settings(const nlohmann::json& j, const std::string& pointer, ClassSet
                                                 "min_points",     "prior_L_m",
                                                 "prior_W_m",      "prior_H_m",
                                                 "split_factor",   "voxel_m",
-                                                "max_entities",   "comment"};
+                                                "voxel_max_m",    "max_entities",
+                                                "comment"};
     for (const auto& item : j.items()) {
         if (known.count(item.key()) == 0) {
             throw std::invalid_argument(pointer + "/" + item.key() + ": unknown member");
@@ -65,6 +67,7 @@ void read_settings(const nlohmann::json& j, const std::string& pointer, ClassSet
     number("prior_H_m", s.prior_H_m);
     number("split_factor", s.split_factor);
     number("voxel_m", s.voxel_m);
+    number("voxel_max_m", s.voxel_max_m);
     integer("max_entities", s.max_entities);
 }
 
@@ -82,7 +85,24 @@ void ClassSettings::validate() const {
     require(prior_H_m >= 0.0, where + " prior_H_m", "must be >= 0");
     require(split_factor > 1.0, where + " split_factor", "must be > 1");
     require(voxel_m >= 0.0, where + " voxel_m", "must be >= 0");
+    require(voxel_max_m == 0.0 || voxel_max_m >= voxel_m, where + " voxel_max_m",
+            "must be 0 or >= voxel_m");
     require(max_entities >= 1, where + " max_entities", "must be >= 1");
+}
+
+std::vector<double> ClassSettings::voxel_doubling_depths() const {
+    std::vector<double> depths;
+    if (!(voxel_m > 0.0) || !(cluster_growth > 0.0)) return depths;
+    for (int k = 1; k <= 7; ++k) {
+        const double factor = static_cast<double>(1 << k);
+        if (voxel_m * factor > voxel_max_m ||
+            cluster_distance_m * factor > cluster_distance_max_m) {
+            break;
+        }
+        // distance_at(z) = d10 * (z / 10 m)^growth = d10 * 2^k
+        depths.push_back(10.0 * std::pow(factor, 1.0 / cluster_growth));
+    }
+    return depths;
 }
 
 ClassSettings ClassConfig::find(std::string_view name) const {

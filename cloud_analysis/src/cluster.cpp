@@ -1,6 +1,7 @@
 #include "cloud_analysis/cluster.hpp"
 
 #include <algorithm>
+#include <array>
 #include <cmath>
 #include <cstdint>
 #include <limits>
@@ -112,6 +113,82 @@ std::int64_t floor_shift(std::int64_t x, int shift) {
     return x >= 0 ? x >> shift : -((-x - 1) >> shift) - 1;
 }
 
+/// Numbers of the occupied cells of the grid levels (cell (x, y, z) of level l covers base
+/// cells x * 2^l ... x * 2^l + 2^l - 1 on each axis). A dense array over the base cells'
+/// bounding box, one margin cell each side so that the 27 cells around any occupied one can be
+/// asked for, when that array is small (a few bytes per point); else a hash table, so that
+/// points spread over kilometres cost no more memory than their number.
+class LevelCells {
+  public:
+    static constexpr std::uint32_t kNone = CellTable::kNone;
+
+    /// For base cells base_cell[3 i .. 3 i + 2] of n points, levels 0 .. levels - 1.
+    LevelCells(const std::vector<std::int64_t>& base_cell, std::size_t n, int levels) : hash_(0) {
+        std::array<std::int64_t, 3> lo{}, hi{};
+        for (int a = 0; a < 3; ++a) {
+            lo[a] = n > 0 ? base_cell[static_cast<std::size_t>(a)] : 0;
+            hi[a] = lo[a];
+        }
+        for (std::size_t i = 0; i < n; ++i) {
+            for (int a = 0; a < 3; ++a) {
+                lo[a] = std::min(lo[a], base_cell[3 * i + static_cast<std::size_t>(a)]);
+                hi[a] = std::max(hi[a], base_cell[3 * i + static_cast<std::size_t>(a)]);
+            }
+        }
+        // The cap keeps the array within 16 bytes per point (1 MiB at least).
+        const std::uint64_t cap = std::max<std::uint64_t>(4 * std::uint64_t{n}, 1 << 18);
+        std::uint64_t total = 0;
+        for (int l = 0; l < levels && total <= cap; ++l) {
+            Level& g = levels_[static_cast<std::size_t>(l)];
+            g.offset = total;
+            std::uint64_t cells = 1;
+            for (int a = 0; a < 3 && cells <= cap; ++a) {
+                g.lo[a] = floor_shift(lo[a], l) - 1;
+                g.dim[a] = floor_shift(hi[a], l) + 2 - g.lo[a];
+                const auto extent = static_cast<std::uint64_t>(g.dim[a]);
+                cells = extent > cap / cells ? cap + 1 : cells * extent;
+            }
+            total += cells;
+        }
+        if (total <= cap) {
+            dense_.assign(static_cast<std::size_t>(total), kNone);
+        } else {
+            hash_ = CellTable(n);
+        }
+    }
+    /// Number of cell (x, y, z) of level l, given next_value when it had none; `inserted`
+    /// says which.
+    std::uint32_t find_or_insert(int l, std::int64_t x, std::int64_t y, std::int64_t z,
+                                 std::uint32_t next_value, bool& inserted) {
+        if (dense_.empty()) return hash_.find_or_insert(cell_key(l, x, y, z), next_value, inserted);
+        std::uint32_t& id = dense_[index(l, x, y, z)];
+        inserted = id == kNone;
+        if (inserted) id = next_value;
+        return id;
+    }
+    /// Number of cell (x, y, z) of level l, or kNone. In the dense array, (x, y, z) must lie
+    /// within one cell of an occupied cell of that level.
+    std::uint32_t find(int l, std::int64_t x, std::int64_t y, std::int64_t z) const {
+        return dense_.empty() ? hash_.find(cell_key(l, x, y, z)) : dense_[index(l, x, y, z)];
+    }
+
+  private:
+    struct Level {
+        std::array<std::int64_t, 3> lo{};
+        std::array<std::int64_t, 3> dim{};
+        std::uint64_t offset = 0;
+    };
+    std::size_t index(int l, std::int64_t x, std::int64_t y, std::int64_t z) const {
+        const Level& g = levels_[static_cast<std::size_t>(l)];
+        return static_cast<std::size_t>(
+            g.offset + static_cast<std::uint64_t>(
+                           ((x - g.lo[0]) * g.dim[1] + (y - g.lo[1])) * g.dim[2] + (z - g.lo[2])));
+    }
+    std::array<Level, 16> levels_{};
+    std::vector<std::uint32_t> dense_;
+    CellTable hash_;
+};
+
 }  // namespace
 
 void ClusterOptions::validate() const {
@@ -167,17 +244,16 @@ std::vector<std::vector<std::size_t>> euclidean_clusters(
     }
     // Points of each cell, contiguous (cell_start), in index order; the unvisited ones first
     // (cell_left counts them) so that visited points leave the candidate lists.
-    CellTable cells(n);
+    LevelCells cells(base_cell, n, levels);
     std::vector<std::uint32_t> cell_of(n);
     std::vector<std::uint32_t> cell_count;
     for (std::size_t i = 0; i < n; ++i) {
         const int l = level[i];
-        const std::uint64_t key =
-            cell_key(l, floor_shift(base_cell[3 * i], l), floor_shift(base_cell[3 * i + 1], l),
-                     floor_shift(base_cell[3 * i + 2], l));
         bool inserted = false;
-        cell_of[i] =
-            cells.find_or_insert(key, static_cast<std::uint32_t>(cell_count.size()), inserted);
+        cell_of[i] = cells.find_or_insert(l, floor_shift(base_cell[3 * i], l),
+                                          floor_shift(base_cell[3 * i + 1], l),
+                                          floor_shift(base_cell[3 * i + 2], l),
+                                          static_cast<std::uint32_t>(cell_count.size()), inserted);
         if (inserted) cell_count.push_back(0);
         ++cell_count[cell_of[i]];
     }
@@ -205,13 +281,13 @@ std::vector<std::vector<std::size_t>> euclidean_clusters(
     };
 
     // Occupied cells around each base cell on every level, listed once per base cell.
-    CellTable base_ids(n);
+    LevelCells base_ids(base_cell, n, 1);
     std::vector<std::uint32_t> near_begin, near_end, near_cells;
     const auto cells_near = [&](std::size_t i) {
         const std::int64_t* b = &base_cell[3 * i];
         bool inserted = false;
         const std::uint32_t id = base_ids.find_or_insert(
-            cell_key(0, b[0], b[1], b[2]), static_cast<std::uint32_t>(near_begin.size()), inserted);
+            0, b[0], b[1], b[2], static_cast<std::uint32_t>(near_begin.size()), inserted);
         if (inserted) {
             near_begin.push_back(static_cast<std::uint32_t>(near_cells.size()));
             for (int l = 0; l < levels; ++l) {
@@ -220,8 +296,8 @@ std::vector<std::vector<std::size_t>> euclidean_clusters(
                 for (std::int64_t dx = -1; dx <= 1; ++dx) {
                     for (std::int64_t dy = -1; dy <= 1; ++dy) {
                         for (std::int64_t dz = -1; dz <= 1; ++dz) {
-                            const std::uint32_t c = cells.find(cell_key(l, x + dx, y + dy, z + dz));
-                            if (c != CellTable::kNone) near_cells.push_back(c);
+                            const std::uint32_t c = cells.find(l, x + dx, y + dy, z + dz);
+                            if (c != LevelCells::kNone) near_cells.push_back(c);
                         }
                     }
                 }
@@ -273,10 +349,17 @@ std::vector<std::vector<std::size_t>> euclidean_clusters(
     return clusters;
 }
 
-VoxelGrid voxelize(const std::vector<Eigen::Vector3f>& points_m, double voxel_m) {
+VoxelGrid voxelize(const std::vector<Eigen::Vector3f>& points_m, double voxel_m,
+                   const std::vector<double>& doubling_depths_m) {
     VoxelGrid v;
     const std::size_t n = points_m.size();
     if (n >= CellTable::kNone) throw std::invalid_argument("voxelize: too many points");
+    if (doubling_depths_m.size() > 7) {
+        throw std::invalid_argument("voxelize: at most 7 doubling depths");
+    }
+    if (!std::is_sorted(doubling_depths_m.begin(), doubling_depths_m.end())) {
+        throw std::invalid_argument("voxelize: doubling depths must be ascending");
+    }
     v.voxel_of.resize(n);
     if (voxel_m <= 0.0) {
         v.centroid_m = points_m;
@@ -284,37 +367,50 @@ VoxelGrid voxelize(const std::vector<Eigen::Vector3f>& points_m, double voxel_m)
         for (std::size_t i = 0; i < n; ++i) v.voxel_of[i] = static_cast<std::uint32_t>(i);
         return v;
     }
-    const double inverse = 1.0 / voxel_m;
+    // Edge and its inverse per depth band (band b: b doubling depths at or below z).
+    std::vector<double> edge(doubling_depths_m.size() + 1, voxel_m);
+    for (std::size_t b = 1; b < edge.size(); ++b) edge[b] = 2.0 * edge[b - 1];
+    std::vector<double> inverse(edge.size());
+    for (std::size_t b = 0; b < edge.size(); ++b) inverse[b] = 1.0 / edge[b];
+    const auto band_of = [&](float z) {
+        std::size_t b = 0;
+        while (b < doubling_depths_m.size() && double{z} >= doubling_depths_m[b]) ++b;
+        return b;
+    };
     CellTable index(std::min<std::size_t>(n, 1 << 16));
     std::vector<Eigen::Vector3d> sums;
     std::vector<std::uint32_t>& counts = v.count;
-    // Points arrive in pixel order, so runs of them share a voxel. A run's voxel (cells cx, cy,
-    // cz) keeps its sum and count in registers until the run ends: the same additions in the
-    // same order as into sums[last]. A point lies in the run's cell when its scaled coordinate
-    // is more than 1e-6 inside it on every axis, exactly where floor_div would return that cell
-    // without dividing.
+    // Points arrive in pixel order, so runs of them share a voxel. A run's voxel (band, cells
+    // cx, cy, cz) keeps its sum and count in registers until the run ends: the same additions
+    // in the same order as into sums[last]. A point lies in the run's cell when it is in the
+    // run's band and its scaled coordinate is more than 1e-6 inside the cell on every axis,
+    // exactly where floor_div would return that cell without dividing.
     const auto inside = [](double q, std::int64_t c) {
         const double above = q - static_cast<double>(c);
         return above > 1e-6 && above < 1.0 - 1e-6;
     };
     const auto wrap = [](std::int64_t c) {
-        return static_cast<std::uint64_t>(c + (1 << 20)) & 0x1FFFFF;
+        return static_cast<std::uint64_t>(c + (1 << 19)) & 0xFFFFF;
     };
     std::int64_t cx = 0, cy = 0, cz = 0;
+    std::size_t band = 0;
     std::uint64_t last_key = ~std::uint64_t{0};
     std::uint32_t last = 0;
     Eigen::Vector3d run_sum = Eigen::Vector3d::Zero();
     std::uint32_t run_count = 0;
     for (std::size_t i = 0; i < n; ++i) {
         const Eigen::Vector3f& p = points_m[i];
-        const double qx = double{p.x()} * inverse, qy = double{p.y()} * inverse,
-                     qz = double{p.z()} * inverse;
-        if (!(inside(qx, cx) && inside(qy, cy) && inside(qz, cz)) ||
+        const std::size_t b = band_of(p.z());
+        const double inv = inverse[b];
+        const double qx = double{p.x()} * inv, qy = double{p.y()} * inv, qz = double{p.z()} * inv;
+        if (!(b == band && inside(qx, cx) && inside(qy, cy) && inside(qz, cz)) ||
             last_key == ~std::uint64_t{0}) {
-            cx = floor_div(double{p.x()}, voxel_m, inverse);
-            cy = floor_div(double{p.y()}, voxel_m, inverse);
-            cz = floor_div(double{p.z()}, voxel_m, inverse);
-            const std::uint64_t key = (wrap(cx) << 42) | (wrap(cy) << 21) | wrap(cz);
+            band = b;
+            cx = floor_div(double{p.x()}, edge[b], inv);
+            cy = floor_div(double{p.y()}, edge[b], inv);
+            cz = floor_div(double{p.z()}, edge[b], inv);
+            const std::uint64_t key =
+                (std::uint64_t{b} << 60) | (wrap(cx) << 40) | (wrap(cy) << 20) | wrap(cz);
             if (key != last_key) {
                 if (last_key != ~std::uint64_t{0}) {
                     sums[last] = run_sum;

@@ -507,7 +507,7 @@ void keep_largest(std::vector<scene_schema::Entity>& entities, int max_entities)
 std::vector<scene_schema::Entity> stuff_of_class(
     const ClassInfo& info, const std::vector<Eigen::Vector3f>& pts, const ClassSettings& s,
     const PendingGround& pending_ground, const ClusterOptions& co, const BoxFitOptions& fit) {
-    const VoxelGrid voxels = voxelize(pts, s.voxel_m);
+    const VoxelGrid voxels = voxelize(pts, s.voxel_m, s.voxel_doubling_depths());
     const std::vector<Indices> voxel_clusters = euclidean_clusters(voxels.centroid_m, co);
     const std::optional<GroundPlane>& ground = pending_ground.get();
     const std::size_t min_points = std::max<std::size_t>(static_cast<std::size_t>(s.min_points), 1);
@@ -556,7 +556,7 @@ std::vector<scene_schema::Entity> instances_of_class(const ClassInfo& info,
     if (options.clustering == "image" && grid.valid()) {
         clusters = image_components(pts, pixels, grid, co, options.image_radius_px);
     } else {
-        const VoxelGrid voxels = voxelize(pts, s.voxel_m);
+        const VoxelGrid voxels = voxelize(pts, s.voxel_m, s.voxel_doubling_depths());
         clusters = points_of(euclidean_clusters(voxels.centroid_m, co), voxels);
     }
     const std::optional<GroundPlane>& ground = pending_ground.get();

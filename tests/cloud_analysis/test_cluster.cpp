@@ -152,6 +152,24 @@ TEST_CASE("the grid clustering finds the clusters of a brute-force reference on 
     }
 }
 
+TEST_CASE("the grid clustering finds the reference's clusters when the points span kilometres",
+          "[cluster]") {
+    // Blobs scattered over 40 km: a dense cell array over their bounding box would take
+    // gigabytes, so the cells are hashed; the clusters must not change.
+    auto pts = random_blobs(7, 30, 40);
+    for (std::size_t i = 0; i < pts.size(); ++i) {
+        const float far = static_cast<float>((i * 2654435761u) % 5) * 10000.0f - 20000.0f;
+        pts[i].x() += far;
+    }
+    ClusterOptions o;
+    o.distance_at_10m_m = 0.4;
+    o.growth = 2.0;
+    o.distance_max_m = 1.5;
+    const auto expected = reference_clusters(pts, o);
+    CHECK(expected.size() > 3);
+    CHECK(as_sorted_sets(euclidean_clusters(pts, o)) == expected);
+}
+
 TEST_CASE("points exactly one clustering distance apart link, a little farther do not",
           "[cluster]") {
     // A chain along x at 5 m depth (distance 0.5 m): steps of 0.5 m link, 0.5001 m does not;
@@ -194,53 +212,74 @@ TEST_CASE("voxelize matches a naive reference on random walks and points on voxe
           "[cluster]") {
     // Walks of small steps (runs of points in one voxel, as in pixel order), jumps, and points
     // on and next to voxel faces (where multiplying by the inverse size and dividing can
-    // round to different cells).
+    // round to different cells); with one edge everywhere, and with the edge doubling at 15
+    // and 25 m (walks cross those depths too).
     const double voxel_m = 0.4;
-    std::mt19937 rng(11);
-    std::uniform_real_distribution<float> step(-0.05f, 0.05f), jump(-20.0f, 20.0f);
-    std::uniform_int_distribution<int> face(-50, 50);
-    std::vector<Eigen::Vector3f> pts;
-    Eigen::Vector3f p(0.1f, 1.3f, 10.0f);
-    for (int i = 0; i < 20000; ++i) {
-        if (i % 500 == 0) p = Eigen::Vector3f(jump(rng), jump(rng), jump(rng) + 20.0f);
-        p += Eigen::Vector3f(step(rng), step(rng), step(rng));
-        pts.push_back(p);
-        if (i % 7 == 0) {
-            // Inside a voxel, then on its face and one float to either side of it.
-            const auto on_face = static_cast<float>(face(rng) * voxel_m);
-            for (const float x : {on_face - 0.01f, on_face, std::nextafter(on_face, -1e9f),
-                                  std::nextafter(on_face, 1e9f), on_face + 0.01f, on_face}) {
-                pts.emplace_back(x, p.y(), p.z());
+    for (const std::vector<double>& doubling : {std::vector<double>{}, {15.0, 25.0}}) {
+        std::mt19937 rng(11);
+        std::uniform_real_distribution<float> step(-0.05f, 0.05f), jump(-20.0f, 20.0f);
+        std::uniform_int_distribution<int> face(-50, 50);
+        std::vector<Eigen::Vector3f> pts;
+        Eigen::Vector3f p(0.1f, 1.3f, 10.0f);
+        for (int i = 0; i < 20000; ++i) {
+            if (i % 500 == 0) p = Eigen::Vector3f(jump(rng), jump(rng), jump(rng) + 20.0f);
+            p += Eigen::Vector3f(step(rng), step(rng), step(rng));
+            pts.push_back(p);
+            if (i % 7 == 0) {
+                // Inside a voxel, then on its face and one float to either side of it.
+                const auto on_face = static_cast<float>(face(rng) * voxel_m);
+                for (const float x : {on_face - 0.01f, on_face, std::nextafter(on_face, -1e9f),
+                                      std::nextafter(on_face, 1e9f), on_face + 0.01f, on_face}) {
+                    pts.emplace_back(x, p.y(), p.z());
+                }
             }
         }
-    }
-    // Reference: cells by division, voxels numbered by first point, sums in point order.
-    std::map<std::array<long long, 3>, std::uint32_t> id;
-    std::vector<std::uint32_t> voxel_of;
-    std::vector<Eigen::Vector3d> sums;
-    std::vector<double> counts;
-    for (const auto& q : pts) {
-        std::array<long long, 3> cell{};
-        for (int a = 0; a < 3; ++a) {
-            cell[static_cast<std::size_t>(a)] =
-                static_cast<long long>(std::floor(double{q[a]} / voxel_m));
+        // Reference: band by depth, cells by division, voxels numbered by first point, sums
+        // in point order.
+        std::map<std::array<long long, 4>, std::uint32_t> id;
+        std::vector<std::uint32_t> voxel_of;
+        std::vector<Eigen::Vector3d> sums;
+        std::vector<double> counts;
+        for (const auto& q : pts) {
+            long long band = 0;
+            double edge = voxel_m;
+            for (const double depth : doubling) {
+                if (double{q.z()} >= depth) {
+                    ++band;
+                    edge *= 2.0;
+                }
+            }
+            std::array<long long, 4> cell{band, 0, 0, 0};
+            for (int a = 0; a < 3; ++a) {
+                cell[static_cast<std::size_t>(a) + 1] =
+                    static_cast<long long>(std::floor(double{q[a]} / edge));
+            }
+            const auto [it, inserted] = id.emplace(cell, static_cast<std::uint32_t>(sums.size()));
+            if (inserted) {
+                sums.emplace_back(Eigen::Vector3d::Zero());
+                counts.push_back(0.0);
+            }
+            sums[it->second] += q.cast<double>();
+            counts[it->second] += 1.0;
+            voxel_of.push_back(it->second);
         }
-        const auto [it, inserted] = id.emplace(cell, static_cast<std::uint32_t>(sums.size()));
-        if (inserted) {
-            sums.emplace_back(Eigen::Vector3d::Zero());
-            counts.push_back(0.0);
+        INFO(doubling.size() << " doubling depths");
+        const auto v = cloud_analysis::voxelize(pts, voxel_m, doubling);
+        CHECK(v.voxel_of == voxel_of);
+        REQUIRE(v.centroid_m.size() == sums.size());
+        for (std::size_t k = 0; k < sums.size(); ++k) {
+            CHECK(v.centroid_m[k] == (sums[k] / counts[k]).cast<float>());
+            CHECK(static_cast<double>(v.count[k]) == counts[k]);
         }
-        sums[it->second] += q.cast<double>();
-        counts[it->second] += 1.0;
-        voxel_of.push_back(it->second);
     }
-    const auto v = cloud_analysis::voxelize(pts, voxel_m);
-    CHECK(v.voxel_of == voxel_of);
-    REQUIRE(v.centroid_m.size() == sums.size());
-    for (std::size_t k = 0; k < sums.size(); ++k) {
-        CHECK(v.centroid_m[k] == (sums[k] / counts[k]).cast<float>());
-        CHECK(static_cast<double>(v.count[k]) == counts[k]);
-    }
+}
+
+TEST_CASE("voxelize refuses doubling depths out of order or too many", "[cluster]") {
+    const std::vector<Eigen::Vector3f> pts = {{0.0f, 0.0f, 10.0f}};
+    CHECK_THROWS_WITH(cloud_analysis::voxelize(pts, 0.4, {20.0, 10.0}),
+                      Catch::Contains("ascending"));
+    CHECK_THROWS_WITH(cloud_analysis::voxelize(pts, 0.4, std::vector<double>(8, 1.0)),
+                      Catch::Contains("at most 7"));
 }
 
 TEST_CASE(

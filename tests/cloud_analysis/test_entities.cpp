@@ -75,6 +75,39 @@ TEST_CASE("the bundled class config loads with the documented car prior", "[enti
     CHECK(default_class_config_path().filename() == "entity_config.json");
 }
 
+TEST_CASE("voxels double with depth where the clustering distance doubles, up to voxel_max_m",
+          "[entities]") {
+    const ClassConfig c = load_class_config(std::string(STEREOSCENE_SOURCE_DIR) +
+                                            "/assets/classes/entity_config.json");
+    // Stuff: 1 m at 10 m growing linearly, capped at 2 m: 0.4 m voxels, 0.8 m from 20 m.
+    const std::vector<double> stuff = c.find("vegetation").voxel_doubling_depths();
+    REQUIRE(stuff.size() == 1);
+    CHECK(stuff[0] == Approx(20.0));
+    // Things keep their fine voxels (voxel_max_m 0).
+    CHECK(c.find("car").voxel_doubling_depths().empty());
+    // Cars' distance (0.4 m at 10 m growing with z^2, capped at 1.5 m) with a larger voxel_max_m:
+    // doubled (0.8 m) at 10 * sqrt(2) m; 1.6 m is over the cap.
+    ClassSettings car = c.find("car");
+    car.voxel_max_m = 0.8;
+    const std::vector<double> car_depths = car.voxel_doubling_depths();
+    REQUIRE(car_depths.size() == 1);
+    CHECK(car_depths[0] == Approx(10.0 * std::sqrt(2.0)));
+    ClassSettings s;
+    s.voxel_m = 0.1;
+    s.cluster_distance_m = 0.5;
+    s.cluster_growth = 1.0;
+    s.cluster_distance_max_m = 100.0;
+    CHECK(s.voxel_doubling_depths().empty());  // voxel_max_m 0: the edge stays voxel_m
+    s.voxel_max_m = 0.4;
+    CHECK(s.voxel_doubling_depths() == std::vector<double>{20.0, 40.0});
+    s.cluster_growth = 0.0;
+    CHECK(s.voxel_doubling_depths().empty());  // a constant distance never doubles
+    CHECK_THROWS_WITH(
+        parse_class_config(R"({"classes": [{"name": "car", "voxel_m": 0.4, "voxel_max_m": 0.2}]})",
+                           "x"),
+        Catch::Contains("voxel_max_m"));
+}
+
 TEST_CASE("a malformed class config names the bad member", "[entities]") {
     CHECK_THROWS_WITH(parse_class_config(R"({"classes": [{"name": "car", "min_points": 0}]})", "x"),
                       Catch::Contains("min_points"));

@@ -28,8 +28,16 @@ struct ClassSettings {
     double prior_H_m = 0.0;               ///< typical height, metres (0 = none)
     double split_factor = 1.6;            ///< split a cluster longer than split_factor * prior_L_m
     double voxel_m = 0.0;                 ///< voxel size used before clustering, metres (0 = none)
-    int max_entities = 50;                ///< keep at most this many entities (largest first), >= 1
+    /// Largest voxel edge, metres (0 = voxel_m): the edge doubles with depth as the clustering
+    /// distance doubles (voxel_doubling_depths), up to this.
+    double voxel_max_m = 0.0;
+    int max_entities = 50;  ///< keep at most this many entities (largest first), >= 1
     bool has_prior() const { return prior_L_m > 0.0 && prior_W_m > 0.0 && prior_H_m > 0.0; }
+    /// Depths (ascending, metres) at which the voxel edge doubles: where the clustering
+    /// distance reaches 2, 4, ... times its value at 10 m, while the doubled edge stays within
+    /// voxel_max_m and the doubled distance within cluster_distance_max_m. Sparse far points
+    /// then share voxels (stereo depth error grows as z^2 anyway); empty without growth.
+    std::vector<double> voxel_doubling_depths() const;
     /// Throws std::invalid_argument naming the bad field.
     void validate() const;
 };

@@ -40,8 +40,12 @@ struct VoxelGrid {
     std::vector<std::uint32_t> voxel_of;      ///< voxel of each input point
 };
 
-/// Voxelizes points with voxels of voxel_m metres (axis-aligned, origin at 0); voxel_m <= 0
-/// gives one voxel per point.
-VoxelGrid voxelize(const std::vector<Eigen::Vector3f>& points_m, double voxel_m);
+/// Voxelizes points with cubic voxels of voxel_m metres (axis-aligned, origin at 0) whose edge
+/// doubles at each of doubling_depths_m (ascending, at most 7): a point at depth z lies in a
+/// voxel of voxel_m * 2^b, b the number of those depths <= z; voxels of different depth bands
+/// are distinct even where they overlap in space. voxel_m <= 0 gives one voxel per point.
+/// Throws std::invalid_argument for depths out of order or too many.
+VoxelGrid voxelize(const std::vector<Eigen::Vector3f>& points_m, double voxel_m,
+                   const std::vector<double>& doubling_depths_m = {});
 
 }  // namespace cloud_analysis
