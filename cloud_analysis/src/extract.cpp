@@ -3,10 +3,14 @@
 #include <algorithm>
 #include <atomic>
 #include <cmath>
+#include <condition_variable>
 #include <cstdint>
+#include <deque>
 #include <exception>
+#include <functional>
 #include <future>
 #include <limits>
+#include <memory>
 #include <mutex>
 #include <stdexcept>
 #include <thread>
@@ -531,85 +535,102 @@ std::vector<scene_schema::Entity> stuff_of_class(
     return out;
 }
 
-std::vector<scene_schema::Entity> instances_of_class(const ClassInfo& info,
-                                                     const std::vector<Eigen::Vector3f>& pts,
-                                                     const std::vector<std::uint32_t>& pixels,
-                                                     const PixelGrid& grid, const ClassSettings& s,
-                                                     const PendingGround& pending_ground,
-                                                     const ExtractOptions& options) {
-    ClusterOptions co;
-    co.distance_at_10m_m = s.cluster_distance_m;
-    co.growth = s.cluster_growth;
-    co.distance_max_m = s.cluster_distance_max_m;
-    co.min_points = 1;
-    BoxFitOptions fit;
-    if (s.thing && s.has_prior()) {
-        fit.prior_L_m = s.prior_L_m;
-        fit.prior_W_m = s.prior_W_m;
-        fit.prior_H_m = s.prior_H_m;
-    }
-    fit.rest_on_ground = s.thing;
-    if (!s.thing) return stuff_of_class(info, pts, s, pending_ground, co, fit);
-    // Things from here on.
+/// Clustering and box-fit settings of a class.
+struct ClassFit {
+    ClusterOptions cluster;
+    BoxFitOptions box;
+};
 
-    std::vector<Indices> clusters;
-    if (options.clustering == "image" && grid.valid()) {
-        clusters = image_components(pts, pixels, grid, co, options.image_radius_px);
-    } else {
-        const VoxelGrid voxels = voxelize(pts, s.voxel_m, s.voxel_doubling_depths());
-        clusters = points_of(euclidean_clusters(voxels.centroid_m, co), voxels);
+ClassFit class_fit(const ClassSettings& s) {
+    ClassFit f;
+    f.cluster.distance_at_10m_m = s.cluster_distance_m;
+    f.cluster.growth = s.cluster_growth;
+    f.cluster.distance_max_m = s.cluster_distance_max_m;
+    f.cluster.min_points = 1;
+    if (s.thing && s.has_prior()) {
+        f.box.prior_L_m = s.prior_L_m;
+        f.box.prior_W_m = s.prior_W_m;
+        f.box.prior_H_m = s.prior_H_m;
     }
-    const std::optional<GroundPlane>& ground = pending_ground.get();
+    f.box.rest_on_ground = s.thing;
+    return f;
+}
+
+/// The clusters of a thing class (point indices in point order).
+std::vector<Indices> thing_clusters(const std::vector<Eigen::Vector3f>& pts,
+                                    const std::vector<std::uint32_t>& pixels, const PixelGrid& grid,
+                                    const ClassSettings& s, const ClusterOptions& co,
+                                    const ExtractOptions& options) {
+    if (options.clustering == "image" && grid.valid()) {
+        return image_components(pts, pixels, grid, co, options.image_radius_px);
+    }
+    const VoxelGrid voxels = voxelize(pts, s.voxel_m, s.voxel_doubling_depths());
+    return points_of(euclidean_clusters(voxels.centroid_m, co), voxels);
+}
+
+/// The candidates of thing cluster number `cluster`: its points without smear, fitted, split
+/// when oversized (at most two levels: rows, then side by side) and refitted. Pieces cut at
+/// clear gaps keep the cluster's shadow group (`cluster`); other pieces get groups of their
+/// own, (cluster + 1) * 2^32 + k, unique over the class.
+std::vector<Candidate> candidates_of_cluster(const std::vector<Eigen::Vector3f>& pts,
+                                             Indices members, std::size_t cluster,
+                                             const ClassSettings& s,
+                                             const std::optional<GroundPlane>& ground,
+                                             BoxFitOptions fit, const ExtractOptions& options) {
     std::vector<Candidate> candidates;
-    std::size_t next_group = clusters.size();
-    for (std::size_t cluster = 0; cluster < clusters.size(); ++cluster) {
-        Indices& members = clusters[cluster];
-        if (members.size() < static_cast<std::size_t>(s.min_points)) continue;
-        members = drop_outliers(pts, members, s, ground, options.outlier_margin_m);
-        // Fit, split oversized blobs (at most two levels: rows, then side by side), refit.
-        // Work items: points, split depth, shadow group, imposed heading.
-        std::vector<std::tuple<Indices, int, std::size_t, std::optional<double>>> work = {
-            {members, 0, cluster, std::nullopt}};
-        while (!work.empty()) {
-            auto [part, depth, group, yaw] = std::move(work.back());
-            work.pop_back();
-            // A piece of a row (cut at clear gaps or at a front-on row's pitch) is a thing
-            // because the row is: half the minimum suffices for its sparse far end.
-            const bool row_piece = depth > 0 && group < clusters.size();
-            const auto min_points =
-                static_cast<std::size_t>(row_piece ? s.min_points / 2 : s.min_points);
-            if (part.size() < std::max<std::size_t>(min_points, 1)) continue;
-            fit.yaw_rad = yaw;
-            const OrientedBox box = fit_upright_box(gather(pts, part), ground, fit);
-            if (depth < 2 && !yaw) {
-                Split split = split_oversized(pts, part, box, s, ground, options);
-                if (split.parts.size() > 1) {
-                    for (auto& piece : split.parts) {
-                        work.emplace_back(std::move(piece), depth + 1,
-                                          split.at_gaps ? group : next_group++, split.yaw_rad);
-                    }
-                    continue;
+    members = drop_outliers(pts, members, s, ground, options.outlier_margin_m);
+    std::size_t next_group = (cluster + 1) << 32;
+    // Work items: points, split depth, shadow group, imposed heading.
+    std::vector<std::tuple<Indices, int, std::size_t, std::optional<double>>> work = {
+        {std::move(members), 0, cluster, std::nullopt}};
+    while (!work.empty()) {
+        auto [part, depth, group, yaw] = std::move(work.back());
+        work.pop_back();
+        // A piece of a row (cut at clear gaps or at a front-on row's pitch) is a thing
+        // because the row is: half the minimum suffices for its sparse far end.
+        const bool row_piece = depth > 0 && group == cluster;
+        const auto min_points =
+            static_cast<std::size_t>(row_piece ? s.min_points / 2 : s.min_points);
+        if (part.size() < std::max<std::size_t>(min_points, 1)) continue;
+        fit.yaw_rad = yaw;
+        const OrientedBox box = fit_upright_box(gather(pts, part), ground, fit);
+        if (depth < 2 && !yaw) {
+            Split split = split_oversized(pts, part, box, s, ground, options);
+            if (split.parts.size() > 1) {
+                for (auto& piece : split.parts) {
+                    work.emplace_back(std::move(piece), depth + 1,
+                                      split.at_gaps ? group : next_group++, split.yaw_rad);
                 }
-            }
-            // A thing whose points all lie near the ground is mislabelled road, not an object.
-            if (s.prior_H_m > 0.0 && ground &&
-                box.H_m < options.min_height_fraction * s.prior_H_m) {
                 continue;
             }
-            Candidate c{box, std::move(part), 0.0, group};
-            if (s.has_prior()) {
-                c.fragment = c.members.size() < static_cast<std::size_t>(s.min_points) ||
-                             height_spread(pts, c.members, ground) <
-                                 options.fragment_height_fraction * s.prior_H_m;
-            }
-            for (std::size_t i : c.members) {
-                const double x = pts[i].x(), z = pts[i].z();
-                c.range_m += std::sqrt(x * x + z * z);
-            }
-            c.range_m /= static_cast<double>(c.members.size());
-            candidates.push_back(std::move(c));
         }
+        // A thing whose points all lie near the ground is mislabelled road, not an object.
+        if (s.prior_H_m > 0.0 && ground && box.H_m < options.min_height_fraction * s.prior_H_m) {
+            continue;
+        }
+        Candidate c{box, std::move(part), 0.0, group};
+        if (s.has_prior()) {
+            c.fragment = c.members.size() < static_cast<std::size_t>(s.min_points) ||
+                         height_spread(pts, c.members, ground) <
+                             options.fragment_height_fraction * s.prior_H_m;
+        }
+        for (std::size_t i : c.members) {
+            const double x = pts[i].x(), z = pts[i].z();
+            c.range_m += std::sqrt(x * x + z * z);
+        }
+        c.range_m /= static_cast<double>(c.members.size());
+        candidates.push_back(std::move(c));
     }
+    return candidates;
+}
+
+/// The entities of a thing class from its clusters' candidates (in cluster order): shadows
+/// and nested fragments suppressed, the largest kept.
+std::vector<scene_schema::Entity> things_of_class(const ClassInfo& info,
+                                                  std::vector<Candidate> candidates,
+                                                  const std::vector<std::uint32_t>& pixels,
+                                                  const PixelGrid& grid, const ClassSettings& s,
+                                                  const ExtractOptions& options) {
     if (s.has_prior()) {
         candidates = suppress_shadows(std::move(candidates), pixels, grid, s.prior_W_m,
                                       options.shadow_fraction, options.shadow_radius_px);
@@ -624,6 +645,116 @@ std::vector<scene_schema::Entity> instances_of_class(const ClassInfo& info,
     return out;
 }
 
+/// Runs tasks on a fixed number of threads. A running task may add tasks at the front, to run
+/// before the ones queued: a class's cluster fits start as soon as its clustering is done, on
+/// whichever thread is free, so that no thread is left alone with the largest class at the
+/// end. The first exception stops the run (queued tasks are dropped) and is rethrown by run().
+class TaskQueue {
+  public:
+    using Task = std::function<void()>;
+    /// Queues a task at the back; before run() or from a running task.
+    void push_back(Task task) {
+        const std::lock_guard<std::mutex> lock(mutex_);
+        queue_.push_back(std::move(task));
+        wake_.notify_one();
+    }
+    /// Queues tasks at the front, in their order.
+    void push_front(std::vector<Task> tasks) {
+        const std::lock_guard<std::mutex> lock(mutex_);
+        queue_.insert(queue_.begin(), std::make_move_iterator(tasks.begin()),
+                      std::make_move_iterator(tasks.end()));
+        wake_.notify_all();
+    }
+    /// Runs every task (those queued, and those they add) on `threads` threads, this one
+    /// included; returns when all have run.
+    void run(int threads) {
+        std::vector<std::thread> helpers;
+        for (int t = 1; t < threads; ++t) helpers.emplace_back([this] { work(); });
+        work();
+        for (auto& h : helpers) h.join();
+        if (failure_) std::rethrow_exception(failure_);
+    }
+
+  private:
+    void work() {
+        std::unique_lock<std::mutex> lock(mutex_);
+        for (;;) {
+            wake_.wait(lock, [this] { return !queue_.empty() || running_ == 0; });
+            if (queue_.empty()) return;  // and nothing running that could add more
+            Task task = std::move(queue_.front());
+            queue_.pop_front();
+            ++running_;
+            lock.unlock();
+            std::exception_ptr failure;
+            try {
+                task();
+            } catch (...) {
+                failure = std::current_exception();
+            }
+            lock.lock();
+            --running_;
+            if (failure) {
+                if (!failure_) failure_ = failure;
+                queue_.clear();
+            }
+            if (queue_.empty() && running_ == 0) wake_.notify_all();
+        }
+    }
+    std::mutex mutex_;
+    std::condition_variable wake_;
+    std::deque<Task> queue_;
+    int running_ = 0;
+    std::exception_ptr failure_;
+};
+
+/// Entities of thing class `info` made on `queue`: clustered by this task, then one task per
+/// cluster of at least min_points (largest first, at the front of the queue); the last of
+/// them to finish makes the class's entities into `out`.
+void queue_things_of_class(TaskQueue& queue, const ClassInfo& info,
+                           const std::vector<Eigen::Vector3f>& pts,
+                           const std::vector<std::uint32_t>& pixels, const PixelGrid& grid,
+                           const ClassSettings& settings, const PendingGround& pending_ground,
+                           const ExtractOptions& options, std::vector<scene_schema::Entity>& out) {
+    struct Job {
+        ClassSettings s;
+        ClassFit fit;
+        std::vector<Indices> clusters;
+        std::vector<std::vector<Candidate>> candidates;  ///< per cluster
+        std::atomic<std::size_t> left{0};                ///< clusters not fitted yet
+    };
+    auto job = std::make_shared<Job>();
+    job->s = settings;
+    job->fit = class_fit(settings);
+    job->clusters = thing_clusters(pts, pixels, grid, settings, job->fit.cluster, options);
+    job->candidates.resize(job->clusters.size());
+    const auto finish = [&info, &pixels, &grid, &options, &out](Job& j) {
+        std::vector<Candidate> all;
+        for (auto& c : j.candidates) {
+            all.insert(all.end(), std::make_move_iterator(c.begin()),
+                       std::make_move_iterator(c.end()));
+        }
+        out = things_of_class(info, std::move(all), pixels, grid, j.s, options);
+    };
+    // Clusters are sorted by size, largest first: those with enough points lead.
+    const auto min_points = static_cast<std::size_t>(settings.min_points);
+    std::size_t fitted = 0;
+    while (fitted < job->clusters.size() && job->clusters[fitted].size() >= min_points) ++fitted;
+    if (fitted == 0) {
+        finish(*job);
+        return;
+    }
+    job->left = fitted;
+    std::vector<TaskQueue::Task> tasks;
+    for (std::size_t c = 0; c < fitted; ++c) {
+        tasks.emplace_back([job, c, finish, &pts, &pending_ground, &options] {
+            job->candidates[c] = candidates_of_cluster(pts, std::move(job->clusters[c]), c, job->s,
+                                                       pending_ground.get(), job->fit.box, options);
+            if (--job->left == 0) finish(*job);
+        });
+    }
+    queue.push_front(std::move(tasks));
+}
+
 /// Ground plane of the points of the ground classes (options.ground_classes).
 std::optional<GroundPlane> fit_ground(const std::vector<std::vector<Eigen::Vector3f>>& per_class,
                                       const Palette& palette, const ExtractOptions& options) {
@@ -635,36 +766,6 @@ std::optional<GroundPlane> fit_ground(const std::vector<std::vector<Eigen::Vecto
         }
     }
     return fit_ground_plane(ground_pts, options.ground);
-}
-
-/// Calls run(k) for every task k (the classes, and the ground plane) on `threads` threads,
-/// costliest first, each task on one thread; rethrows the first exception once all threads
-/// have stopped.
-template <typename Run>
-void for_each_class(const std::vector<double>& cost, int threads, Run&& run) {
-    std::vector<std::size_t> order(cost.size());
-    for (std::size_t k = 0; k < order.size(); ++k) order[k] = k;
-    std::stable_sort(order.begin(), order.end(),
-                     [&](std::size_t a, std::size_t b) { return cost[a] > cost[b]; });
-    std::atomic<std::size_t> next{0};
-    std::mutex failure_mutex;
-    std::exception_ptr failure;
-    const auto work = [&] {
-        for (std::size_t n = next++; n < order.size(); n = next++) {
-            try {
-                run(order[n]);
-            } catch (...) {
-                const std::lock_guard<std::mutex> lock(failure_mutex);
-                if (!failure) failure = std::current_exception();
-                next = order.size();
-            }
-        }
-    };
-    std::vector<std::thread> helpers;
-    for (int t = 1; t < threads; ++t) helpers.emplace_back(work);
-    work();
-    for (auto& h : helpers) h.join();
-    if (failure) std::rethrow_exception(failure);
 }
 
 /// Fewest points per thread when the cloud is split by class (below, threads cost more than
@@ -801,51 +902,61 @@ scene_schema::EntityDocument extract_entities(const LabeledCloud& cloud, const P
 
     // The ground plane is the first task, fitted beside the clustering of the classes (which
     // does not need it); a class waits for it once clustered. Thing points cost about four
-    // times stuff points (smear removal, splits, refits): the costliest classes start first so
-    // that no thread is left with a big one at the end.
+    // times stuff points (smear removal, splits, refits): the costliest classes start first,
+    // and a thing class's clusters are fitted as tasks of their own, ahead of the queued
+    // classes, so that both threads share the largest class.
     std::promise<std::optional<GroundPlane>> ground_promise;
     const PendingGround pending_ground = ground_promise.get_future().share();
-    const std::size_t ground_task = per_class.size();
-    std::vector<double> cost(per_class.size() + 1, std::numeric_limits<double>::infinity());
+    std::vector<double> cost(per_class.size());
     for (std::size_t k = 0; k < per_class.size(); ++k) {
         cost[k] = static_cast<double>(per_class[k].size()) * (is_thing[k] ? 4.0 : 1.0);
     }
     std::vector<std::vector<scene_schema::Entity>> made(palette.classes.size());
-    for_each_class(cost, options.threads, [&](std::size_t k) {
-        if (k == ground_task) {
-            try {
-                ground_promise.set_value(options.method == "instances"
-                                             ? fit_ground(per_class, palette, options)
-                                             : std::nullopt);
-            } catch (...) {
-                ground_promise.set_exception(std::current_exception());
-                throw;
-            }
-            return;
+    std::vector<std::size_t> order(per_class.size());
+    for (std::size_t k = 0; k < order.size(); ++k) order[k] = k;
+    std::stable_sort(order.begin(), order.end(),
+                     [&](std::size_t a, std::size_t b) { return cost[a] > cost[b]; });
+    TaskQueue queue;
+    queue.push_back([&] {
+        try {
+            ground_promise.set_value(options.method == "instances"
+                                         ? fit_ground(per_class, palette, options)
+                                         : std::nullopt);
+        } catch (...) {
+            ground_promise.set_exception(std::current_exception());
+            throw;
         }
+    });
+    for (const std::size_t k : order) {
         const ClassInfo& info = palette.classes[k];
         const ClassSettings s = options.classes.find(info.name);
         const auto& pts = per_class[k];
-        if (!s.entity || pts.size() < static_cast<std::size_t>(s.min_points)) return;
-        if (options.method == "instances") {
-            made[k] = instances_of_class(info, pts, per_class_pixels[k], grid, s, pending_ground,
-                                         options);
-        } else {
-            OrientedBox box;
-            if (options.method == "centroid") {
-                const Eigen::Vector3d size =
-                    s.has_prior() ? Eigen::Vector3d(s.prior_L_m, s.prior_H_m, s.prior_W_m)
-                                  : Eigen::Vector3d(1.0, 1.0, 1.0);
-                box = centroid_box(pts, size);
-            } else if (options.method == "average") {
-                box = average_box(pts);
+        if (!s.entity || pts.size() < static_cast<std::size_t>(s.min_points)) continue;
+        queue.push_back([&, k, s] {
+            if (options.method == "instances" && s.thing) {
+                queue_things_of_class(queue, info, pts, per_class_pixels[k], grid, s,
+                                      pending_ground, options, made[k]);
+            } else if (options.method == "instances") {
+                const ClassFit fit = class_fit(s);
+                made[k] = stuff_of_class(info, pts, s, pending_ground, fit.cluster, fit.box);
             } else {
-                box = variance_box(pts);
+                OrientedBox box;
+                if (options.method == "centroid") {
+                    const Eigen::Vector3d size =
+                        s.has_prior() ? Eigen::Vector3d(s.prior_L_m, s.prior_H_m, s.prior_W_m)
+                                      : Eigen::Vector3d(1.0, 1.0, 1.0);
+                    box = centroid_box(pts, size);
+                } else if (options.method == "average") {
+                    box = average_box(pts);
+                } else {
+                    box = variance_box(pts);
+                }
+                made[k].push_back(make_entity(info, box, pts.size(), confidence_of(pts.size(), s),
+                                              options.method));
             }
-            made[k].push_back(
-                make_entity(info, box, pts.size(), confidence_of(pts.size(), s), options.method));
-        }
-    });
+        });
+    }
+    queue.run(options.threads);
     scene_schema::EntityDocument doc;
     if (const std::optional<GroundPlane>& ground = pending_ground.get()) {
         doc.extra["ground_plane"] = {
