@@ -709,7 +709,7 @@ class TaskQueue {
 
 /// Entities of thing class `info` made on `queue`: clustered by this task, then one task per
 /// cluster of at least min_points (largest first, at the front of the queue); the last of
-/// them to finish makes the class's entities into `out`.
+/// them to finish makes the class's entities, from the candidates in cluster order, into `out`.
 void queue_things_of_class(TaskQueue& queue, const ClassInfo& info,
                            const std::vector<Eigen::Vector3f>& pts,
                            const std::vector<std::uint32_t>& pixels, const PixelGrid& grid,
@@ -735,17 +735,23 @@ void queue_things_of_class(TaskQueue& queue, const ClassInfo& info,
         }
         out = things_of_class(info, std::move(all), pixels, grid, j.s, options);
     };
-    // Clusters are sorted by size, largest first: those with enough points lead.
-    const auto min_points = static_cast<std::size_t>(settings.min_points);
-    std::size_t fitted = 0;
-    while (fitted < job->clusters.size() && job->clusters[fitted].size() >= min_points) ++fitted;
-    if (fitted == 0) {
+    // One task per cluster with enough points, the largest first.
+    std::vector<std::size_t> fitted;
+    for (std::size_t c = 0; c < job->clusters.size(); ++c) {
+        if (job->clusters[c].size() >= static_cast<std::size_t>(settings.min_points)) {
+            fitted.push_back(c);
+        }
+    }
+    if (fitted.empty()) {
         finish(*job);
         return;
     }
-    job->left = fitted;
+    std::stable_sort(fitted.begin(), fitted.end(), [&](std::size_t a, std::size_t b) {
+        return job->clusters[a].size() > job->clusters[b].size();
+    });
+    job->left = fitted.size();
     std::vector<TaskQueue::Task> tasks;
-    for (std::size_t c = 0; c < fitted; ++c) {
+    for (const std::size_t c : fitted) {
         tasks.emplace_back([job, c, finish, &pts, &pending_ground, &options] {
             job->candidates[c] = candidates_of_cluster(pts, std::move(job->clusters[c]), c, job->s,
                                                        pending_ground.get(), job->fit.box, options);
