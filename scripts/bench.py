@@ -74,7 +74,7 @@ def bench(tool, inputs, work, runs, extra=()):
     return json.loads(r.stdout)
 
 
-ROW = re.compile(r"^(lit msaa \d+|semantic)\s+(\d+)\s+([\d.]+)\s+([\d.]+)\s+([\d.]+)\s+([\d.]+)\s+([\d.]+)")
+ROW = re.compile(r"^(lit fxaa|lit msaa \d+|lit none|semantic)\s+(\d+)\s+([\d.]+)\s+([\d.]+)\s+([\d.]+)\s+([\d.]+)\s+([\d.]+)")
 
 
 def render_bench(render, entities=50, frames=30, extra=()):
@@ -248,7 +248,7 @@ def part_scaling(a, tool, render, result):
     if render:
         for n in [10, 100, 1000, 10000]:
             rows = render_bench(render, n, 3 if n >= 1000 else 10)
-            lit = [r for r in rows if r["shading"] == "lit msaa 0"] or rows[:1]
+            lit = [r for r in rows if r["shading"] == "lit none"] or rows[:1]
             if lit:
                 scaling["entities"].append({"entities": n, **lit[0]})
     result["scaling"] = scaling

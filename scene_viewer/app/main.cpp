@@ -50,7 +50,8 @@ struct ViewArgs {
     std::string target;
     std::optional<float> fov_deg;
     std::string shading = "lit";
-    int msaa = 4;
+    std::string antialias;    ///< empty: fxaa, or msaa when --msaa is given
+    std::optional<int> msaa;  ///< --msaa, when given
     bool no_grid = false;
     bool no_ego = false;
     bool boxes = false;
@@ -68,8 +69,9 @@ void add_view_options(CLI::App& app, ViewArgs& a) {
     app.add_option("--target", a.target, "free/chase view: look-at point x,y,z in metres");
     app.add_option("--fov", a.fov_deg, "free/chase view: vertical field of view in degrees");
     app.add_option("--shading", a.shading, "lit | semantic | instance")->capture_default_str();
-    app.add_option("--msaa", a.msaa, "lit shading: multisample count, 0 = off")
-        ->capture_default_str();
+    app.add_option("--antialias", a.antialias,
+                   "lit shading: fxaa | msaa | none (default: fxaa; msaa when --msaa is given)");
+    app.add_option("--msaa", a.msaa, "lit shading: multisample count (default 4), 0 = off");
     app.add_flag("--no-grid", a.no_grid, "bev view: no metre grid");
     app.add_flag("--no-ego", a.no_ego, "chase/bev/free views: do not draw the ego car");
     app.add_flag("--boxes", a.boxes, "draw every entity as a box (no glTF models)");
@@ -78,6 +80,30 @@ void add_view_options(CLI::App& app, ViewArgs& a) {
     app.add_option("--cloud", a.cloud, "point cloud overlay (.ply, .pcd, .xyz)");
     app.add_option("--point-size", a.point_size, "point cloud overlay: point size in pixels")
         ->capture_default_str();
+}
+
+/// Sets o.antialias and o.msaa_samples from --antialias and --msaa (alone, it implies msaa);
+/// rejects contradictory combinations (--msaa N > 1 with fxaa or none, --antialias msaa with
+/// --msaa 0 or 1) and antialiasing asked of unlit shading. Needs o.shading.
+void apply_antialias(const std::string& name, std::optional<int> msaa, RenderOptions& o) {
+    if (!name.empty()) {
+        try {
+            o.antialias = parse_antialias(name);
+        } catch (const std::invalid_argument& e) {
+            usage(e.what(), "--antialias");
+        }
+        if (o.shading != Shading::lit && o.antialias != Antialias::none)
+            usage("applies to lit shading only (semantic and instance colours stay exact)",
+                  "--antialias");
+    }
+    if (!msaa) return;
+    if (!name.empty() && o.antialias != Antialias::msaa) {
+        if (*msaa > 1) usage("multisampling contradicts --antialias " + name, "--msaa");
+        return;
+    }
+    if (!name.empty() && *msaa < 2) usage("--antialias msaa needs 2..16 samples", "--msaa");
+    o.antialias = Antialias::msaa;
+    o.msaa_samples = *msaa;
 }
 
 glm::vec3 parse_vec3(const std::string& text, const std::string& flag) {
@@ -152,14 +178,14 @@ RenderOptions render_options(const ViewArgs& a, const scene_schema::EntityDocume
     if (!a.eye.empty()) o.view.eye_kitti = parse_vec3(a.eye, "--eye");
     if (!a.target.empty()) o.view.target_kitti = parse_vec3(a.target, "--target");
     if (a.fov_deg) o.view.fov_y_deg = *a.fov_deg;
-    o.msaa_samples = a.msaa;
+    apply_antialias(a.antialias, a.msaa, o);
     o.grid = !a.no_grid;
     o.ego = !a.no_ego;
     o.point_size_px = a.point_size;
     try {
         o.validate();
     } catch (const std::invalid_argument& e) {
-        usage(e.what(), "--msaa/--fov/--eye/--target/--point-size");
+        usage(e.what(), "--antialias/--msaa/--fov/--eye/--target/--point-size");
     }
     return o;
 }
@@ -284,7 +310,9 @@ int run(int argc, char** argv) {
     bench->add_option("--entities", bench_options.entity_count, "cars in the scene")
         ->capture_default_str();
     bench->add_option("--size", bench_size, "image size WxH")->capture_default_str();
-    bench->add_option("--msaa", bench_msaa, "multisample count of the first lit row")
+    bench
+        ->add_option("--msaa", bench_msaa,
+                     "multisample count of the 'lit msaa' row (0 = no such row)")
         ->capture_default_str();
     bench->add_option("--zlib", bench_options.zlib_level, "PNG zlib level 0..9")
         ->capture_default_str();
@@ -372,15 +400,20 @@ int run(int argc, char** argv) {
         struct Config {
             std::string name;
             Shading shading;
-            int msaa;
+            Antialias antialias;
         };
-        std::vector<Config> configs = {
-            {"lit msaa " + std::to_string(bench_msaa), Shading::lit, bench_msaa},
-            {"semantic", Shading::semantic, 0}};
-        if (bench_msaa != 0) configs.insert(configs.begin() + 1, {"lit msaa 0", Shading::lit, 0});
+        // The default first, then what it replaces and what it costs over no antialiasing.
+        std::vector<Config> configs = {{"lit fxaa", Shading::lit, Antialias::fxaa},
+                                       {"lit none", Shading::lit, Antialias::none},
+                                       {"semantic", Shading::semantic, Antialias::none}};
+        if (bench_msaa > 1) {
+            configs.insert(configs.begin() + 1, {"lit msaa " + std::to_string(bench_msaa),
+                                                 Shading::lit, Antialias::msaa});
+        }
+        o.msaa_samples = bench_msaa;
         for (const Config& c : configs) {
             o.shading = c.shading;
-            o.msaa_samples = c.msaa;
+            o.antialias = c.antialias;
             const BenchmarkResult r = run_benchmark(gpu->renderer, document, o, bench_options);
             std::printf("%-16s %10zu %10.2f %10.2f %8.1f %8.2f %9.1f\n", c.name.c_str(),
                         r.triangles, r.frame_ms, r.frame_ms_min, r.fps, r.png_ms,

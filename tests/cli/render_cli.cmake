@@ -62,8 +62,29 @@ render_cli_test("grid with a label count that differs exits 2" ARGS grid
     STDERR "--labels" OUTPUT ${_render_out}/grid2/out.png OUTPUT_EXISTS 0)
 render_cli_test("'-' writes the PNG to stdout" ARGS ${_street} --size 64x32 -o - CODE 0
     STDOUT "PNG")
-render_cli_test("bench times a short run and prints a table" ARGS bench --frames 2
-    --entities 5 --size 160x90 CODE 0 STDOUT "ms/frame")
+render_cli_test("bench times a short run and prints a row per antialiasing and shading"
+    ARGS bench --frames 2 --entities 5 --size 160x90 CODE 0
+    STDOUT "ms/frame.*\nlit fxaa .*\nlit msaa 4 .*\nlit none .*\nsemantic ")
+foreach(aa fxaa msaa none)
+    render_cli_test("renders the street sample with --antialias ${aa}" ARGS ${_street}
+        --view chase --size 160x90 --antialias ${aa} -o ${_render_out}/aa_${aa}/out.png CODE 0
+        OUTPUT ${_render_out}/aa_${aa}/out.png OUTPUT_EXISTS 1)
+endforeach()
+render_cli_test("an unknown --antialias exits 2 naming the flag" ARGS ${_street}
+    --antialias ssaa -o ${_render_out}/aa_bad/out.png CODE 2
+    STDERR "unknown antialiasing 'ssaa'.*[(]--antialias[)]" OUTPUT ${_render_out}/aa_bad/out.png
+    OUTPUT_EXISTS 0)
+render_cli_test("--msaa 4 with --antialias fxaa exits 2 naming --msaa" ARGS ${_street}
+    --antialias fxaa --msaa 4 -o ${_render_out}/aa_fxaa_msaa/out.png CODE 2
+    STDERR "contradicts --antialias fxaa [(]--msaa[)]"
+    OUTPUT ${_render_out}/aa_fxaa_msaa/out.png OUTPUT_EXISTS 0)
+render_cli_test("--antialias msaa with --msaa 0 exits 2 naming --msaa" ARGS ${_street}
+    --antialias msaa --msaa 0 -o ${_render_out}/aa_msaa0/out.png CODE 2 STDERR "[(]--msaa[)]"
+    OUTPUT ${_render_out}/aa_msaa0/out.png OUTPUT_EXISTS 0)
+render_cli_test("--antialias fxaa with semantic shading exits 2" ARGS ${_street}
+    --shading semantic --antialias fxaa -o ${_render_out}/aa_semantic/out.png CODE 2
+    STDERR "lit shading only.*[(]--antialias[)]" OUTPUT ${_render_out}/aa_semantic/out.png
+    OUTPUT_EXISTS 0)
 render_cli_test("--glb exports the scene as binary glTF without an image" ARGS ${_street}
     --glb ${_render_out}/glb/out.glb CODE 0 OUTPUT ${_render_out}/glb/out.glb OUTPUT_EXISTS 1
     MAGIC 676c5446)

@@ -220,11 +220,16 @@ TEST_CASE("Render options refuse absurd image sizes naming the field", "[ecs][op
     options.width_px = 100;
     options.height_px = kMaxImageSide + 1;
     CHECK_THROWS_WITH(options.validate(), Catch::Contains("height_px"));
-    // 16384^2 is fine without MSAA but not with 4 samples per pixel.
+    // 16384^2 is fine with one target but not with 4 samples per pixel or FXAA's second target.
     options.width_px = options.height_px = kMaxImageSide;
     options.shading = Shading::semantic;
     CHECK_NOTHROW(options.validate());
     options.shading = Shading::lit;
+    options.antialias = Antialias::none;
+    CHECK_NOTHROW(options.validate());
+    options.antialias = Antialias::fxaa;
+    CHECK_THROWS_WITH(options.validate(), Catch::Contains("fxaa"));
+    options.antialias = Antialias::msaa;
     options.msaa_samples = 4;
     CHECK_THROWS_WITH(options.validate(), Catch::Contains("msaa_samples"));
 }

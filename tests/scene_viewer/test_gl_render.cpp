@@ -216,13 +216,14 @@ void check_against_golden(const ImageRgba8& image, const char* golden_file, doub
 
 TEST_CASE("The lit chase view of the street sample matches the golden image", "[gl][golden]") {
     // Golden made with: scene-render samples/baselines/street.json --view chase --size 320x180
-    //   --boxes -o tests/scene_viewer/data/golden_street_chase_boxes.png
+    //   --boxes --antialias msaa -o tests/scene_viewer/data/golden_street_chase_boxes.png
     SceneRenderer renderer(gl_device());
     const auto doc = scene_schema::read_file(STEREOSCENE_SAMPLES_DIR "/baselines/street.json");
     RenderOptions options;
     options.width_px = 320;
     options.height_px = 180;
     options.view = chase_view();
+    options.antialias = Antialias::msaa;
     check_against_golden(renderer.render(doc, nullptr, options), "golden_street_chase_boxes.png",
                          0.005);
 }

@@ -104,6 +104,169 @@ GLuint compile(GLenum type, const char* source) {
     return shader;
 }
 
+/// Links a vertex and a fragment shader; throws std::runtime_error with the GL log.
+GLuint link(const char* vertex_source, const char* fragment_source) {
+    const GLuint vs = compile(GL_VERTEX_SHADER, vertex_source);
+    GLuint fs = 0;
+    try {
+        fs = compile(GL_FRAGMENT_SHADER, fragment_source);
+    } catch (...) {
+        glDeleteShader(vs);
+        throw;
+    }
+    const GLuint program = glCreateProgram();
+    glAttachShader(program, vs);
+    glAttachShader(program, fs);
+    glLinkProgram(program);
+    glDeleteShader(vs);
+    glDeleteShader(fs);
+    GLint ok = 0;
+    glGetProgramiv(program, GL_LINK_STATUS, &ok);
+    if (!ok) {
+        char log[2048] = {};
+        glGetProgramInfoLog(program, sizeof log, nullptr, log);
+        glDeleteProgram(program);
+        throw std::runtime_error(std::string("GL program link failed: ") + log);
+    }
+    return program;
+}
+
+// A triangle covering the viewport at window depth 0, from gl_VertexID alone (no vertex buffer).
+constexpr const char* kFullscreenVertexShader = R"(#version 450 core
+void main() {
+    vec2 p = vec2((gl_VertexID << 1) & 2, gl_VertexID & 2);
+    gl_Position = vec4(p * 2.0 - 1.0, -1.0, 1.0);
+}
+)";
+
+// FXAA 3.11, PC quality preset 12 (T. Lottes, "FXAA", NVIDIA whitepaper 2011, and its reference
+// Fxaa3_11.h), in two passes because llvmpipe runs both sides of a branch: the mark pass copies
+// every pixel and sets depth 0 on luma edges, then the blend pass runs only there (early depth
+// test EQUAL 0), walks along each edge to its ends and blends across it by the pixel's place on
+// the span. Luma is Rec. 601 of the stored RGB.
+#define STEREOSCENE_FXAA_COMMON                                                           \
+    "#version 450 core\n"                                                                 \
+    "uniform sampler2D u_source;\n"                                                       \
+    "out vec4 o_colour;\n"                                                                \
+    "const float kEdgeThreshold = 0.166;  // contrast needed for an edge, share of max\n" \
+    "const float kEdgeThresholdMin = 0.0833;  // ... and at least this absolute luma\n"   \
+    "float luma(vec4 c) { return dot(c.rgb, vec3(0.299, 0.587, 0.114)); }\n"              \
+    "// FXAA's local contrast test of a pixel (m) and its 4 neighbours.\n"                \
+    "bool on_edge(float m, float n, float s, float e, float w, out float range) {\n"      \
+    "    float range_max = max(max(n, w), max(e, max(s, m)));\n"                          \
+    "    range = range_max - min(min(n, w), min(e, min(s, m)));\n"                        \
+    "    return range >= max(kEdgeThresholdMin, range_max * kEdgeThreshold);\n"           \
+    "}\n"
+
+constexpr const char* kFxaaMarkShader = STEREOSCENE_FXAA_COMMON R"(
+// Texel fetches: cheaper than filtered samples on llvmpipe; clamped like CLAMP_TO_EDGE.
+#define LUMA_AT(dx, dy) luma(texelFetch(u_source, clamp(p + ivec2(dx, dy), ivec2(0), hi), 0))
+void main() {
+    ivec2 p = ivec2(gl_FragCoord.xy);
+    ivec2 hi = textureSize(u_source, 0) - 1;
+    vec4 rgba_m = texelFetch(u_source, p, 0);
+    float range;
+    bool edge = on_edge(luma(rgba_m), LUMA_AT(0, 1), LUMA_AT(0, -1), LUMA_AT(1, 0),
+                        LUMA_AT(-1, 0), range);
+    o_colour = rgba_m;
+    gl_FragDepth = edge ? 0.0 : 1.0;
+}
+)";
+
+constexpr const char* kFxaaBlendShader = STEREOSCENE_FXAA_COMMON R"(
+const float kSubpix = 0.75;  // subpixel aliasing removal, 0 off .. 1 softer
+const int kSearchSteps = 5;
+const float kSearchStep[5] = float[](1.0, 1.5, 2.0, 4.0, 12.0);  // pixels per search step
+// Texel offsets must be constant expressions.
+#define LUMA_AT(dx, dy) luma(textureLodOffset(u_source, pos, 0.0, ivec2(dx, dy)))
+void main() {
+    vec2 rcp = 1.0 / vec2(textureSize(u_source, 0));
+    vec2 pos = gl_FragCoord.xy * rcp;
+    vec4 rgba_m = textureLod(u_source, pos, 0.0);
+    float luma_m = luma(rgba_m);
+    float luma_s = LUMA_AT(0, 1);
+    float luma_e = LUMA_AT(1, 0);
+    float luma_n = LUMA_AT(0, -1);
+    float luma_w = LUMA_AT(-1, 0);
+    float range;
+    if (!on_edge(luma_m, luma_n, luma_s, luma_e, luma_w, range)) {
+        o_colour = rgba_m;  // the mark pass's decision, should the two ever differ
+        return;
+    }
+    float luma_nw = LUMA_AT(-1, -1);
+    float luma_se = LUMA_AT(1, 1);
+    float luma_ne = LUMA_AT(1, -1);
+    float luma_sw = LUMA_AT(-1, 1);
+
+    // Edge direction: horizontal edges have a strong vertical second derivative.
+    float edge_horz = abs(-2.0 * luma_w + luma_nw + luma_sw) +
+                      2.0 * abs(-2.0 * luma_m + luma_n + luma_s) +
+                      abs(-2.0 * luma_e + luma_ne + luma_se);
+    float edge_vert = abs(-2.0 * luma_s + luma_sw + luma_se) +
+                      2.0 * abs(-2.0 * luma_m + luma_w + luma_e) +
+                      abs(-2.0 * luma_n + luma_nw + luma_ne);
+    bool horz_span = edge_horz >= edge_vert;
+    float subpix_a = 2.0 * (luma_n + luma_s + luma_w + luma_e) +
+                     (luma_nw + luma_sw + luma_ne + luma_se);
+    float length_sign = horz_span ? rcp.y : rcp.x;
+    if (!horz_span) {
+        luma_n = luma_w;
+        luma_s = luma_e;
+    }
+    // The side of the edge with the larger gradient.
+    float gradient_n = luma_n - luma_m;
+    float gradient_s = luma_s - luma_m;
+    bool pair_n = abs(gradient_n) >= abs(gradient_s);
+    float gradient = max(abs(gradient_n), abs(gradient_s));
+    if (pair_n) length_sign = -length_sign;
+    float luma_nn = pair_n ? luma_n + luma_m : luma_s + luma_m;
+    float subpix_c = clamp(abs(subpix_a * (1.0 / 12.0) - luma_m) / range, 0.0, 1.0);
+
+    // Walk both ways along the edge, half a pixel towards the pair, until the luma leaves it.
+    vec2 pos_b = pos;
+    vec2 off_np = horz_span ? vec2(rcp.x, 0.0) : vec2(0.0, rcp.y);
+    if (horz_span) {
+        pos_b.y += length_sign * 0.5;
+    } else {
+        pos_b.x += length_sign * 0.5;
+    }
+    float gradient_scaled = gradient * 0.25;
+    bool luma_m_lt_zero = luma_m - luma_nn * 0.5 < 0.0;
+    vec2 pos_n = pos_b - off_np * kSearchStep[0];
+    vec2 pos_p = pos_b + off_np * kSearchStep[0];
+    float luma_end_n = luma(textureLod(u_source, pos_n, 0.0)) - luma_nn * 0.5;
+    float luma_end_p = luma(textureLod(u_source, pos_p, 0.0)) - luma_nn * 0.5;
+    bool done_n = abs(luma_end_n) >= gradient_scaled;
+    bool done_p = abs(luma_end_p) >= gradient_scaled;
+    if (!done_n) pos_n -= off_np * kSearchStep[1];
+    if (!done_p) pos_p += off_np * kSearchStep[1];
+    for (int i = 2; i < kSearchSteps && !(done_n && done_p); ++i) {
+        if (!done_n) luma_end_n = luma(textureLod(u_source, pos_n, 0.0)) - luma_nn * 0.5;
+        if (!done_p) luma_end_p = luma(textureLod(u_source, pos_p, 0.0)) - luma_nn * 0.5;
+        done_n = abs(luma_end_n) >= gradient_scaled;
+        done_p = abs(luma_end_p) >= gradient_scaled;
+        if (!done_n) pos_n -= off_np * kSearchStep[i];
+        if (!done_p) pos_p += off_np * kSearchStep[i];
+    }
+
+    // Blend across the edge by the distance to the nearer end of the span, or by the subpixel
+    // contrast, whichever is larger.
+    float dst_n = horz_span ? pos.x - pos_n.x : pos.y - pos_n.y;
+    float dst_p = horz_span ? pos_p.x - pos.x : pos_p.y - pos.y;
+    bool direction_n = dst_n < dst_p;
+    bool good_span = ((direction_n ? luma_end_n : luma_end_p) < 0.0) != luma_m_lt_zero;
+    float pixel_offset = good_span ? 0.5 - min(dst_n, dst_p) / (dst_n + dst_p) : 0.0;
+    float subpix_f = (-2.0 * subpix_c + 3.0) * subpix_c * subpix_c;
+    float offset = max(pixel_offset, subpix_f * subpix_f * kSubpix);
+    if (horz_span) {
+        pos.y += offset * length_sign;
+    } else {
+        pos.x += offset * length_sign;
+    }
+    o_colour = textureLod(u_source, pos, 0.0);
+}
+)";
+
 struct GpuMesh {
     GLuint vao = 0;
     GLuint buffers[5] = {};  // positions, normals, colours, texcoords, indices
@@ -115,21 +278,18 @@ struct GpuMesh {
 class GlDevice final : public Device {
   public:
     GlDevice() {
-        const GLuint vs = compile(GL_VERTEX_SHADER, kVertexShader);
-        const GLuint fs = compile(GL_FRAGMENT_SHADER, kFragmentShader);
-        program_ = glCreateProgram();
-        glAttachShader(program_, vs);
-        glAttachShader(program_, fs);
-        glLinkProgram(program_);
-        glDeleteShader(vs);
-        glDeleteShader(fs);
-        GLint ok = 0;
-        glGetProgramiv(program_, GL_LINK_STATUS, &ok);
-        if (!ok) {
-            char log[2048] = {};
-            glGetProgramInfoLog(program_, sizeof log, nullptr, log);
-            throw std::runtime_error(std::string("GL program link failed: ") + log);
+        program_ = link(kVertexShader, kFragmentShader);
+        try {
+            fxaa_mark_program_ = link(kFullscreenVertexShader, kFxaaMarkShader);
+            fxaa_blend_program_ = link(kFullscreenVertexShader, kFxaaBlendShader);
+        } catch (...) {
+            glDeleteProgram(fxaa_mark_program_);
+            glDeleteProgram(program_);
+            throw;
         }
+        for (GLuint program : {fxaa_mark_program_, fxaa_blend_program_})
+            glProgramUniform1i(program, glGetUniformLocation(program, "u_source"), 0);
+        glCreateVertexArrays(1, &empty_vao_);
         auto at = [this](const char* name) { return glGetUniformLocation(program_, name); };
         u_ = Uniforms{at("u_model"),           at("u_view_projection"), at("u_normal_matrix"),
                       at("u_point_size"),      at("u_colour"),          at("u_lit"),
@@ -142,6 +302,9 @@ class GlDevice final : public Device {
         for (auto& [id, mesh] : meshes_) release(mesh);
         for (auto& [id, tex] : textures_) glDeleteTextures(1, &tex);
         release_targets();
+        glDeleteVertexArrays(1, &empty_vao_);
+        glDeleteProgram(fxaa_blend_program_);
+        glDeleteProgram(fxaa_mark_program_);
         glDeleteProgram(program_);
     }
 
@@ -243,6 +406,9 @@ class GlDevice final : public Device {
                 "frame " + std::to_string(setup.width_px) + "x" + std::to_string(setup.height_px) +
                 " exceeds GL_MAX_RENDERBUFFER_SIZE " + std::to_string(max_size));
         const int samples = setup.msaa_samples > 1 ? setup.msaa_samples : 0;
+        if (setup.fxaa && samples > 0)
+            throw std::invalid_argument("frame setup asks for both MSAA and FXAA");
+        fxaa_ = setup.fxaa;
         if (setup.width_px != width_ || setup.height_px != height_ || samples != samples_) {
             release_targets();
             create_targets(setup.width_px, setup.height_px, samples);
@@ -257,6 +423,7 @@ class GlDevice final : public Device {
         glClearColor(setup.clear_colour.r, setup.clear_colour.g, setup.clear_colour.b,
                      setup.clear_colour.a);
         glClearDepth(1.0);
+        glDepthMask(GL_TRUE);
         glClear(GL_COLOR_BUFFER_BIT | GL_DEPTH_BUFFER_BIT);
         glEnable(GL_DEPTH_TEST);
         glDepthFunc(GL_LEQUAL);
@@ -299,6 +466,23 @@ class GlDevice final : public Device {
             glBlitNamedFramebuffer(msaa_fbo_, resolve_fbo_, 0, 0, width_, height_, 0, 0, width_,
                                    height_, GL_COLOR_BUFFER_BIT, GL_NEAREST);
         }
+        output_fbo_ = resolve_fbo_;
+        if (fxaa_) {
+            if (fxaa_fbo_ == 0) create_fxaa_target();
+            glBindFramebuffer(GL_FRAMEBUFFER, fxaa_fbo_);
+            glBindTextureUnit(0, resolve_colour_);
+            glBindVertexArray(empty_vao_);
+            glDepthFunc(GL_ALWAYS);
+            glUseProgram(fxaa_mark_program_);
+            glDrawArrays(GL_TRIANGLES, 0, 3);
+            glDepthFunc(GL_EQUAL);
+            glDepthMask(GL_FALSE);
+            glUseProgram(fxaa_blend_program_);
+            glDrawArrays(GL_TRIANGLES, 0, 3);
+            glDepthMask(GL_TRUE);
+            glBindTextureUnit(0, 0);
+            output_fbo_ = fxaa_fbo_;
+        }
         const GLenum err = glGetError();
         if (err != GL_NO_ERROR) throw std::runtime_error("GL error " + std::to_string(err));
     }
@@ -309,7 +493,7 @@ class GlDevice final : public Device {
         image.height = height_;
         const std::size_t row = static_cast<std::size_t>(width_) * 4;
         image.pixels.resize(row * height_);
-        glBindFramebuffer(GL_READ_FRAMEBUFFER, resolve_fbo_);
+        glBindFramebuffer(GL_READ_FRAMEBUFFER, output_fbo_);
         glPixelStorei(GL_PACK_ALIGNMENT, 1);
         glReadPixels(0, 0, width_, height_, GL_RGBA, GL_UNSIGNED_BYTE, image.pixels.data());
         // GL rows run bottom to top; images run top to bottom.
@@ -350,14 +534,19 @@ class GlDevice final : public Device {
         width_ = width;
         height_ = height;
         samples_ = samples;
-        glCreateRenderbuffers(2, resolve_rb_);
-        glNamedRenderbufferStorage(resolve_rb_[0], GL_RGBA8, width, height);
-        glNamedRenderbufferStorage(resolve_rb_[1], GL_DEPTH_COMPONENT24, width, height);
+        // The single-sample colour is a texture, so the FXAA pass can sample it.
+        glCreateTextures(GL_TEXTURE_2D, 1, &resolve_colour_);
+        glTextureStorage2D(resolve_colour_, 1, GL_RGBA8, width, height);
+        glTextureParameteri(resolve_colour_, GL_TEXTURE_MIN_FILTER, GL_LINEAR);
+        glTextureParameteri(resolve_colour_, GL_TEXTURE_MAG_FILTER, GL_LINEAR);
+        glTextureParameteri(resolve_colour_, GL_TEXTURE_WRAP_S, GL_CLAMP_TO_EDGE);
+        glTextureParameteri(resolve_colour_, GL_TEXTURE_WRAP_T, GL_CLAMP_TO_EDGE);
+        glCreateRenderbuffers(1, &resolve_depth_);
+        glNamedRenderbufferStorage(resolve_depth_, GL_DEPTH_COMPONENT24, width, height);
         glCreateFramebuffers(1, &resolve_fbo_);
-        glNamedFramebufferRenderbuffer(resolve_fbo_, GL_COLOR_ATTACHMENT0, GL_RENDERBUFFER,
-                                       resolve_rb_[0]);
+        glNamedFramebufferTexture(resolve_fbo_, GL_COLOR_ATTACHMENT0, resolve_colour_, 0);
         glNamedFramebufferRenderbuffer(resolve_fbo_, GL_DEPTH_ATTACHMENT, GL_RENDERBUFFER,
-                                       resolve_rb_[1]);
+                                       resolve_depth_);
         check_complete(resolve_fbo_);
         if (samples > 0) {
             glCreateRenderbuffers(2, msaa_rb_);
@@ -373,6 +562,20 @@ class GlDevice final : public Device {
         }
     }
 
+    /// The FXAA passes' colour and edge marks (depth), made on the first FXAA frame of a size.
+    void create_fxaa_target() {
+        glCreateRenderbuffers(2, fxaa_rb_);
+        glNamedRenderbufferStorage(fxaa_rb_[0], GL_RGBA8, width_, height_);
+        glNamedRenderbufferStorage(fxaa_rb_[1], GL_DEPTH_COMPONENT24, width_, height_);
+        glCreateFramebuffers(1, &fxaa_fbo_);
+        glNamedFramebufferRenderbuffer(fxaa_fbo_, GL_COLOR_ATTACHMENT0, GL_RENDERBUFFER,
+                                       fxaa_rb_[0]);
+        // Depth marks the edge pixels for the blend pass.
+        glNamedFramebufferRenderbuffer(fxaa_fbo_, GL_DEPTH_ATTACHMENT, GL_RENDERBUFFER,
+                                       fxaa_rb_[1]);
+        check_complete(fxaa_fbo_);
+    }
+
     static void check_complete(GLuint fbo) {
         const GLenum status = glCheckNamedFramebufferStatus(fbo, GL_FRAMEBUFFER);
         if (status != GL_FRAMEBUFFER_COMPLETE)
@@ -380,16 +583,21 @@ class GlDevice final : public Device {
     }
 
     void release_targets() {
-        if (resolve_fbo_ != 0) glDeleteFramebuffers(1, &resolve_fbo_);
-        if (msaa_fbo_ != 0) glDeleteFramebuffers(1, &msaa_fbo_);
-        glDeleteRenderbuffers(2, resolve_rb_);
-        glDeleteRenderbuffers(2, msaa_rb_);
-        resolve_fbo_ = msaa_fbo_ = 0;
-        resolve_rb_[0] = resolve_rb_[1] = msaa_rb_[0] = msaa_rb_[1] = 0;
+        const GLuint fbos[3] = {resolve_fbo_, msaa_fbo_, fxaa_fbo_};
+        glDeleteFramebuffers(3, fbos);
+        glDeleteTextures(1, &resolve_colour_);
+        const GLuint renderbuffers[5] = {resolve_depth_, fxaa_rb_[0], fxaa_rb_[1], msaa_rb_[0],
+                                         msaa_rb_[1]};
+        glDeleteRenderbuffers(5, renderbuffers);
+        resolve_fbo_ = msaa_fbo_ = fxaa_fbo_ = output_fbo_ = 0;
+        resolve_colour_ = resolve_depth_ = 0;
+        fxaa_rb_[0] = fxaa_rb_[1] = msaa_rb_[0] = msaa_rb_[1] = 0;
         width_ = height_ = samples_ = 0;
     }
 
     GLuint program_ = 0;
+    GLuint fxaa_mark_program_ = 0, fxaa_blend_program_ = 0;
+    GLuint empty_vao_ = 0;  ///< the FXAA pass's triangle needs a vertex array, not its buffers
     /// Uniform locations of the one program.
     struct Uniforms {
         GLint model, view_projection, normal_matrix, point_size, colour, lit, vertex_colour,
@@ -399,9 +607,12 @@ class GlDevice final : public Device {
     std::unordered_map<std::uint32_t, GpuMesh> meshes_;
     std::unordered_map<std::uint32_t, GLuint> textures_;
     std::uint32_t next_id_ = 1;
-    GLuint resolve_fbo_ = 0, msaa_fbo_ = 0;
-    GLuint resolve_rb_[2] = {}, msaa_rb_[2] = {};
+    GLuint resolve_fbo_ = 0, msaa_fbo_ = 0, fxaa_fbo_ = 0;
+    GLuint output_fbo_ = 0;  ///< where the last frame's colour is: resolve_fbo_ or fxaa_fbo_
+    GLuint resolve_colour_ = 0, resolve_depth_ = 0;
+    GLuint fxaa_rb_[2] = {}, msaa_rb_[2] = {};
     int width_ = 0, height_ = 0, samples_ = 0;
+    bool fxaa_ = false;  ///< this frame ends with the FXAA pass
 };
 
 }  // namespace

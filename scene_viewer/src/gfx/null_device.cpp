@@ -2,6 +2,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <stdexcept>
 
 namespace scene_viewer {
 
@@ -19,6 +20,8 @@ void NullDevice::destroy_mesh(MeshHandle /*mesh*/) { ++meshes_destroyed; }
 void NullDevice::destroy_texture(TextureHandle /*texture*/) { ++textures_destroyed; }
 
 void NullDevice::begin_frame(const FrameSetup& setup) {
+    if (setup.fxaa && setup.msaa_samples > 1)
+        throw std::invalid_argument("frame setup asks for both MSAA and FXAA");
     ++frames_begun;
     last_setup = setup;
     draws.clear();
@@ -26,7 +29,10 @@ void NullDevice::begin_frame(const FrameSetup& setup) {
 
 void NullDevice::draw(const DrawCall& call) { draws.push_back(call); }
 
-void NullDevice::end_frame() { ++frames_ended; }
+void NullDevice::end_frame() {
+    ++frames_ended;
+    if (last_setup.fxaa) ++fxaa_passes;
+}
 
 ImageRgba8 NullDevice::read_pixels() {
     ImageRgba8 image;

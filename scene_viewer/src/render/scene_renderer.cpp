@@ -20,6 +20,13 @@ Shading parse_shading(const std::string& name) {
     throw std::invalid_argument("unknown shading '" + name + "' (lit, semantic, instance)");
 }
 
+Antialias parse_antialias(const std::string& name) {
+    if (name == "fxaa") return Antialias::fxaa;
+    if (name == "msaa") return Antialias::msaa;
+    if (name == "none") return Antialias::none;
+    throw std::invalid_argument("unknown antialiasing '" + name + "' (fxaa, msaa, none)");
+}
+
 void RenderOptions::validate() const {
     if (width_px < 1 || width_px > kMaxImageSide)
         throw std::invalid_argument("width_px must be in 1.." + std::to_string(kMaxImageSide));
@@ -27,11 +34,16 @@ void RenderOptions::validate() const {
         throw std::invalid_argument("height_px must be in 1.." + std::to_string(kMaxImageSide));
     if (msaa_samples < 0 || msaa_samples > 16)
         throw std::invalid_argument("msaa_samples must be in 0..16");
-    const long long samples = static_cast<long long>(width_px) * height_px *
-                              (shading == Shading::lit ? std::max(1, msaa_samples) : 1);
-    if (samples > kMaxFrameSamples)
-        throw std::invalid_argument("width_px * height_px * msaa_samples must be <= " +
-                                    std::to_string(kMaxFrameSamples) + " (lower --size or --msaa)");
+    // FXAA renders into a second single-sample target: it counts as 2 samples.
+    const bool lit = shading == Shading::lit;
+    const int samples_per_pixel = !lit                           ? 1
+                                  : antialias == Antialias::msaa ? std::max(1, msaa_samples)
+                                  : antialias == Antialias::fxaa ? 2
+                                                                 : 1;
+    if (static_cast<long long>(width_px) * height_px * samples_per_pixel > kMaxFrameSamples)
+        throw std::invalid_argument("width_px * height_px * msaa_samples (2 for fxaa) must be <= " +
+                                    std::to_string(kMaxFrameSamples) +
+                                    " (lower --size or --msaa, or --antialias none)");
     if (!(point_size_px >= 1.0f && point_size_px <= 64.0f))
         throw std::invalid_argument("point_size_px must be in 1..64");
     view.validate();
@@ -62,7 +74,8 @@ ImageRgba8 SceneRenderer::render_frame() {
                     : options_.shading == Shading::semantic ? kSemanticBackground
                                                             : Rgb8{0, 0, 0};
     setup.clear_colour = {bg[0] / 255.0f, bg[1] / 255.0f, bg[2] / 255.0f, 0.0f};
-    setup.msaa_samples = lit ? options_.msaa_samples : 0;
+    setup.msaa_samples = lit && options_.antialias == Antialias::msaa ? options_.msaa_samples : 0;
+    setup.fxaa = lit && options_.antialias == Antialias::fxaa;
     render_world(world_, models_, *device_, setup);
     ImageRgba8 image = device_->read_pixels();
     if (!options_.keep_alpha) {

@@ -174,6 +174,7 @@ StereoFrame render_stereo_frame(SceneRenderer& renderer,
     o.ego = false;
     o.keep_alpha = true;
     o.procedural_texture = true;
+    o.antialias = Antialias::msaa;
     o.msaa_samples = options.msaa_samples;
 
     StereoFrame frame;

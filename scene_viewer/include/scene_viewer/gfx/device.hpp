@@ -43,8 +43,9 @@ struct FrameSetup {
     int height_px = 0;                               ///< target height
     glm::vec4 clear_colour{0.0f, 0.0f, 0.0f, 0.0f};  ///< RGBA 0..1
     int msaa_samples = 0;                            ///< 0 or 1: no multisampling
-    glm::vec3 light_direction{0.3f, 1.0f, 0.4f};     ///< towards the light, GL world frame
-    float ambient = 0.35f;                           ///< ambient share of the lit colour, 0..1
+    bool fxaa = false;  ///< end_frame runs an FXAA post-process pass (needs msaa_samples <= 1)
+    glm::vec3 light_direction{0.3f, 1.0f, 0.4f};  ///< towards the light, GL world frame
+    float ambient = 0.35f;                        ///< ambient share of the lit colour, 0..1
 };
 
 /// One draw of one mesh.
@@ -60,7 +61,9 @@ struct DrawCall {
     bool procedural = false;          ///< modulate by value noise fixed in world space (stereo)
 };
 
-/// The backend interface. One frame: begin_frame, draw..., end_frame, then read_pixels.
+/// The backend interface. One frame: begin_frame, draw..., end_frame (MSAA resolve or FXAA pass),
+/// then read_pixels. begin_frame throws std::invalid_argument for a setup asking for both MSAA and
+/// FXAA.
 class Device {
   public:
     virtual ~Device() = default;

@@ -30,6 +30,7 @@ class NullDevice final : public Device {
     int textures_destroyed = 0;
     int frames_begun = 0;
     int frames_ended = 0;
+    int fxaa_passes = 0;  ///< frames ended with the FXAA post-process pass
     FrameSetup last_setup;
     std::vector<DrawCall> draws;  ///< draws of the current (last) frame
 };
