@@ -190,7 +190,7 @@ void main() {
     float luma_w = LUMA_AT(-1, 0);
     float range;
     if (!on_edge(luma_m, luma_n, luma_s, luma_e, luma_w, range)) {
-        o_colour = rgba_m;  // the mark pass's decision, should the two ever differ
+        o_colour = rgba_m;  // the mark pass's test again: the pass stays right on its own
         return;
     }
     float luma_nw = LUMA_AT(-1, -1);
