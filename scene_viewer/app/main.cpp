@@ -551,7 +551,8 @@ int run(int argc, char** argv) {
         ImageRgba8 image = gpu->renderer.render_frame();
         if (background_image) {
             composite_over(image, resize_nearest(*background_image, image.width, image.height),
-                           opacity);
+                           opacity,
+                           options.shading == Shading::lit ? kLitBackground : kSemanticBackground);
         }
         write_output(output, image);
     }

@@ -261,3 +261,37 @@ TEST_CASE("On the street's geometric edges FXAA comes closer to 4x MSAA than no 
     CHECK(fxaa_error < 0.75 * none_error);
     CHECK(fxaa_changed_off_edges < fxaa_changed / 4);
 }
+
+TEST_CASE("Compositing over a background adds only an edge pixel's covered share of the model",
+          "[fxaa][composite]") {
+    const Rgb8 clear = kLitBackground;
+    const Rgb8 model{0, 0, 200};
+    const Rgb8 background{50, 50, 50};
+    // Three pixels: uncovered (the clear colour, alpha 0), an edge half covered, fully covered.
+    ImageRgba8 render = make_image(3, 1, clear, 0);
+    std::uint8_t* edge = &render.pixels[4];
+    for (int c = 0; c < 3; ++c) edge[c] = static_cast<std::uint8_t>((model[c] + clear[c] + 1) / 2);
+    edge[3] = 128;
+    std::uint8_t* full = &render.pixels[8];
+    std::copy(model.begin(), model.end(), full);
+    full[3] = 255;
+
+    SECTION("opaque: the edge is half model, half background, with no trace of the clear colour") {
+        composite_over(render, make_image(3, 1, background), 1.0f, clear);
+        for (int c = 0; c < 3; ++c) {
+            CHECK(render.pixels[c] == background[c]);
+            CHECK(std::abs(render.pixels[4 + c] - (model[c] + background[c]) / 2.0) <= 1.0);
+            CHECK(render.pixels[8 + c] == model[c]);
+        }
+    }
+    SECTION("opacity 0.6: covered pixels mix 60 % model, the edge half of that") {
+        composite_over(render, make_image(3, 1, background), 0.6f, clear);
+        for (int c = 0; c < 3; ++c) {
+            CHECK(render.pixels[c] == background[c]);
+            CHECK(std::abs(render.pixels[4 + c] -
+                           (background[c] + 0.3 * (model[c] - background[c]))) <= 1.0);
+            CHECK(std::abs(render.pixels[8 + c] - (0.4 * background[c] + 0.6 * model[c])) <= 0.5);
+        }
+    }
+    for (int i = 3; i < 12; i += 4) CHECK(render.pixels[i] == 255);
+}

@@ -1,5 +1,6 @@
 #include "scene_viewer/render/image.hpp"
 
+#include <algorithm>
 #include <cstdio>
 #include <cstring>
 #include <stdexcept>
@@ -52,17 +53,18 @@ ImageRgba8 resize_nearest(const ImageRgba8& image, int width, int height) {
     return out;
 }
 
-void composite_over(ImageRgba8& render, const ImageRgba8& background, float opacity) {
+void composite_over(ImageRgba8& render, const ImageRgba8& background, float opacity, Rgb8 clear) {
     if (render.width != background.width || render.height != background.height) {
         throw std::invalid_argument("composite: background size differs from the render");
     }
     for (std::size_t i = 0; i < render.pixels.size(); i += 4) {
-        const bool covered = render.pixels[i + 3] > 0;
+        const float alpha = render.pixels[i + 3] / 255.0f;
         for (int c = 0; c < 3; ++c) {
-            const float r = render.pixels[i + c];
             const float b = background.pixels[i + c];
-            const float v = covered ? opacity * r + (1.0f - opacity) * b : b;
-            render.pixels[i + c] = static_cast<std::uint8_t>(v + 0.5f);
+            // The model's premultiplied share: the pixel minus its uncovered share of `clear`.
+            const float model = render.pixels[i + c] - (1.0f - alpha) * clear[c];
+            const float v = alpha > 0.0f ? b + opacity * (model - alpha * b) : b;
+            render.pixels[i + c] = static_cast<std::uint8_t>(std::clamp(v, 0.0f, 255.0f) + 0.5f);
         }
         render.pixels[i + 3] = 255;
     }

@@ -21,9 +21,11 @@ void write_png(const std::filesystem::path& path, const ImageRgba8& image, int z
 /// Nearest-neighbour resize.
 ImageRgba8 resize_nearest(const ImageRgba8& image, int width, int height);
 
-/// Lays the render over a background of the same size: where the render has alpha > 0 the result
-/// is opacity * render + (1 - opacity) * background, elsewhere the background; alpha becomes 255.
-void composite_over(ImageRgba8& render, const ImageRgba8& background, float opacity);
+/// Lays the render over a background of the same size. The render's alpha is coverage: an edge
+/// pixel (MSAA or FXAA) holds alpha * model + (1 - alpha) * `clear`, so the result is
+/// background + opacity * alpha * (model - background), without a halo of the clear colour;
+/// where alpha is 0 it is the background. Alpha becomes 255.
+void composite_over(ImageRgba8& render, const ImageRgba8& background, float opacity, Rgb8 clear);
 
 /// The RGBA pixel at (x, y), row 0 at the top.
 inline const std::uint8_t* pixel_at(const ImageRgba8& image, int x, int y) {
