@@ -26,7 +26,7 @@ void read_settings(const nlohmann::json& j, const std::string& pointer, ClassSet
                                                 "prior_W_m",      "prior_H_m",
                                                 "split_factor",   "voxel_m",
                                                 "voxel_max_m",    "max_entities",
-                                                "comment"};
+                                                "column_step",    "comment"};
     for (const auto& item : j.items()) {
         if (known.count(item.key()) == 0) {
             throw std::invalid_argument(pointer + "/" + item.key() + ": unknown member");
@@ -69,6 +69,7 @@ void read_settings(const nlohmann::json& j, const std::string& pointer, ClassSet
     number("voxel_m", s.voxel_m);
     number("voxel_max_m", s.voxel_max_m);
     integer("max_entities", s.max_entities);
+    integer("column_step", s.column_step);
 }
 
 }  // namespace
@@ -88,6 +89,10 @@ void ClassSettings::validate() const {
     require(voxel_max_m == 0.0 || voxel_max_m >= voxel_m, where + " voxel_max_m",
             "must be 0 or >= voxel_m");
     require(max_entities >= 1, where + " max_entities", "must be >= 1");
+    require(column_step == 1 || column_step == 2 || column_step == 4 || column_step == 8,
+            where + " column_step", "must be 1, 2, 4 or 8");
+    require(!thing || column_step == 1, where + " column_step",
+            "must be 1 for a thing (its boxes need every point)");
 }
 
 std::vector<double> ClassSettings::voxel_doubling_depths() const {

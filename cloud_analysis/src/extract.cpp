@@ -507,10 +507,14 @@ void keep_largest(std::vector<scene_schema::Entity>& entities, int max_entities)
 }
 
 /// Stuff entities: one box over each cluster, never split, fitted to the cluster's voxel
-/// centroids weighted by their point counts (a stuff cluster costs its voxels, not its points).
-std::vector<scene_schema::Entity> stuff_of_class(
-    const ClassInfo& info, const std::vector<Eigen::Vector3f>& pts, const ClassSettings& s,
-    const PendingGround& pending_ground, const ClusterOptions& co, const BoxFitOptions& fit) {
+/// centroids weighted by their point counts (a stuff cluster costs its voxels, not its points);
+/// each of `pts` stands for `step` points of the cloud (every step-th column taken).
+std::vector<scene_schema::Entity> stuff_of_class(const ClassInfo& info,
+                                                 const std::vector<Eigen::Vector3f>& pts,
+                                                 std::size_t step, const ClassSettings& s,
+                                                 const PendingGround& pending_ground,
+                                                 const ClusterOptions& co,
+                                                 const BoxFitOptions& fit) {
     const VoxelGrid voxels = voxelize(pts, s.voxel_m, s.voxel_doubling_depths());
     const std::vector<Indices> voxel_clusters = euclidean_clusters(voxels.centroid_m, co);
     const std::optional<GroundPlane>& ground = pending_ground.get();
@@ -520,13 +524,13 @@ std::vector<scene_schema::Entity> stuff_of_class(
     std::vector<float> counts;
     for (const Indices& cluster : voxel_clusters) {
         std::size_t size = 0;
-        for (std::size_t v : cluster) size += voxels.count[v];
+        for (std::size_t v : cluster) size += step * voxels.count[v];
         if (size < min_points) continue;
         centroids.clear();
         counts.clear();
         for (std::size_t v : cluster) {
             centroids.push_back(voxels.centroid_m[v]);
-            counts.push_back(static_cast<float>(voxels.count[v]));
+            counts.push_back(static_cast<float>(step * voxels.count[v]));
         }
         out.push_back(make_entity(info, fit_upright_box_weighted(centroids, counts, ground, fit),
                                   size, confidence_of(size, s), "instances"));
@@ -852,13 +856,35 @@ scene_schema::EntityDocument extract_entities(const LabeledCloud& cloud, const P
     const std::size_t chunks = std::clamp<std::size_t>(cloud.size() / kMinChunkPoints, 1,
                                                        static_cast<std::size_t>(options.threads));
     const bool has_pixels = cloud.pixel.size() == cloud.size();
+    // Stuff classes keep every column_step-th pixel column (u & (step - 1) == 0), when the
+    // cloud knows its pixels.
+    std::vector<std::uint32_t> column_mask(classes, 0);
+    for (std::size_t k = 0; k < classes && has_pixels && cloud.width_px > 0; ++k) {
+        column_mask[k] =
+            static_cast<std::uint32_t>(options.classes.find(palette.classes[k].name).column_step) -
+            1;
+    }
+    // Each point taken of class k stands for step[k] points of the cloud.
+    std::vector<std::size_t> step(classes);
+    for (std::size_t k = 0; k < classes; ++k) step[k] = std::size_t{column_mask[k]} + 1;
+    const auto width = static_cast<std::uint32_t>(std::max(cloud.width_px, 1));
+    // Column of pixel p, for pixels mostly in increasing order: the row's first pixel is
+    // found by a division only when p leaves the row.
+    const auto column_of = [width](std::uint32_t p, std::uint32_t& row_start) {
+        if (p - row_start >= width) row_start = p / width * width;
+        return p - row_start;
+    };
+    const auto taken = [&](std::size_t i, std::uint16_t k, std::uint32_t& row_start) {
+        return column_mask[k] == 0 || (column_of(cloud.pixel[i], row_start) & column_mask[k]) == 0;
+    };
     std::vector<std::vector<std::size_t>> start(chunks, std::vector<std::size_t>(classes, 0));
     std::vector<std::uint32_t> last_pixel(chunks, 0);
     for_each_chunk(cloud.size(), chunks, [&](std::size_t c, std::size_t first, std::size_t last) {
         auto& size = start[c];
+        std::uint32_t row_start = 0;
         for (std::size_t i = first; i < last; ++i) {
             const auto k = cloud.class_index[i];
-            if (k < classes) ++size[k];
+            if (k < classes && taken(i, k, row_start)) ++size[k];
         }
         for (std::size_t i = first; has_pixels && i < last; ++i) {
             last_pixel[c] = std::max(last_pixel[c], cloud.pixel[i]);
@@ -880,10 +906,11 @@ scene_schema::EntityDocument extract_entities(const LabeledCloud& cloud, const P
     std::vector<std::vector<std::size_t>> end = start;
     for_each_chunk(cloud.size(), chunks, [&](std::size_t c, std::size_t first, std::size_t last) {
         auto& at = end[c];
+        std::uint32_t row_start = 0;
         for (std::size_t i = first; i < last; ++i) {
             const auto k = cloud.class_index[i];
             const auto& p = cloud.xyz_m[i];
-            if (k == kVoidClass || k >= classes) continue;
+            if (k == kVoidClass || k >= classes || !taken(i, k, row_start)) continue;
             if (!(p.z() > 0.0f && double{p.z()} < options.max_range_m) || !p.allFinite()) continue;
             if (is_thing[k]) per_class_pixels[k][at[k]] = grid.valid() ? cloud.pixel[i] : 0;
             per_class[k][at[k]++] = p;
@@ -937,14 +964,17 @@ scene_schema::EntityDocument extract_entities(const LabeledCloud& cloud, const P
         const ClassInfo& info = palette.classes[k];
         const ClassSettings s = options.classes.find(info.name);
         const auto& pts = per_class[k];
-        if (!s.entity || pts.size() < static_cast<std::size_t>(s.min_points)) continue;
+        if (!s.entity || pts.size() * step[k] < static_cast<std::size_t>(s.min_points)) {
+            continue;
+        }
         queue.push_back([&, k, s] {
             if (options.method == "instances" && s.thing) {
                 queue_things_of_class(queue, info, pts, per_class_pixels[k], grid, s,
                                       pending_ground, options, made[k]);
             } else if (options.method == "instances") {
                 const ClassFit fit = class_fit(s);
-                made[k] = stuff_of_class(info, pts, s, pending_ground, fit.cluster, fit.box);
+                made[k] =
+                    stuff_of_class(info, pts, step[k], s, pending_ground, fit.cluster, fit.box);
             } else {
                 OrientedBox box;
                 if (options.method == "centroid") {
@@ -957,8 +987,8 @@ scene_schema::EntityDocument extract_entities(const LabeledCloud& cloud, const P
                 } else {
                     box = variance_box(pts);
                 }
-                made[k].push_back(make_entity(info, box, pts.size(), confidence_of(pts.size(), s),
-                                              options.method));
+                const std::size_t n = pts.size() * step[k];
+                made[k].push_back(make_entity(info, box, n, confidence_of(n, s), options.method));
             }
         });
     }

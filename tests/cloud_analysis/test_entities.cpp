@@ -612,3 +612,62 @@ TEST_CASE("a large cloud split by class on several threads gives the entities of
         CHECK(scene_schema::dump(many) == scene_schema::dump(one));
     }
 }
+
+TEST_CASE("stuff taken every fourth pixel column gives the box and point count of every column",
+          "[entities]") {
+    // A road seen as a 400 x 300 pixel image (x across the columns, z along the rows), and a
+    // car on it; the cloud knows its pixels. Road is stuff (column_step 4 in the bundled
+    // config), the car a thing (every point).
+    constexpr int kWidth = 400, kHeight = 300;
+    LabeledCloud cloud;
+    cloud.width_px = kWidth;
+    cloud.height_px = kHeight;
+    for (int v = 0; v < kHeight; ++v) {
+        for (int u = 0; u < kWidth; ++u) {
+            add_point(cloud,
+                      {0.03f * static_cast<float>(u - kWidth / 2), 1.65f,
+                       3.0f + 0.1f * static_cast<float>(v)},
+                      0);
+        }
+    }
+    add_car(cloud, -2.0f, 12.0f);
+    ExtractOptions o = options_with_bundled_config("instances");
+    REQUIRE(o.classes.find("road").column_step == 4);
+    const auto stepped = extract_entities(cloud, test_palette(), StereoCamera{}, o);
+    for (auto& c : o.classes.classes) {
+        if (c.name == "road") c.column_step = 1;
+    }
+    const auto every = extract_entities(cloud, test_palette(), StereoCamera{}, o);
+    REQUIRE(count_class(stepped, "road") == 1);
+    REQUIRE(count_class(every, "road") == 1);
+    REQUIRE(count_class(stepped, "car") == 1);
+    const auto find = [](const scene_schema::EntityDocument& doc, const std::string& name) {
+        for (const auto& e : doc.entities) {
+            if (e.class_name == name) return e;
+        }
+        return scene_schema::Entity{};
+    };
+    const auto a = find(stepped, "road"), b = find(every, "road");
+    CHECK(b.point_count == kWidth * kHeight);
+    CHECK(a.point_count == kWidth * kHeight);  // 100 columns taken, each standing for 4
+    CHECK(std::abs(a.x - b.x) < 0.05);
+    CHECK(std::abs(a.z - b.z) < 0.05);
+    CHECK(std::abs(a.L - b.L) < 0.1);
+    CHECK(std::abs(a.W - b.W) < 0.1);
+    // The car is a thing: all its points, the same box.
+    const auto car_a = find(stepped, "car"), car_b = find(every, "car");
+    CHECK(car_a.point_count == car_b.point_count);
+    CHECK(std::abs(car_a.x - car_b.x) < 1e-6);
+    CHECK(std::abs(car_a.z - car_b.z) < 1e-6);
+    CHECK(std::abs(car_a.theta - car_b.theta) < 1e-9);
+}
+
+TEST_CASE("column_step must be 1, 2, 4 or 8, and 1 for a thing", "[entities]") {
+    CHECK_THROWS_WITH(
+        parse_class_config(R"({"classes": [{"name": "road", "column_step": 3}]})", "x"),
+        Catch::Contains("column_step: must be 1, 2, 4 or 8"));
+    CHECK_THROWS_WITH(
+        parse_class_config(R"({"classes": [{"name": "car", "thing": true, "column_step": 4}]})",
+                           "x"),
+        Catch::Contains("column_step: must be 1 for a thing"));
+}

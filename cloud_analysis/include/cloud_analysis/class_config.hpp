@@ -32,6 +32,9 @@ struct ClassSettings {
     /// distance doubles (voxel_doubling_depths), up to this.
     double voxel_max_m = 0.0;
     int max_entities = 50;  ///< keep at most this many entities (largest first), >= 1
+    /// Stuff only: the extractor takes every column_step-th pixel column of the class (1, 2, 4
+    /// or 8), each point standing for column_step; 1 for things.
+    int column_step = 1;
     bool has_prior() const { return prior_L_m > 0.0 && prior_W_m > 0.0 && prior_H_m > 0.0; }
     /// Depths (ascending, metres) at which the voxel edge doubles: where the clustering
     /// distance reaches 2, 4, ... times its value at 10 m, while the doubled edge stays within

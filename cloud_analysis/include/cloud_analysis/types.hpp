@@ -16,28 +16,28 @@ using Rgb = std::array<std::uint8_t, 3>;
 
 /// Rectified pinhole stereo rig: the left camera's intrinsics and the baseline.
 struct StereoCamera {
-    int width_px = 0;         ///< rectified image width in pixels
-    int height_px = 0;        ///< rectified image height in pixels
-    double fx_px = 0.0;       ///< focal length along x in pixels
-    double fy_px = 0.0;       ///< focal length along y in pixels
-    double cx_px = 0.0;       ///< left principal point x in pixels
-    double cy_px = 0.0;       ///< principal point y in pixels
-    double cx_right_px = 0.0; ///< right principal point x in pixels (equals cx_px when unknown)
-    double baseline_m = 0.0;  ///< distance between the optical centres in metres, > 0
+    int width_px = 0;          ///< rectified image width in pixels
+    int height_px = 0;         ///< rectified image height in pixels
+    double fx_px = 0.0;        ///< focal length along x in pixels
+    double fy_px = 0.0;        ///< focal length along y in pixels
+    double cx_px = 0.0;        ///< left principal point x in pixels
+    double cy_px = 0.0;        ///< principal point y in pixels
+    double cx_right_px = 0.0;  ///< right principal point x in pixels (equals cx_px when unknown)
+    double baseline_m = 0.0;   ///< distance between the optical centres in metres, > 0
 };
 
 /// One semantic class of a palette.
 struct ClassInfo {
-    std::string name;  ///< e.g. "car"
-    int id = 0;        ///< numeric id written to entities (Cityscapes labelId by default)
-    bool thing = false;///< countable object (split into instances) vs stuff (extents)
-    Rgb colour{};      ///< colour of the class in the semantic image
+    std::string name;    ///< e.g. "car"
+    int id = 0;          ///< numeric id written to entities (Cityscapes labelId by default)
+    bool thing = false;  ///< countable object (split into instances) vs stuff (extents)
+    Rgb colour{};        ///< colour of the class in the semantic image
 };
 
 /// Colour -> class table, loaded from assets/palettes/*.json.
 struct Palette {
-    std::string name;              ///< e.g. "cityscapes"
-    std::vector<ClassInfo> classes;///< in file order; colours are unique
+    std::string name;                ///< e.g. "cityscapes"
+    std::vector<ClassInfo> classes;  ///< in file order; colours are unique
 };
 
 /// Class index value for pixels whose colour is not in the palette.
@@ -46,12 +46,12 @@ inline constexpr std::uint16_t kVoidClass = 0xFFFF;
 /// A metric point cloud in the rectified left camera frame (x right, y down, z forward,
 /// metres), one entry per valid pixel, structure of arrays.
 struct LabeledCloud {
-    int width_px = 0;                    ///< source image width (for pixel indices)
-    int height_px = 0;                   ///< source image height
-    std::vector<Eigen::Vector3f> xyz_m;  ///< positions in metres
-    std::vector<Rgb> colour;             ///< left image colour at the pixel
+    int width_px = 0;                        ///< source image width (for pixel indices)
+    int height_px = 0;                       ///< source image height
+    std::vector<Eigen::Vector3f> xyz_m;      ///< positions in metres
+    std::vector<Rgb> colour;                 ///< left image colour at the pixel
     std::vector<std::uint16_t> class_index;  ///< index into Palette::classes, or kVoidClass
-    std::vector<std::uint32_t> pixel;    ///< v * width_px + u of the source pixel
+    std::vector<std::uint32_t> pixel;        ///< v * width_px + u of the source pixel
     std::size_t size() const { return xyz_m.size(); }
 };
 
