@@ -318,10 +318,23 @@ scene_schema::Entity make_entity(const ClassInfo& info, const OrientedBox& box,
     return e;
 }
 
+/// A thing's bird's-eye footprint: centre, heading's cosine and sine, half length and width.
+struct Footprint {
+    double x, z, c, s, half_L, half_W;
+};
+
+std::vector<Footprint> footprints_of(const std::vector<scene_schema::Entity>& things) {
+    std::vector<Footprint> out;
+    out.reserve(things.size());
+    for (const auto& t : things) {
+        out.push_back({t.x, t.z, std::cos(t.theta), std::sin(t.theta), t.L / 2.0, t.W / 2.0});
+    }
+    return out;
+}
+
 /// Share of the bird's-eye footprint of `e` (sampled on a kSamples x kSamples grid of cell
-/// centres) inside the footprint of any of `things`.
-double footprint_share_inside(const scene_schema::Entity& e,
-                              const std::vector<scene_schema::Entity>& things) {
+/// centres) inside any of the `things` footprints.
+double footprint_share_inside(const scene_schema::Entity& e, const std::vector<Footprint>& things) {
     constexpr int kSamples = 10;
     const double c = std::cos(e.theta), sn = std::sin(e.theta);
     int inside = 0;
@@ -333,9 +346,8 @@ double footprint_share_inside(const scene_schema::Entity& e,
             const double x = e.x + a * c + b * sn, z = e.z - a * sn + b * c;
             for (const auto& t : things) {
                 const double dx = x - t.x, dz = z - t.z;
-                const double ct = std::cos(t.theta), st = std::sin(t.theta);
-                if (std::abs(dx * ct - dz * st) <= t.L / 2.0 &&
-                    std::abs(dx * st + dz * ct) <= t.W / 2.0) {
+                if (std::abs(dx * t.c - dz * t.s) <= t.half_L &&
+                    std::abs(dx * t.s + dz * t.c) <= t.half_W) {
                     ++inside;
                     break;
                 }
@@ -1006,12 +1018,13 @@ scene_schema::EntityDocument extract_entities(const LabeledCloud& cloud, const P
         for (std::size_t k = 0; k < made.size(); ++k) {
             if (is_thing[k]) things.insert(things.end(), made[k].begin(), made[k].end());
         }
+        const std::vector<Footprint> footprints = footprints_of(things);
         for (std::size_t k = 0; k < made.size(); ++k) {
             if (is_thing[k]) continue;
             auto& list = made[k];
             list.erase(std::remove_if(list.begin(), list.end(),
                                       [&](const scene_schema::Entity& e) {
-                                          return footprint_share_inside(e, things) >
+                                          return footprint_share_inside(e, footprints) >
                                                  options.stuff_on_thing_fraction;
                                       }),
                        list.end());
