@@ -261,22 +261,28 @@ std::vector<std::vector<std::size_t>> euclidean_clusters(
     for (std::size_t c = 0; c < cell_count.size(); ++c) {
         cell_start[c + 1] = cell_start[c] + cell_count[c];
     }
-    std::vector<std::uint32_t> members(n);
+    // The points of each cell as records (position, distance, index) side by side, so that
+    // scanning a cell reads one contiguous run of memory.
+    struct Member {
+        Eigen::Vector3f p;
+        std::uint32_t point;
+        double radius;
+    };
+    std::vector<Member> members(n);
     std::vector<std::uint32_t> slot_of(n);
     std::vector<std::uint32_t> cell_left(cell_count.size(), 0);
     for (std::size_t i = 0; i < n; ++i) {
         const std::uint32_t c = cell_of[i];
         const std::uint32_t slot = cell_start[c] + cell_left[c]++;
-        members[slot] = static_cast<std::uint32_t>(i);
+        members[slot] = Member{points_m[i], static_cast<std::uint32_t>(i), radius[i]};
         slot_of[i] = slot;
     }
     const auto remove = [&](std::uint32_t i) {
         const std::uint32_t c = cell_of[i];
         const std::uint32_t last = cell_start[c] + --cell_left[c];
-        const std::uint32_t moved = members[last];
-        members[slot_of[i]] = moved;
-        slot_of[moved] = slot_of[i];
-        members[last] = i;
+        const std::uint32_t at = slot_of[i];
+        std::swap(members[at], members[last]);
+        slot_of[members[at].point] = at;
         slot_of[i] = last;
     };
 
@@ -330,12 +336,13 @@ std::vector<std::vector<std::size_t>> euclidean_clusters(
                 }
                 ++k;
                 for (std::uint32_t slot = cell_start[c]; slot < cell_start[c] + cell_left[c];) {
-                    const std::uint32_t j = members[slot];
-                    const double link = std::min(ri, radius[j]);
-                    if (double{(points_m[j] - p).squaredNorm()} > link * link) {
+                    const Member& m = members[slot];
+                    const double link = std::min(ri, m.radius);
+                    if (double{(m.p - p).squaredNorm()} > link * link) {
                         ++slot;
                         continue;
                     }
+                    const std::uint32_t j = m.point;
                     visited[j] = 1;
                     remove(j);  // moves another unvisited point into this slot
                     queue.push_back(j);
