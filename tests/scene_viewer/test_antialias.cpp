@@ -295,3 +295,29 @@ TEST_CASE("Compositing over a background adds only an edge pixel's covered share
     }
     for (int i = 3; i < 12; i += 4) CHECK(render.pixels[i] == 255);
 }
+
+TEST_CASE("One device switches antialiasing, shading and size between frames without leftovers",
+          "[gl][fxaa]") {
+    const auto doc = scene_schema::read_file(STEREOSCENE_SAMPLES_DIR "/baselines/street.json");
+    SceneRenderer renderer(gl_device());
+    RenderOptions options;
+    options.width_px = 160;
+    options.height_px = 90;
+    options.view = chase_view();
+    const ImageRgba8 first = renderer.render(doc, nullptr, options);
+    options.shading = Shading::semantic;
+    const ImageRgba8 semantic = renderer.render(doc, nullptr, options);
+    options.shading = Shading::lit;
+    options.antialias = Antialias::msaa;
+    options.width_px = 200;
+    options.height_px = 100;
+    renderer.render(doc, nullptr, options);
+    options.antialias = Antialias::none;
+    options.width_px = 160;
+    options.height_px = 90;
+    renderer.render(doc, nullptr, options);
+    options.antialias = Antialias::fxaa;
+    CHECK(renderer.render(doc, nullptr, options).pixels == first.pixels);
+    options.shading = Shading::semantic;
+    CHECK(renderer.render(doc, nullptr, options).pixels == semantic.pixels);
+}
