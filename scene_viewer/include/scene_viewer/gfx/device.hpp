@@ -43,9 +43,9 @@ struct FrameSetup {
     int height_px = 0;                               ///< target height
     glm::vec4 clear_colour{0.0f, 0.0f, 0.0f, 0.0f};  ///< RGBA 0..1
     int msaa_samples = 0;                            ///< 0 or 1: no multisampling
-    bool fxaa = false;  ///< end_frame runs an FXAA post-process pass (needs msaa_samples <= 1)
-    glm::vec3 light_direction{0.3f, 1.0f, 0.4f};  ///< towards the light, GL world frame
-    float ambient = 0.35f;                        ///< ambient share of the lit colour, 0..1
+    bool fxaa = false;                               ///< end_frame runs FXAA (msaa_samples <= 1)
+    glm::vec3 light_direction{0.3f, 1.0f, 0.4f};     ///< towards the light, GL world frame
+    float ambient = 0.35f;                           ///< ambient share of the lit colour, 0..1
 };
 
 /// One draw of one mesh.

@@ -54,12 +54,12 @@ struct RenderOptions {
     bool fit_bev = true;                    ///< bev: frame every entity (ignores bev_* of view)
     Shading shading = Shading::lit;         ///< lit or semantic
     Antialias antialias = Antialias::fxaa;  ///< lit: edge smoothing; semantic, instance: none
-    int msaa_samples = 4;  ///< lit with Antialias::msaa: multisample count (0 = off), else unused
-    bool grid = true;      ///< bev: draw a 1 m ground grid (10 m lines darker)
-    bool ego = true;       ///< chase/bev/free: draw the ego car at the camera
-    float point_size_px = 2.0f;       ///< point cloud overlay: point size, pixels
-    bool keep_alpha = false;          ///< keep alpha 0 where nothing was drawn (compositing)
-    bool procedural_texture = false;  ///< lit: world-space noise texture on every surface
+    int msaa_samples = 4;                   ///< lit, Antialias::msaa: multisample count (0 = off)
+    bool grid = true;                       ///< bev: draw a 1 m ground grid (10 m lines darker)
+    bool ego = true;                        ///< chase/bev/free: draw the ego car at the camera
+    float point_size_px = 2.0f;             ///< point cloud overlay: point size, pixels
+    bool keep_alpha = false;                ///< keep alpha 0 where nothing was drawn (compositing)
+    bool procedural_texture = false;        ///< lit: world-space noise texture on every surface
     /// Throws std::invalid_argument naming the bad field.
     void validate() const;
 };
