@@ -63,6 +63,10 @@ std::size_t DisparityMap::valid_count() const {
         std::count_if(disparity_px.begin(), disparity_px.end(), [](float d) { return d > 0.0f; }));
 }
 
+bool DisparityMap::any_valid() const {
+    return std::any_of(disparity_px.begin(), disparity_px.end(), [](float d) { return d > 0.0f; });
+}
+
 ImageU8 read_image(const std::filesystem::path& path, ImageMode mode) {
     const bool as_is = mode == ImageMode::kAsIs;
     // A PNG's header says whether it is grey: one decode instead of a colour decode followed by

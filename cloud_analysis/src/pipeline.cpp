@@ -166,7 +166,7 @@ AnalyseResult analyse(const LoadedInputs& in, const AnalyseOptions& options,
     watch.lap("disparity");
     if (classes.valid()) r.classes = classes.get();
     watch.lap("semantic");
-    if (r.disparity.valid_count() == 0) {
+    if (!r.disparity.any_valid()) {
         throw std::runtime_error("empty disparity: no pixel has a valid disparity (" +
                                  in.paths.left.string() + ")");
     }

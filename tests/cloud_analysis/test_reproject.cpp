@@ -55,7 +55,7 @@ LabeledCloud naive_reproject(const DisparityMap& map, const StereoCamera& cam, c
 
 }  // namespace
 
-TEST_CASE("the one-pass reprojection agrees with the 4x4 Q product on random maps", "[reproject]") {
+TEST_CASE("the reprojection agrees with the 4x4 Q product on random maps", "[reproject]") {
     const int w = 64, h = 24;
     const std::size_t n = static_cast<std::size_t>(w) * h;
     std::mt19937 rng(11);
@@ -120,4 +120,16 @@ TEST_CASE("disparities at or below cx - cx_right are beyond infinity and give no
     // Z = fx B / (d - (cx - cx_right)): 10 px of effective disparity at u = 3 -> 38.961 m.
     CHECK(cloud.xyz_m[1].z() == Approx(721.5 * 0.54 / 10.0).epsilon(1e-6));
     CHECK(cloud.colour[1] == Rgb{40, 40, 40});
+}
+
+TEST_CASE("a disparity map has a valid pixel when any pixel holds a value", "[reproject]") {
+    DisparityMap map;
+    map.width_px = 4;
+    map.height_px = 3;
+    map.disparity_px.assign(12, 0.0f);
+    CHECK_FALSE(map.any_valid());
+    CHECK(map.valid_count() == 0);
+    map.disparity_px[11] = 0.5f;
+    CHECK(map.any_valid());
+    CHECK(map.valid_count() == 1);
 }

@@ -28,6 +28,7 @@ struct DisparityMap {
     int height_px = 0;                ///< rows
     std::vector<float> disparity_px;  ///< row-major, left image pixel grid
     std::size_t valid_count() const;  ///< pixels holding a value
+    bool any_valid() const;           ///< whether any pixel holds a value (stops at the first)
 };
 
 /// Single-channel 16-bit image, row-major (KITTI disparity and instance PNGs).
