@@ -130,6 +130,10 @@ void add_settings_flags(CLI::App& cmd, AnalyseArgs& a) {
         ->capture_default_str()
         ->group(cl);
     cmd.add_option("--class-config", a.class_config, "per-class settings JSON")->group(cl);
+    cmd.add_flag("--fsync-clouds", a.fsync_clouds,
+                 "also fsync the cloud files before renaming them (durable across a power loss; "
+                 "about 1 ms per MB): without it they are written atomically but not fsync'ed")
+        ->group(cl);
 }
 
 void add_output_flags(CLI::App& cmd, AnalyseArgs& a) {
@@ -204,12 +208,16 @@ void resolve(AnalyseArgs& a, const CLI::App& cmd) {
     resolve_settings(a, cmd);
 }
 
+scene_schema::FileSync cloud_sync(const AnalyseArgs& a) {
+    return a.fsync_clouds ? scene_schema::FileSync::kDurable : scene_schema::FileSync::kAtomicOnly;
+}
+
 void write_output(const PendingOutput& out) {
     if (out.path == "-") {
         std::fwrite(out.bytes.data(), 1, out.bytes.size(), stdout);
         std::fflush(stdout);
     } else {
-        scene_schema::write_file_atomic(out.path, out.bytes);
+        scene_schema::write_file_atomic(out.path, out.bytes, out.sync);
     }
 }
 
@@ -342,7 +350,7 @@ RunReport analyse_loaded_and_write(const LoadedRun& run, const AnalyseArgs& a,
         outputs.push_back({path.string(),
                            cloud_analysis::format_cloud(
                                r.cloud, in.palette, cloud_analysis::cloud_format_from_path(path)),
-                           flag});
+                           flag, cloud_sync(a)});
         timings.push_back({std::string("format ") + flag, ms_since(t)});
     }
     t = Clock::now();

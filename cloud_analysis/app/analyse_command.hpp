@@ -9,6 +9,7 @@
 #include <vector>
 
 #include <CLI/CLI.hpp>
+#include <scene_schema/entities.hpp>
 
 #include "cloud_analysis/disparity.hpp"
 #include "cloud_analysis/extract.hpp"
@@ -30,6 +31,7 @@ struct AnalyseArgs {
     std::string entities;
     std::filesystem::path xyz, pcd, ply, disparity_png, disparity_kitti, gt_disparity;
     bool timings = false;
+    bool fsync_clouds = false;  ///< --fsync-clouds: the clouds are durable too
 };
 
 /// One output file, formatted in memory before anything is written.
@@ -37,6 +39,8 @@ struct PendingOutput {
     std::string path;   ///< "-" = stdout
     std::string bytes;  ///< whole file
     std::string label;  ///< flag that asked for it (for --timings)
+    /// Clouds are written without fsync unless --fsync-clouds (docs/cli.md "Durability").
+    scene_schema::FileSync sync = scene_schema::FileSync::kDurable;
 };
 
 /// Input flags of one frame (--left ... --kitti-root --frame).
@@ -53,6 +57,8 @@ void resolve(AnalyseArgs& a, const CLI::App& cmd);
 
 /// Writes one output atomically (or to stdout for "-").
 void write_output(const PendingOutput& out);
+/// How the cloud files are written: fsync'ed only with --fsync-clouds.
+scene_schema::FileSync cloud_sync(const AnalyseArgs& a);
 
 /// Extraction settings of the flags, with the class config read and validated.
 cloud_analysis::ExtractOptions extract_options(const AnalyseArgs& a);

@@ -110,7 +110,8 @@ Finished finish_frame(FinishJob job) {
             const std::filesystem::path path = job.stem.string() + "." + fmt;
             outputs.push_back(
                 {path.string(),
-                 format_cloud(job.result.cloud, job.in.palette, cloud_format_from_path(path)), ""});
+                 format_cloud(job.result.cloud, job.in.palette, cloud_format_from_path(path)), "",
+                 cloud_sync(*job.settings)});
         }
         for (const auto& out : outputs) {
             write_output(out);
@@ -370,7 +371,7 @@ int run_bench(const BenchArgs& a) {
         std::map<std::string, std::vector<double>> stages;
         std::vector<std::string> order;
         std::vector<double> totals;
-        std::vector<double> writes;  // fsync'ed atomic writes: disk latency, not computation
+        std::vector<double> writes;  // atomic writes (the entity file fsync'ed): disk latency
         std::size_t points = 0;
     };
     std::vector<Row> rows;

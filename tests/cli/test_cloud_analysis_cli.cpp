@@ -247,6 +247,12 @@ TEST_CASE("CloudCompare loads our .xyz and .ply with every point and PCL reads o
     REQUIRE(xyz.rfind("//X Y Z R G B Class Intensity\n", 0) == 0);
     const std::size_t points = count_lines(xyz) - 1;
     REQUIRE(points > 10000);
+    // The clouds are written atomically but not fsync'ed unless asked: the same bytes either way.
+    REQUIRE(run(tool() + sample_inputs() + " --fsync-clouds --xyz " +
+                    quote((dir / "durable.xyz").string()),
+                dir)
+                .code == 0);
+    CHECK(slurp(dir / "durable.xyz") == xyz);
 
     for (const char* name : {"c.xyz", "c.ply"}) {
         INFO(name);
