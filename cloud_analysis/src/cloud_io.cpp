@@ -49,6 +49,20 @@ char* put_unsigned(char* p, std::uint64_t v) {
     return p;
 }
 
+/// ".000" to ".999", built once: the decimals of every coordinate.
+struct MilliText {
+    char text[1000][4];
+    MilliText() {
+        for (int i = 0; i < 1000; ++i) {
+            text[i][0] = '.';
+            text[i][1] = static_cast<char>('0' + i / 100);
+            text[i][2] = static_cast<char>('0' + (i / 10) % 10);
+            text[i][3] = static_cast<char>('0' + i % 10);
+        }
+    }
+};
+const MilliText kMilliText;
+
 /// Writes v with 3 decimals (millimetres) at p; returns the end. Fixed point: no locale, no
 /// exponent. Non-finite values never reach here (reprojection drops them).
 char* put_fixed3(char* p, float value) {
@@ -63,12 +77,13 @@ char* put_fixed3(char* p, float value) {
         milli = -milli;
     }
     const auto m = static_cast<std::uint64_t>(milli);
-    p = put_unsigned(p, m / 1000);
-    const auto frac = static_cast<unsigned>(m % 1000);
-    p[0] = '.';
-    p[1] = static_cast<char>('0' + frac / 100);
-    p[2] = static_cast<char>('0' + (frac / 10) % 10);
-    p[3] = static_cast<char>('0' + frac % 10);
+    const std::uint64_t whole = m / 1000;
+    if (whole < 100) {  // metres in front of a car: one or two digits from the byte table
+        p = put_byte(p, static_cast<std::uint8_t>(whole));
+    } else {
+        p = put_unsigned(p, whole);
+    }
+    std::memcpy(p, kMilliText.text[m - whole * 1000], 4);
     return p + 4;
 }
 
@@ -98,14 +113,20 @@ CloudFormat cloud_format_from_path(const std::filesystem::path& path) {
 
 namespace {
 
+/// Text in a buffer sized for the worst case, left uninitialised (unlike std::string::resize):
+/// the pages of the unused tail are never touched.
+struct Text {
+    std::unique_ptr<char[]> data;
+    std::size_t size = 0;
+};
+
 /// The .xyz lines of points [begin, end) (no header).
-std::string xyz_lines(const LabeledCloud& cloud, const Palette& palette, std::size_t begin,
-                      std::size_t end) {
-    // Worst case per line: 3 coordinates of 24 chars, 3 colours, class, intensity, separators.
-    // Left uninitialised (unlike std::string::resize): the pages of the unused worst-case tail
-    // are never touched, so a cloud costs its real size (~45 bytes a point), not 120.
-    const std::unique_ptr<char[]> buffer(new char[(end - begin) * 120 + 1]);
-    char* const start = buffer.get();
+Text xyz_lines(const LabeledCloud& cloud, const Palette& palette, std::size_t begin,
+               std::size_t end) {
+    // Worst case per line: 3 coordinates of 24 chars, 3 colours, class, intensity, separators;
+    // a cloud costs its real size (~35 bytes a point), not 120.
+    Text text{std::unique_ptr<char[]>(new char[(end - begin) * 120 + 1]), 0};
+    char* const start = text.data.get();
     char* p = start;
     for (std::size_t i = begin; i < end; ++i) {
         const auto& xyz = cloud.xyz_m[i];
@@ -127,7 +148,8 @@ std::string xyz_lines(const LabeledCloud& cloud, const Palette& palette, std::si
             p, static_cast<std::uint8_t>((299 * c[0] + 587 * c[1] + 114 * c[2] + 500) / 1000));
         *p++ = '\n';
     }
-    return std::string(start, p);
+    text.size = static_cast<std::size_t>(p - start);
+    return text;
 }
 
 }  // namespace
@@ -138,15 +160,17 @@ std::string format_xyz(const LabeledCloud& cloud, const Palette& palette) {
     // on a helper thread (2 cores), then the halves are joined.
     constexpr std::size_t kParallelFrom = 100000;
     const std::size_t n = cloud.size();
-    std::string out(kHeader);
-    if (n < kParallelFrom) return out + xyz_lines(cloud, palette, 0, n);
-    auto second =
-        std::async(std::launch::async, [&] { return xyz_lines(cloud, palette, n / 2, n); });
-    const std::string first = xyz_lines(cloud, palette, 0, n / 2);
-    const std::string last = second.get();
-    out.reserve(out.size() + first.size() + last.size());
-    out += first;
-    out += last;
+    const std::size_t split = n < kParallelFrom ? n : n / 2;
+    auto second = std::async(split < n ? std::launch::async : std::launch::deferred,
+                             [&] { return xyz_lines(cloud, palette, split, n); });
+    const Text first = xyz_lines(cloud, palette, 0, split);
+    const Text last = second.get();
+    // One copy of each half into the file's bytes.
+    std::string out;
+    out.reserve(sizeof(kHeader) - 1 + first.size + last.size);
+    out.append(kHeader, sizeof(kHeader) - 1);
+    out.append(first.data.get(), first.size);
+    out.append(last.data.get(), last.size);
     return out;
 }
 
