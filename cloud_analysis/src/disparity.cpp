@@ -236,27 +236,32 @@ DisparityMap DisparityMatcher::compute(const ImageU8& left, const ImageU8& right
     out.disparity_px.resize(static_cast<std::size_t>(out.width_px) * out.height_px);
     const std::int16_t lowest_valid = static_cast<std::int16_t>(std::max(invalid_raw, 0) + 1);
     const float lr_max_diff = static_cast<float>(options.lr_max_diff_px);
-    for (int v = 0; v < raw_left.rows; ++v) {
-        const auto* row = raw_left.ptr<std::int16_t>(v);
-        const std::int16_t* row_r = options.lr_check ? raw_right.ptr<std::int16_t>(v) : nullptr;
-        float* dst = out.disparity_px.data() + static_cast<std::size_t>(v) * out.width_px;
-        if (row_r == nullptr) {
-            for (int u = 0; u < raw_left.cols; ++u) {
-                dst[u] = row[u] >= lowest_valid ? static_cast<float>(row[u]) * to_px : kNoDisparity;
+    // Rows in parallel stripes (each row on its own: the same values as one pass).
+    const auto convert_rows = [&](const cv::Range& rows) {
+        for (int v = rows.start; v < rows.end; ++v) {
+            const auto* row = raw_left.ptr<std::int16_t>(v);
+            const std::int16_t* row_r = options.lr_check ? raw_right.ptr<std::int16_t>(v) : nullptr;
+            float* dst = out.disparity_px.data() + static_cast<std::size_t>(v) * out.width_px;
+            if (row_r == nullptr) {
+                for (int u = 0; u < raw_left.cols; ++u) {
+                    dst[u] =
+                        row[u] >= lowest_valid ? static_cast<float>(row[u]) * to_px : kNoDisparity;
+                }
+                continue;
             }
-            continue;
+            for (int u = 0; u < raw_left.cols; ++u) {
+                dst[u] = kNoDisparity;
+                if (row[u] < lowest_valid) continue;
+                const float d = static_cast<float>(row[u]) * to_px;
+                const int ur = static_cast<int>(std::lround(static_cast<float>(u) - d));
+                if (ur < 0) continue;
+                const float dr = -static_cast<float>(row_r[ur]) * to_px;
+                if (!(dr > 0.0f) || std::abs(dr - d) > lr_max_diff) continue;
+                dst[u] = d;
+            }
         }
-        for (int u = 0; u < raw_left.cols; ++u) {
-            dst[u] = kNoDisparity;
-            if (row[u] < lowest_valid) continue;
-            const float d = static_cast<float>(row[u]) * to_px;
-            const int ur = static_cast<int>(std::lround(static_cast<float>(u) - d));
-            if (ur < 0) continue;
-            const float dr = -static_cast<float>(row_r[ur]) * to_px;
-            if (!(dr > 0.0f) || std::abs(dr - d) > lr_max_diff) continue;
-            dst[u] = d;
-        }
-    }
+    };
+    cv::parallel_for_(cv::Range(0, raw_left.rows), convert_rows, std::min(raw_left.rows, 8));
     return out;
 }
 

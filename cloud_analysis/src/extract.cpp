@@ -231,10 +231,15 @@ bool front_on_row(const std::vector<Eigen::Vector3f>& pts, const Indices& idx,
     std::vector<double> along, across;
     along.reserve(idx.size());
     across.reserve(idx.size());
+    double min_along = std::numeric_limits<double>::infinity(), max_along = -min_along;
     for (std::size_t i : idx) {
         along.push_back(double{pts[i].x()} * c - double{pts[i].z()} * sn);
         across.push_back(double{pts[i].x()} * sn + double{pts[i].z()} * c);
+        min_along = std::min(min_along, along.back());
+        max_along = std::max(max_along, along.back());
     }
+    // The whole extent bounds the 2-98 % one: most blobs (single things) stop here.
+    if (max_along - min_along < 2.0 * s.prior_W_m) return false;
     const double length = quantile_of(along, 0.98) - quantile_of(along, 0.02);
     if (length < 2.0 * s.prior_W_m) return false;
     std::vector<double> sorted = across;
@@ -892,11 +897,11 @@ scene_schema::EntityDocument extract_entities(const LabeledCloud& cloud, const P
     std::vector<std::vector<std::size_t>> start(chunks, std::vector<std::size_t>(classes, 0));
     std::vector<std::uint32_t> last_pixel(chunks, 0);
     for_each_chunk(cloud.size(), chunks, [&](std::size_t c, std::size_t first, std::size_t last) {
+        // Every point of each class (an upper bound once the columns are thinned).
         auto& size = start[c];
-        std::uint32_t row_start = 0;
         for (std::size_t i = first; i < last; ++i) {
             const auto k = cloud.class_index[i];
-            if (k < classes && taken(i, k, row_start)) ++size[k];
+            if (k < classes) ++size[k];
         }
         for (std::size_t i = first; has_pixels && i < last; ++i) {
             last_pixel[c] = std::max(last_pixel[c], cloud.pixel[i]);
