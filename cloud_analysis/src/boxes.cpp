@@ -9,6 +9,8 @@
 #include <Eigen/Eigenvalues>
 #include <Eigen/Geometry>
 
+#include "cloud_analysis/select.hpp"
+
 namespace cloud_analysis {
 namespace {
 
@@ -46,17 +48,8 @@ std::size_t quantile_index(std::size_t n, double q) {
 /// Values at fractions q_lo <= q_hi (0..1) of values, which are reordered.
 std::pair<double, double> quantiles(std::vector<double>& values, double q_lo, double q_hi) {
     if (values.empty()) return {0.0, 0.0};
-    const std::size_t lo = quantile_index(values.size(), q_lo);
-    const std::size_t hi = quantile_index(values.size(), q_hi);
-    const auto at = [&values](std::size_t k) {
-        return values.begin() + static_cast<std::ptrdiff_t>(k);
-    };
-    std::nth_element(values.begin(), at(hi), values.end());
-    const double value_hi = values[hi];
-    if (lo >= hi) return {value_hi, value_hi};
-    // Everything before position hi is now <= values[hi], so the lower one lies there.
-    std::nth_element(values.begin(), at(lo), at(hi));
-    return {values[lo], value_hi};
+    const double lo = select_kth(values, quantile_index(values.size(), q_lo));
+    return {lo, select_kth(values, quantile_index(values.size(), q_hi))};
 }
 
 using WeightedValues = std::vector<std::pair<double, float>>;

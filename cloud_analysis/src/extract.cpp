@@ -19,6 +19,7 @@
 
 #include "cloud_analysis/boxes.hpp"
 #include "cloud_analysis/cluster.hpp"
+#include "cloud_analysis/select.hpp"
 
 namespace cloud_analysis {
 namespace {
@@ -199,13 +200,6 @@ Split split_along(const std::vector<Eigen::Vector3f>& pts, const Indices& idx, d
     return split;
 }
 
-/// Value at fraction q (0..1) of the values (reordered).
-double quantile_of(std::vector<double>& values, double q) {
-    const auto k = static_cast<std::ptrdiff_t>(q * static_cast<double>(values.size() - 1) + 0.5);
-    std::nth_element(values.begin(), values.begin() + k, values.end());
-    return values[static_cast<std::size_t>(k)];
-}
-
 /// Vertical extent of points (2 % to 98 % height quantiles above the ground, or along -y
 /// without a ground plane), metres.
 double height_spread(const std::vector<Eigen::Vector3f>& pts, const Indices& idx,
@@ -215,7 +209,7 @@ double height_spread(const std::vector<Eigen::Vector3f>& pts, const Indices& idx
     for (std::size_t i : idx) {
         h.push_back(ground ? ground->height(pts[i].cast<double>()) : -double{pts[i].y()});
     }
-    return quantile_of(h, 0.98) - quantile_of(h, 0.02);
+    return quantile(h, 0.98) - quantile(h, 0.02);
 }
 
 /// Whether a long blob is a row of things side by side seen front-on (or from behind) rather
@@ -240,10 +234,10 @@ bool front_on_row(const std::vector<Eigen::Vector3f>& pts, const Indices& idx,
     }
     // The whole extent bounds the 2-98 % one: most blobs (single things) stop here.
     if (max_along - min_along < 2.0 * s.prior_W_m) return false;
-    const double length = quantile_of(along, 0.98) - quantile_of(along, 0.02);
+    const double length = quantile(along, 0.98) - quantile(along, 0.02);
     if (length < 2.0 * s.prior_W_m) return false;
     std::vector<double> sorted = across;
-    const double lo = quantile_of(sorted, 0.02), hi = quantile_of(sorted, 0.98);
+    const double lo = quantile(sorted, 0.02), hi = quantile(sorted, 0.98);
     // Top (95 % height) per 0.1 m bin across, walked from the end nearer the camera.
     constexpr double kBin = 0.1;
     const int bins = static_cast<int>((hi - lo) / kBin) + 1;
@@ -260,7 +254,7 @@ bool front_on_row(const std::vector<Eigen::Vector3f>& pts, const Indices& idx,
     for (int b = 0; b < bins; ++b) {
         auto& h = heights[static_cast<std::size_t>(b)];
         if (h.size() < kMinBinPoints) continue;
-        top[static_cast<std::size_t>(b)] = quantile_of(h, 0.95);
+        top[static_cast<std::size_t>(b)] = quantile(h, 0.95);
         highest = std::max(highest, top[static_cast<std::size_t>(b)]);
     }
     if (highest <= 0.0) return false;

@@ -1,0 +1,22 @@
+#pragma once
+
+/// Order statistics of large arrays: the value std::nth_element would put at position k,
+/// found in about one pass.
+
+#include <cstddef>
+#include <vector>
+
+namespace cloud_analysis {
+
+/// The k-th smallest of `values` (0-based, k < size), exactly as std::nth_element finds it;
+/// the values may be reordered. Large arrays are narrowed first: a strided sample's order
+/// statistics bracket rank k, one pass counts the values below the bracket and keeps those in
+/// it, and only those are selected from (the whole array when the bracket misses, which keeps
+/// the answer exact whatever the order of the values).
+double select_kth(std::vector<double>& values, std::size_t k);
+
+/// The value at fraction q (clamped to 0..1) of the sorted values: rank round(q * (n - 1));
+/// the values may be reordered. 0 for no values.
+double quantile(std::vector<double>& values, double q);
+
+}  // namespace cloud_analysis
