@@ -48,8 +48,8 @@ std::size_t quantile_index(std::size_t n, double q) {
 /// Values at fractions q_lo <= q_hi (0..1) of values, which are reordered.
 std::pair<double, double> quantiles(std::vector<double>& values, double q_lo, double q_hi) {
     if (values.empty()) return {0.0, 0.0};
-    const double lo = select_kth(values, quantile_index(values.size(), q_lo));
-    return {lo, select_kth(values, quantile_index(values.size(), q_hi))};
+    return select_two(values, quantile_index(values.size(), q_lo),
+                      quantile_index(values.size(), q_hi));
 }
 
 using WeightedValues = std::vector<std::pair<double, float>>;
@@ -414,20 +414,26 @@ OrientedBox fit_upright_box(const std::vector<Eigen::Vector3f>& points_m,
         }
         const std::size_t na = cells_along(hi.x() - lo.x());
         const std::size_t nb = cells_along(hi.y() - lo.y());
-        std::vector<std::uint32_t> count(na * nb, 0);
-        std::vector<Eigen::Vector2d> sum(na * nb, Eigen::Vector2d::Zero());
-        for (const auto& p : ab) {
-            const auto a = std::min(na - 1, static_cast<std::size_t>((p.x() - lo.x()) / cell));
-            const auto b = std::min(nb - 1, static_cast<std::size_t>((p.y() - lo.y()) / cell));
-            ++count[a * nb + b];
-            sum[a * nb + b] += p;
+        // Counted per cell, then the occupied cells numbered in cell order and summed there:
+        // 4 bytes per grid cell instead of a count and a sum for each.
+        std::vector<std::uint32_t> slot(na * nb, 0);
+        std::vector<std::uint32_t> cell_of(ab.size());
+        for (std::size_t i = 0; i < ab.size(); ++i) {
+            const auto a = std::min(na - 1, static_cast<std::size_t>((ab[i].x() - lo.x()) / cell));
+            const auto b = std::min(nb - 1, static_cast<std::size_t>((ab[i].y() - lo.y()) / cell));
+            cell_of[i] = static_cast<std::uint32_t>(a * nb + b);
+            ++slot[a * nb + b];
         }
-        std::vector<Eigen::Vector2d> cells;
         std::vector<float> counts;
-        for (std::size_t k = 0; k < count.size(); ++k) {
-            if (count[k] == 0) continue;
-            cells.push_back(sum[k] / static_cast<double>(count[k]));
-            counts.push_back(static_cast<float>(count[k]));
+        for (auto& s : slot) {
+            if (s == 0) continue;
+            counts.push_back(static_cast<float>(s));
+            s = static_cast<std::uint32_t>(counts.size() - 1);
+        }
+        std::vector<Eigen::Vector2d> cells(counts.size(), Eigen::Vector2d::Zero());
+        for (std::size_t i = 0; i < ab.size(); ++i) cells[slot[cell_of[i]]] += ab[i];
+        for (std::size_t k = 0; k < cells.size(); ++k) {
+            cells[k] /= static_cast<double>(counts[k]);
         }
         angle = best_weighted_lshape_angle(cells, counts, options.angle_step_deg);
     } else {

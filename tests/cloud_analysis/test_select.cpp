@@ -20,7 +20,7 @@ double sorted_kth(std::vector<double> values, std::size_t k) {
 
 }  // namespace
 
-TEST_CASE("select_kth gives the sorted array's k-th value on large arrays of any order",
+TEST_CASE("select_kth and select_two give the sorted array's values on large arrays of any order",
           "[select]") {
     std::mt19937 rng(5);
     std::normal_distribution<double> normal(0.0, 3.0);
@@ -34,7 +34,7 @@ TEST_CASE("select_kth gives the sorted array's k-th value on large arrays of any
         arrays[3][i] = static_cast<double>(few(rng));  // many equal values
         arrays[4][i] = static_cast<double>(i % 1000);  // periodic, like pixel rows
         // The strided sample sees only zeros: its bracket misses every inner rank.
-        arrays[5][i] = i % (n / 1024) == (n / 1024) / 2 ? 0.0 : static_cast<double>(i);
+        arrays[5][i] = i % (n / 512) == (n / 512) / 2 ? 0.0 : static_cast<double>(i);
     }
     for (std::size_t a = 0; a < arrays.size(); ++a) {
         for (const std::size_t k :
@@ -42,6 +42,11 @@ TEST_CASE("select_kth gives the sorted array's k-th value on large arrays of any
             INFO("array " << a << ", k " << k);
             std::vector<double> copy = arrays[a];
             CHECK(select_kth(copy, k) == sorted_kth(arrays[a], k));
+            const std::size_t k_hi = std::min(n - 1, k + n / 3);
+            copy = arrays[a];
+            const auto [lo, hi] = cloud_analysis::select_two(copy, k, k_hi);
+            CHECK(lo == sorted_kth(arrays[a], k));
+            CHECK(hi == sorted_kth(arrays[a], k_hi));
         }
     }
 }
@@ -58,4 +63,8 @@ TEST_CASE("quantile takes rank round(q * (n - 1)), clamps q and is 0 for no valu
     std::vector<double> none;
     CHECK(quantile(none, 0.5) == 0.0);
     CHECK_THROWS_AS(select_kth(v, 5), std::invalid_argument);
+    CHECK_THROWS_AS(cloud_analysis::select_two(v, 3, 2), std::invalid_argument);
+    const auto [lo, hi] = cloud_analysis::select_two(v, 1, 3);  // a small array
+    CHECK(lo == 2.0);
+    CHECK(hi == 4.0);
 }

@@ -4,6 +4,7 @@
 /// found in about one pass.
 
 #include <cstddef>
+#include <utility>
 #include <vector>
 
 namespace cloud_analysis {
@@ -14,6 +15,11 @@ namespace cloud_analysis {
 /// it, and only those are selected from (the whole array when the bracket misses, which keeps
 /// the answer exact whatever the order of the values).
 double select_kth(std::vector<double>& values, std::size_t k);
+
+/// The k_lo-th and k_hi-th smallest of `values` (k_lo <= k_hi < size), as select_kth gives
+/// them, from one sample and one pass.
+std::pair<double, double> select_two(std::vector<double>& values, std::size_t k_lo,
+                                     std::size_t k_hi);
 
 /// The value at fraction q (clamped to 0..1) of the sorted values: rank round(q * (n - 1));
 /// the values may be reordered. 0 for no values.
