@@ -250,8 +250,7 @@ std::string entity_json(const cloud_analysis::LoadedInputs& in,
                          {"class_config", a.class_config.empty() ? std::string("default")
                                                                  : a.class_config.string()}};
     doc.source = source;
-    scene_schema::check(doc);
-    return scene_schema::dump(doc);
+    return scene_schema::dump_checked(doc);
 }
 
 LoadedRun load_run(const AnalyseArgs& a) {

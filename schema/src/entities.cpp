@@ -330,7 +330,10 @@ json to_json(const EntityDocument& doc) {
     return j;
 }
 
-void check(const EntityDocument& document) {
+namespace {
+
+/// check() on a document and its JSON form.
+void check(const EntityDocument& document, const json& j) {
     for (std::size_t i = 0; i < document.entities.size(); ++i) {
         const Entity& e = document.entities[i];
         for (double v : {e.x, e.y, e.z, e.theta, e.W, e.H, e.L, e.confidence}) {
@@ -339,8 +342,18 @@ void check(const EntityDocument& document) {
             }
         }
     }
-    auto issues = validate(to_json(document));
+    auto issues = validate(j);
     if (!issues.empty()) throw SchemaError(issues.front().pointer, issues.front().rule);
+}
+
+}  // namespace
+
+void check(const EntityDocument& document) { check(document, to_json(document)); }
+
+std::string dump_checked(const EntityDocument& document) {
+    const json j = to_json(document);
+    check(document, j);
+    return j.dump(2) + "\n";
 }
 
 EntityDocument parse(std::string_view text) {
@@ -372,8 +385,7 @@ EntityDocument read_file(const std::filesystem::path& path) {
 }
 
 void write_file(const EntityDocument& document, const std::filesystem::path& path) {
-    check(document);
-    write_file_atomic(path, dump(document));
+    write_file_atomic(path, dump_checked(document));
 }
 
 void write_file_atomic(const std::filesystem::path& path, std::string_view bytes, FileSync sync) {

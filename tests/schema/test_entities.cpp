@@ -189,6 +189,17 @@ TEST_CASE("writing is atomic: the file appears whole or not at all", "[schema]")
     CHECK(count == 1);  // only out.json
 }
 
+TEST_CASE("dump_checked gives dump's text and refuses what check refuses", "[schema]") {
+    CHECK(scene_schema::dump_checked(small_document()) == scene_schema::dump(small_document()));
+    EntityDocument bad = small_document();
+    bad.entities[0].L = 0.0;
+    CHECK_THROWS_AS(scene_schema::check(bad), SchemaError);
+    CHECK_THROWS_AS(scene_schema::dump_checked(bad), SchemaError);
+    bad = small_document();
+    bad.entities[0].x = std::numeric_limits<double>::infinity();
+    CHECK_THROWS_AS(scene_schema::dump_checked(bad), SchemaError);
+}
+
 TEST_CASE("an atomic write without fsync replaces the file whole and leaves no temp file",
           "[schema]") {
     ScratchDir dir;

@@ -108,6 +108,9 @@ EntityDocument parse(std::string_view text);
 /// Canonical text: 2-space indent, sorted keys, trailing newline.
 std::string dump(const EntityDocument& document);
 
+/// check() then dump(), converting the document to JSON once.
+std::string dump_checked(const EntityDocument& document);
+
 /// Reads and validates a file; errors carry the pointer and the file name is added by the caller
 /// through ReadError.
 EntityDocument read_file(const std::filesystem::path& path);
