@@ -13,9 +13,10 @@
 #include <memory>
 #include <mutex>
 #include <stdexcept>
-#include <thread>
 #include <tuple>
 #include <utility>
+
+#include <opencv2/core.hpp>
 
 #include "cloud_analysis/boxes.hpp"
 #include "cloud_analysis/cluster.hpp"
@@ -683,10 +684,15 @@ class TaskQueue {
     /// Runs every task (those queued, and those they add) on `threads` threads, this one
     /// included; returns when all have run.
     void run(int threads) {
-        std::vector<std::thread> helpers;
-        for (int t = 1; t < threads; ++t) helpers.emplace_back([this] { work(); });
-        work();
-        for (auto& h : helpers) h.join();
+        // The workers run on OpenCV's thread pool (no thread started per call). A worker that
+        // starts late, or after another on the same thread, finds what is left: it only ever
+        // waits for tasks that are running.
+        cv::parallel_for_(
+            cv::Range(0, threads),
+            [this](const cv::Range& workers) {
+                for (int w = workers.start; w < workers.end; ++w) work();
+            },
+            threads);
         if (failure_) std::rethrow_exception(failure_);
     }
 
@@ -793,18 +799,20 @@ std::optional<GroundPlane> fit_ground(const std::vector<std::vector<Eigen::Vecto
 /// they save).
 constexpr std::size_t kMinChunkPoints = 32768;
 
-/// Calls body(c, first, last) for `chunks` contiguous ranges [first, last) of [0, n), chunk 0
-/// on this thread and the others on their own; rethrows the first exception.
+/// Calls body(c, first, last) for `chunks` contiguous ranges [first, last) of [0, n), on
+/// OpenCV's thread pool (already running for the matcher: no thread is started per call).
 template <typename Body>
 void for_each_chunk(std::size_t n, std::size_t chunks, Body&& body) {
     const auto bound = [&](std::size_t c) { return n / chunks * c + std::min(c, n % chunks); };
-    std::vector<std::future<void>> helpers;
-    for (std::size_t c = 1; c < chunks; ++c) {
-        helpers.push_back(std::async(std::launch::async,
-                                     [&body, &bound, c] { body(c, bound(c), bound(c + 1)); }));
-    }
-    body(0, bound(0), bound(1));
-    for (auto& h : helpers) h.get();
+    cv::parallel_for_(
+        cv::Range(0, static_cast<int>(chunks)),
+        [&](const cv::Range& range) {
+            for (int c = range.start; c < range.end; ++c) {
+                const auto k = static_cast<std::size_t>(c);
+                body(k, bound(k), bound(k + 1));
+            }
+        },
+        static_cast<double>(chunks));
 }
 
 }  // namespace
