@@ -13,10 +13,9 @@
 #include <memory>
 #include <mutex>
 #include <stdexcept>
+#include <thread>
 #include <tuple>
 #include <utility>
-
-#include <opencv2/core.hpp>
 
 #include "cloud_analysis/boxes.hpp"
 #include "cloud_analysis/cluster.hpp"
@@ -661,6 +660,75 @@ std::vector<scene_schema::Entity> things_of_class(const ClassInfo& info,
     return out;
 }
 
+/// Threads kept between calls for the extractor's parallel parts: starting a thread costs tens
+/// of microseconds, more right after the matcher, and a call started three. Not OpenCV's pool:
+/// the task queue's workers block while they wait for running tasks, which would starve a
+/// matcher running beside them on that pool (batch mode). A call offers work to helper threads
+/// and runs it itself too, so it completes even when no helper is free.
+class Helpers {
+  public:
+    static Helpers& instance() {
+        static Helpers helpers;
+        return helpers;
+    }
+    Helpers(const Helpers&) = delete;
+    Helpers& operator=(const Helpers&) = delete;
+
+    /// Runs `fn` (which must not throw) on this thread and on up to `extra` helper threads at
+    /// once; returns when every started copy has returned. Copies not started by the time this
+    /// thread's copy returns are withdrawn.
+    void run(int extra, const std::function<void()>& fn) {
+        Job job{&fn};
+        {
+            const std::lock_guard<std::mutex> lock(mutex_);
+            while (static_cast<int>(threads_.size()) < extra) {
+                threads_.emplace_back([this] { serve(); });
+            }
+            for (int i = 0; i < extra; ++i) offers_.push_back(&job);
+        }
+        wake_.notify_all();
+        fn();
+        std::unique_lock<std::mutex> lock(mutex_);
+        offers_.erase(std::remove(offers_.begin(), offers_.end(), &job), offers_.end());
+        done_.wait(lock, [&job] { return job.running == 0; });
+    }
+
+  private:
+    struct Job {
+        const std::function<void()>* fn;
+        int running = 0;
+    };
+    Helpers() = default;
+    ~Helpers() {
+        {
+            const std::lock_guard<std::mutex> lock(mutex_);
+            stop_ = true;
+        }
+        wake_.notify_all();
+        for (auto& t : threads_) t.join();
+    }
+    void serve() {
+        std::unique_lock<std::mutex> lock(mutex_);
+        for (;;) {
+            wake_.wait(lock, [this] { return stop_ || !offers_.empty(); });
+            if (stop_) return;
+            Job* job = offers_.front();
+            offers_.pop_front();
+            ++job->running;
+            lock.unlock();
+            (*job->fn)();
+            lock.lock();
+            --job->running;
+            done_.notify_all();
+        }
+    }
+    std::mutex mutex_;
+    std::condition_variable wake_, done_;
+    std::deque<Job*> offers_;
+    std::vector<std::thread> threads_;
+    bool stop_ = false;
+};
+
 /// Runs tasks on a fixed number of threads. A running task may add tasks at the front, to run
 /// before the ones queued: a class's cluster fits start as soon as its clustering is done, on
 /// whichever thread is free, so that no thread is left alone with the largest class at the
@@ -684,15 +752,7 @@ class TaskQueue {
     /// Runs every task (those queued, and those they add) on `threads` threads, this one
     /// included; returns when all have run.
     void run(int threads) {
-        // The workers run on OpenCV's thread pool (no thread started per call). A worker that
-        // starts late, or after another on the same thread, finds what is left: it only ever
-        // waits for tasks that are running.
-        cv::parallel_for_(
-            cv::Range(0, threads),
-            [this](const cv::Range& workers) {
-                for (int w = workers.start; w < workers.end; ++w) work();
-            },
-            threads);
+        Helpers::instance().run(threads - 1, [this] { work(); });
         if (failure_) std::rethrow_exception(failure_);
     }
 
@@ -799,20 +859,25 @@ std::optional<GroundPlane> fit_ground(const std::vector<std::vector<Eigen::Vecto
 /// they save).
 constexpr std::size_t kMinChunkPoints = 32768;
 
-/// Calls body(c, first, last) for `chunks` contiguous ranges [first, last) of [0, n), on
-/// OpenCV's thread pool (already running for the matcher: no thread is started per call).
+/// Calls body(c, first, last) for `chunks` contiguous ranges [first, last) of [0, n), taken in
+/// turn by this thread and up to chunks - 1 helpers; rethrows the first exception.
 template <typename Body>
 void for_each_chunk(std::size_t n, std::size_t chunks, Body&& body) {
     const auto bound = [&](std::size_t c) { return n / chunks * c + std::min(c, n % chunks); };
-    cv::parallel_for_(
-        cv::Range(0, static_cast<int>(chunks)),
-        [&](const cv::Range& range) {
-            for (int c = range.start; c < range.end; ++c) {
-                const auto k = static_cast<std::size_t>(c);
-                body(k, bound(k), bound(k + 1));
+    std::atomic<std::size_t> next{0};
+    std::mutex failure_mutex;
+    std::exception_ptr failure;
+    Helpers::instance().run(static_cast<int>(chunks) - 1, [&] {
+        for (std::size_t c = next++; c < chunks; c = next++) {
+            try {
+                body(c, bound(c), bound(c + 1));
+            } catch (...) {
+                const std::lock_guard<std::mutex> lock(failure_mutex);
+                if (!failure) failure = std::current_exception();
             }
-        },
-        static_cast<double>(chunks));
+        }
+    });
+    if (failure) std::rethrow_exception(failure);
 }
 
 }  // namespace

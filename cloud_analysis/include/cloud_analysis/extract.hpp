@@ -49,9 +49,9 @@ struct ExtractOptions {
                                            ///< footprint inside thing boxes is dropped (stuff
                                            ///< smeared onto a thing's silhouette), (0, 1],
                                            ///< 1 = off
-    /// Workers: the split by class, the classes and a thing class's clusters are shared among
-    /// this many workers on OpenCV's thread pool (at most its size run at once; the result does
-    /// not depend on it), >= 1
+    /// Threads: the classes and a thing class's clusters are shared among this many (the split
+    /// by class among as many chunks on OpenCV's thread pool); the result does not depend on
+    /// it, >= 1
     int threads = 2;
     /// Throws std::invalid_argument naming the bad field.
     void validate() const;
