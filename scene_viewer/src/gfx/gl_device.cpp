@@ -89,19 +89,26 @@ void main() {
 }
 )";
 
+/// Returns `object` when its `status` (GL_COMPILE_STATUS of a shader, GL_LINK_STATUS of a
+/// program) is true; else deletes it and throws std::runtime_error "<what>: <GL info log>".
+template <typename GetStatus, typename GetLog, typename Delete>
+GLuint checked(GLuint object, GLenum status, GetStatus get_status, GetLog get_log, Delete remove,
+               const char* what) {
+    GLint ok = 0;
+    get_status(object, status, &ok);
+    if (ok) return object;
+    char log[2048] = {};
+    get_log(object, sizeof log, nullptr, log);
+    remove(object);
+    throw std::runtime_error(std::string(what) + ": " + log);
+}
+
 GLuint compile(GLenum type, const char* source) {
     const GLuint shader = glCreateShader(type);
     glShaderSource(shader, 1, &source, nullptr);
     glCompileShader(shader);
-    GLint ok = 0;
-    glGetShaderiv(shader, GL_COMPILE_STATUS, &ok);
-    if (!ok) {
-        char log[2048] = {};
-        glGetShaderInfoLog(shader, sizeof log, nullptr, log);
-        glDeleteShader(shader);
-        throw std::runtime_error(std::string("GL shader compile failed: ") + log);
-    }
-    return shader;
+    return checked(shader, GL_COMPILE_STATUS, glGetShaderiv, glGetShaderInfoLog, glDeleteShader,
+                   "GL shader compile failed");
 }
 
 /// Links a vertex and a fragment shader; throws std::runtime_error with the GL log.
@@ -120,15 +127,8 @@ GLuint link(const char* vertex_source, const char* fragment_source) {
     glLinkProgram(program);
     glDeleteShader(vs);
     glDeleteShader(fs);
-    GLint ok = 0;
-    glGetProgramiv(program, GL_LINK_STATUS, &ok);
-    if (!ok) {
-        char log[2048] = {};
-        glGetProgramInfoLog(program, sizeof log, nullptr, log);
-        glDeleteProgram(program);
-        throw std::runtime_error(std::string("GL program link failed: ") + log);
-    }
-    return program;
+    return checked(program, GL_LINK_STATUS, glGetProgramiv, glGetProgramInfoLog, glDeleteProgram,
+                   "GL program link failed");
 }
 
 // A triangle covering the viewport at window depth 0, from gl_VertexID alone (no vertex buffer).
