@@ -40,18 +40,6 @@ struct GroundFrame {
     }
 };
 
-/// Index of the value at fraction q (0..1) of n sorted values.
-std::size_t quantile_index(std::size_t n, double q) {
-    return static_cast<std::size_t>(std::clamp(q, 0.0, 1.0) * static_cast<double>(n - 1) + 0.5);
-}
-
-/// Values at fractions q_lo <= q_hi (0..1) of values, which are reordered.
-std::pair<double, double> quantiles(std::vector<double>& values, double q_lo, double q_hi) {
-    if (values.empty()) return {0.0, 0.0};
-    return select_two(values, quantile_index(values.size(), q_lo),
-                      quantile_index(values.size(), q_hi));
-}
-
 using WeightedValues = std::vector<std::pair<double, float>>;
 
 /// The value of rank `rank` (0-based) among weighted values written out (each value standing

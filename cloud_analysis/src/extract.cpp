@@ -209,7 +209,8 @@ double height_spread(const std::vector<Eigen::Vector3f>& pts, const Indices& idx
     for (std::size_t i : idx) {
         h.push_back(ground ? ground->height(pts[i].cast<double>()) : -double{pts[i].y()});
     }
-    return quantile(h, 0.98) - quantile(h, 0.02);
+    const auto [lo, hi] = quantiles(h, 0.02, 0.98);
+    return hi - lo;
 }
 
 /// Whether a long blob is a row of things side by side seen front-on (or from behind) rather
@@ -234,10 +235,11 @@ bool front_on_row(const std::vector<Eigen::Vector3f>& pts, const Indices& idx,
     }
     // The whole extent bounds the 2-98 % one: most blobs (single things) stop here.
     if (max_along - min_along < 2.0 * s.prior_W_m) return false;
-    const double length = quantile(along, 0.98) - quantile(along, 0.02);
+    const auto [along_lo, along_hi] = quantiles(along, 0.02, 0.98);
+    const double length = along_hi - along_lo;
     if (length < 2.0 * s.prior_W_m) return false;
     std::vector<double> sorted = across;
-    const double lo = quantile(sorted, 0.02), hi = quantile(sorted, 0.98);
+    const auto [lo, hi] = quantiles(sorted, 0.02, 0.98);
     // Top (95 % height) per 0.1 m bin across, walked from the end nearer the camera.
     constexpr double kBin = 0.1;
     const int bins = static_cast<int>((hi - lo) / kBin) + 1;

@@ -65,15 +65,18 @@ std::pair<double, double> select_two(std::vector<double>& values, std::size_t k_
     std::sort(sample.begin(), sample.end());
     const auto [lo_min, lo_max] = bracket_of(sample, k_lo, n);
     const auto [hi_min, hi_max] = bracket_of(sample, k_hi, n);
+    const bool two = k_lo != k_hi;
     std::size_t below_lo = 0, below_hi = 0;
     std::vector<double> in_lo, in_hi;
     for (const double v : values) {
-        below_lo += v < lo_min ? 1 : 0;
         below_hi += v < hi_min ? 1 : 0;
-        if (v >= lo_min && v <= lo_max) in_lo.push_back(v);
         if (v >= hi_min && v <= hi_max) in_hi.push_back(v);
+        if (!two) continue;
+        below_lo += v < lo_min ? 1 : 0;
+        if (v >= lo_min && v <= lo_max) in_lo.push_back(v);
     }
     const double hi = select_in(in_hi, below_hi, values, k_hi);
+    if (!two) return {hi, hi};
     return {select_in(in_lo, below_lo, values, k_lo), hi};
 }
 
@@ -82,11 +85,24 @@ double select_kth(std::vector<double>& values, std::size_t k) {
     return select_two(values, k, k).first;
 }
 
+namespace {
+
+/// Rank round(q * (n - 1)) of n > 0 values, q clamped to 0..1.
+std::size_t quantile_rank(std::size_t n, double q) {
+    return static_cast<std::size_t>(std::clamp(q, 0.0, 1.0) * static_cast<double>(n - 1) + 0.5);
+}
+
+}  // namespace
+
 double quantile(std::vector<double>& values, double q) {
     if (values.empty()) return 0.0;
-    const auto k = static_cast<std::size_t>(
-        std::clamp(q, 0.0, 1.0) * static_cast<double>(values.size() - 1) + 0.5);
-    return select_kth(values, k);
+    return select_kth(values, quantile_rank(values.size(), q));
+}
+
+std::pair<double, double> quantiles(std::vector<double>& values, double q_lo, double q_hi) {
+    if (values.empty()) return {0.0, 0.0};
+    return select_two(values, quantile_rank(values.size(), q_lo),
+                      quantile_rank(values.size(), q_hi));
 }
 
 }  // namespace cloud_analysis

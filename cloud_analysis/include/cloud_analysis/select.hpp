@@ -25,4 +25,8 @@ std::pair<double, double> select_two(std::vector<double>& values, std::size_t k_
 /// the values may be reordered. 0 for no values.
 double quantile(std::vector<double>& values, double q);
 
+/// The values at fractions q_lo <= q_hi, as quantile() gives each, from one pass; {0, 0} for
+/// no values.
+std::pair<double, double> quantiles(std::vector<double>& values, double q_lo, double q_hi);
+
 }  // namespace cloud_analysis
