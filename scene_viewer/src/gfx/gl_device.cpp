@@ -549,31 +549,25 @@ class GlDevice final : public Device {
                                        resolve_depth_);
         check_complete(resolve_fbo_);
         if (samples > 0) {
-            glCreateRenderbuffers(2, msaa_rb_);
-            glNamedRenderbufferStorageMultisample(msaa_rb_[0], samples, GL_RGBA8, width, height);
-            glNamedRenderbufferStorageMultisample(msaa_rb_[1], samples, GL_DEPTH_COMPONENT24, width,
-                                                  height);
-            glCreateFramebuffers(1, &msaa_fbo_);
-            glNamedFramebufferRenderbuffer(msaa_fbo_, GL_COLOR_ATTACHMENT0, GL_RENDERBUFFER,
-                                           msaa_rb_[0]);
-            glNamedFramebufferRenderbuffer(msaa_fbo_, GL_DEPTH_ATTACHMENT, GL_RENDERBUFFER,
-                                           msaa_rb_[1]);
-            check_complete(msaa_fbo_);
+            msaa_fbo_ = renderbuffer_target(msaa_rb_, samples, width, height);
         }
     }
 
     /// The FXAA passes' colour and edge marks (depth), made on the first FXAA frame of a size.
-    void create_fxaa_target() {
-        glCreateRenderbuffers(2, fxaa_rb_);
-        glNamedRenderbufferStorage(fxaa_rb_[0], GL_RGBA8, width_, height_);
-        glNamedRenderbufferStorage(fxaa_rb_[1], GL_DEPTH_COMPONENT24, width_, height_);
-        glCreateFramebuffers(1, &fxaa_fbo_);
-        glNamedFramebufferRenderbuffer(fxaa_fbo_, GL_COLOR_ATTACHMENT0, GL_RENDERBUFFER,
-                                       fxaa_rb_[0]);
-        // Depth marks the edge pixels for the blend pass.
-        glNamedFramebufferRenderbuffer(fxaa_fbo_, GL_DEPTH_ATTACHMENT, GL_RENDERBUFFER,
-                                       fxaa_rb_[1]);
-        check_complete(fxaa_fbo_);
+    void create_fxaa_target() { fxaa_fbo_ = renderbuffer_target(fxaa_rb_, 0, width_, height_); }
+
+    /// A framebuffer of an RGBA8 colour renderbuffer rb[0] and a 24-bit depth renderbuffer
+    /// rb[1], multisampled when samples > 0 (0 is plain storage in GL 4.5).
+    static GLuint renderbuffer_target(GLuint (&rb)[2], int samples, int width, int height) {
+        glCreateRenderbuffers(2, rb);
+        glNamedRenderbufferStorageMultisample(rb[0], samples, GL_RGBA8, width, height);
+        glNamedRenderbufferStorageMultisample(rb[1], samples, GL_DEPTH_COMPONENT24, width, height);
+        GLuint fbo = 0;
+        glCreateFramebuffers(1, &fbo);
+        glNamedFramebufferRenderbuffer(fbo, GL_COLOR_ATTACHMENT0, GL_RENDERBUFFER, rb[0]);
+        glNamedFramebufferRenderbuffer(fbo, GL_DEPTH_ATTACHMENT, GL_RENDERBUFFER, rb[1]);
+        check_complete(fbo);
+        return fbo;
     }
 
     static void check_complete(GLuint fbo) {
