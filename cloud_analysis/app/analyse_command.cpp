@@ -234,7 +234,9 @@ std::string entity_json(const cloud_analysis::LoadedInputs& in,
                         const cloud_analysis::AnalyseResult& r, const AnalyseArgs& a,
                         const cloud_analysis::ExtractOptions& extract) {
     scene_schema::EntityDocument doc =
-        cloud_analysis::extract_entities(r.cloud, in.palette, r.camera, extract);
+        r.points.xyz_m.empty()
+            ? cloud_analysis::extract_entities(r.cloud, in.palette, r.camera, extract)
+            : cloud_analysis::extract_entities(r.points, in.palette, extract);
     doc.frame.id = in.paths.frame_id;
     scene_schema::CameraIntrinsics cam;
     cam.width_px = r.camera.width_px;
@@ -251,6 +253,15 @@ std::string entity_json(const cloud_analysis::LoadedInputs& in,
                                                                  : a.class_config.string()}};
     doc.source = source;
     return scene_schema::dump_checked(doc);
+}
+
+cloud_analysis::AnalyseOptions options_for_outputs(const AnalyseArgs& a,
+                                                   const cloud_analysis::ExtractOptions& extract,
+                                                   const cloud_analysis::Palette& palette,
+                                                   bool clouds) {
+    cloud_analysis::AnalyseOptions options = a.options;
+    if (!clouds) options.class_points_only = cloud_analysis::class_selection(palette, extract);
+    return options;
 }
 
 LoadedRun load_run(const AnalyseArgs& a) {
@@ -317,7 +328,9 @@ RunReport analyse_loaded_and_write(const LoadedRun& run, const AnalyseArgs& a,
                   << ")\n";
     }
 
-    cloud_analysis::AnalyseResult r = cloud_analysis::analyse(in, a.options, matcher);
+    const bool any_cloud = !a.xyz.empty() || !a.pcd.empty() || !a.ply.empty();
+    cloud_analysis::AnalyseResult r = cloud_analysis::analyse(
+        in, options_for_outputs(a, run.extract, in.palette, any_cloud), matcher);
     timings.insert(timings.end(), r.timings.begin(), r.timings.end());
     if (in.semantic.empty()) {
         std::cerr << kTool << ": warning: no semantic image: every point is void\n";
@@ -384,7 +397,7 @@ RunReport analyse_loaded_and_write(const LoadedRun& run, const AnalyseArgs& a,
         throw;
     }
 
-    return {timings, r.cloud.size()};
+    return {timings, r.cloud_points};
 }
 
 RunReport analyse_and_write(const AnalyseArgs& a, cloud_analysis::DisparityMatcher& matcher) {

@@ -63,6 +63,13 @@ scene_schema::FileSync cloud_sync(const AnalyseArgs& a);
 /// Extraction settings of the flags, with the class config read and validated.
 cloud_analysis::ExtractOptions extract_options(const AnalyseArgs& a);
 
+/// The analyse options for a run: without cloud outputs, analyse builds no cloud and
+/// reprojects straight into the extractor's per-class points (AnalyseOptions::class_points_only).
+cloud_analysis::AnalyseOptions options_for_outputs(const AnalyseArgs& a,
+                                                   const cloud_analysis::ExtractOptions& extract,
+                                                   const cloud_analysis::Palette& palette,
+                                                   bool clouds);
+
 /// The entity file of one analysed frame (entities, camera, `source` block), checked against
 /// the schema, as text.
 std::string entity_json(const cloud_analysis::LoadedInputs& in,

@@ -195,15 +195,17 @@ int run_batch(const BatchArgs& a) {
     // core each thread's frees stay in its own arena and the resident set creeps up (kitti15,
     // fast preset: peak 227 MB, still rising after 60 frames); two arenas keep it flat (196 MB).
     mallopt(M_ARENA_MAX, 2);
-    const AnalyseOptions& options = a.settings.options;
     const ExtractOptions extract = extract_options(a.settings);
     const Palette palette = [&] {
         try {
-            return load_palette(options.palette);
+            return load_palette(a.settings.options.palette);
         } catch (const std::exception& e) {
             throw std::runtime_error(std::string("cannot read palette: ") + e.what());
         }
     }();
+    // Without clouds the entities are extracted from points reprojected by class directly.
+    const AnalyseOptions options = options_for_outputs(a.settings, extract, palette,
+                                                       /*clouds=*/!a.cloud_formats.empty());
     DisparityMatcher matcher(options.disparity);
     std::map<std::filesystem::path, Calibration> calibrations;  // touched by the loader only
 
@@ -271,7 +273,7 @@ int run_batch(const BatchArgs& a) {
             try {
                 AnalyseResult r = analyse(*frame.inputs, options, matcher);
                 for (const auto& s : r.timings) record[s.stage + "_ms"] = s.ms;
-                record["points"] = r.cloud.size();
+                record["points"] = r.cloud_points;
                 job =
                     FinishJob{std::move(*frame.inputs), std::move(r),      &a.settings,    &extract,
                               a.out_dir / frame.frame,  a.disparity_kitti, a.cloud_formats};

@@ -920,39 +920,43 @@ void ExtractOptions::validate() const {
     }
 }
 
-scene_schema::EntityDocument extract_entities(const LabeledCloud& cloud, const Palette& palette,
-                                              const StereoCamera& camera,
-                                              const ExtractOptions& options) {
-    static_cast<void>(camera);  // not needed by the current extractors (see extract.hpp)
-    options.validate();
+ClassSelection class_selection(const Palette& palette, const ExtractOptions& options) {
+    ClassSelection selection;
+    selection.max_depth_m = options.max_range_m;
+    for (const ClassInfo& info : palette.classes) {
+        const ClassSettings s = options.classes.find(info.name);
+        selection.column_mask.push_back(static_cast<std::uint32_t>(s.column_step) - 1);
+        selection.keep_pixels.push_back(s.thing ? 1 : 0);
+    }
+    return selection;
+}
+
+ClassPoints points_by_class(const LabeledCloud& cloud, const ClassSelection& selection,
+                            int threads) {
     if (cloud.class_index.size() != cloud.xyz_m.size()) {
         throw std::invalid_argument("cloud: class_index and xyz_m differ in size");
     }
-    std::vector<char> is_thing(palette.classes.size(), 0);
-    for (std::size_t k = 0; k < palette.classes.size(); ++k) {
-        is_thing[k] = options.classes.find(palette.classes[k].name).thing ? 1 : 0;
+    if (selection.keep_pixels.size() != selection.column_mask.size()) {
+        throw std::invalid_argument("selection: column_mask and keep_pixels differ in size");
     }
-    // Points per palette class, within range; pixels only for things (the image-space steps).
-    std::vector<std::vector<Eigen::Vector3f>> per_class(palette.classes.size());
-    std::vector<std::vector<std::uint32_t>> per_class_pixels(palette.classes.size());
+    const std::size_t classes = selection.column_mask.size();
+    ClassPoints out;
+    out.cloud_points = cloud.size();
+    auto& per_class = out.xyz_m;
+    auto& per_class_pixels = out.pixel;
+    per_class.resize(classes);
+    per_class_pixels.resize(classes);
     // Split on `chunks` threads over contiguous point ranges (each chunk writes its points of a
     // class after the previous chunks' ones, so the order is the points' order): count, size,
     // write, then close the gaps the range check left.
-    const std::size_t classes = palette.classes.size();
-    const std::size_t chunks = std::clamp<std::size_t>(cloud.size() / kMinChunkPoints, 1,
-                                                       static_cast<std::size_t>(options.threads));
+    const std::size_t chunks = std::clamp<std::size_t>(
+        cloud.size() / kMinChunkPoints, 1, static_cast<std::size_t>(std::max(threads, 1)));
     const bool has_pixels = cloud.pixel.size() == cloud.size();
-    // Stuff classes keep every column_step-th pixel column (u & (step - 1) == 0), when the
-    // cloud knows its pixels.
+    // Columns are thinned only when the cloud knows its pixels.
     std::vector<std::uint32_t> column_mask(classes, 0);
-    for (std::size_t k = 0; k < classes && has_pixels && cloud.width_px > 0; ++k) {
-        column_mask[k] =
-            static_cast<std::uint32_t>(options.classes.find(palette.classes[k].name).column_step) -
-            1;
-    }
-    // Each point taken of class k stands for step[k] points of the cloud.
-    std::vector<std::size_t> step(classes);
-    for (std::size_t k = 0; k < classes; ++k) step[k] = std::size_t{column_mask[k]} + 1;
+    if (has_pixels && cloud.width_px > 0) column_mask = selection.column_mask;
+    out.weight.resize(classes);
+    for (std::size_t k = 0; k < classes; ++k) out.weight[k] = std::size_t{column_mask[k]} + 1;
     const auto width = static_cast<std::uint32_t>(std::max(cloud.width_px, 1));
     // Column of pixel p, for pixels mostly in increasing order: the row's first pixel is
     // found by a division only when p leaves the row.
@@ -976,29 +980,31 @@ scene_schema::EntityDocument extract_entities(const LabeledCloud& cloud, const P
             last_pixel[c] = std::max(last_pixel[c], cloud.pixel[i]);
         }
     });
-    PixelGrid grid;
-    if (has_pixels && cloud.width_px > 0 && cloud.height_px > 0 &&
-        *std::max_element(last_pixel.begin(), last_pixel.end()) <
-            static_cast<std::uint64_t>(cloud.width_px) * cloud.height_px) {
-        grid = PixelGrid{cloud.width_px, cloud.height_px};
+    const bool grid = has_pixels && cloud.width_px > 0 && cloud.height_px > 0 &&
+                      *std::max_element(last_pixel.begin(), last_pixel.end()) <
+                          static_cast<std::uint64_t>(cloud.width_px) * cloud.height_px;
+    if (grid) {
+        out.width_px = cloud.width_px;
+        out.height_px = cloud.height_px;
     }
     // Sized for every point of the class, written by index, then cut to the points kept.
     for (std::size_t k = 0; k < classes; ++k) {
         std::size_t total = 0;
         for (std::size_t c = 0; c < chunks; ++c) total += std::exchange(start[c][k], total);
         per_class[k].resize(total);
-        if (is_thing[k]) per_class_pixels[k].resize(total);
+        if (selection.keep_pixels[k]) per_class_pixels[k].resize(total);
     }
     std::vector<std::vector<std::size_t>> end = start;
+    const double max_depth = selection.max_depth_m;
     for_each_chunk(cloud.size(), chunks, [&](std::size_t c, std::size_t first, std::size_t last) {
         auto& at = end[c];
         std::uint32_t row_start = 0;
         for (std::size_t i = first; i < last; ++i) {
             const auto k = cloud.class_index[i];
             const auto& p = cloud.xyz_m[i];
-            if (k == kVoidClass || k >= classes || !taken(i, k, row_start)) continue;
-            if (!(p.z() > 0.0f && double{p.z()} < options.max_range_m) || !p.allFinite()) continue;
-            if (is_thing[k]) per_class_pixels[k][at[k]] = grid.valid() ? cloud.pixel[i] : 0;
+            if (k >= classes || !taken(i, k, row_start)) continue;
+            if (!(p.z() > 0.0f && double{p.z()} < max_depth) || !p.allFinite()) continue;
+            if (selection.keep_pixels[k]) per_class_pixels[k][at[k]] = grid ? cloud.pixel[i] : 0;
             per_class[k][at[k]++] = p;
         }
     });
@@ -1009,15 +1015,48 @@ scene_schema::EntityDocument extract_entities(const LabeledCloud& cloud, const P
             const auto to = static_cast<std::ptrdiff_t>(end[c][k]);
             std::copy(per_class[k].begin() + from, per_class[k].begin() + to,
                       per_class[k].begin() + static_cast<std::ptrdiff_t>(kept));
-            if (is_thing[k]) {
+            if (selection.keep_pixels[k]) {
                 std::copy(per_class_pixels[k].begin() + from, per_class_pixels[k].begin() + to,
                           per_class_pixels[k].begin() + static_cast<std::ptrdiff_t>(kept));
             }
             kept += end[c][k] - start[c][k];
         }
         per_class[k].resize(kept);
-        if (is_thing[k]) per_class_pixels[k].resize(kept);
+        if (selection.keep_pixels[k]) per_class_pixels[k].resize(kept);
     }
+    return out;
+}
+
+scene_schema::EntityDocument extract_entities(const LabeledCloud& cloud, const Palette& palette,
+                                              const StereoCamera& camera,
+                                              const ExtractOptions& options) {
+    static_cast<void>(camera);  // not needed by the current extractors (see extract.hpp)
+    options.validate();
+    return extract_entities(
+        points_by_class(cloud, class_selection(palette, options), options.threads), palette,
+        options);
+}
+
+scene_schema::EntityDocument extract_entities(const ClassPoints& points, const Palette& palette,
+                                              const ExtractOptions& options) {
+    options.validate();
+    if (points.xyz_m.size() != palette.classes.size() ||
+        points.pixel.size() != palette.classes.size() ||
+        points.weight.size() != palette.classes.size()) {
+        throw std::invalid_argument("points: not one entry per palette class");
+    }
+    std::vector<char> is_thing(palette.classes.size(), 0);
+    for (std::size_t k = 0; k < palette.classes.size(); ++k) {
+        is_thing[k] = options.classes.find(palette.classes[k].name).thing ? 1 : 0;
+        if (is_thing[k] && points.pixel[k].size() != points.xyz_m[k].size()) {
+            throw std::invalid_argument("points: no pixels for thing class '" +
+                                        palette.classes[k].name + "'");
+        }
+    }
+    const auto& per_class = points.xyz_m;
+    const auto& per_class_pixels = points.pixel;
+    const auto& step = points.weight;
+    const PixelGrid grid{points.width_px, points.height_px};
 
     // The ground plane is the first task, fitted beside the clustering of the classes (which
     // does not need it); a class waits for it once clustered. Thing points cost about four

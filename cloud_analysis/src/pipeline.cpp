@@ -170,9 +170,16 @@ AnalyseResult analyse(const LoadedInputs& in, const AnalyseOptions& options,
         throw std::runtime_error("empty disparity: no pixel has a valid disparity (" +
                                  in.paths.left.string() + ")");
     }
-    r.cloud = reproject(r.disparity, r.camera, *left, r.classes, options.reproject);
+    if (options.class_points_only) {
+        r.points = reproject_by_class(r.disparity, r.camera, r.classes, options.reproject,
+                                      *options.class_points_only);
+        r.cloud_points = r.points.cloud_points;
+    } else {
+        r.cloud = reproject(r.disparity, r.camera, *left, r.classes, options.reproject);
+        r.cloud_points = r.cloud.size();
+    }
     watch.lap("reproject");
-    if (r.cloud.size() == 0) {
+    if (r.cloud_points == 0) {
         throw std::runtime_error("empty cloud: no point within " +
                                  std::to_string(options.reproject.max_range_m) +
                                  " m (--max-range)");

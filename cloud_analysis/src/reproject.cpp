@@ -3,6 +3,7 @@
 #include <algorithm>
 #include <cmath>
 #include <stdexcept>
+#include <utility>
 #include <vector>
 
 #include <opencv2/core.hpp>
@@ -10,6 +11,103 @@
 #include "cloud_analysis/calibration.hpp"
 
 namespace cloud_analysis {
+namespace {
+
+/// The reprojection of one pixel row at a time, shared by reproject and reproject_by_class so
+/// that both keep exactly the same points with exactly the same coordinates.
+class RowReprojector {
+  public:
+    RowReprojector(const DisparityMap& disparity, const StereoCamera& camera,
+                   const ClassImage& classes, const ReprojectOptions& options)
+        : disparity_(disparity), classes_(classes), options_(options) {
+        options.validate();
+        const int w = disparity.width_px;
+        labelled_ = !classes.class_index.empty();
+        if (labelled_ && (classes.width_px != w || classes.height_px != disparity.height_px)) {
+            throw std::invalid_argument("semantic image and disparity differ in size");
+        }
+        if (!(camera.baseline_m > 0.0) || !(camera.fx_px > 0.0) || !(camera.fy_px > 0.0)) {
+            throw std::invalid_argument("camera: fx, fy and baseline must be > 0");
+        }
+        // (X, Y, Z, W) = Q (u, v, d, 1) with OpenCV's Q (reprojection_matrix): X = u - cx,
+        // Y = (v - cy) fx / fy, Z = fx, W = (d - (cx - cx_right)) / B. Only W depends on d, so
+        // the 4x4 product reduces to one reciprocal per point; rows and columns are precomputed.
+        Q_ = reprojection_matrix(camera);
+        z_num_ = Q_(2, 3);
+        x_num_.resize(static_cast<std::size_t>(w));
+        x_num_sq_.resize(x_num_.size());
+        for (int u = 0; u < w; ++u) {
+            const auto i = static_cast<std::size_t>(u);
+            x_num_[i] = Q_(0, 0) * u + Q_(0, 3);
+            x_num_sq_[i] = x_num_[i] * x_num_[i];
+        }
+        max_range_sq_ = options.max_range_m * options.max_range_m;
+    }
+
+    int width() const { return disparity_.width_px; }
+    int height() const { return disparity_.height_px; }
+
+    std::size_t row_start(int v) const {
+        return static_cast<std::size_t>(v) * static_cast<std::size_t>(width());
+    }
+
+    /// Calls emit(u, y_num, w_h, class) for each pixel of row v that becomes a point, in order.
+    /// The range test needs no division: |(X, Y, Z)| / W <= r  <=>  |(X, Y, Z)|^2 <= r^2 W^2,
+    /// W > 0.
+    template <typename Emit>
+    void for_each_point(int v, Emit&& emit) const {
+        const std::size_t row = row_start(v);
+        const float* d_row = disparity_.disparity_px.data() + row;
+        const std::uint16_t* c_row = labelled_ ? classes_.class_index.data() + row : nullptr;
+        const double y_num = Q_(1, 1) * v + Q_(1, 3);
+        const double yz_num_sq = y_num * y_num + z_num_ * z_num_;
+        const double w_per_px = Q_(3, 2);
+        const double w_offset = Q_(3, 3);
+        const double min_d = options_.min_disparity_px;
+        const bool keep_void = options_.keep_void;
+        for (int u = 0; u < width(); ++u) {
+            const double d = d_row[u];
+            if (!(d > min_d)) continue;
+            const std::uint16_t cls = labelled_ ? c_row[u] : kVoidClass;
+            if (cls == kVoidClass && !keep_void) continue;
+            const double w_h = w_per_px * d + w_offset;
+            if (!(w_h > 0.0)) continue;  // at or beyond infinity
+            if (!(x_num_sq_[static_cast<std::size_t>(u)] + yz_num_sq <=
+                  max_range_sq_ * w_h * w_h)) {
+                continue;
+            }
+            emit(u, y_num, w_h, cls);
+        }
+    }
+
+    /// The point of column u of a row emitted with (y_num, w_h).
+    Eigen::Vector3f point(int u, double y_num, double w_h) const {
+        const double inv = 1.0 / w_h;
+        return {static_cast<float>(x_num_[static_cast<std::size_t>(u)] * inv),
+                static_cast<float>(y_num * inv), static_cast<float>(z_num_ * inv)};
+    }
+
+    /// Calls body(first_row, last_row) for row stripes in parallel.
+    template <typename Body>
+    void for_stripes(Body&& body) const {
+        const int h = height();
+        cv::parallel_for_(
+            cv::Range(0, h), [&](const cv::Range& rows) { body(rows.start, rows.end); },
+            std::max(1, std::min(h, 16)));
+    }
+
+  private:
+    const DisparityMap& disparity_;
+    const ClassImage& classes_;
+    const ReprojectOptions& options_;
+    bool labelled_ = false;
+    Eigen::Matrix4d Q_;
+    double z_num_ = 0.0;
+    std::vector<double> x_num_, x_num_sq_;
+    double max_range_sq_ = 0.0;
+};
+
+}  // namespace
 
 void ReprojectOptions::validate() const {
     if (!(max_range_m > 0.0)) throw std::invalid_argument("max_range_m: must be > 0");
@@ -19,107 +117,133 @@ void ReprojectOptions::validate() const {
 LabeledCloud reproject(const DisparityMap& disparity, const StereoCamera& camera,
                        const ImageU8& left, const ClassImage& classes,
                        const ReprojectOptions& options) {
-    options.validate();
-    const int w = disparity.width_px;
-    const int h = disparity.height_px;
-    if (left.width_px != w || left.height_px != h) {
+    if (left.width_px != disparity.width_px || left.height_px != disparity.height_px) {
         throw std::invalid_argument("left image and disparity differ in size");
     }
-    const bool labelled = !classes.class_index.empty();
-    if (labelled && (classes.width_px != w || classes.height_px != h)) {
-        throw std::invalid_argument("semantic image and disparity differ in size");
-    }
-    if (!(camera.baseline_m > 0.0) || !(camera.fx_px > 0.0) || !(camera.fy_px > 0.0)) {
-        throw std::invalid_argument("camera: fx, fy and baseline must be > 0");
-    }
-    // (X, Y, Z, W) = Q (u, v, d, 1) with OpenCV's Q (reprojection_matrix): X = u - cx,
-    // Y = (v - cy) fx / fy, Z = fx, W = (d - (cx - cx_right)) / B. Only W depends on d, so the
-    // 4x4 product reduces to one reciprocal per point; rows and columns are precomputed.
-    const Eigen::Matrix4d Q = reprojection_matrix(camera);
-    const double w_per_px = Q(3, 2);
-    const double w_offset = Q(3, 3);
-    const double z_num = Q(2, 3);
-    std::vector<double> x_num(static_cast<std::size_t>(w)), x_num_sq(x_num.size());
-    for (int u = 0; u < w; ++u) {
-        x_num[static_cast<std::size_t>(u)] = Q(0, 0) * u + Q(0, 3);
-        x_num_sq[static_cast<std::size_t>(u)] =
-            x_num[static_cast<std::size_t>(u)] * x_num[static_cast<std::size_t>(u)];
-    }
-    const double max_range_sq = options.max_range_m * options.max_range_m;
-    const double min_d = options.min_disparity_px;
+    const RowReprojector rows(disparity, camera, classes, options);
+    const int h = rows.height();
     const bool grey = left.channels != 3;
-    const auto row_of = [w](int v) {
-        return static_cast<std::size_t>(v) * static_cast<std::size_t>(w);
-    };
-    // Calls emit(u, w_h, class) for each pixel of row v that becomes a point, in order. The
-    // range test needs no division: |(X, Y, Z)| / W <= r  <=>  |(X, Y, Z)|^2 <= r^2 W^2, W > 0.
-    const auto for_each_point = [&](int v, auto&& emit) {
-        const std::size_t row = row_of(v);
-        const float* d_row = disparity.disparity_px.data() + row;
-        const std::uint16_t* c_row = labelled ? classes.class_index.data() + row : nullptr;
-        const double y_num = Q(1, 1) * v + Q(1, 3);
-        const double yz_num_sq = y_num * y_num + z_num * z_num;
-        for (int u = 0; u < w; ++u) {
-            const double d = d_row[u];
-            if (!(d > min_d)) continue;
-            const std::uint16_t cls = labelled ? c_row[u] : kVoidClass;
-            if (cls == kVoidClass && !options.keep_void) continue;
-            const double w_h = w_per_px * d + w_offset;
-            if (!(w_h > 0.0)) continue;  // at or beyond infinity
-            if (!(x_num_sq[static_cast<std::size_t>(u)] + yz_num_sq <= max_range_sq * w_h * w_h)) {
-                continue;
-            }
-            emit(u, y_num, w_h, cls);
-        }
-    };
     // Rows in parallel stripes, twice: the points of each row are counted, then written from
     // the row's offset (the same tests in the same order, so the counts hold): the cloud comes
     // out in pixel order, as from one pass.
     std::vector<std::size_t> offset(static_cast<std::size_t>(h) + 1, 0);
-    const int stripes = std::max(1, std::min(h, 16));
-    cv::parallel_for_(
-        cv::Range(0, h),
-        [&](const cv::Range& rows) {
-            for (int v = rows.start; v < rows.end; ++v) {
-                std::size_t n = 0;
-                for_each_point(v, [&n](int, double, double, std::uint16_t) { ++n; });
-                offset[static_cast<std::size_t>(v) + 1] = n;
-            }
-        },
-        stripes);
+    rows.for_stripes([&](int first, int last) {
+        for (int v = first; v < last; ++v) {
+            std::size_t n = 0;
+            rows.for_each_point(v, [&n](int, double, double, std::uint16_t) { ++n; });
+            offset[static_cast<std::size_t>(v) + 1] = n;
+        }
+    });
     for (std::size_t v = 0; v < static_cast<std::size_t>(h); ++v) offset[v + 1] += offset[v];
     LabeledCloud cloud;
-    cloud.width_px = w;
+    cloud.width_px = rows.width();
     cloud.height_px = h;
     const std::size_t n = offset.back();
     cloud.xyz_m.resize(n);
     cloud.colour.resize(n);
     cloud.class_index.resize(n);
     cloud.pixel.resize(n);
-    cv::parallel_for_(
-        cv::Range(0, h),
-        [&](const cv::Range& rows) {
-            for (int v = rows.start; v < rows.end; ++v) {
-                const std::size_t row = row_of(v);
-                const std::uint8_t* img_row =
-                    left.data.data() + row * static_cast<std::size_t>(left.channels);
-                std::size_t at = offset[static_cast<std::size_t>(v)];
-                for_each_point(v, [&](int u, double y_num, double w_h, std::uint16_t cls) {
-                    const double inv = 1.0 / w_h;
-                    cloud.xyz_m[at] = Eigen::Vector3f(
-                        static_cast<float>(x_num[static_cast<std::size_t>(u)] * inv),
-                        static_cast<float>(y_num * inv), static_cast<float>(z_num * inv));
-                    const std::uint8_t* c =
-                        grey ? img_row + u : img_row + 3 * static_cast<std::size_t>(u);
-                    cloud.colour[at] = grey ? Rgb{c[0], c[0], c[0]} : Rgb{c[0], c[1], c[2]};
-                    cloud.class_index[at] = cls;
-                    cloud.pixel[at] = static_cast<std::uint32_t>(row + static_cast<std::size_t>(u));
-                    ++at;
+    rows.for_stripes([&](int first, int last) {
+        for (int v = first; v < last; ++v) {
+            const std::size_t row = rows.row_start(v);
+            const std::uint8_t* img_row =
+                left.data.data() + row * static_cast<std::size_t>(left.channels);
+            std::size_t at = offset[static_cast<std::size_t>(v)];
+            rows.for_each_point(v, [&](int u, double y_num, double w_h, std::uint16_t cls) {
+                cloud.xyz_m[at] = rows.point(u, y_num, w_h);
+                const std::uint8_t* c =
+                    grey ? img_row + u : img_row + 3 * static_cast<std::size_t>(u);
+                cloud.colour[at] = grey ? Rgb{c[0], c[0], c[0]} : Rgb{c[0], c[1], c[2]};
+                cloud.class_index[at] = cls;
+                cloud.pixel[at] = static_cast<std::uint32_t>(row + static_cast<std::size_t>(u));
+                ++at;
+            });
+        }
+    });
+    return cloud;
+}
+
+ClassPoints reproject_by_class(const DisparityMap& disparity, const StereoCamera& camera,
+                               const ClassImage& classes, const ReprojectOptions& options,
+                               const ClassSelection& selection) {
+    if (selection.keep_pixels.size() != selection.column_mask.size()) {
+        throw std::invalid_argument("selection: column_mask and keep_pixels differ in size");
+    }
+    const RowReprojector rows(disparity, camera, classes, options);
+    const int h = rows.height();
+    const std::size_t k_count = selection.column_mask.size();
+    const double max_depth = selection.max_depth_m;
+    // The extractor's own tests on a point of class cls at column u (as points_by_class makes
+    // them on the cloud).
+    const auto selected = [&](int u, std::uint16_t cls) {
+        return cls < k_count && (static_cast<std::uint32_t>(u) & selection.column_mask[cls]) == 0;
+    };
+    const auto in_depth = [&](const Eigen::Vector3f& p) {
+        return p.z() > 0.0f && double{p.z()} < max_depth && p.allFinite();
+    };
+    // One pass over the pixels in parallel row stripes keeps each stripe's selected points (and
+    // counts its points of every class); a second one copies them to their classes, stripes in
+    // order: every class comes out in pixel order.
+    struct Taken {
+        Eigen::Vector3f xyz;
+        std::uint32_t pixel;
+        std::uint16_t cls;
+    };
+    const int stripes = std::max(1, std::min(h, 16));
+    const auto first_row = [&](int s) { return static_cast<int>(std::int64_t{h} * s / stripes); };
+    std::vector<std::vector<Taken>> taken(static_cast<std::size_t>(stripes));
+    // Per stripe and class (the last slot: every point of the stripe).
+    const std::size_t slots = k_count + 1;
+    std::vector<std::size_t> count(static_cast<std::size_t>(stripes) * slots, 0);
+    cv::parallel_for_(cv::Range(0, stripes), [&](const cv::Range& range) {
+        for (int s = range.start; s < range.end; ++s) {
+            auto& mine = taken[static_cast<std::size_t>(s)];
+            std::size_t* n = count.data() + static_cast<std::size_t>(s) * slots;
+            for (int v = first_row(s); v < first_row(s + 1); ++v) {
+                const std::size_t row = rows.row_start(v);
+                rows.for_each_point(v, [&](int u, double y_num, double w_h, std::uint16_t cls) {
+                    ++n[k_count];
+                    if (!selected(u, cls)) return;
+                    const Eigen::Vector3f p = rows.point(u, y_num, w_h);
+                    if (!in_depth(p)) return;
+                    ++n[cls];
+                    mine.push_back(
+                        {p, static_cast<std::uint32_t>(row + static_cast<std::size_t>(u)), cls});
                 });
             }
-        },
-        stripes);
-    return cloud;
+        }
+    });
+    ClassPoints out;
+    out.width_px = rows.width();
+    out.height_px = h;
+    out.xyz_m.resize(k_count);
+    out.pixel.resize(k_count);
+    out.weight.resize(k_count);
+    for (std::size_t k = 0; k < k_count; ++k) {
+        out.weight[k] = std::size_t{selection.column_mask[k]} + 1;
+    }
+    // Counts become offsets: per class, stripes in order.
+    std::vector<std::size_t> total(slots, 0);
+    for (std::size_t s = 0; s < static_cast<std::size_t>(stripes); ++s) {
+        for (std::size_t k = 0; k < slots; ++k) {
+            total[k] += std::exchange(count[s * slots + k], total[k]);
+        }
+    }
+    out.cloud_points = total[k_count];
+    for (std::size_t k = 0; k < k_count; ++k) {
+        out.xyz_m[k].resize(total[k]);
+        if (selection.keep_pixels[k]) out.pixel[k].resize(total[k]);
+    }
+    cv::parallel_for_(cv::Range(0, stripes), [&](const cv::Range& range) {
+        for (int s = range.start; s < range.end; ++s) {
+            std::size_t* at = count.data() + static_cast<std::size_t>(s) * slots;
+            for (const Taken& t : taken[static_cast<std::size_t>(s)]) {
+                if (selection.keep_pixels[t.cls]) out.pixel[t.cls][at[t.cls]] = t.pixel;
+                out.xyz_m[t.cls][at[t.cls]++] = t.xyz;
+            }
+        }
+    });
+    return out;
 }
 
 }  // namespace cloud_analysis

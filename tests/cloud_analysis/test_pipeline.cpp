@@ -42,6 +42,24 @@ TEST_CASE("the bundled sample runs through the chain into a labelled metric clou
     CHECK(r.classes.void_pixels == 0);
     REQUIRE(r.timings.size() == 3);
     CHECK(r.timings[0].stage == "disparity");
+    CHECK(r.cloud_points == r.cloud.size());
+    CHECK(r.points.xyz_m.empty());
+    // Entities only: no cloud, the extractor's points straight from the disparity.
+    AnalyseOptions by_class = options;
+    ClassSelection selection;
+    selection.column_mask.assign(in.palette.classes.size(), 0);
+    selection.keep_pixels.assign(in.palette.classes.size(), 1);
+    by_class.class_points_only = selection;
+    const AnalyseResult p = analyse(in, by_class);
+    CHECK(p.cloud.size() == 0);
+    CHECK(p.cloud_points == r.cloud.size());
+    REQUIRE(p.points.xyz_m.size() == in.palette.classes.size());
+    std::size_t labelled = 0;
+    for (const auto& k : r.cloud.class_index) labelled += k != kVoidClass ? 1 : 0;
+    std::size_t taken = 0;
+    for (const auto& pts : p.points.xyz_m) taken += pts.size();
+    CHECK(taken > 0);
+    CHECK(taken <= labelled);  // within the extractor's depth limit
     const nlohmann::json source = describe_run(in, options, "test");
     CHECK(source["calibration"]["baseline_m"] == 0.54);
     CHECK(source["disparity"]["block_size"] == options.disparity.block_size);

@@ -5,6 +5,7 @@
 #include <Eigen/Core>
 
 #include "cloud_analysis/calibration.hpp"
+#include "cloud_analysis/extract.hpp"
 #include "cloud_analysis/reproject.hpp"
 
 using namespace cloud_analysis;
@@ -132,4 +133,53 @@ TEST_CASE("a disparity map has a valid pixel when any pixel holds a value", "[re
     map.disparity_px[11] = 0.5f;
     CHECK(map.any_valid());
     CHECK(map.valid_count() == 1);
+}
+
+TEST_CASE("reprojecting by class gives the split of the reprojected cloud, without the cloud",
+          "[reproject]") {
+    const int w = 96, h = 40;
+    const std::size_t n = static_cast<std::size_t>(w) * h;
+    std::mt19937 rng(5);
+    std::uniform_real_distribution<float> disparity(-2.0f, 60.0f);
+    std::uniform_int_distribution<int> klass(0, 5);  // 4 = past the selection, 5 = void
+    DisparityMap map{w, h, std::vector<float>(n)};
+    for (auto& d : map.disparity_px) d = disparity(rng);
+    const ImageU8 grey{w, h, 1, std::vector<std::uint8_t>(n, 128)};
+    ClassImage classes{w, h, std::vector<std::uint16_t>(n), 0};
+    for (auto& c : classes.class_index) {
+        const int k = klass(rng);
+        c = k == 5 ? kVoidClass : static_cast<std::uint16_t>(k);
+    }
+    const StereoCamera cam = kitti_like_camera(w, h);
+    // Class 0 every column with pixels (a thing), 1 every 4th column, 2 every 2nd, 3 every 8th.
+    ClassSelection selection;
+    selection.column_mask = {0, 3, 1, 7};
+    selection.keep_pixels = {1, 0, 0, 1};
+    selection.max_depth_m = 30.0;  // below the reprojection's range: both limits apply
+    ReprojectOptions options;
+    options.max_range_m = 50.0;
+    for (const bool keep_void : {true, false}) {
+        options.keep_void = keep_void;
+        const LabeledCloud cloud = reproject(map, cam, grey, classes, options);
+        const ClassPoints want = points_by_class(cloud, selection, 2);
+        const ClassPoints got = reproject_by_class(map, cam, classes, options, selection);
+        CHECK(got.cloud_points == cloud.size());
+        CHECK(got.width_px == w);
+        CHECK(got.height_px == h);
+        CHECK(got.weight == std::vector<std::size_t>{1, 4, 2, 8});
+        CHECK(got.pixel == want.pixel);
+        REQUIRE(got.xyz_m.size() == 4);
+        for (std::size_t k = 0; k < 4; ++k) {
+            CHECK(got.xyz_m[k] == want.xyz_m[k]);  // the same floats, in pixel order
+            CHECK_FALSE(got.xyz_m[k].empty());
+            for (const auto& p : got.xyz_m[k]) CHECK(p.z() < 30.0f);
+        }
+        CHECK(got.pixel[1].empty());
+        // Thinned columns and pixels of the kept points.
+        for (const std::uint32_t p : got.pixel[3]) CHECK(p % w % 8 == 0);
+    }
+    ClassSelection bad = selection;
+    bad.keep_pixels.pop_back();
+    CHECK_THROWS_WITH(reproject_by_class(map, cam, classes, options, bad),
+                      Catch::Contains("keep_pixels"));
 }

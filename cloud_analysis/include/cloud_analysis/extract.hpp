@@ -11,6 +11,7 @@
 
 #include "cloud_analysis/class_config.hpp"
 #include "cloud_analysis/ground.hpp"
+#include "cloud_analysis/reproject.hpp"
 #include "cloud_analysis/types.hpp"
 
 namespace cloud_analysis {
@@ -49,20 +50,34 @@ struct ExtractOptions {
                                            ///< footprint inside thing boxes is dropped (stuff
                                            ///< smeared onto a thing's silhouette), (0, 1],
                                            ///< 1 = off
-    /// Threads: the classes and a thing class's clusters are shared among this many (the split
-    /// by class among as many chunks on OpenCV's thread pool); the result does not depend on
-    /// it, >= 1
+    /// Threads: the classes and a thing class's clusters are shared among this many (and a
+    /// cloud's split by class among as many chunks); the result does not depend on it, >= 1
     int threads = 2;
     /// Throws std::invalid_argument naming the bad field.
     void validate() const;
 };
 
-/// Builds the entities of a labelled cloud (ids "<class>-<n>", point_count and confidence on
-/// each; sky and void never). The caller fills frame and source. With method "instances"
-/// the ground plane, when found, is reported in document.extra["ground_plane"] (normal, d,
-/// camera_height_m, inliers). The result passes scene_schema::check() once the caller has set
-/// frame.id. `camera` is not needed by the current extractors (image-space steps use the
-/// cloud's pixel indices); it stays in the signature for stages that project.
+/// Which points of each palette class the extractor takes: stuff on every column_step-th pixel
+/// column, pixels for things, depth within options.max_range_m.
+ClassSelection class_selection(const Palette& palette, const ExtractOptions& options);
+
+/// A labelled cloud split by class with `selection` (on up to `threads` threads; the result
+/// does not depend on it). Columns are thinned only when the cloud has its pixels.
+ClassPoints points_by_class(const LabeledCloud& cloud, const ClassSelection& selection,
+                            int threads = 2);
+
+/// Builds the entities of a labelled cloud's points split by class (points_by_class, or
+/// reproject_by_class without a cloud; either with class_selection(palette, options)): ids
+/// "<class>-<n>", point_count and confidence on each; sky and void never. The caller fills
+/// frame and source. With method "instances" the ground plane, when found, is reported in
+/// document.extra["ground_plane"] (normal, d, camera_height_m, inliers). The result passes
+/// scene_schema::check() once the caller has set frame.id.
+scene_schema::EntityDocument extract_entities(const ClassPoints& points, const Palette& palette,
+                                              const ExtractOptions& options);
+
+/// The same from the labelled cloud: extract_entities(points_by_class(cloud, ...), ...).
+/// `camera` is not needed by the current extractors (image-space steps use the cloud's pixel
+/// indices); it stays in the signature for stages that project.
 scene_schema::EntityDocument extract_entities(const LabeledCloud& cloud, const Palette& palette,
                                               const StereoCamera& camera,
                                               const ExtractOptions& options);

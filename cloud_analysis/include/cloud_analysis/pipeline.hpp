@@ -4,6 +4,7 @@
 /// rectify (raw input only) -> disparity -> semantic association -> reprojection.
 
 #include <filesystem>
+#include <optional>
 #include <string>
 #include <vector>
 
@@ -39,6 +40,10 @@ struct AnalyseOptions {
     bool raw = false;                    ///< inputs are unrectified: undistort + rectify first
     DisparityOptions disparity;          ///< SGBM and post-filters
     ReprojectOptions reproject;          ///< range limits
+    /// When set, analyse builds no cloud: it reprojects straight into the entity extractor's
+    /// per-class points (AnalyseResult::points, see reproject_by_class), for runs whose only
+    /// output is entities. Unset: the labelled cloud (AnalyseResult::cloud).
+    std::optional<ClassSelection> class_points_only;
     /// Throws std::invalid_argument naming the first bad field.
     void validate() const;
 };
@@ -75,7 +80,9 @@ struct AnalyseResult {
     StereoCamera camera;               ///< rectified rig used
     DisparityMap disparity;            ///< left disparity, px
     ClassImage classes;                ///< per-pixel classes (empty without semantic image)
-    LabeledCloud cloud;                ///< metric labelled points
+    LabeledCloud cloud;                ///< metric labelled points (empty with class_points_only)
+    ClassPoints points;                ///< with class_points_only: the extractor's points
+    std::size_t cloud_points = 0;      ///< points of the cloud, built or not
     std::vector<StageTiming> timings;  ///< per stage
 };
 

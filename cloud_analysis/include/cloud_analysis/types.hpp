@@ -55,4 +55,17 @@ struct LabeledCloud {
     std::size_t size() const { return xyz_m.size(); }
 };
 
+/// The entity extractor's input: a labelled cloud's points split by palette class, each class in
+/// pixel order (see ClassSelection for which points are kept).
+struct ClassPoints {
+    std::vector<std::vector<Eigen::Vector3f>> xyz_m;  ///< per palette class, metres
+    std::vector<std::vector<std::uint32_t>> pixel;    ///< per class, v * width_px + u of each
+                                                      ///< point; filled for classes that keep
+                                                      ///< pixels (things), else empty
+    std::vector<std::size_t> weight;  ///< per class: cloud points each point stands for (>= 1)
+    int width_px = 0;                 ///< pixel grid of `pixel`; 0 when the pixels are unknown
+    int height_px = 0;                ///< pixel grid height; 0 when the pixels are unknown
+    std::size_t cloud_points = 0;     ///< points of the whole cloud (every class and void)
+};
+
 }  // namespace cloud_analysis
