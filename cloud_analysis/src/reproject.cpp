@@ -51,11 +51,11 @@ class RowReprojector {
         return static_cast<std::size_t>(v) * static_cast<std::size_t>(width());
     }
 
-    /// Calls emit(u, y_num, w_h, class) for each pixel of row v that becomes a point, in order.
-    /// The range test needs no division: |(X, Y, Z)| / W <= r  <=>  |(X, Y, Z)|^2 <= r^2 W^2,
-    /// W > 0.
-    template <typename Emit>
-    void for_each_point(int v, Emit&& emit) const {
+    /// Calls emit(u, y_num, w_h, class) for each pixel of row v that becomes a point and whose
+    /// column and class `wanted` accepts (tested first), in order. The range test needs no
+    /// division: |(X, Y, Z)| / W <= r  <=>  |(X, Y, Z)|^2 <= r^2 W^2, W > 0.
+    template <typename Wanted, typename Emit>
+    void for_each_point(int v, Wanted&& wanted, Emit&& emit) const {
         const std::size_t row = row_start(v);
         const float* d_row = disparity_.disparity_px.data() + row;
         const std::uint16_t* c_row = labelled_ ? classes_.class_index.data() + row : nullptr;
@@ -66,9 +66,10 @@ class RowReprojector {
         const double min_d = options_.min_disparity_px;
         const bool keep_void = options_.keep_void;
         for (int u = 0; u < width(); ++u) {
+            const std::uint16_t cls = labelled_ ? c_row[u] : kVoidClass;
+            if (!wanted(u, cls)) continue;
             const double d = d_row[u];
             if (!(d > min_d)) continue;
-            const std::uint16_t cls = labelled_ ? c_row[u] : kVoidClass;
             if (cls == kVoidClass && !keep_void) continue;
             const double w_h = w_per_px * d + w_offset;
             if (!(w_h > 0.0)) continue;  // at or beyond infinity
@@ -78,6 +79,38 @@ class RowReprojector {
             }
             emit(u, y_num, w_h, cls);
         }
+    }
+
+    /// The same for every pixel.
+    template <typename Emit>
+    void for_each_point(int v, Emit&& emit) const {
+        for_each_point(
+            v, [](int, std::uint16_t) { return true; }, emit);
+    }
+
+    /// Points of row v: the pixels for_each_point emits, counted without branches.
+    std::size_t count_points(int v) const {
+        const std::size_t row = row_start(v);
+        const float* d_row = disparity_.disparity_px.data() + row;
+        const std::uint16_t* c_row = labelled_ ? classes_.class_index.data() + row : nullptr;
+        const double y_num = Q_(1, 1) * v + Q_(1, 3);
+        const double yz_num_sq = y_num * y_num + z_num_ * z_num_;
+        const double w_per_px = Q_(3, 2);
+        const double w_offset = Q_(3, 3);
+        const double min_d = options_.min_disparity_px;
+        const bool all_classes = options_.keep_void || !labelled_;
+        if (!options_.keep_void && !labelled_) return 0;
+        std::size_t n = 0;
+        for (int u = 0; u < width(); ++u) {
+            const double d = d_row[u];
+            const double w_h = w_per_px * d + w_offset;
+            const bool point =
+                (d > min_d) & (w_h > 0.0) &
+                (x_num_sq_[static_cast<std::size_t>(u)] + yz_num_sq <= max_range_sq_ * w_h * w_h) &
+                (all_classes || c_row[u] != kVoidClass);
+            n += point ? 1 : 0;
+        }
+        return n;
     }
 
     /// The point of column u of a row emitted with (y_num, w_h).
@@ -129,9 +162,7 @@ LabeledCloud reproject(const DisparityMap& disparity, const StereoCamera& camera
     std::vector<std::size_t> offset(static_cast<std::size_t>(h) + 1, 0);
     rows.for_stripes([&](int first, int last) {
         for (int v = first; v < last; ++v) {
-            std::size_t n = 0;
-            rows.for_each_point(v, [&n](int, double, double, std::uint16_t) { ++n; });
-            offset[static_cast<std::size_t>(v) + 1] = n;
+            offset[static_cast<std::size_t>(v) + 1] = rows.count_points(v);
         }
     });
     for (std::size_t v = 0; v < static_cast<std::size_t>(h); ++v) offset[v + 1] += offset[v];
@@ -198,18 +229,21 @@ ClassPoints reproject_by_class(const DisparityMap& disparity, const StereoCamera
     cv::parallel_for_(cv::Range(0, stripes), [&](const cv::Range& range) {
         for (int s = range.start; s < range.end; ++s) {
             auto& mine = taken[static_cast<std::size_t>(s)];
+            mine.reserve(static_cast<std::size_t>(first_row(s + 1) - first_row(s)) *
+                         static_cast<std::size_t>(rows.width()));
             std::size_t* n = count.data() + static_cast<std::size_t>(s) * slots;
             for (int v = first_row(s); v < first_row(s + 1); ++v) {
                 const std::size_t row = rows.row_start(v);
-                rows.for_each_point(v, [&](int u, double y_num, double w_h, std::uint16_t cls) {
-                    ++n[k_count];
-                    if (!selected(u, cls)) return;
-                    const Eigen::Vector3f p = rows.point(u, y_num, w_h);
-                    if (!in_depth(p)) return;
-                    ++n[cls];
-                    mine.push_back(
-                        {p, static_cast<std::uint32_t>(row + static_cast<std::size_t>(u)), cls});
-                });
+                n[k_count] += rows.count_points(v);
+                rows.for_each_point(
+                    v, selected, [&](int u, double y_num, double w_h, std::uint16_t cls) {
+                        const Eigen::Vector3f p = rows.point(u, y_num, w_h);
+                        if (!in_depth(p)) return;
+                        ++n[cls];
+                        mine.push_back(
+                            {p, static_cast<std::uint32_t>(row + static_cast<std::size_t>(u)),
+                             cls});
+                    });
             }
         }
     });
