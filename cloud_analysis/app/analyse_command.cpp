@@ -323,7 +323,7 @@ RunReport analyse_loaded_and_write(const LoadedRun& run, const AnalyseArgs& a,
     };
     const cloud_analysis::LoadedInputs& in = run.inputs;
     std::vector<cloud_analysis::StageTiming> timings;
-    if (!in.calibration.note.empty()) {
+    if (a.warnings && !in.calibration.note.empty()) {
         std::cerr << kTool << ": warning: " << in.calibration.note << " (" << in.calibration.source
                   << ")\n";
     }
@@ -332,9 +332,9 @@ RunReport analyse_loaded_and_write(const LoadedRun& run, const AnalyseArgs& a,
     cloud_analysis::AnalyseResult r = cloud_analysis::analyse(
         in, options_for_outputs(a, run.extract, in.palette, any_cloud), matcher);
     timings.insert(timings.end(), r.timings.begin(), r.timings.end());
-    if (in.semantic.empty()) {
+    if (a.warnings && in.semantic.empty()) {
         std::cerr << kTool << ": warning: no semantic image: every point is void\n";
-    } else if (r.classes.void_pixels > 0) {
+    } else if (a.warnings && r.classes.void_pixels > 0) {
         std::cerr << kTool << ": warning: " << r.classes.void_pixels
                   << " semantic pixels have colours not in palette '" << in.palette.name
                   << "' and count as void (" << a.paths.semantic.string() << ")\n";

@@ -32,6 +32,7 @@ struct AnalyseArgs {
     std::filesystem::path xyz, pcd, ply, disparity_png, disparity_kitti, gt_disparity;
     bool timings = false;
     bool fsync_clouds = false;  ///< --fsync-clouds: the clouds are durable too
+    bool warnings = true;       ///< print the inputs' warnings (bench: on its first run only)
 };
 
 /// One output file, formatted in memory before anything is written.
