@@ -474,20 +474,23 @@ OrientedBox fit_upright_box(const std::vector<Eigen::Vector3f>& points_m,
         const std::size_t na = cells_along(hi.x() - lo.x());
         const std::size_t nb = cells_along(hi.y() - lo.y());
         // Counted per cell, then the occupied cells numbered in cell order and summed there:
-        // 4 bytes per grid cell instead of a count and a sum for each.
+        // 4 bytes per grid cell instead of a count and a sum for each. The occupied cells are
+        // listed as they fill and sorted, not found by scanning the grid (smear can stretch
+        // the footprint over 10^5 cells for a few thousand points).
         std::vector<std::uint32_t> slot(na * nb, 0);
         std::vector<std::uint32_t> cell_of(ab.size());
+        std::vector<std::uint32_t> occupied;
         for (std::size_t i = 0; i < ab.size(); ++i) {
             const auto a = std::min(na - 1, static_cast<std::size_t>((ab[i].x() - lo.x()) / cell));
             const auto b = std::min(nb - 1, static_cast<std::size_t>((ab[i].y() - lo.y()) / cell));
             cell_of[i] = static_cast<std::uint32_t>(a * nb + b);
-            ++slot[a * nb + b];
+            if (slot[a * nb + b]++ == 0) occupied.push_back(cell_of[i]);
         }
-        std::vector<float> counts;
-        for (auto& s : slot) {
-            if (s == 0) continue;
-            counts.push_back(static_cast<float>(s));
-            s = static_cast<std::uint32_t>(counts.size() - 1);
+        std::sort(occupied.begin(), occupied.end());
+        std::vector<float> counts(occupied.size());
+        for (std::size_t k = 0; k < occupied.size(); ++k) {
+            counts[k] = static_cast<float>(slot[occupied[k]]);
+            slot[occupied[k]] = static_cast<std::uint32_t>(k);
         }
         std::vector<Eigen::Vector2d> cells(counts.size(), Eigen::Vector2d::Zero());
         for (std::size_t i = 0; i < ab.size(); ++i) cells[slot[cell_of[i]]] += ab[i];

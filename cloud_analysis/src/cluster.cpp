@@ -166,10 +166,35 @@ class LevelCells {
         if (inserted) id = next_value;
         return id;
     }
-    /// Number of cell (x, y, z) of level l, or kNone. In the dense array, (x, y, z) must lie
-    /// within one cell of an occupied cell of that level.
-    std::uint32_t find(int l, std::int64_t x, std::int64_t y, std::int64_t z) const {
-        return dense_.empty() ? hash_.find(cell_key(l, x, y, z)) : dense_[index(l, x, y, z)];
+    /// Calls f(number) for each occupied cell of the 27 around cell (x, y, z) of level l (in
+    /// the dense array, (x, y, z) must lie within the base cells' bounding box), in the order of
+    /// dx, dy, dz = -1, 0, 1 nested (dz innermost); in the dense array from the centre's index and
+    /// fixed offsets.
+    template <typename F>
+    void for_each_near(int l, std::int64_t x, std::int64_t y, std::int64_t z, F&& f) const {
+        if (dense_.empty()) {
+            for (std::int64_t dx = -1; dx <= 1; ++dx) {
+                for (std::int64_t dy = -1; dy <= 1; ++dy) {
+                    for (std::int64_t dz = -1; dz <= 1; ++dz) {
+                        const std::uint32_t c = hash_.find(cell_key(l, x + dx, y + dy, z + dz));
+                        if (c != kNone) f(c);
+                    }
+                }
+            }
+            return;
+        }
+        const Level& g = levels_[static_cast<std::size_t>(l)];
+        const auto sx = static_cast<std::ptrdiff_t>(g.dim[1] * g.dim[2]);
+        const auto sy = static_cast<std::ptrdiff_t>(g.dim[2]);
+        const std::uint32_t* centre = dense_.data() + index(l, x, y, z);
+        for (std::ptrdiff_t dx = -sx; dx <= sx; dx += sx) {
+            for (std::ptrdiff_t dy = -sy; dy <= sy; dy += sy) {
+                for (std::ptrdiff_t dz = -1; dz <= 1; ++dz) {
+                    const std::uint32_t c = centre[dx + dy + dz];
+                    if (c != kNone) f(c);
+                }
+            }
+        }
     }
 
   private:
@@ -297,16 +322,9 @@ std::vector<std::vector<std::size_t>> euclidean_clusters(
         if (inserted) {
             near_begin.push_back(static_cast<std::uint32_t>(near_cells.size()));
             for (int l = 0; l < levels; ++l) {
-                const std::int64_t x = floor_shift(b[0], l), y = floor_shift(b[1], l),
-                                   z = floor_shift(b[2], l);
-                for (std::int64_t dx = -1; dx <= 1; ++dx) {
-                    for (std::int64_t dy = -1; dy <= 1; ++dy) {
-                        for (std::int64_t dz = -1; dz <= 1; ++dz) {
-                            const std::uint32_t c = cells.find(l, x + dx, y + dy, z + dz);
-                            if (c != LevelCells::kNone) near_cells.push_back(c);
-                        }
-                    }
-                }
+                cells.for_each_near(l, floor_shift(b[0], l), floor_shift(b[1], l),
+                                    floor_shift(b[2], l),
+                                    [&](std::uint32_t c) { near_cells.push_back(c); });
             }
             near_end.push_back(static_cast<std::uint32_t>(near_cells.size()));
         }
