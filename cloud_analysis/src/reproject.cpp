@@ -56,28 +56,21 @@ class RowReprojector {
     /// division: |(X, Y, Z)| / W <= r  <=>  |(X, Y, Z)|^2 <= r^2 W^2, W > 0.
     template <typename Wanted, typename Emit>
     void for_each_point(int v, Wanted&& wanted, Emit&& emit) const {
-        const std::size_t row = row_start(v);
-        const float* d_row = disparity_.disparity_px.data() + row;
-        const std::uint16_t* c_row = labelled_ ? classes_.class_index.data() + row : nullptr;
-        const double y_num = Q_(1, 1) * v + Q_(1, 3);
-        const double yz_num_sq = y_num * y_num + z_num_ * z_num_;
-        const double w_per_px = Q_(3, 2);
-        const double w_offset = Q_(3, 3);
-        const double min_d = options_.min_disparity_px;
+        const Row r = row(v);
         const bool keep_void = options_.keep_void;
         for (int u = 0; u < width(); ++u) {
-            const std::uint16_t cls = labelled_ ? c_row[u] : kVoidClass;
+            const std::uint16_t cls = labelled_ ? r.cls[u] : kVoidClass;
             if (!wanted(u, cls)) continue;
-            const double d = d_row[u];
-            if (!(d > min_d)) continue;
+            const double d = r.d[u];
+            if (!(d > r.min_d)) continue;
             if (cls == kVoidClass && !keep_void) continue;
-            const double w_h = w_per_px * d + w_offset;
+            const double w_h = r.w_per_px * d + r.w_offset;
             if (!(w_h > 0.0)) continue;  // at or beyond infinity
-            if (!(x_num_sq_[static_cast<std::size_t>(u)] + yz_num_sq <=
+            if (!(x_num_sq_[static_cast<std::size_t>(u)] + r.yz_num_sq <=
                   max_range_sq_ * w_h * w_h)) {
                 continue;
             }
-            emit(u, y_num, w_h, cls);
+            emit(u, r.y_num, w_h, cls);
         }
     }
 
@@ -90,24 +83,17 @@ class RowReprojector {
 
     /// Points of row v: the pixels for_each_point emits, counted without branches.
     std::size_t count_points(int v) const {
-        const std::size_t row = row_start(v);
-        const float* d_row = disparity_.disparity_px.data() + row;
-        const std::uint16_t* c_row = labelled_ ? classes_.class_index.data() + row : nullptr;
-        const double y_num = Q_(1, 1) * v + Q_(1, 3);
-        const double yz_num_sq = y_num * y_num + z_num_ * z_num_;
-        const double w_per_px = Q_(3, 2);
-        const double w_offset = Q_(3, 3);
-        const double min_d = options_.min_disparity_px;
-        const bool all_classes = options_.keep_void || !labelled_;
         if (!options_.keep_void && !labelled_) return 0;
+        const Row r = row(v);
+        const bool all_classes = options_.keep_void || !labelled_;
         std::size_t n = 0;
         for (int u = 0; u < width(); ++u) {
-            const double d = d_row[u];
-            const double w_h = w_per_px * d + w_offset;
-            const bool point =
-                (d > min_d) & (w_h > 0.0) &
-                (x_num_sq_[static_cast<std::size_t>(u)] + yz_num_sq <= max_range_sq_ * w_h * w_h) &
-                (all_classes || c_row[u] != kVoidClass);
+            const double d = r.d[u];
+            const double w_h = r.w_per_px * d + r.w_offset;
+            const bool point = (d > r.min_d) & (w_h > 0.0) &
+                               (x_num_sq_[static_cast<std::size_t>(u)] + r.yz_num_sq <=
+                                max_range_sq_ * w_h * w_h) &
+                               (all_classes || r.cls[u] != kVoidClass);
             n += point ? 1 : 0;
         }
         return n;
@@ -130,6 +116,28 @@ class RowReprojector {
     }
 
   private:
+    /// Row v's inputs and the terms that are constant along it.
+    struct Row {
+        const float* d;            ///< disparities, px
+        const std::uint16_t* cls;  ///< classes; null without a class image
+        double y_num;              ///< Y of the row before the division by W
+        double yz_num_sq;          ///< Y^2 + Z^2 before the division by W^2
+        double w_per_px;           ///< W = w_per_px * d + w_offset
+        double w_offset;
+        double min_d;  ///< disparities at or below this give no point
+    };
+    Row row(int v) const {
+        const std::size_t start = row_start(v);
+        const double y_num = Q_(1, 1) * v + Q_(1, 3);
+        return {disparity_.disparity_px.data() + start,
+                labelled_ ? classes_.class_index.data() + start : nullptr,
+                y_num,
+                y_num * y_num + z_num_ * z_num_,
+                Q_(3, 2),
+                Q_(3, 3),
+                options_.min_disparity_px};
+    }
+
     const DisparityMap& disparity_;
     const ClassImage& classes_;
     const ReprojectOptions& options_;

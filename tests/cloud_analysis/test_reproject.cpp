@@ -54,26 +54,39 @@ LabeledCloud naive_reproject(const DisparityMap& map, const StereoCamera& cam, c
     return cloud;
 }
 
+/// w x h disparities drawn uniformly from [lo, hi).
+DisparityMap random_disparities(int w, int h, float lo, float hi, std::mt19937& rng) {
+    std::uniform_real_distribution<float> disparity(lo, hi);
+    DisparityMap map{w, h, std::vector<float>(static_cast<std::size_t>(w) * h)};
+    for (auto& d : map.disparity_px) d = disparity(rng);
+    return map;
+}
+
+/// w x h classes drawn uniformly from 0 .. void_index, void_index standing for void.
+ClassImage random_classes(int w, int h, int void_index, std::mt19937& rng) {
+    std::uniform_int_distribution<int> klass(0, void_index);
+    ClassImage classes{w, h, std::vector<std::uint16_t>(static_cast<std::size_t>(w) * h), 0};
+    for (auto& c : classes.class_index) {
+        const int k = klass(rng);
+        c = k == void_index ? kVoidClass : static_cast<std::uint16_t>(k);
+    }
+    return classes;
+}
+
 }  // namespace
 
 TEST_CASE("the reprojection agrees with the 4x4 Q product on random maps", "[reproject]") {
     const int w = 64, h = 24;
     const std::size_t n = static_cast<std::size_t>(w) * h;
     std::mt19937 rng(11);
-    std::uniform_real_distribution<float> disparity(-2.0f, 40.0f);  // some missing, some < 3.5
+    const DisparityMap map =
+        random_disparities(w, h, -2.0f, 40.0f, rng);  // some missing, some < 3.5
     std::uniform_int_distribution<int> byte(0, 255);
-    std::uniform_int_distribution<int> klass(0, 4);  // 4 = void
-    DisparityMap map{w, h, std::vector<float>(n)};
-    for (auto& d : map.disparity_px) d = disparity(rng);
     ImageU8 rgb{w, h, 3, std::vector<std::uint8_t>(n * 3)};
     for (auto& b : rgb.data) b = static_cast<std::uint8_t>(byte(rng));
     ImageU8 grey{w, h, 1, std::vector<std::uint8_t>(n)};
     for (auto& b : grey.data) b = static_cast<std::uint8_t>(byte(rng));
-    ClassImage classes{w, h, std::vector<std::uint16_t>(n), 0};
-    for (auto& c : classes.class_index) {
-        const int k = klass(rng);
-        c = k == 4 ? kVoidClass : static_cast<std::uint16_t>(k);
-    }
+    const ClassImage classes = random_classes(w, h, 4, rng);
     const StereoCamera cam = kitti_like_camera(w, h);
 
     ReprojectOptions options;
@@ -140,16 +153,9 @@ TEST_CASE("reprojecting by class gives the split of the reprojected cloud, witho
     const int w = 96, h = 40;
     const std::size_t n = static_cast<std::size_t>(w) * h;
     std::mt19937 rng(5);
-    std::uniform_real_distribution<float> disparity(-2.0f, 60.0f);
-    std::uniform_int_distribution<int> klass(0, 5);  // 4 = past the selection, 5 = void
-    DisparityMap map{w, h, std::vector<float>(n)};
-    for (auto& d : map.disparity_px) d = disparity(rng);
+    const DisparityMap map = random_disparities(w, h, -2.0f, 60.0f, rng);
     const ImageU8 grey{w, h, 1, std::vector<std::uint8_t>(n, 128)};
-    ClassImage classes{w, h, std::vector<std::uint16_t>(n), 0};
-    for (auto& c : classes.class_index) {
-        const int k = klass(rng);
-        c = k == 5 ? kVoidClass : static_cast<std::uint16_t>(k);
-    }
+    const ClassImage classes = random_classes(w, h, 5, rng);  // 4 = past the selection
     const StereoCamera cam = kitti_like_camera(w, h);
     // Class 0 every column with pixels (a thing), 1 every 4th column, 2 every 2nd, 3 every 8th.
     ClassSelection selection;
