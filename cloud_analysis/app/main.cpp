@@ -1,8 +1,6 @@
 // cloud-analysis: stereo pair + calibration + semantic image -> disparity, labelled metric
 // cloud (.xyz/.pcd/.ply) and entity file. Thin CLI: parse, validate, call the library, write.
 
-#include <malloc.h>
-
 #include <algorithm>
 #include <iostream>
 #include <string>
@@ -10,6 +8,7 @@
 
 #include <CLI/CLI.hpp>
 #include <scene_schema/entities.hpp>
+#include <scene_schema/process.hpp>
 
 #include "analyse_command.hpp"
 #include "cloud_analysis/io.hpp"
@@ -48,18 +47,6 @@ int run_make_sample(const SampleArgs& a) {
     return 0;
 }
 
-/// Keeps freed memory in the process instead of returning it to the kernel after every frame:
-/// each frame allocates the same tens of megabytes (cloud, per-class arrays, voxel and cluster
-/// tables), and with glibc's defaults (a dynamic mmap threshold, 128 KiB trimming) most of them
-/// came back as fresh pages, faulted in again while both cores ran the extractor (kitti15
-/// 000000_10: 78,800 page faults in 64 extractions, 19.3 ms of CPU each; with these settings
-/// 13,700 and 15.7 ms; docs/performance.md). The resident set then stays at its peak, which the
-/// benchmark measures.
-void keep_freed_memory() {
-    mallopt(M_MMAP_THRESHOLD, 32 << 20);   // blocks up to 32 MiB come from the heap
-    mallopt(M_TRIM_THRESHOLD, 128 << 20);  // the heap gives back only more than 128 MiB free
-}
-
 bool is_subcommand(const std::string& arg) {
     return arg == "analyse" || arg == "evaluate" || arg == "export-kitti" || arg == "make-sample" ||
            arg == "batch" || arg == "bench" || arg == "help";
@@ -68,7 +55,7 @@ bool is_subcommand(const std::string& arg) {
 }  // namespace
 
 int main(int argc, char** argv) {
-    keep_freed_memory();
+    scene_schema::keep_freed_memory();
     // `analyse` is the default command: insert it unless a subcommand or --version is first.
     std::vector<std::string> args(argv + 1, argv + argc);
     if (args.empty() || (!is_subcommand(args[0]) && args[0] != "--version")) {

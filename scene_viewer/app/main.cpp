@@ -1,7 +1,5 @@
 // scene-render: renders entity files headless (see docs/cli.md). Parses, validates every input,
 // then calls the scene_viewer library; the only error boundary of the tool.
-#include <malloc.h>
-
 #include <cerrno>
 #include <cstdio>
 #include <cstring>
@@ -18,6 +16,7 @@
 #include <CLI/CLI.hpp>
 
 #include "scene_schema/entities.hpp"
+#include "scene_schema/process.hpp"
 #include "scene_viewer/assets/class_table.hpp"
 #include "scene_viewer/assets/image_io.hpp"
 #include "scene_viewer/figure/grid_figure.hpp"
@@ -39,17 +38,6 @@ struct Failure {
     std::string where;
     int code = 1;
 };
-
-/// Keeps freed memory in the process instead of returning it to the kernel after every frame.
-/// Each frame allocates the same megabytes (Mesa's vertex and binning buffers, the read-back
-/// image, the PNG encoder's rows), and with glibc's defaults (a dynamic mmap threshold, 128 KiB
-/// trimming) they came back as fresh pages, faulted in again on every frame. Where page faults
-/// are dear (a paravirtualised VM), that made a 50-entity FXAA frame at 1280x720 take 80 ms
-/// instead of 27 ms (docs/performance.md). cloud-analysis does the same.
-void keep_freed_memory() {
-    mallopt(M_MMAP_THRESHOLD, 32 << 20);   // blocks up to 32 MiB come from the heap
-    mallopt(M_TRIM_THRESHOLD, 128 << 20);  // the heap gives back only more than 128 MiB free
-}
 
 [[noreturn]] void usage(const std::string& detail, const std::string& flag) {
     throw Failure{"bad usage", detail, flag, 2};
@@ -584,7 +572,7 @@ int run(int argc, char** argv) {
 }  // namespace
 
 int main(int argc, char** argv) {
-    keep_freed_memory();
+    scene_schema::keep_freed_memory();
     try {
         return run(argc, argv);
     } catch (const Failure& f) {

@@ -1,0 +1,12 @@
+#include "scene_schema/process.hpp"
+
+#include <malloc.h>
+
+namespace scene_schema {
+
+void keep_freed_memory() {
+    mallopt(M_MMAP_THRESHOLD, 32 << 20);
+    mallopt(M_TRIM_THRESHOLD, 128 << 20);
+}
+
+}  // namespace scene_schema
