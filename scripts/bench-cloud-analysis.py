@@ -2,9 +2,9 @@
 """Median per-stage milliseconds of cloud-analysis on KITTI frames (a benchmark, not a test).
 
 Usage: scripts/bench-cloud-analysis.py BUILD/cloud_analysis/cloud-analysis [KITTI15_DIR] [RUNS]
-Each run writes the three cloud formats into a temporary folder (formatting and the atomic,
-fsync'ed write are timed separately per file), so the cost of a cloud can be set against the
-disparity that produced it. Reads the data in place; copies nothing.
+Each run writes the three cloud formats into a temporary folder (formatting and the atomic
+write, not fsync'ed unless --fsync-clouds, are timed separately per file), so the cost of a
+cloud can be set against the disparity that produced it. Reads the data in place; copies nothing.
 """
 import collections
 import re

@@ -1,5 +1,5 @@
 #!/usr/bin/python3
-"""Benchmarks of cloud-analysis and scene-render (issue 6); a benchmark, never a test.
+"""Benchmarks of cloud-analysis and scene-render (docs/performance.md); a benchmark, never a test.
 
 usage: scripts/bench.py --build BUILD_DIR [--out out/bench] [--runs 5] [--batch-frames 100]
                         [--parts table,batch,presets,scaling] [--plots docs/images]

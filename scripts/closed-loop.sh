@@ -1,12 +1,12 @@
 #!/usr/bin/env bash
-# The closed loop of issue 5, side by side for the extractors: for every rendered sample
+# The closed loop, side by side for the extractors: for every rendered sample
 # (<samples>/<scene>/ in KITTI layout, truth <samples>/<scene>/scene.json or
 # <samples>/scenes/<scene>.json) run cloud-analysis with the default settings and
 # --method instances|centroid|variance, score each against the truth with `evaluate` and the
 # bars of docs/evaluation.md "Closed loop", and print one Markdown table.
 # usage: scripts/closed-loop.sh [--no-build] [--build-dir DIR] [--samples DIR] [--out DIR]
 #        [--render]   (--render: first render <samples>/scenes/*.json with scene-render sensors
-#                      into --out, for when the rendered samples are not committed yet)
+#                      into --out, e.g. for scenes without committed renders)
 set -euo pipefail
 source "$(dirname "${BASH_SOURCE[0]}")/common.sh"
 

@@ -1,5 +1,5 @@
 #!/usr/bin/env bash
-# Runs the whole KITTI evaluation of cloud-analysis (issue 3 "Done means") and prints the tables:
+# Runs the whole KITTI evaluation of cloud-analysis (docs/evaluation.md) and prints the tables:
 # disparity of the tuned defaults vs OpenCV's sample settings, car entities vs the instance
 # ground truth, the ground plane, and the thesis's one-per-class extractors.
 # usage: scripts/evaluate.sh [--no-build] [--build-dir DIR] [--kitti-root DIR] [--out DIR] [frames...]
@@ -45,7 +45,7 @@ for f in "${frames[@]}"; do
         "$ca" evaluate --kitti-root "$kitti_root" --frame "$f" \
             --entities "$out_dir/$f-$preset.json" --disparity "$out_dir/$f-$preset-disp.png" \
             --json "$out_dir/$f-$preset-eval.json"
-        # The same entities under the old GT rule (whole masks, no 2D fallback), for comparison.
+        # The same entities with whole GT masks and no 2D fallback, for comparison.
         "$ca" evaluate --kitti-root "$kitti_root" --frame "$f" \
             --entities "$out_dir/$f-$preset.json" --occluder-gap 0 --fallback-max-points -1 \
             --json "$out_dir/$f-$preset-eval-oldrule.json" >/dev/null
@@ -97,7 +97,7 @@ for preset in ("tuned", "opencv-sample"):
     print(f"{preset:14s} D1-all " + " / ".join(f"{100*x:.2f} %" for x in d1) +
           "   density " + " / ".join(f"{100*x:.1f} %" for x in dens))
     print(f"{'':14s} cars: " + cars(preset))
-    print(f"{'':14s} cars, old GT rule (whole masks, no 2D fallback): " +
+    print(f"{'':14s} cars, whole GT masks, no 2D fallback: " +
           cars(preset, "-oldrule"))
     print(f"{'':14s} camera height above the fitted road plane: " +
           " / ".join(f"{h:.3f} m" for h in heights))
