@@ -1,6 +1,8 @@
 #!/usr/bin/env bash
 # Installs what is missing, builds (Release), runs cloud-analysis on the bundled samples and
-# scene-render on its output and on the crafted baseline, then prints where each output is.
+# scene-render on its output and on the crafted baseline, writes the interactive viewer and
+# OUTPUT_DIR/index.html (the viewer embedded and every output linked), then prints that page
+# first and where each output is.
 # usage: scripts/demo.sh [OUTPUT_DIR]      (default: out/demo)
 set -euo pipefail
 source "$(dirname "${BASH_SOURCE[0]}")/common.sh"
@@ -14,7 +16,11 @@ render="$build/scene_viewer/scene-render"
 samples="$STEREOSCENE_ROOT/samples"
 mkdir -p "$out"
 outputs=()
-note() { outputs+=("$(printf '%-34s %s' "$1" "$2")"); }
+listing=()
+note() {
+    outputs+=("$(printf '%-34s %s' "$1" "$2")")
+    listing+=("$1"$'\t'"$2")
+}
 
 # 1. cloud-analysis on the rendered street (samples/rendered: made by scene-render sensors from
 #    a known scene): clouds in three formats, disparity, entities by the default extractor and by
@@ -82,6 +88,21 @@ if [ -d "$kitti/image_2" ]; then
     note "KITTI BEV" "$out/kitti-000000_10-bev.png"
 fi
 
+# 5. The interactive viewer: the analysis with its cloud and left image, compared with the truth
+#    and the thesis extractors; then the page that embeds it and links everything above.
+if "$render" html "$out/street-instances.json" "$r/scenes/street.json" \
+    "$out/street-centroid.json" "$out/street-variance.json" \
+    --labels instances truth "centre of mass" variance --cloud "$out/street.ply" \
+    --background "$r/street/image_2/000000.png" --title "rendered street" --out "$out/viewer"; then
+    note "interactive viewer (browser)" "$out/viewer/index.html"
+else
+    echo "demo: the viewer was not written (scripts/install-deps.sh installs three.js)" >&2
+fi
+printf '%s\n' "${listing[@]}" > "$out/.index-list.tsv"
+/usr/bin/python3 "$STEREOSCENE_ROOT/scripts/demo_index.py" "$out" "$out/.index-list.tsv"
+rm -f "$out/.index-list.tsv"
+
+echo "Demo page (open in a browser): $out/index.html"
 echo
 echo "Demo outputs:"
 printf '  %s\n' "${outputs[@]}"

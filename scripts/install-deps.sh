@@ -1,6 +1,8 @@
 #!/usr/bin/env bash
 # Installs the Debian (bookworm) packages that the build, the tests and the real-client checks
-# need. Idempotent: when everything is present it changes nothing and only says so.
+# need, then the browser viewer's pinned npm packages (third_party/web/package-lock.json: three.js,
+# esbuild, playwright-core, pngjs) into third_party/web/node_modules (not committed).
+# Idempotent: when everything is present it changes nothing and only says so.
 # Works as root or through sudo. Set INSTALL_DEPS_DRY_RUN=1 to only list what is missing.
 set -euo pipefail
 
@@ -16,6 +18,8 @@ packages=(
     python3 python3-jsonschema python3-numpy cloudcompare pcl-tools
     # plots for docs/performance.md
     python3-matplotlib
+    # the browser viewer: node runs npm and esbuild; the browser tests drive Debian's chromium
+    nodejs chromium
 )
 
 missing=()
@@ -25,8 +29,30 @@ for p in "${packages[@]}"; do
     fi
 done
 
+# The viewer's npm packages, exactly as locked; reinstalled only when the lock file changes.
+install_npm() {
+    local dir
+    dir="$(cd "$(dirname "${BASH_SOURCE[0]}")/.." && pwd)/third_party/web"
+    local stamp="$dir/node_modules/.stereoscene-lock"
+    if [ -f "$stamp" ] && cmp -s "$stamp" "$dir/package-lock.json"; then
+        return 0
+    fi
+    if [ "${INSTALL_DEPS_DRY_RUN:-0}" = 1 ]; then
+        echo "install-deps: missing: npm packages of third_party/web" >&2
+        return 0
+    fi
+    if ! command -v npm >/dev/null 2>&1; then
+        echo "install-deps: warning: npm not found; the viewer and its browser tests are skipped" >&2
+        return 0
+    fi
+    (cd "$dir" && npm ci --no-audit --no-fund --loglevel=error >&2)
+    cp "$dir/package-lock.json" "$stamp"
+    echo "install-deps: installed the npm packages of third_party/web" >&2
+}
+
 if [ ${#missing[@]} -eq 0 ]; then
     echo "install-deps: all ${#packages[@]} packages present" >&2
+    install_npm
     exit 0
 fi
 
@@ -49,3 +75,6 @@ export DEBIAN_FRONTEND=noninteractive
 "${sudo_cmd[@]}" apt-get update -qq
 "${sudo_cmd[@]}" apt-get install -y -qq --no-install-recommends "${missing[@]}" >/dev/null
 echo "install-deps: installed ${#missing[@]} packages" >&2
+# Debian's nodejs ships npm separately (NodeSource's includes it).
+command -v npm >/dev/null 2>&1 || "${sudo_cmd[@]}" apt-get install -y -qq --no-install-recommends npm >/dev/null
+install_npm

@@ -15,6 +15,7 @@
 
 #include <CLI/CLI.hpp>
 
+#include "commands/html_command.hpp"
 #include "scene_schema/entities.hpp"
 #include "scene_schema/process.hpp"
 #include "scene_viewer/assets/class_table.hpp"
@@ -369,6 +370,9 @@ int run(int argc, char** argv) {
     sensors->add_option("--classes", sensors_classes,
                         "class table (default: assets/classes/render_classes.json)");
 
+    scene_render::html_command::Options html_options;
+    CLI::App* html = scene_render::html_command::add(app, html_options);
+
     try {
         app.parse(argc, argv);
     } catch (const CLI::ParseError& e) {
@@ -377,6 +381,7 @@ int run(int argc, char** argv) {
     }
 
     if (info) return print_info();
+    if (*html) return scene_render::html_command::run(html_options);
 
     if (*bench) {
         RenderOptions o;
@@ -576,6 +581,10 @@ int main(int argc, char** argv) {
     try {
         return run(argc, argv);
     } catch (const Failure& f) {
+        std::cerr << "scene-render: error: " << f.what << ": " << f.detail << " (" << f.where
+                  << ")\n";
+        return f.code;
+    } catch (const scene_render::html_command::Failure& f) {
         std::cerr << "scene-render: error: " << f.what << ": " << f.detail << " (" << f.where
                   << ")\n";
         return f.code;

@@ -93,3 +93,17 @@ render_cli_test("a class without a model is drawn as a box with one warning" ARG
     -o ${_render_out}/unmodelled/out.png CODE 0
     STDERR "^scene-render: warning: no model for class 'train'[^\n]*\n$"
     OUTPUT ${_render_out}/unmodelled/out.png OUTPUT_EXISTS 1)
+if(STEREOSCENE_VIEWER_THREE)
+    render_cli_test("html writes the viewer folder of the street sample" ARGS html ${_street}
+        --out ${_render_out}/html --cloud ${PROJECT_SOURCE_DIR}/tests/scene_viewer/data/tiny_cloud.ply
+        CODE 0 OUTPUT ${_render_out}/html/index.html OUTPUT_EXISTS 1 MAGIC 3c21646f6374797065)
+endif()
+render_cli_test("html with a missing entity file exits 1 and writes no folder" ARGS html
+    ${_render_out}/none.json --out ${_render_out}/html_none CODE 1 STDERR "invalid entity file"
+    OUTPUT ${_render_out}/html_none/index.html OUTPUT_EXISTS 0)
+render_cli_test("html with a label count that differs exits 2" ARGS html ${_street} ${_street}
+    --labels A --out ${_render_out}/html_labels CODE 2 STDERR "--labels"
+    OUTPUT ${_render_out}/html_labels/index.html OUTPUT_EXISTS 0)
+render_cli_test("html with a missing point cloud exits 1 naming --cloud" ARGS html ${_street}
+    --cloud ${_render_out}/none.ply --out ${_render_out}/html_nocloud CODE 1 STDERR "--cloud"
+    OUTPUT ${_render_out}/html_nocloud/index.html OUTPUT_EXISTS 0)

@@ -1,0 +1,151 @@
+#include "html_command.hpp"
+
+#include <filesystem>
+#include <iostream>
+#include <map>
+#include <memory>
+#include <optional>
+
+#include "scene_schema/entities.hpp"
+#include "scene_viewer/assets/class_table.hpp"
+#include "scene_viewer/assets/image_io.hpp"
+#include "scene_viewer/assets/scene_export.hpp"
+#include "scene_viewer/gfx/null_device.hpp"
+#include "scene_viewer/render/scene_renderer.hpp"
+#include "scene_viewer/sensors/stereo_sensors.hpp"
+#include "scene_viewer/web/viewer_folder.hpp"
+
+namespace scene_render::html_command {
+namespace {
+
+using namespace scene_viewer;
+
+ViewerLayer read_layer(const std::string& path, const std::string& label) {
+    try {
+        return ViewerLayer{label, scene_schema::read_file(path)};
+    } catch (const std::exception& e) {
+        throw Failure{"invalid entity file", e.what(), path};
+    }
+}
+
+/// The first file's models (or boxes) and the ego car, placed as scene-render draws them.
+std::vector<unsigned char> scene_glb(const Options& o, const scene_schema::EntityDocument& doc) {
+    std::optional<ClassTable> classes;
+    if (!o.boxes) {
+        const std::filesystem::path path =
+            o.classes.empty() ? default_class_table_path() : std::filesystem::path(o.classes);
+        try {
+            classes = load_class_table(path);
+        } catch (const std::exception& e) {
+            throw Failure{"cannot read class table", e.what(),
+                          o.classes.empty() ? path.string() : "--classes"};
+        }
+    }
+    // The export needs no GL: the null device takes the uploads.
+    NullDevice device;
+    SceneRenderer renderer(device);
+    if (classes) {
+        try {
+            use_class_models(renderer, *classes);
+        } catch (const std::exception& e) {
+            throw Failure{"cannot load class model", e.what(), classes->source.string()};
+        }
+    }
+    RenderOptions options;
+    options.view = chase_view();  // a view that places the ego car
+    options.ego = !o.no_ego;
+    options.grid = false;
+    renderer.load(doc, nullptr, options);
+    try {
+        return export_scene_glb_bytes(renderer.placed_models());
+    } catch (const std::exception& e) {
+        throw Failure{"cannot export the scene", e.what(), o.inputs.front()};
+    }
+}
+
+}  // namespace
+
+CLI::App* add(CLI::App& app, Options& o) {
+    CLI::App* html = app.add_subcommand(
+        "html", "write an interactive browser viewer folder (see docs/viewer.md)");
+    html->add_option("inputs", o.inputs, "entity files: the scene, then files to compare with it")
+        ->required();
+    html->add_option("--out", o.out_dir, "output folder")->required();
+    html->add_option("--labels", o.labels, "one label per input (default: file names)");
+    html->add_option("--cloud", o.cloud, "point cloud (.ply, .pcd, .xyz)");
+    html->add_option("--background", o.background, "left image, shown behind the camera view");
+    html->add_option("--classes", o.classes,
+                     "class table (default: assets/classes/render_classes.json)");
+    html->add_flag("--boxes", o.boxes, "draw every entity as a box (no glTF models)");
+    html->add_flag("--no-ego", o.no_ego, "no ego car");
+    html->add_option("--title", o.title, "page title (default: the first file's name)");
+    html->add_option("--point-size", o.point_size_px, "cloud point size in pixels")
+        ->capture_default_str();
+    return html;
+}
+
+int run(const Options& o) {
+    if (!o.labels.empty() && o.labels.size() != o.inputs.size()) {
+        throw Failure{"bad usage",
+                      std::to_string(o.labels.size()) + " labels for " +
+                          std::to_string(o.inputs.size()) + " inputs",
+                      "--labels", 2};
+    }
+    ViewerOptions viewer;
+    viewer.title =
+        o.title.empty() ? std::filesystem::path(o.inputs.front()).stem().string() : o.title;
+    viewer.point_size_px = o.point_size_px;
+    try {
+        viewer.validate();
+    } catch (const std::invalid_argument& e) {
+        throw Failure{"bad usage", e.what(), "--point-size", 2};
+    }
+    const std::filesystem::path web_dir =
+        o.web_dir.empty() ? default_viewer_assets_dir() : std::filesystem::path(o.web_dir);
+    ViewerAssets assets;
+    try {
+        assets = load_viewer_assets(web_dir);
+    } catch (const std::exception& e) {
+        throw Failure{"cannot read the viewer's files (scripts/install-deps.sh installs three.js)",
+                      e.what(), web_dir.string()};
+    }
+    ViewerScene scene;
+    for (std::size_t i = 0; i < o.inputs.size(); ++i) {
+        scene.layers.push_back(read_layer(
+            o.inputs[i],
+            o.labels.empty() ? std::filesystem::path(o.inputs[i]).stem().string() : o.labels[i]));
+    }
+    std::optional<PointCloud> cloud;
+    if (!o.cloud.empty()) {
+        try {
+            cloud = read_point_cloud(o.cloud);
+        } catch (const std::exception& e) {
+            throw Failure{"cannot read point cloud", e.what(), "--cloud"};
+        }
+        scene.cloud = &*cloud;
+    }
+    if (!o.background.empty()) {
+        try {
+            const std::vector<unsigned char> png = encode_png(decode_image(o.background), 6);
+            scene.background_bytes.assign(png.begin(), png.end());
+        } catch (const std::exception& e) {
+            throw Failure{"cannot read background image", e.what(), "--background"};
+        }
+        scene.background_name = "left.png";
+    }
+    scene.scene_glb = scene_glb(o, scene.layers.front().document);
+    std::map<std::string, std::string> files;
+    try {
+        files = viewer_files(scene, assets, viewer);
+    } catch (const std::exception& e) {
+        throw Failure{"cannot build the viewer", e.what(), o.out_dir};
+    }
+    try {
+        write_files(o.out_dir, files);
+    } catch (const std::exception& e) {
+        throw Failure{"cannot write the viewer", e.what(), o.out_dir};
+    }
+    return 0;
+}
+
+}  // namespace scene_render::html_command

@@ -1,0 +1,42 @@
+#pragma once
+
+/// scene-render html: writes the browser viewer folder of one or more entity files.
+
+#include <string>
+#include <vector>
+
+#include <CLI/CLI.hpp>
+
+namespace scene_render::html_command {
+
+/// Flags of `scene-render html`.
+struct Options {
+    std::vector<std::string> inputs;  ///< entity files; the first is the scene, more are compared
+    std::vector<std::string> labels;  ///< one label per input (default: file stems)
+    std::string out_dir;              ///< output folder, created as needed
+    std::string cloud;                ///< point cloud (.ply, .pcd, .xyz), or ""
+    std::string background;           ///< left image shown behind the camera view, or ""
+    std::string classes;              ///< class table, "" = the project's
+    bool boxes = false;               ///< every entity as a box (no glTF models)
+    bool no_ego = false;              ///< no ego car
+    std::string title;                ///< page title, "" = the first file's stem
+    float point_size_px = 2.0f;       ///< cloud point size, pixels
+    std::string web_dir;              ///< viewer's static files, "" = the build's
+};
+
+/// A failure with the parts of the one-line message and the exit code (1 failure, 2 usage).
+struct Failure {
+    std::string what;
+    std::string detail;
+    std::string where;
+    int code = 1;
+};
+
+/// Adds the `html` subcommand, filling `options` when parsed.
+CLI::App* add(CLI::App& app, Options& options);
+
+/// Reads and checks every input, builds the folder's files in memory, then writes them; throws
+/// Failure.
+int run(const Options& options);
+
+}  // namespace scene_render::html_command

@@ -1,0 +1,73 @@
+#pragma once
+
+/// The browser viewer: a self-contained folder (index.html, the scene as .glb, the cloud as a
+/// glTF POINTS .glb, the left image, three.js) that opens from disk or any static web server.
+/// Data reach the page through classic <script> files (file:// pages may not fetch() nor import
+/// modules in Chromium), so nothing is requested outside the folder. See docs/viewer.md.
+
+#include <filesystem>
+#include <map>
+#include <string>
+#include <vector>
+
+#include "scene_schema/entities.hpp"
+#include "scene_viewer/render/point_cloud.hpp"
+
+namespace scene_viewer {
+
+/// One entity file shown by the viewer.
+struct ViewerLayer {
+    std::string label;                      ///< name in the page (e.g. the file stem)
+    scene_schema::EntityDocument document;  ///< the entities
+};
+
+/// What the page shows. The first layer is the scene (drawn with its models from scene_glb);
+/// further layers are compared with it (boxes in per-file colours).
+struct ViewerScene {
+    std::vector<ViewerLayer> layers;       ///< at least one
+    std::vector<unsigned char> scene_glb;  ///< export_scene_glb_bytes() of the first layer
+    const PointCloud* cloud = nullptr;     ///< optional point cloud (KITTI frame), borrowed
+    std::string background_name;           ///< file name of the left image in the folder, or ""
+    std::string background_bytes;          ///< its bytes, copied as they are
+};
+
+/// Page settings.
+struct ViewerOptions {
+    std::string title = "scene";  ///< page title
+    float point_size_px = 2.0f;   ///< cloud point size, pixels, > 0
+    /// Throws std::invalid_argument naming the bad field.
+    void validate() const;
+};
+
+/// The viewer's static files: three.js (bundled with its orbit controls and glTF loader), the
+/// page's script, style sheet and HTML template (placeholders {{TITLE}} and {{DATA_SCRIPTS}}).
+struct ViewerAssets {
+    std::string three_js;
+    std::string viewer_js;
+    std::string viewer_css;
+    std::string index_html;
+};
+
+/// Reads the viewer's static files from `dir`; throws std::runtime_error naming a missing file.
+ViewerAssets load_viewer_assets(const std::filesystem::path& dir);
+
+/// Where the build put the viewer's static files (scene_viewer/web of the build tree).
+std::filesystem::path default_viewer_assets_dir();
+
+/// The point cloud as binary glTF: one POINTS mesh per class (node "cloud_class_<id>", or
+/// "cloud" without classes), positions in the glTF frame (+Y up, metres), COLOR_0 as
+/// normalised linear bytes when the cloud has colours, else the class colour as material.
+std::vector<unsigned char> point_cloud_glb_bytes(const PointCloud& cloud);
+
+/// Standard base64 (RFC 4648, with padding).
+std::string base64_encode(const unsigned char* data, std::size_t size);
+
+/// Every file of the viewer folder, relative path -> bytes: index.html, viewer.js, viewer.css,
+/// three.min.js, scene.glb, cloud.glb (with a cloud), the background image (with one) and
+/// data/*.js (page data and the .glb files as base64 for file:// pages). Throws
+/// std::invalid_argument for no layers or bad options.
+std::map<std::string, std::string> viewer_files(const ViewerScene& scene,
+                                                const ViewerAssets& assets,
+                                                const ViewerOptions& options);
+
+}  // namespace scene_viewer

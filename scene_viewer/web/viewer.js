@@ -1,0 +1,559 @@
+// The scene viewer page (docs/viewer.md): a classic script over the global THREE of
+// three.min.js and the data scripts scene-render html writes (window.SCENE_VIEWER_DATA and the
+// base64 .glb files in window.SCENE_VIEWER_BLOBS). Coordinates are glTF/OpenGL (x right, y up,
+// z backward, metres); the details pane shows the entity file's KITTI camera frame values.
+(function () {
+    'use strict';
+
+    const data = window.SCENE_VIEWER_DATA;
+    const blobs = window.SCENE_VIEWER_BLOBS || {};
+    const params = new URLSearchParams(window.location.search);
+    const statusBox = document.getElementById('status');
+    const canvas = document.getElementById('view');
+    const backgroundImg = document.getElementById('background');
+    const detailsBox = document.getElementById('details');
+
+    let resolveReady;
+    let rejectReady;
+    const api = {
+        ready: new Promise((resolve, reject) => {
+            resolveReady = resolve;
+            rejectReady = reject;
+        }),
+        firstFrameMs: null,
+        view: 'camera',
+        frames: 0,
+    };
+    window.viewer = api;
+    if (params.get('ui') === '0') document.body.classList.add('no-ui');
+
+    const show = {
+        cloud: true, ego: true, grid: true, background: true, models: true, boxes: false,
+    };
+    const hiddenClasses = new Set();
+    const hiddenLayers = new Set();
+
+    const renderer = new THREE.WebGLRenderer({ canvas, antialias: true, alpha: true });
+    renderer.setPixelRatio(window.devicePixelRatio || 1);
+    const scene = new THREE.Scene();
+    const perspective = new THREE.PerspectiveCamera(60, 1, data.views.camera.near,
+                                                    data.views.camera.far);
+    const orthographic = new THREE.OrthographicCamera(-1, 1, 1, -1, 1, 2 * data.views.bev.height_m);
+    let camera = perspective;
+    let controls = null;
+    let dirty = true;
+
+    const entityObjects = [];  // {layer, entity, object} of every drawn entity
+    const egoObjects = [];
+    const cloudObjects = [];   // {className, object}
+    let grid = null;
+    let highlight = null;
+    let pinned = null;
+
+    const classById = new Map(data.classes.map((c) => [c.id, c]));
+
+    function setStatus(text, isError) {
+        statusBox.textContent = text;
+        statusBox.classList.toggle('error', !!isError);
+    }
+
+    function decodeBase64(text) {
+        const binary = atob(text);
+        const bytes = new Uint8Array(binary.length);
+        for (let i = 0; i < binary.length; ++i) bytes[i] = binary.charCodeAt(i);
+        return bytes.buffer;
+    }
+
+    function parseGlb(name) {
+        if (!(name in blobs)) return Promise.reject(new Error('missing data for ' + name));
+        const loader = new THREE.GLTFLoader();
+        return new Promise((resolve, reject) => {
+            loader.parse(decodeBase64(blobs[name]), '', resolve, reject);
+        });
+    }
+
+    // --- lights: the renderer's lit shading, c * (ambient + (1 - ambient) * max(n.l, 0)) ---
+    function addLights() {
+        const a = data.light.ambient;
+        scene.add(new THREE.AmbientLight(0xffffff, a * Math.PI));
+        const sun = new THREE.DirectionalLight(0xffffff, (1 - a) * Math.PI);
+        sun.position.fromArray(data.light.direction);
+        scene.add(sun);
+    }
+
+    /// Lambert materials (no specular): closer to scene-render's lighting and cheaper.
+    function toLambert(material) {
+        const m = new THREE.MeshLambertMaterial({
+            color: material.color, map: material.map || null, side: material.side,
+            transparent: material.transparent, opacity: material.opacity,
+        });
+        m.name = material.name;
+        return m;
+    }
+
+    // --- the scene: the first file's models, from scene.glb ---
+    function addSceneModels(gltf) {
+        // Nodes are the scene's roots, named by entity id (three.js keeps the raw name in
+        // userData.name and a sanitised one in name).
+        const byId = new Map();
+        for (const e of data.layers[0].entities) {
+            byId.set(e.id, e);
+            byId.set(THREE.PropertyBinding.sanitizeNodeName(e.id), e);
+        }
+        gltf.scene.traverse((object) => {
+            if (!object.isMesh) return;
+            const materials = Array.isArray(object.material) ? object.material : [object.material];
+            const lambert = materials.map(toLambert);
+            object.material = Array.isArray(object.material) ? lambert : lambert[0];
+        });
+        for (const object of gltf.scene.children) {
+            const name = object.userData.name !== undefined ? object.userData.name : object.name;
+            const entity = byId.get(name) || byId.get(object.name);
+            if (entity) {
+                entityObjects.push({ layer: 0, entity, object, kind: 'model' });
+            } else if (name === 'ego') {
+                egoObjects.push(object);
+            }
+        }
+        scene.add(gltf.scene);
+    }
+
+    // --- every file's entities as boxes in the file's colour (the comparison overlay) ---
+    const unitBox = new THREE.BoxGeometry(1, 1, 1);
+    const unitEdges = new THREE.EdgesGeometry(unitBox);
+
+    function placeBox(object, e) {
+        object.position.set(e.x, -e.y, -e.z);
+        object.rotation.set(0, Math.PI / 2 - e.theta, 0);
+        object.scale.set(e.W, e.H, e.L);
+    }
+
+    function addBoxes() {
+        data.layers.forEach((layer, index) => {
+            const colour = new THREE.Color(layer.colour);
+            const edges = new THREE.LineBasicMaterial({ color: colour });
+            const faces = new THREE.MeshBasicMaterial({
+                color: colour, transparent: true, opacity: 0.15, depthWrite: false,
+            });
+            for (const e of layer.entities) {
+                const group = new THREE.Group();
+                group.add(new THREE.LineSegments(unitEdges, edges));
+                group.add(new THREE.Mesh(unitBox, faces));
+                placeBox(group, e);
+                scene.add(group);
+                entityObjects.push({ layer: index, entity: e, object: group, kind: 'box' });
+            }
+        });
+    }
+
+    function addCloud(gltf) {
+        gltf.scene.traverse((object) => {
+            if (!object.isPoints) return;
+            const old = object.material;
+            object.material = new THREE.PointsMaterial({
+                size: data.point_size, sizeAttenuation: false,
+                vertexColors: !!object.geometry.getAttribute('color'), color: old.color,
+            });
+            let holder = object;
+            while (holder && holder.userData.class_id === undefined) holder = holder.parent;
+            const id = holder ? holder.userData.class_id : undefined;
+            const c = id === undefined ? null : classById.get(id);
+            cloudObjects.push({ className: c ? c.name : null, object });
+        });
+        scene.add(gltf.scene);
+    }
+
+    /// Top of the ground patches in the GL frame (scene-render's grid height).
+    function groundTopGl() {
+        let top = null;
+        for (const e of data.layers[0].entities) {
+            const c = data.classes.find((k) => k.name === e.class);
+            if (!c || !c.ground) continue;
+            const h = Math.min(e.H, 0.1);
+            const y = e.y + 0.5 * e.H - h;
+            top = top === null ? y : Math.min(top, y);
+        }
+        return -(top === null ? 1.65 : top);
+    }
+
+    /// The BEV framing of views.cpp's bev_view_fitting over every file's footprints.
+    function bevFit(aspect) {
+        let minX = -2, maxX = 2, minZ = -4, maxZ = 4;
+        for (const layer of data.layers) {
+            for (const e of layer.entities) {
+                const r = 0.5 * Math.hypot(e.W, e.L);
+                minX = Math.min(minX, e.x - r);
+                maxX = Math.max(maxX, e.x + r);
+                minZ = Math.min(minZ, e.z - r);
+                maxZ = Math.max(maxZ, e.z + r);
+            }
+        }
+        const halfH = 0.5 * (maxZ - minZ);
+        const halfW = 0.5 * (maxX - minX);
+        return {
+            centre: [0.5 * (minX + maxX), 0.5 * (minZ + maxZ)],
+            halfHeight: data.views.bev.margin * Math.max(halfH, halfW / aspect),
+            halfWidth: halfW, halfDepth: halfH,
+        };
+    }
+
+    function addGrid() {
+        const fit = bevFit(1);
+        const size = 2 * Math.ceil(Math.max(fit.halfWidth, fit.halfDepth) + 10);
+        grid = new THREE.GridHelper(size, size, 0x8a93a0, 0xb4bcc8);
+        grid.position.set(Math.round(fit.centre[0]), groundTopGl() + 0.01, -Math.round(fit.centre[1]));
+        scene.add(grid);
+    }
+
+    // --- views ---
+    function canvasSize() {
+        return { w: canvas.clientWidth || 1, h: canvas.clientHeight || 1 };
+    }
+
+    /// The frame's camera, letterboxed into the canvas: the projection of views.cpp's
+    /// projection_from_intrinsics with the intrinsics scaled and shifted to the image's rectangle.
+    function cameraProjection() {
+        const k = data.views.camera;
+        const { w, h } = canvasSize();
+        const s = Math.min(w / k.width, h / k.height);
+        const ox = 0.5 * (w - k.width * s);
+        const oy = 0.5 * (h - k.height * s);
+        const fx = k.fx * s, fy = k.fy * s, cx = k.cx * s + ox, cy = k.cy * s + oy;
+        const n = k.near, f = k.far;
+        perspective.projectionMatrix.set(
+            2 * fx / w, 0, 1 - 2 * cx / w, 0,
+            0, 2 * fy / h, 2 * cy / h - 1, 0,
+            0, 0, -(f + n) / (f - n), -2 * f * n / (f - n),
+            0, 0, -1, 0);
+        perspective.projectionMatrixInverse.copy(perspective.projectionMatrix).invert();
+        Object.assign(backgroundImg.style, {
+            left: ox + 'px', top: oy + 'px', width: k.width * s + 'px', height: k.height * s + 'px',
+        });
+    }
+
+    function makeControls() {
+        if (controls) controls.dispose();
+        controls = new THREE.OrbitControls(camera, canvas);
+        controls.addEventListener('change', () => { dirty = true; });
+        controls.addEventListener('start', () => {
+            if (api.view === 'camera') {
+                api.view = 'free';
+                applyVisibility();
+                updateProjection();
+                markViewButtons();
+            }
+        });
+    }
+
+    function updateProjection() {
+        const { w, h } = canvasSize();
+        if (camera === orthographic) {
+            const fit = bevFit(w / h);
+            orthographic.left = -fit.halfHeight * w / h;
+            orthographic.right = fit.halfHeight * w / h;
+            orthographic.top = fit.halfHeight;
+            orthographic.bottom = -fit.halfHeight;
+            orthographic.updateProjectionMatrix();
+        } else if (api.view === 'camera') {
+            cameraProjection();
+        } else {
+            perspective.aspect = w / h;
+            perspective.updateProjectionMatrix();
+        }
+        dirty = true;
+    }
+
+    function setView(name) {
+        const k = data.views.camera;
+        api.view = name;
+        if (name === 'bev') {
+            camera = orthographic;
+            const fit = bevFit(1);
+            const target = new THREE.Vector3(fit.centre[0], 0, -fit.centre[1]);
+            orthographic.position.set(target.x, data.views.bev.height_m, target.z);
+            orthographic.up.set(0, 0, -1);
+            orthographic.zoom = 1;
+            makeControls();
+            controls.enableRotate = false;
+            controls.screenSpacePanning = true;
+            controls.target.copy(target);
+        } else {
+            camera = perspective;
+            perspective.up.set(0, 1, 0);
+            makeControls();
+            if (name === 'chase') {
+                perspective.fov = data.views.chase.fov;
+                perspective.position.fromArray(data.views.chase.eye);
+                controls.target.fromArray(data.views.chase.target);
+            } else {
+                perspective.fov = 2 * Math.atan(0.5 * k.height / k.fy) * 180 / Math.PI;
+                perspective.position.set(0, 0, 0);
+                controls.target.set(0, 0, -20);
+            }
+        }
+        controls.update();
+        updateProjection();
+        applyVisibility();
+        markViewButtons();
+    }
+
+    // --- visibility ---
+    function visible(object) {
+        for (let o = object; o; o = o.parent) if (!o.visible) return false;
+        return true;
+    }
+
+    function applyVisibility() {
+        const comparing = data.layers.length > 1;
+        for (const item of entityObjects) {
+            const on = !hiddenClasses.has(item.entity.class) && !hiddenLayers.has(item.layer);
+            const wanted = item.kind === 'model' ? show.models : (show.boxes || (comparing && item.layer > 0));
+            item.object.visible = on && wanted;
+        }
+        for (const o of egoObjects) o.visible = show.ego && api.view !== 'camera';
+        for (const c of cloudObjects) c.object.visible = show.cloud && !hiddenClasses.has(c.className);
+        if (grid) grid.visible = show.grid && api.view === 'bev';
+        const withImage = !!data.background_image && show.background && api.view === 'camera';
+        backgroundImg.hidden = !withImage;
+        canvas.style.opacity = withImage ? '0.6' : '1';
+        renderer.setClearColor(new THREE.Color(data.background_colour), withImage ? 0 : 1);
+        dirty = true;
+    }
+
+    // --- picking and the details pane ---
+    const raycaster = new THREE.Raycaster();
+
+    function entityAt(clientX, clientY) {
+        const rect = canvas.getBoundingClientRect();
+        const ndc = new THREE.Vector2(((clientX - rect.left) / rect.width) * 2 - 1,
+                                      -((clientY - rect.top) / rect.height) * 2 + 1);
+        raycaster.setFromCamera(ndc, camera);
+        const targets = entityObjects.filter((i) => visible(i.object)).map((i) => i.object);
+        for (const hit of raycaster.intersectObjects(targets, true)) {
+            if (!hit.object.isMesh || !visible(hit.object)) continue;
+            for (let o = hit.object; o; o = o.parent) {
+                const item = entityObjects.find((i) => i.object === o);
+                if (item) return item;
+            }
+        }
+        return null;
+    }
+
+    function fmt(v, digits) {
+        return typeof v === 'number' ? v.toFixed(digits) : String(v);
+    }
+
+    function showDetails(item) {
+        if (highlight) {
+            scene.remove(highlight);
+            highlight = null;
+        }
+        if (!item) {
+            detailsBox.hidden = true;
+            dirty = true;
+            return;
+        }
+        const e = item.entity;
+        const rows = [
+            ['id', e.id],
+            ['class', e.class + ' (' + e.class_id + ')'],
+            ['x, y, z', [e.x, e.y, e.z].map((v) => fmt(v, 2)).join(', ') + ' m'],
+            ['heading', fmt(e.theta * 180 / Math.PI, 1) + '° (' + fmt(e.theta, 3) + ' rad)'],
+            ['W × H × L', [e.W, e.H, e.L].map((v) => fmt(v, 2)).join(' × ') + ' m'],
+            ['confidence', fmt(e.confidence, 2)],
+            ['points', e.point_count],
+        ];
+        if (e.method) rows.push(['method', e.method]);
+        for (const key of ['track_id', 'track']) if (e[key] !== undefined) rows.push(['track', e[key]]);
+        for (const key of ['speed_mps', 'speed']) {
+            if (e[key] !== undefined) rows.push(['speed', fmt(e[key], 2) + ' m/s']);
+        }
+        if (data.layers.length > 1) rows.unshift(['file', data.layers[item.layer].label]);
+        const table = document.createElement('table');
+        for (const [k, v] of rows) {
+            const tr = table.insertRow();
+            const th = document.createElement('th');
+            th.textContent = k;
+            tr.appendChild(th);
+            tr.insertCell().textContent = v;
+        }
+        detailsBox.replaceChildren(table);
+        if (pinned === item) {
+            const note = document.createElement('div');
+            note.className = 'pinned';
+            note.textContent = 'kept (click elsewhere to release)';
+            detailsBox.appendChild(note);
+        }
+        detailsBox.hidden = false;
+        detailsBox.dataset.entityId = e.id;
+        highlight = new THREE.LineSegments(unitEdges, new THREE.LineBasicMaterial({ color: 0xffd400 }));
+        placeBox(highlight, e);
+        highlight.scale.multiplyScalar(1.02);
+        scene.add(highlight);
+        dirty = true;
+    }
+
+    canvas.addEventListener('pointermove', (event) => {
+        if (pinned || event.buttons) return;
+        showDetails(entityAt(event.clientX, event.clientY));
+    });
+    canvas.addEventListener('click', (event) => {
+        const item = entityAt(event.clientX, event.clientY);
+        pinned = item;
+        showDetails(item);
+    });
+    canvas.addEventListener('pointerleave', () => { if (!pinned) showDetails(null); });
+
+    // --- the panel ---
+    function checkbox(parent, text, checked, onChange, colour) {
+        const label = document.createElement('label');
+        const input = document.createElement('input');
+        input.type = 'checkbox';
+        input.checked = checked;
+        input.addEventListener('change', () => {
+            onChange(input.checked);
+            applyVisibility();
+        });
+        label.appendChild(input);
+        if (colour) {
+            const swatch = document.createElement('span');
+            swatch.className = 'swatch';
+            swatch.style.background = colour;
+            label.appendChild(swatch);
+        }
+        label.appendChild(document.createTextNode(text));
+        parent.appendChild(label);
+        return input;
+    }
+
+    function markViewButtons() {
+        for (const b of document.querySelectorAll('#views button')) {
+            b.classList.toggle('active', b.dataset.view === api.view);
+        }
+    }
+
+    function buildPanel() {
+        const views = document.getElementById('views');
+        for (const [name, text] of [['camera', 'camera'], ['chase', 'chase'], ['bev', 'BEV']]) {
+            const b = document.createElement('button');
+            b.textContent = text;
+            b.dataset.view = name;
+            b.addEventListener('click', () => setView(name));
+            views.appendChild(b);
+        }
+        const toggles = document.getElementById('toggles');
+        checkbox(toggles, 'models', show.models, (v) => { show.models = v; });
+        checkbox(toggles, 'boxes', show.boxes, (v) => { show.boxes = v; });
+        if (data.cloud) {
+            checkbox(toggles, 'point cloud (' + data.cloud.points.toLocaleString('en') + ')',
+                     show.cloud, (v) => { show.cloud = v; });
+        }
+        if (egoObjects.length) checkbox(toggles, 'ego car', show.ego, (v) => { show.ego = v; });
+        checkbox(toggles, 'grid (BEV)', show.grid, (v) => { show.grid = v; });
+        if (data.background_image) {
+            checkbox(toggles, 'left image (camera)', show.background,
+                     (v) => { show.background = v; });
+        }
+        if (data.layers.length > 1) {
+            document.getElementById('layers-section').hidden = false;
+            const layers = document.getElementById('layers');
+            data.layers.forEach((layer, i) => {
+                checkbox(layers, layer.label + ' (' + layer.entities.length + ')', true,
+                         (v) => { if (v) hiddenLayers.delete(i); else hiddenLayers.add(i); },
+                         layer.colour);
+            });
+        }
+        const classes = document.getElementById('classes');
+        for (const c of data.classes) {
+            checkbox(classes, c.name, true, (v) => {
+                if (v) hiddenClasses.delete(c.name); else hiddenClasses.add(c.name);
+            }, c.colour);
+        }
+        const downloads = document.getElementById('downloads');
+        const files = [data.scene_file, data.cloud && data.cloud.file, data.background_image];
+        for (const f of files.filter(Boolean)) {
+            const a = document.createElement('a');
+            a.href = f;
+            a.textContent = f;
+            a.download = f;
+            downloads.appendChild(a);
+        }
+    }
+
+    // --- frame loop ---
+    function resize() {
+        const { w, h } = canvasSize();
+        renderer.setSize(w, h, false);
+        updateProjection();
+    }
+
+    function frame() {
+        if (controls && controls.update()) dirty = true;
+        if (dirty) {
+            renderer.render(scene, camera);
+            dirty = false;
+            ++api.frames;
+        }
+        requestAnimationFrame(frame);
+    }
+
+    /// Projects a KITTI camera-frame point to canvas pixels (CSS) in the current view.
+    api.project = function (x, y, z) {
+        const v = new THREE.Vector3(x, -y, -z).project(camera);
+        const { w, h } = canvasSize();
+        return { x: (v.x + 1) * 0.5 * w, y: (1 - v.y) * 0.5 * h };
+    };
+    api.setView = setView;
+    /// Orbits for `ms` milliseconds and reports the frame rate seen by requestAnimationFrame.
+    api.orbitBenchmark = function (ms) {
+        return new Promise((resolve) => {
+            controls.autoRotate = true;
+            controls.autoRotateSpeed = 30;
+            const times = [];
+            function tick(t) {
+                times.push(t);
+                if (t - times[0] < ms) {
+                    requestAnimationFrame(tick);
+                    return;
+                }
+                controls.autoRotate = false;
+                const span = times[times.length - 1] - times[0];
+                let worst = 0;
+                for (let i = 1; i < times.length; ++i) worst = Math.max(worst, times[i] - times[i - 1]);
+                resolve({ frames: times.length - 1, fps: (times.length - 1) * 1000 / span,
+                          worst_ms: worst });
+            }
+            requestAnimationFrame(tick);
+        });
+    };
+
+    async function start() {
+        if (!data) throw new Error('data/scene-data.js did not load');
+        if (!window.THREE || !THREE.GLTFLoader) throw new Error('three.min.js did not load');
+        renderer.setClearColor(new THREE.Color(data.background_colour), 1);
+        if (data.background_image) backgroundImg.src = data.background_image;
+        addLights();
+        const sceneGltf = await parseGlb(data.scene_file);
+        addSceneModels(sceneGltf);
+        addBoxes();
+        if (data.cloud) addCloud(await parseGlb(data.cloud.file));
+        addGrid();
+        buildPanel();
+        window.addEventListener('resize', resize);
+        resize();
+        setView(params.get('view') || 'camera');
+        renderer.render(scene, camera);
+        requestAnimationFrame(() => {
+            api.firstFrameMs = performance.now();
+            setStatus('');
+            resolveReady();
+            requestAnimationFrame(frame);
+        });
+    }
+
+    start().catch((error) => {
+        console.error('scene viewer:', error);
+        setStatus('cannot show the scene: ' + error.message, true);
+        rejectReady(error);
+    });
+})();

@@ -1,0 +1,172 @@
+#include <catch2/catch.hpp>
+
+#include <cstdint>
+#include <cstring>
+#include <filesystem>
+#include <string>
+
+#include <nlohmann/json.hpp>
+#include <scene_viewer/render/coordinates.hpp>
+#include <scene_viewer/views/views.hpp>
+#include <scene_viewer/web/viewer_folder.hpp>
+
+using namespace scene_viewer;
+
+namespace {
+
+std::string b64(const std::string& text) {
+    return base64_encode(reinterpret_cast<const unsigned char*>(text.data()), text.size());
+}
+
+/// The JSON and BIN chunks of a .glb (glTF 2.0 binary container).
+struct Glb {
+    nlohmann::json json;
+    std::string bin;
+};
+
+Glb split_glb(const std::vector<unsigned char>& bytes) {
+    REQUIRE(bytes.size() >= 20);
+    REQUIRE(std::string(bytes.begin(), bytes.begin() + 4) == "glTF");
+    auto u32 = [&](std::size_t at) {
+        std::uint32_t v;
+        std::memcpy(&v, bytes.data() + at, 4);
+        return v;
+    };
+    const std::uint32_t json_length = u32(12);
+    Glb glb;
+    glb.json = nlohmann::json::parse(bytes.begin() + 20, bytes.begin() + 20 + json_length);
+    const std::size_t bin_at = 20 + json_length;
+    if (bin_at + 8 <= bytes.size()) {
+        const std::uint32_t bin_length = u32(bin_at);
+        glb.bin.assign(bytes.begin() + static_cast<long>(bin_at) + 8,
+                       bytes.begin() + static_cast<long>(bin_at + 8 + bin_length));
+    }
+    return glb;
+}
+
+PointCloud two_class_cloud() {
+    PointCloud cloud;
+    cloud.positions_kitti = {{1.0f, 0.5f, 10.0f}, {0.0f, 1.6f, 8.0f}, {1.2f, 0.6f, 10.5f}};
+    cloud.colours = {{{0, 0, 142}}, {{128, 64, 128}}, {{0, 0, 142}}};
+    cloud.class_ids = {26, 7, 26};
+    return cloud;
+}
+
+scene_schema::EntityDocument one_car() {
+    scene_schema::EntityDocument doc;
+    scene_schema::CameraIntrinsics k;
+    k.width_px = 640;
+    k.height_px = 200;
+    k.fx_px = k.fy_px = 500.0;
+    k.cx_px = 320.0;
+    k.cy_px = 90.0;
+    doc.frame.camera = k;
+    scene_schema::Entity car;
+    car.id = "car-1";
+    car.class_name = "car";
+    car.class_id = 26;
+    car.x = 1.0;
+    car.y = 0.9;
+    car.z = 12.0;
+    car.W = 1.8;
+    car.H = 1.5;
+    car.L = 4.2;
+    doc.entities.push_back(car);
+    return doc;
+}
+
+}  // namespace
+
+TEST_CASE("base64 encodes the RFC 4648 test vectors", "[web]") {
+    CHECK(b64("") == "");
+    CHECK(b64("f") == "Zg==");
+    CHECK(b64("fo") == "Zm8=");
+    CHECK(b64("foo") == "Zm9v");
+    CHECK(b64("foob") == "Zm9vYg==");
+    CHECK(b64("fooba") == "Zm9vYmE=");
+    CHECK(b64("foobar") == "Zm9vYmFy");
+    const unsigned char high[] = {0xff, 0xfe, 0xfd};
+    CHECK(base64_encode(high, 3) == "//79");
+}
+
+TEST_CASE("a cloud becomes one glTF POINTS mesh per class in the glTF frame", "[web]") {
+    const PointCloud cloud = two_class_cloud();
+    const Glb glb = split_glb(point_cloud_glb_bytes(cloud));
+    const auto& nodes = glb.json.at("nodes");
+    REQUIRE(nodes.size() == 2);
+    CHECK(nodes[0].at("name") == "cloud_class_7");  // classes in id order
+    CHECK(nodes[1].at("name") == "cloud_class_26");
+    CHECK(nodes[1].at("extras").at("class_id") == 26);
+    const auto& car = glb.json.at("meshes")[1].at("primitives")[0];
+    CHECK(car.at("mode") == 0);  // POINTS
+    const auto& accessors = glb.json.at("accessors");
+    const auto& position = accessors[car.at("attributes").at("POSITION").get<std::size_t>()];
+    REQUIRE(position.at("count") == 2);
+    const auto& view = glb.json.at("bufferViews")[position.at("bufferView").get<std::size_t>()];
+    const auto offset = view.find("byteOffset");
+    const std::size_t at = offset == view.end() ? 0 : offset->get<std::size_t>();
+    float xyz[3];
+    std::memcpy(xyz, glb.bin.data() + at, sizeof xyz);
+    const glm::vec3 want = kitti_to_gl(cloud.positions_kitti[0]);
+    CHECK(xyz[0] == want.x);
+    CHECK(xyz[1] == want.y);
+    CHECK(xyz[2] == want.z);
+    const auto& colour = accessors[car.at("attributes").at("COLOR_0").get<std::size_t>()];
+    CHECK(colour.at("normalized") == true);
+    CHECK(colour.at("componentType") == 5121);  // unsigned byte
+}
+
+TEST_CASE("a cloud with mismatched colours is refused", "[web]") {
+    PointCloud cloud = two_class_cloud();
+    cloud.colours.pop_back();
+    CHECK_THROWS_AS(point_cloud_glb_bytes(cloud), std::invalid_argument);
+}
+
+TEST_CASE("the viewer folder carries the page, the data and the views of views.cpp", "[web]") {
+    ViewerScene scene;
+    scene.layers.push_back({"truth", one_car()});
+    scene.layers.push_back({"analysis", one_car()});
+    scene.scene_glb = {'g', 'l', 'T', 'F'};
+    const PointCloud cloud = two_class_cloud();
+    scene.cloud = &cloud;
+    ViewerAssets assets{"three", "viewer", "css", "<title>{{TITLE}}</title>{{DATA_SCRIPTS}}"};
+    ViewerOptions options;
+    options.title = "a<b";
+    const auto files = viewer_files(scene, assets, options);
+    for (const char* name :
+         {"index.html", "three.min.js", "viewer.js", "viewer.css", "scene.glb", "cloud.glb",
+          "data/scene-data.js", "data/scene-glb.js", "data/cloud-glb.js"}) {
+        INFO(name);
+        CHECK(files.count(name) == 1);
+    }
+    const std::string& html = files.at("index.html");
+    CHECK(html.find("<title>a&lt;b</title>") == 0);
+    CHECK(html.find("<script src=\"data/cloud-glb.js\"></script>") != std::string::npos);
+    CHECK(files.at("data/scene-glb.js").find("\"scene.glb\"] = \"Z2xURg==\";") !=
+          std::string::npos);
+
+    const std::string& script = files.at("data/scene-data.js");
+    const std::string prefix = "window.SCENE_VIEWER_DATA = ";
+    REQUIRE(script.rfind(prefix, 0) == 0);
+    const auto data =
+        nlohmann::json::parse(script.substr(prefix.size(), script.size() - prefix.size() - 2));
+    CHECK(data.at("layers").size() == 2);
+    CHECK(data.at("layers")[1].at("label") == "analysis");
+    CHECK(data.at("layers")[0].at("colour") != data.at("layers")[1].at("colour"));
+    CHECK(data.at("layers")[0].at("entities")[0].at("id") == "car-1");
+    CHECK(data.at("views").at("camera").at("fx") == 500.0);
+    CHECK(data.at("views").at("camera").at("cy") == 90.0);
+    const glm::vec3 eye = kitti_to_gl(chase_view().eye_kitti);
+    CHECK(data.at("views").at("chase").at("eye")[1].get<float>() == eye.y);
+    CHECK(data.at("cloud").at("points") == 3);
+}
+
+TEST_CASE("a viewer without entity files or with a bad point size is refused", "[web]") {
+    const ViewerAssets assets;
+    ViewerScene scene;
+    CHECK_THROWS_AS(viewer_files(scene, assets, ViewerOptions{}), std::invalid_argument);
+    scene.layers.push_back({"one", one_car()});
+    ViewerOptions options;
+    options.point_size_px = 0.0f;
+    CHECK_THROWS_AS(viewer_files(scene, assets, options), std::invalid_argument);
+}

@@ -1,0 +1,170 @@
+// Browser tests of `scene-render html` (label browser): the page in Debian's headless chromium.
+//   camera: the camera view's screenshot against scene-render's own render of the same file
+//           (the same silhouettes within a few pixels, whatever the shading), no errors logged,
+//           no request outside the folder.
+//   pick:   a pointer at a car's projected centre shows that car's id in the details pane.
+// usage: node viewer_test.mjs camera|pick SCENE_RENDER ENTITIES.json OUT_DIR NODE_MODULES CHROMIUM
+// Exit 0 pass, 1 fail, 77 skipped (chromium or the npm packages missing).
+import { spawnSync } from 'node:child_process';
+import fs from 'node:fs';
+import path from 'node:path';
+import { launch, loadModules, openViewer, readPng } from './browser.mjs';
+
+const [mode, sceneRender, entitiesFile, outDir, nodeModules, chromium] = process.argv.slice(2);
+const { playwright, PNG } = loadModules(nodeModules);
+if (!fs.existsSync(chromium || '')) {
+    console.log('SKIPPED: chromium not found (' + chromium + ')');
+    process.exit(77);
+}
+
+function fail(message) {
+    console.error('FAIL: ' + message);
+    process.exit(1);
+}
+
+function run(args) {
+    const r = spawnSync(sceneRender, args, { encoding: 'utf8' });
+    if (r.status !== 0) fail('scene-render ' + args.join(' ') + ' exited ' + r.status + ': ' + r.stderr);
+}
+
+/// Pixels that differ from the lit background (205, 215, 228) by more than `threshold`.
+function foreground(png, threshold) {
+    const mask = new Uint8Array(png.width * png.height);
+    for (let i = 0; i < mask.length; ++i) {
+        const d = Math.abs(png.data[4 * i] - 205) + Math.abs(png.data[4 * i + 1] - 215) +
+                  Math.abs(png.data[4 * i + 2] - 228);
+        mask[i] = d > threshold ? 1 : 0;
+    }
+    return mask;
+}
+
+/// The mask grown by r pixels (square neighbourhood, separable).
+function dilate(mask, w, h, r) {
+    const rows = new Uint8Array(mask.length);
+    for (let y = 0; y < h; ++y) {
+        for (let x = 0; x < w; ++x) {
+            let on = 0;
+            for (let dx = -r; dx <= r && !on; ++dx) {
+                const xx = x + dx;
+                if (xx >= 0 && xx < w && mask[y * w + xx]) on = 1;
+            }
+            rows[y * w + x] = on;
+        }
+    }
+    const out = new Uint8Array(mask.length);
+    for (let y = 0; y < h; ++y) {
+        for (let x = 0; x < w; ++x) {
+            let on = 0;
+            for (let dy = -r; dy <= r && !on; ++dy) {
+                const yy = y + dy;
+                if (yy >= 0 && yy < h && rows[yy * w + x]) on = 1;
+            }
+            out[y * w + x] = on;
+        }
+    }
+    return out;
+}
+
+/// Share of a's pixels farther than r pixels from every pixel of b.
+function outsideShare(a, b, w, h, r) {
+    const grown = dilate(b, w, h, r);
+    let count = 0, outside = 0;
+    for (let i = 0; i < a.length; ++i) {
+        if (!a[i]) continue;
+        ++count;
+        if (!grown[i]) ++outside;
+    }
+    return count ? outside / count : 0;
+}
+
+function checkReport(report) {
+    if (report.errors.length) fail('the page logged errors: ' + report.errors.join(' | '));
+    if (report.outside.length) fail('requests outside the folder: ' + report.outside.join(' '));
+    if (report.requests < 5) fail('only ' + report.requests + ' requests seen: listener broken?');
+}
+
+/// The test scene without ground and buildings: objects against the background, so the
+/// silhouettes compare every box's place.
+function objectsOnly(file) {
+    const doc = JSON.parse(fs.readFileSync(file, 'utf8'));
+    const stuff = new Set(['road', 'sidewalk', 'parking', 'terrain', 'building', 'wall', 'fence']);
+    doc.entities = doc.entities.filter((e) => !stuff.has(e.class));
+    const out = path.join(outDir, 'objects.json');
+    fs.writeFileSync(out, JSON.stringify(doc));
+    return { out, doc };
+}
+
+async function cameraTest() {
+    const { out: objects, doc } = objectsOnly(entitiesFile);
+    const k = doc.frame.camera;
+    const viewerDir = path.join(outDir, 'viewer');
+    run(['html', objects, '--out', viewerDir]);
+    const reference = path.join(outDir, 'reference.png');
+    run([objects, '--view', 'camera', '-o', reference]);
+    const context = await launch(playwright, chromium);
+    try {
+        const { page, report } = await openViewer(context, viewerDir, '?ui=0',
+                                                  { width: k.width, height: k.height });
+        const shot = path.join(outDir, 'viewer.png');
+        await page.screenshot({ path: shot });
+        checkReport(report);
+        const a = readPng(PNG, shot), b = readPng(PNG, reference);
+        if (a.width !== b.width || a.height !== b.height) {
+            fail(`screenshot ${a.width}x${a.height}, reference ${b.width}x${b.height}`);
+        }
+        const ma = foreground(a, 40), mb = foreground(b, 40);
+        const count = (m) => m.reduce((s, v) => s + v, 0);
+        let both = 0, either = 0;
+        for (let i = 0; i < ma.length; ++i) {
+            both += ma[i] & mb[i];
+            either += ma[i] | mb[i];
+        }
+        const iou = both / either;
+        const viewerOut = outsideShare(ma, mb, a.width, a.height, 3);
+        const referenceOut = outsideShare(mb, ma, a.width, a.height, 3);
+        console.log(`foreground px: viewer ${count(ma)}, scene-render ${count(mb)}; IoU ${iou.toFixed(3)};` +
+                    ` farther than 3 px: viewer ${(100 * viewerOut).toFixed(2)} %,` +
+                    ` scene-render ${(100 * referenceOut).toFixed(2)} %`);
+        if (count(mb) < 2000) fail('the reference render shows almost nothing');
+        if (viewerOut > 0.02 || referenceOut > 0.02 || iou < 0.85) {
+            fail('the viewer and scene-render disagree (see ' + shot + ' and ' + reference + ')');
+        }
+    } finally {
+        await context.close();
+    }
+}
+
+async function pickTest() {
+    const doc = JSON.parse(fs.readFileSync(entitiesFile, 'utf8'));
+    const k = doc.frame.camera;
+    // The nearest car: nothing stands in front of it.
+    const car = doc.entities.filter((e) => e.class === 'car').sort((p, q) => p.z - q.z)[0];
+    const viewerDir = path.join(outDir, 'viewer');
+    run(['html', entitiesFile, '--out', viewerDir]);
+    const context = await launch(playwright, chromium);
+    try {
+        const { page, report } = await openViewer(context, viewerDir, '',
+                                                  { width: k.width, height: k.height });
+        // The pinhole projection of the box centre, computed here from the file (not the page).
+        const u = k.fx * car.x / car.z + k.cx, v = k.fy * car.y / car.z + k.cy;
+        await page.mouse.move(u, v);
+        await page.mouse.click(u, v);
+        const shown = await page.locator('#details').getAttribute('data-entity-id');
+        const text = await page.locator('#details').innerText();
+        checkReport(report);
+        console.log(`pointer at (${u.toFixed(1)}, ${v.toFixed(1)}) for ${car.id}: pane shows ${shown}`);
+        if (shown !== car.id || !text.includes(car.id)) {
+            fail(`the details pane shows '${shown}' (${text.replace(/\n/g, ' ')}), expected ${car.id}`);
+        }
+        // Away from every entity (the sky above the road) the pane releases the selection.
+        await page.mouse.click(k.cx, 2);
+        if (await page.locator('#details').isVisible()) fail('the pane stays after a click on the sky');
+    } finally {
+        await context.close();
+    }
+}
+
+fs.mkdirSync(outDir, { recursive: true });
+const tests = { camera: cameraTest, pick: pickTest };
+if (!tests[mode]) fail('unknown mode ' + mode);
+tests[mode]().then(() => console.log('PASS'), (e) => fail(e.stack || String(e)));
