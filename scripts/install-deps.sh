@@ -20,6 +20,8 @@ packages=(
     python3-matplotlib
     # the browser viewer: node runs npm and esbuild; the browser tests drive Debian's chromium
     nodejs chromium
+    # a throw-away single-node Slurm for the cluster test (scripts/slurm/local-cluster.sh)
+    slurm-wlm munge iproute2
 )
 
 missing=()
