@@ -49,7 +49,7 @@ int run_make_sample(const SampleArgs& a) {
 
 bool is_subcommand(const std::string& arg) {
     return arg == "analyse" || arg == "evaluate" || arg == "export-kitti" || arg == "make-sample" ||
-           arg == "batch" || arg == "bench" || arg == "help";
+           arg == "batch" || arg == "bench" || arg == "report" || arg == "help";
 }
 
 }  // namespace
@@ -67,7 +67,8 @@ int main(int argc, char** argv) {
     CLI::App app{
         "cloud-analysis: rectified stereo pair + calibration + semantic image -> "
         "disparity, labelled metric point cloud and entity file.\n"
-        "Commands: analyse (default), evaluate, export-kitti, make-sample, batch, bench. Exit "
+        "Commands: analyse (default), evaluate, export-kitti, make-sample, batch, report, bench. "
+        "Exit "
         "codes: 0 ok, 1 "
         "failure, 2 usage, 3 (evaluate) a bar was missed."};
     app.set_version_flag("--version", std::string(kTool) + " " + STEREOSCENE_VERSION);
@@ -79,7 +80,8 @@ int main(int argc, char** argv) {
     cloud_analysis::app::add_settings_flags(*analyse, analyse_args);
     cloud_analysis::app::add_output_flags(*analyse, analyse_args);
     analyse->footer(
-        "Other commands: evaluate, export-kitti, make-sample, batch, bench (each with --help).\n"
+        "Other commands: evaluate, export-kitti, make-sample, batch, report, bench (each with "
+        "--help).\n"
         "Exit codes: 0 ok, 1 failure (one line on stderr, no output written), 2 usage error.");
     cloud_analysis::app::EvaluateArgs evaluate_args;
     CLI::App* evaluate = cloud_analysis::app::add_evaluate_command(app, evaluate_args);
@@ -88,6 +90,8 @@ int main(int argc, char** argv) {
 
     cloud_analysis::app::BatchArgs batch_args;
     CLI::App* batch = cloud_analysis::app::add_batch_command(app, batch_args);
+    cloud_analysis::app::ReportArgs report_args;
+    CLI::App* report = cloud_analysis::app::add_report_command(app, report_args);
     cloud_analysis::app::BenchArgs bench_args;
     CLI::App* bench = cloud_analysis::app::add_bench_command(app, bench_args);
 
@@ -116,6 +120,7 @@ int main(int argc, char** argv) {
             cloud_analysis::app::resolve_batch(batch_args, *batch);
             return cloud_analysis::app::run_batch(batch_args);
         }
+        if (*report) return cloud_analysis::app::run_report(report_args);
         if (*bench) {
             cloud_analysis::app::resolve(bench_args.analyse, *bench);
             return cloud_analysis::app::run_bench(bench_args);

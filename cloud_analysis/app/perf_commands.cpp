@@ -7,6 +7,7 @@
 #include <algorithm>
 #include <chrono>
 #include <cstdio>
+#include <cstdlib>
 #include <exception>
 #include <fstream>
 #include <future>
@@ -19,6 +20,9 @@
 
 #include "cloud_analysis/cloud_io.hpp"
 #include "cloud_analysis/disparity.hpp"
+#include "cloud_analysis/pipeline/batch_report.hpp"
+#include "cloud_analysis/pipeline/resume.hpp"
+#include "cloud_analysis/support/progress.hpp"
 
 namespace cloud_analysis::app {
 namespace {
@@ -93,15 +97,15 @@ struct Finished {
     double ms = 0.0;
 };
 
-/// Extracts the entities, formats every output and writes them, all or nothing.
+/// Extracts the entities, formats every output and writes them, all or nothing. The entity
+/// file goes last: it marks the frame complete for --resume (a writer killed before it leaves
+/// a frame that is redone).
 Finished finish_frame(FinishJob job) {
     const auto start = Clock::now();
     std::vector<std::filesystem::path> written;
     Finished done;
     try {
         std::vector<PendingOutput> outputs;
-        outputs.push_back({job.stem.string() + ".json",
-                           entity_json(job.in, job.result, *job.settings, *job.extract), ""});
         if (job.disparity_kitti) {
             outputs.push_back({job.stem.string() + "_disparity.png",
                                encode_kitti_disparity_png(job.result.disparity), ""});
@@ -113,6 +117,8 @@ Finished finish_frame(FinishJob job) {
                  format_cloud(job.result.cloud, job.in.palette, cloud_format_from_path(path)), "",
                  cloud_sync(*job.settings)});
         }
+        outputs.push_back({job.stem.string() + ".json",
+                           entity_json(job.in, job.result, *job.settings, *job.extract), ""});
         for (const auto& out : outputs) {
             write_output(out);
             written.emplace_back(out.path);
@@ -161,21 +167,44 @@ CLI::App* add_batch_command(CLI::App& app, BatchArgs& a) {
     cmd->add_flag("--disparity-kitti", a.disparity_kitti,
                   "also write <frame>_disparity.png (KITTI 16-bit)");
     cmd->add_option("--report", a.report,
-                    "JSON report: per-frame ms and resident memory ('-' = stdout)");
+                    "JSON report: counts, failures, fps, CPU time, per-frame ms and resident "
+                    "memory ('-' = stdout); merge shards' reports with `report`");
+    cmd->add_option("--shard", a.shard_text,
+                    "I/N: do frames I, I+N, I+2N, ... of the list (default: "
+                    "SLURM_ARRAY_TASK_ID/SLURM_ARRAY_TASK_COUNT when set, else all)");
+    cmd->add_flag("--resume", a.resume,
+                  "skip frames whose outputs are all there, complete and valid");
+    cmd->add_flag("--quiet,-q", a.quiet, "no progress and no summary line (errors only)");
+    cmd->add_option("--progress-every", a.progress_every_s,
+                    "seconds between progress lines when stderr is not a terminal")
+        ->capture_default_str()
+        ->check(CLI::Range(0.1, 86400.0));
     add_settings_flags(*cmd, a.settings);
     cmd->footer(
         "A frame that fails is named on stderr and skipped; exit 1 if any frame failed. Every "
-        "file of a frame is written atomically, all or nothing.");
+        "file of a frame is written atomically and the entity file last, so a killed run "
+        "leaves each frame whole or without its entity file (redone by --resume).");
     return cmd;
 }
 
 void resolve_batch(BatchArgs& a, const CLI::App& cmd) {
     if (!a.list.empty()) a.frames = read_frame_list(a.list);
     if (a.frames.empty()) throw CLI::RequiredError("--frames or --list (with frames)");
+    try {
+        a.shard = a.shard_text.empty() ? shard_from_slurm(std::getenv("SLURM_ARRAY_TASK_ID"),
+                                                          std::getenv("SLURM_ARRAY_TASK_COUNT"))
+                                       : parse_shard(a.shard_text);
+    } catch (const std::invalid_argument& e) {
+        throw CLI::ValidationError("--shard", e.what());
+    }
+    a.list_frames = a.frames.size();
+    a.frames = shard_frames(a.frames, a.shard);
     resolve_settings(a.settings, cmd);
 }
 
-int run_batch(const BatchArgs& a) {
+namespace {
+
+void check_batch_folders(const BatchArgs& a) {
     if (!std::filesystem::is_directory(a.out_dir)) {
         throw std::runtime_error("cannot write output: no such folder (" + a.out_dir.string() +
                                  ", --out-dir)");
@@ -190,6 +219,46 @@ int run_batch(const BatchArgs& a) {
     if (!std::filesystem::is_directory(a.kitti_root)) {
         throw std::runtime_error("cannot read frames: no such folder (" + a.kitti_root.string() +
                                  ", --kitti-root)");
+    }
+}
+
+/// The frames of the share still to do: all of them, or with --resume those whose outputs are
+/// not all complete and valid (the share's stale temporary files are removed first).
+std::vector<std::string> frames_to_do(const BatchArgs& a, std::size_t& skipped) {
+    skipped = 0;
+    if (!a.resume) return a.frames;
+    const FrameOutputs outputs{a.cloud_formats, a.disparity_kitti};
+    remove_stale_temporaries(a.out_dir, a.frames, outputs);
+    std::vector<std::string> todo;
+    for (const auto& frame : a.frames) {
+        if (frame_outputs_problem(a.out_dir, frame, outputs).empty()) {
+            ++skipped;
+        } else {
+            todo.push_back(frame);
+        }
+    }
+    return todo;
+}
+
+double unix_seconds() {
+    return std::chrono::duration<double>(std::chrono::system_clock::now().time_since_epoch())
+        .count();
+}
+
+}  // namespace
+
+int run_batch(const BatchArgs& a) {
+    check_batch_folders(a);
+    const double started_at = unix_seconds();
+    std::size_t skipped = 0;
+    const std::vector<std::string> frames = frames_to_do(a, skipped);
+    const std::string label = std::string(kTool) + ": batch" +
+                              (a.shard.count > 1 ? " " + std::to_string(a.shard.index) + "/" +
+                                                       std::to_string(a.shard.count)
+                                                 : std::string());
+    if (!a.quiet && (a.shard.count > 1 || a.resume)) {
+        std::fprintf(stderr, "%s: %zu of %zu frames in this share, %zu already done, %zu to do\n",
+                     label.c_str(), a.frames.size(), a.list_frames, skipped, frames.size());
     }
     // Three threads allocate frame-sized buffers: with glibc's default of up to 8 arenas per
     // core each thread's frees stay in its own arena and the resident set creeps up (kitti15,
@@ -211,7 +280,7 @@ int run_batch(const BatchArgs& a) {
 
     const auto load = [&](std::size_t i) {
         LoadedFrame f;
-        f.frame = a.frames[i];
+        f.frame = frames[i];
         const auto start = Clock::now();
         try {
             const InputPaths paths = kitti_layout(a.kitti_root, f.frame);
@@ -230,16 +299,25 @@ int run_batch(const BatchArgs& a) {
         return f;
     };
 
-    const std::size_t n = a.frames.size();
+    const std::size_t n = frames.size();
     const bool tty = isatty(STDERR_FILENO) != 0;
+    ProgressMeter::Options progress_options;
+    progress_options.terminal = tty;
+    progress_options.line_interval_s = a.progress_every_s;
+    ProgressMeter progress(label, n, progress_options);
+    bool bar_open = false;  // a bar is drawn without its newline: an error line starts one
     std::size_t failed = 0;
+    nlohmann::json failures = nlohmann::json::array();
     const auto fail = [&](const std::string& frame, const std::string& what) {
         ++failed;
-        std::fprintf(stderr, "%s%s: error: frame %s: %s\n", tty ? "\n" : "", kTool, frame.c_str(),
-                     what.c_str());
+        failures.push_back({{"frame", frame}, {"error", what}});
+        std::fprintf(stderr, "%s%s: error: frame %s: %s\n", bar_open ? "\n" : "", kTool,
+                     frame.c_str(), what.c_str());
+        bar_open = false;
     };
     nlohmann::json per_frame = nlohmann::json::array();
-    std::future<LoadedFrame> next = std::async(std::launch::async, load, 0);
+    std::future<LoadedFrame> next;
+    if (n > 0) next = std::async(std::launch::async, load, 0);
     std::future<Finished> finishing;
     std::string finishing_frame;
     std::size_t finishing_record = 0;
@@ -254,6 +332,14 @@ int run_batch(const BatchArgs& a) {
     };
     const auto start = Clock::now();
     const double cpu_start = cpu_seconds();
+    const auto show_progress = [&](std::size_t done) {
+        if (a.quiet) return;
+        const std::string text =
+            progress.update(done, failed, ms_between(start, Clock::now()) / 1000.0);
+        if (text.empty()) return;
+        std::fputs(text.c_str(), stderr);
+        bar_open = text.back() != '\n';
+    };
     for (std::size_t i = 0; i < n; ++i) {
         // The waits show whether the overlap works: with the loader and the finishing thread
         // keeping up, the main thread never waits for them and the frame period is the
@@ -294,40 +380,110 @@ int run_batch(const BatchArgs& a) {
             finishing_record = per_frame.size() - 1;
             finishing = std::async(std::launch::async, finish_frame, std::move(*job));
         }
-        const double seconds = ms_between(start, Clock::now()) / 1000.0;
-        if (tty || (i + 1) % 10 == 0 || i + 1 == n) {
-            std::fprintf(stderr, "%s%s: batch: %zu/%zu frames, %.1f fps, %zu failed%s",
-                         tty ? "\r" : "", kTool, i + 1, n, static_cast<double>(i + 1) / seconds,
-                         failed, tty ? "" : "\n");
-        }
+        show_progress(i + 1);
     }
     collect();
     const double seconds = ms_between(start, Clock::now()) / 1000.0;
-    const double fps = static_cast<double>(n) / seconds;
+    const double fps = seconds > 0.0 ? static_cast<double>(n) / seconds : 0.0;
     // CPU time per frame does not depend on what else runs on the machine; the busy share
     // (CPU time over wall time times cores) says whether the overlap keeps every core working.
-    const double cpu_ms_per_frame = 1000.0 * (cpu_seconds() - cpu_start) / static_cast<double>(n);
+    const double cpu = cpu_seconds() - cpu_start;
+    const double cpu_ms_per_frame = n > 0 ? 1000.0 * cpu / static_cast<double>(n) : 0.0;
     const unsigned cores = std::max(1u, std::thread::hardware_concurrency());
     const double busy = cpu_ms_per_frame * fps / (1000.0 * cores);
-    std::fprintf(stderr,
-                 "%s%s: batch: %zu frames in %.2f s (%.2f fps), %zu failed, peak RSS %.0f MB, "
-                 "%.0f ms CPU per frame, cores %.0f %% busy\n",
-                 tty ? "\n" : "", kTool, n, seconds, fps, failed, peak_rss_mb(), cpu_ms_per_frame,
-                 100.0 * busy);
+    if (!a.quiet) {
+        std::fprintf(stderr,
+                     "%s%s: %zu frames in %.2f s (%.2f fps), %zu failed, peak RSS %.0f MB, "
+                     "%.0f ms CPU per frame, cores %.0f %% busy\n",
+                     bar_open ? "\n" : "", label.c_str(), n, seconds, fps, failed, peak_rss_mb(),
+                     cpu_ms_per_frame, 100.0 * busy);
+    }
     if (!a.report.empty()) {
-        const nlohmann::json report = {{"frames", n},
-                                       {"failed", failed},
-                                       {"seconds", seconds},
-                                       {"fps", fps},
-                                       {"peak_rss_mb", peak_rss_mb()},
-                                       {"cpu_ms_per_frame", cpu_ms_per_frame},
-                                       {"cores", cores},
-                                       {"cores_busy", busy},
-                                       {"preset", a.settings.preset},
-                                       {"per_frame", per_frame}};
+        const nlohmann::json report = {
+            {"shard", {{"index", a.shard.index}, {"count", a.shard.count}}},
+            {"list_frames", a.list_frames},
+            {"frames", a.frames.size()},
+            {"done", n - failed},
+            {"skipped", skipped},
+            {"failed", failed},
+            {"failures", failures},
+            {"started_at", started_at},
+            {"ended_at", unix_seconds()},
+            {"seconds", seconds},
+            {"fps", fps},
+            {"cpu_seconds", cpu},
+            {"peak_rss_mb", peak_rss_mb()},
+            {"cpu_ms_per_frame", cpu_ms_per_frame},
+            {"cores", cores},
+            {"cores_busy", busy},
+            {"preset", a.settings.preset},
+            {"per_frame", per_frame}};
         write_output({a.report.string(), report.dump(1) + "\n", "--report"});
     }
     return failed == 0 ? 0 : 1;
+}
+
+CLI::App* add_report_command(CLI::App& app, ReportArgs& a) {
+    CLI::App* cmd = app.add_subcommand(
+        "report",
+        "merge the reports of a sharded batch (batch --shard I/N --report) into one: frames "
+        "done, skipped, failed with reasons, fps, CPU time, memory");
+    cmd->add_option("reports", a.inputs, "shard report files")->required();
+    cmd->add_option("--shards", a.shards, "shards of the run (default: as the reports say)")
+        ->check(CLI::Range(1, 1000000));
+    cmd->add_option("-o,--output", a.output, "merged report ('-' = stdout)")->capture_default_str();
+    cmd->footer(
+        "Exit 1 when a shard's report is missing or a frame failed (the report is "
+        "still written), 2 on usage errors.");
+    return cmd;
+}
+
+int run_report(const ReportArgs& a) {
+    std::vector<nlohmann::json> reports;
+    for (const auto& path : a.inputs) {
+        std::ifstream in(path);
+        if (!in)
+            throw std::runtime_error("cannot read report: no such file (" + path.string() + ")");
+        try {
+            reports.push_back(nlohmann::json::parse(in));
+        } catch (const nlohmann::json::exception& e) {
+            throw std::runtime_error("cannot read report: " + std::string(e.what()) + " (" +
+                                     path.string() + ")");
+        }
+    }
+    int shards = a.shards;
+    if (shards == 0 && !reports.empty() && reports.front().contains("shard")) {
+        shards = reports.front()["shard"].value("count", 0);
+    }
+    nlohmann::json merged;
+    try {
+        merged = merge_batch_reports(reports, shards);
+    } catch (const std::invalid_argument& e) {
+        throw std::runtime_error(std::string("cannot merge reports: ") + e.what());
+    }
+    const std::string output_dir = std::filesystem::path(a.output).parent_path().string();
+    if (a.output != "-" && !output_dir.empty() && !std::filesystem::is_directory(output_dir)) {
+        throw std::runtime_error("cannot write output: no such folder (" + output_dir + ", -o)");
+    }
+    write_output({a.output, merged.dump(1) + "\n", "-o"});
+    for (const auto& index : merged["missing_shards"]) {
+        std::fprintf(stderr, "%s: error: shard %d/%d: no report\n", kTool, index.get<int>(),
+                     shards);
+    }
+    for (const auto& f : merged["failures"]) {
+        std::fprintf(stderr, "%s: error: frame %s: %s\n", kTool, f.value("frame", "?").c_str(),
+                     f.value("error", "?").c_str());
+    }
+    std::fprintf(stderr,
+                 "%s: report: %zu shards of %d, %zu frames: %zu done, %zu skipped (done "
+                 "before), %zu failed; %.2f fps over %.1f s, %.0f ms CPU per frame, peak RSS "
+                 "%.0f MB\n",
+                 kTool, merged["shards_reported"].get<std::size_t>(), shards,
+                 merged["frames"].get<std::size_t>(), merged["done"].get<std::size_t>(),
+                 merged["skipped"].get<std::size_t>(), merged["failed"].get<std::size_t>(),
+                 merged["fps"].get<double>(), merged["wall_seconds"].get<double>(),
+                 merged["cpu_ms_per_frame"].get<double>(), merged["peak_rss_mb"].get<double>());
+    return merged["missing_shards"].empty() && merged["failed"].get<std::size_t>() == 0 ? 0 : 1;
 }
 
 CLI::App* add_bench_command(CLI::App& app, BenchArgs& a) {

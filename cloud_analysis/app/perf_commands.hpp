@@ -13,6 +13,7 @@
 #include <CLI/CLI.hpp>
 
 #include "analyse_command.hpp"
+#include "cloud_analysis/pipeline/shard.hpp"
 
 namespace cloud_analysis::app {
 
@@ -26,6 +27,12 @@ struct BatchArgs {
     std::vector<std::string> cloud_formats;  ///< --clouds: any of xyz pcd ply
     bool disparity_kitti = false;            ///< --disparity-kitti: <frame>_disparity.png
     std::filesystem::path report;            ///< --report: per-frame ms and memory as JSON
+    std::string shard_text;                  ///< --shard: "I/N" (else from SLURM_ARRAY_TASK_*)
+    cloud_analysis::Shard shard;             ///< the share of the list this run does
+    std::size_t list_frames = 0;             ///< frames in the whole list, before sharding
+    bool resume = false;                     ///< --resume: skip frames already complete and valid
+    bool quiet = false;                      ///< --quiet: no progress, no summary line
+    double progress_every_s = 10.0;          ///< --progress-every: seconds between log lines
 };
 
 /// Flags of `bench`.
@@ -37,7 +44,15 @@ struct BenchArgs {
     std::string json = "-";          ///< --json: result file ("-" = stdout)
 };
 
+/// Flags of `report`.
+struct ReportArgs {
+    std::vector<std::filesystem::path> inputs;  ///< positional: shard reports of one run
+    int shards = 0;                             ///< --shards: shards of the run (0 = from reports)
+    std::string output = "-";                   ///< -o: merged report ("-" = stdout)
+};
+
 CLI::App* add_batch_command(CLI::App& app, BatchArgs& args);
+CLI::App* add_report_command(CLI::App& app, ReportArgs& args);
 CLI::App* add_bench_command(CLI::App& app, BenchArgs& args);
 
 /// Resolves the frame list and the settings; throws CLI::ValidationError.
@@ -46,5 +61,8 @@ void resolve_batch(BatchArgs& args, const CLI::App& cmd);
 /// Exit code 0 when every frame succeeded, 1 when any failed (each named on stderr).
 int run_batch(const BatchArgs& args);
 int run_bench(const BenchArgs& args);
+/// Merges shard reports; exit 1 (after writing the report) when a shard is missing or a frame
+/// failed, each named on stderr.
+int run_report(const ReportArgs& args);
 
 }  // namespace cloud_analysis::app

@@ -105,6 +105,7 @@ cleanup() {
             kill -KILL "$p" 2>/dev/null || true
         fi
     done
+    echo "local-cluster: stopped after $SECONDS s" >&2
     if [ "$code" -ne 0 ]; then
         for log in slurmctld slurmd munged; do
             [ -f "$dir/$log.log" ] || continue
@@ -145,7 +146,7 @@ SlurmdPidFile=$dir/slurmd.pid
 SlurmctldLogFile=$dir/slurmctld.log
 SlurmdLogFile=$dir/slurmd.log
 SlurmctldDebug=info
-SlurmdDebug=info
+SlurmdDebug=${LOCAL_CLUSTER_SLURMD_DEBUG:-info}
 ProctrackType=proctrack/linuxproc
 TaskPlugin=task/none
 JobAcctGatherType=jobacct_gather/none
@@ -189,6 +190,7 @@ if [ "$ready" = 0 ]; then
     exit 1
 fi
 
+echo "local-cluster: up in $SECONDS s (files in $dir)" >&2
 if [ ${#command[@]} -eq 0 ]; then
     command=(bash -c 'out=$(sbatch --wait --quiet --output=/dev/stdout --wrap "srun hostname") && echo "local-cluster: a job ran: $out"')
 fi

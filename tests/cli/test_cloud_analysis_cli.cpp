@@ -354,6 +354,101 @@ TEST_CASE("batch without frames or with both --frames and --list is a usage erro
     CHECK(run(base + " --frames a --preset turbo", dir).code == 2);
 }
 
+namespace {
+
+/// The sample as three KITTI frames a_10 b_10 c_10 (same images, different ids).
+fs::path three_frames(const fs::path& dir) {
+    const fs::path root = sample_as_kitti(dir);
+    for (const char* sub : {"image_2", "image_3", "semantic_rgb", "calib"}) {
+        const std::string ext = std::string(sub) == "calib" ? ".txt" : ".png";
+        for (const char* id : {"a_10", "b_10", "c_10"}) {
+            fs::copy_file(root / sub / ("street_10" + ext), root / sub / (id + ext));
+        }
+    }
+    return root;
+}
+
+std::string batch_of_three(const fs::path& root, const fs::path& out) {
+    fs::create_directories(out);
+    return tool() + " batch --kitti-root " + quote(root.string()) +
+           " --frames a_10 b_10 c_10 --preset fast --out-dir " + quote(out.string());
+}
+
+}  // namespace
+
+TEST_CASE("two shards do what one process does, and report merges their reports",
+          "[cli][batch][shard]") {
+    const auto dir = scratch("batch_shards");
+    const fs::path root = three_frames(dir);
+    REQUIRE(run(batch_of_three(root, dir / "one") + " --quiet", dir).code == 0);
+    const std::string sharded = batch_of_three(root, dir / "two");
+    const Run first =
+        run(sharded + " --shard 0/2 --report " + quote((dir / "r0.json").string()), dir);
+    REQUIRE(first.code == 0);
+    CHECK(first.err.find("2 of 3 frames in this share") != std::string::npos);
+    CHECK_FALSE(fs::exists(dir / "two" / "b_10.json"));
+    // Shard 1/2 from a Slurm array task's variables.
+    const Run second = run("SLURM_ARRAY_TASK_ID=1 SLURM_ARRAY_TASK_COUNT=2 " + sharded +
+                               " --report " + quote((dir / "r1.json").string()),
+                           dir);
+    REQUIRE(second.code == 0);
+    for (const char* frame : {"a_10", "b_10", "c_10"}) {
+        CAPTURE(frame);
+        CHECK(slurp(dir / "two" / (std::string(frame) + ".json")) ==
+              slurp(dir / "one" / (std::string(frame) + ".json")));
+    }
+    const Run merged = run(tool() + " report " + quote((dir / "r0.json").string()) + " " +
+                               quote((dir / "r1.json").string()),
+                           dir);
+    REQUIRE(merged.code == 0);
+    const auto report = nlohmann::json::parse(merged.out);
+    CHECK(report["frames"] == 3);
+    CHECK(report["done"] == 3);
+    CHECK(report["shards_reported"] == 2);
+    CHECK(report["fps"].get<double>() > 0.0);
+    // A missing shard: the report is written, the shard named, exit 1.
+    const Run missing = run(tool() + " report --shards 2 -o " + quote((dir / "m.json").string()) +
+                                " " + quote((dir / "r1.json").string()),
+                            dir);
+    CHECK(missing.code == 1);
+    CHECK(missing.err.find("shard 0/2: no report") != std::string::npos);
+    CHECK(fs::exists(dir / "m.json"));
+    CHECK(run(sharded + " --shard 2/2", dir).code == 2);
+    CHECK(run("SLURM_ARRAY_TASK_ID=3 SLURM_ARRAY_TASK_COUNT=2 " + sharded, dir).code == 2);
+    CHECK(run(tool() + " report " + quote((dir / "nope.json").string()), dir).code == 1);
+}
+
+TEST_CASE("--resume keeps finished frames untouched and redoes broken or missing ones",
+          "[cli][batch][resume]") {
+    const auto dir = scratch("batch_resume");
+    const fs::path root = three_frames(dir);
+    const fs::path out = dir / "out";
+    const std::string batch = batch_of_three(root, out) + " --clouds pcd";
+    REQUIRE(run(batch + " --quiet", dir).code == 0);
+    const std::string reference = slurp(out / "b_10.json");
+    const auto a_time = fs::last_write_time(out / "a_10.json");
+    // b_10's entity file cut short, c_10's cloud gone, a killed writer's temporary left.
+    fs::resize_file(out / "b_10.json", fs::file_size(out / "b_10.json") / 2);
+    fs::remove(out / "c_10.pcd");
+    std::ofstream(out / ".c_10.json.tmp-AbCdEf") << "{";
+    const Run r = run(batch + " --resume --report " + quote((dir / "r.json").string()), dir);
+    REQUIRE(r.code == 0);
+    CHECK(r.err.find("1 already done, 2 to do") != std::string::npos);
+    CHECK(fs::last_write_time(out / "a_10.json") == a_time);
+    CHECK(slurp(out / "b_10.json") == reference);
+    CHECK(fs::exists(out / "c_10.pcd"));
+    CHECK_FALSE(fs::exists(out / ".c_10.json.tmp-AbCdEf"));
+    const auto report = nlohmann::json::parse(slurp(dir / "r.json"));
+    CHECK(report["skipped"] == 1);
+    CHECK(report["done"] == 2);
+    CHECK(report["frames"] == 3);
+    // Everything done: nothing is rewritten, and --quiet prints nothing.
+    const Run again = run(batch + " --resume --quiet", dir);
+    CHECK(again.code == 0);
+    CHECK(again.err.empty());
+    CHECK(fs::last_write_time(out / "a_10.json") == a_time);
+}
+
 TEST_CASE("bench reports frames from memory and from files beside the matcher alone as JSON",
           "[cli][bench]") {
     const auto dir = scratch("bench");
