@@ -418,7 +418,7 @@ TEST_CASE("two shards do what one process does, and report merges their reports"
     CHECK(run(tool() + " report " + quote((dir / "nope.json").string()), dir).code == 1);
 }
 
-TEST_CASE("--resume keeps finished frames untouched and redoes broken or missing ones",
+TEST_CASE("a resumed batch keeps finished frames untouched and redoes broken or missing ones",
           "[cli][batch][resume]") {
     const auto dir = scratch("batch_resume");
     const fs::path root = three_frames(dir);

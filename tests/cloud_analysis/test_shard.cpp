@@ -45,7 +45,7 @@ TEST_CASE("a shard is dealt round-robin, in list order, the same every time", "[
     CHECK(shard_frames(frames, {2, 3}) == shard_frames(frames, {2, 3}));
 }
 
-TEST_CASE("--shard I/N parses, and bad values say what is wrong", "[shard]") {
+TEST_CASE("a shard I/N parses, and bad values say what is wrong", "[shard]") {
     const Shard s = parse_shard("2/10");
     CHECK(s.index == 2);
     CHECK(s.count == 10);
