@@ -90,7 +90,7 @@ const folderBytes = fs.readdirSync(viewerDir, { recursive: true })
     .map((f) => fs.statSync(path.join(viewerDir, f))).filter((s) => s.isFile())
     .reduce((sum, s) => sum + s.size, 0);
 
-const { playwright } = loadModules(path.join(root, 'third_party/web/node_modules'));
+const { playwright } = loadModules(path.join(root, 'scripts/npm/node_modules'));
 const context = await launch(playwright, '/usr/bin/chromium');
 const firstFrames = [];
 let orbit = null;

@@ -1,7 +1,7 @@
 #!/usr/bin/env bash
 # Installs the Debian (bookworm) packages that the build, the tests and the real-client checks
-# need, then the browser viewer's pinned npm packages (third_party/web/package-lock.json: three.js,
-# esbuild, playwright-core, pngjs) into third_party/web/node_modules (not committed).
+# need, then the browser viewer's pinned npm packages (scripts/npm/package-lock.json: three.js,
+# esbuild, playwright-core, pngjs, ajv-cli) into scripts/npm/node_modules (not committed).
 # Idempotent: when everything is present it changes nothing and only says so.
 # Works as root or through sudo. Set INSTALL_DEPS_DRY_RUN=1 to only list what is missing.
 set -euo pipefail
@@ -34,13 +34,13 @@ done
 # The viewer's npm packages, exactly as locked; reinstalled only when the lock file changes.
 install_npm() {
     local dir
-    dir="$(cd "$(dirname "${BASH_SOURCE[0]}")/.." && pwd)/third_party/web"
+    dir="$(cd "$(dirname "${BASH_SOURCE[0]}")/.." && pwd)/scripts/npm"
     local stamp="$dir/node_modules/.stereoscene-lock"
     if [ -f "$stamp" ] && cmp -s "$stamp" "$dir/package-lock.json"; then
         return 0
     fi
     if [ "${INSTALL_DEPS_DRY_RUN:-0}" = 1 ]; then
-        echo "install-deps: missing: npm packages of third_party/web" >&2
+        echo "install-deps: missing: npm packages of scripts/npm" >&2
         return 0
     fi
     if ! command -v npm >/dev/null 2>&1; then
@@ -49,7 +49,7 @@ install_npm() {
     fi
     (cd "$dir" && npm ci --no-audit --no-fund --loglevel=error >&2)
     cp "$dir/package-lock.json" "$stamp"
-    echo "install-deps: installed the npm packages of third_party/web" >&2
+    echo "install-deps: installed the npm packages of scripts/npm" >&2
 }
 
 if [ ${#missing[@]} -eq 0 ]; then

@@ -2,9 +2,9 @@
 # copies them from: the page's own sources (this folder) and three.js 0.160 with its orbit
 # controls and glTF loader, bundled by esbuild into one classic script (file:// pages cannot
 # import ES modules). three.js and esbuild come from the npm registry, pinned in
-# third_party/web/package-lock.json and installed by scripts/install-deps.sh (not committed).
+# scripts/npm/package-lock.json and installed by scripts/install-deps.sh (not committed).
 set(SCENE_VIEWER_WEB_DIR ${CMAKE_CURRENT_BINARY_DIR}/web)
-set(STEREOSCENE_NODE_MODULES ${PROJECT_SOURCE_DIR}/third_party/web/node_modules CACHE INTERNAL
+set(STEREOSCENE_NODE_MODULES ${PROJECT_SOURCE_DIR}/scripts/npm/node_modules CACHE INTERNAL
     "npm packages of the viewer and its browser tests")
 set(_web_outputs)
 foreach(file index.html viewer.js viewer.css)
