@@ -1,5 +1,7 @@
 #include "scene_schema/entities.hpp"
 
+#include "scene_schema/json_text.hpp"
+
 #include <cerrno>
 #include <cmath>
 #include <cstdio>
@@ -86,6 +88,24 @@ class Checker {
         return true;
     }
 
+    /// A number within [lo, hi]: the schema's "minimum"/"maximum", which also refuse the
+    /// infinities a lenient JSON reader makes of 1e400.
+    bool bounded(const json& value, const std::string& pointer, double lo, double hi) {
+        if (!number(value, pointer)) return false;
+        const double v = value.get<double>();
+        if (!(v >= lo && v <= hi)) {
+            fail(pointer, "must be between " + text(lo) + " and " + text(hi));
+            return false;
+        }
+        return true;
+    }
+
+    static std::string text(double v) {
+        char buffer[32];
+        std::snprintf(buffer, sizeof buffer, "%.17g", v);
+        return buffer;
+    }
+
     /// JSON Schema's "integer": any number with a zero fractional part.
     bool integer(const json& value, const std::string& pointer) {
         if (value.is_number_integer()) return true;
@@ -105,16 +125,24 @@ class Checker {
         return true;
     }
 
-    void positive(const json& value, const std::string& pointer) {
-        if (number(value, pointer) && !(value.get<double>() > 0.0)) fail(pointer, "must be > 0");
+    void positive(const json& value, const std::string& pointer, double hi) {
+        if (!number(value, pointer)) return;
+        if (!(value.get<double>() > 0.0)) {
+            fail(pointer, "must be > 0");
+        } else {
+            bounded(value, pointer, 0.0, hi);
+        }
     }
 
-    void non_negative_integer(const json& value, const std::string& pointer) {
-        if (integer(value, pointer) && value.get<double>() < 0.0) fail(pointer, "must be >= 0");
-    }
-
-    void positive_integer(const json& value, const std::string& pointer) {
-        if (integer(value, pointer) && value.get<double>() < 1.0) fail(pointer, "must be >= 1");
+    void integer_in(const json& value, const std::string& pointer, double lo, double hi) {
+        if (!integer(value, pointer)) return;
+        if (lo == 0.0 && value.get<double>() < 0.0) {
+            fail(pointer, "must be >= 0");
+        } else if (lo == 1.0 && value.get<double>() < 1.0) {
+            fail(pointer, "must be >= 1");
+        } else {
+            bounded(value, pointer, lo, hi);
+        }
     }
 
     void schema_version(const json& value, const std::string& pointer) {
@@ -135,18 +163,27 @@ class Checker {
     void camera(const json& value, const std::string& pointer) {
         if (!object(value, pointer)) return;
         for (const char* key : {"width", "height"}) {
-            if (const json* v = required(value, pointer, key))
-                positive_integer(*v, at(pointer, key));
+            if (const json* v = required(value, pointer, key)) {
+                integer_in(*v, at(pointer, key), 1.0, kMaxImageSide_px);
+            }
         }
         for (const char* key : {"fx", "fy"}) {
-            if (const json* v = required(value, pointer, key)) positive(*v, at(pointer, key));
+            if (const json* v = required(value, pointer, key)) {
+                positive(*v, at(pointer, key), kMaxPixelValue_px);
+            }
         }
         for (const char* key : {"cx", "cy"}) {
-            if (const json* v = required(value, pointer, key)) number(*v, at(pointer, key));
+            if (const json* v = required(value, pointer, key)) {
+                bounded(*v, at(pointer, key), -kMaxPixelValue_px, kMaxPixelValue_px);
+            }
         }
         if (auto it = value.find("baseline_m"); it != value.end()) {
             const auto p = at(pointer, "baseline_m");
-            if (number(*it, p) && it->get<double>() < 0.0) fail(p, "must be >= 0");
+            if (number(*it, p) && it->get<double>() < 0.0) {
+                fail(p, "must be >= 0");
+            } else {
+                bounded(*it, p, 0.0, kMaxSize_m);
+            }
         }
     }
 
@@ -168,16 +205,23 @@ class Checker {
             if (const json* v = required(value, pointer, key)) string(*v, at(pointer, key));
         }
         if (const json* v = required(value, pointer, "class_id")) {
-            non_negative_integer(*v, at(pointer, "class_id"));
+            integer_in(*v, at(pointer, "class_id"), 0.0, kMaxClassId);
         }
-        for (const char* key : {"x", "y", "z", "theta"}) {
-            if (const json* v = required(value, pointer, key)) number(*v, at(pointer, key));
+        for (const char* key : {"x", "y", "z"}) {
+            if (const json* v = required(value, pointer, key)) {
+                bounded(*v, at(pointer, key), -kMaxPosition_m, kMaxPosition_m);
+            }
+        }
+        if (const json* v = required(value, pointer, "theta")) {
+            bounded(*v, at(pointer, "theta"), -kMaxTheta_rad, kMaxTheta_rad);
         }
         for (const char* key : {"W", "H", "L"}) {
-            if (const json* v = required(value, pointer, key)) positive(*v, at(pointer, key));
+            if (const json* v = required(value, pointer, key)) {
+                positive(*v, at(pointer, key), kMaxSize_m);
+            }
         }
         if (const json* v = required(value, pointer, "point_count")) {
-            non_negative_integer(*v, at(pointer, "point_count"));
+            integer_in(*v, at(pointer, "point_count"), 0.0, kMaxPointCount);
         }
         if (const json* v = required(value, pointer, "confidence")) {
             const auto p = at(pointer, "confidence");
@@ -356,18 +400,7 @@ std::string dump_checked(const EntityDocument& document) {
     return j.dump(2) + "\n";
 }
 
-EntityDocument parse(std::string_view text) {
-    json j;
-    try {
-        j = json::parse(text.begin(), text.end());
-    } catch (const json::parse_error& e) {
-        std::string what = e.what();
-        // nlohmann: "[json.exception.parse_error.101] parse error at line 1, column 2: ..."
-        if (auto pos = what.find("] "); pos != std::string::npos) what = what.substr(pos + 2);
-        throw SchemaError("", "not valid JSON: " + what);
-    }
-    return from_json(j);
-}
+EntityDocument parse(std::string_view text) { return from_json(parse_json(text)); }
 
 std::string dump(const EntityDocument& document) { return to_json(document).dump(2) + "\n"; }
 

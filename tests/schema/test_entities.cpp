@@ -8,6 +8,7 @@
 #include <unistd.h>
 
 #include "scene_schema/entities.hpp"
+#include "scene_schema/json_text.hpp"
 
 namespace fs = std::filesystem;
 using nlohmann::json;
@@ -228,7 +229,85 @@ TEST_CASE("read errors name the file", "[schema]") {
         FAIL("read a truncated file");
     } catch (const scene_schema::FileError& e) {
         const std::string what = e.what();
-        CHECK(what.rfind(truncated.string() + ": not valid JSON", 0) == 0);
+        CHECK(what.rfind(truncated.string() + ": /entities/0: not valid JSON: parse error at line",
+                         0) == 0);
     }
     CHECK_THROWS_AS(scene_schema::read_file("/nonexistent/entities.json"), scene_schema::FileError);
+}
+
+TEST_CASE("JSON text errors name the pointer where the text breaks, in one line", "[schema]") {
+    using scene_schema::parse_json;
+    auto pointer_of = [](const std::string& text) {
+        try {
+            parse_json(text);
+        } catch (const SchemaError& e) {
+            CHECK(std::string(e.what()).find("json.exception") == std::string::npos);
+            CHECK(std::string(e.what()).find('\n') == std::string::npos);
+            return e.pointer();
+        }
+        FAIL("parsed: " << text);
+        return std::string();
+    };
+    CHECK(pointer_of(R"({"a": {"b": [1, 2, 1e400]}})") == "/a/b/2");
+    CHECK(pointer_of(R"({"a": [{"x": 1}, {"y/z~": NaN}]})") == "/a/1/y~1z~0");
+    CHECK(pointer_of(R"([[1], [2, Infinity]])") == "/1/1");
+    CHECK(pointer_of(R"({"a": )") == "/a");
+    CHECK(pointer_of("") == "");
+    try {
+        parse_json(R"({"x": 1e400})");
+    } catch (const SchemaError& e) {
+        CHECK(e.rule() == "not valid JSON: number overflow parsing '1e400'");
+    }
+}
+
+TEST_CASE("JSON nested past the depth limit is refused before any walk of it", "[schema]") {
+    const std::size_t depth = scene_schema::kMaxJsonDepth;
+    // At the limit: read. One level more: refused at the innermost container's pointer.
+    const std::string at_limit = std::string(depth, '[') + std::string(depth, ']');
+    CHECK(scene_schema::parse_json(at_limit).is_array());
+    const std::string beyond = std::string(depth + 1, '[') + std::string(depth + 1, ']');
+    try {
+        scene_schema::parse_json(beyond);
+        FAIL("read JSON nested deeper than the limit");
+    } catch (const SchemaError& e) {
+        CHECK(e.rule() == "nested deeper than " + std::to_string(depth) + " levels");
+        std::string pointer;
+        for (std::size_t i = 0; i < depth; ++i) pointer += "/0";
+        CHECK(e.pointer() == pointer);
+    }
+    // A million levels in an entity file's free-form member: an error, not a stack overflow.
+    const std::string huge = std::string(1000000, '[') + std::string(1000000, ']');
+    const std::string text = R"({"schema_version": "1.0.0", "frame": {"id": "f",)"
+                             R"( "convention": "kitti_camera"}, "entities": [], "x": )" +
+                             huge + "}";
+    CHECK_THROWS_AS(scene_schema::parse(text), SchemaError);
+}
+
+TEST_CASE("a leading UTF-8 byte order mark is skipped (RFC 8259 8.1)", "[schema]") {
+    const std::string text = "\xEF\xBB\xBF" + scene_schema::dump(small_document());
+    CHECK(scene_schema::parse(text).entities.size() == small_document().entities.size());
+}
+
+TEST_CASE("numbers beyond the schema's bounds are refused at their pointer", "[schema]") {
+    const json good = scene_schema::to_json(small_document());
+    const std::vector<std::pair<std::string, double>> cases = {
+        {"/entities/0/x", 1e30},        {"/entities/0/z", -2e5},
+        {"/entities/0/class_id", 1e30}, {"/entities/0/point_count", 1e17},
+        {"/entities/0/L", 2e4},         {"/entities/0/theta", 1e4},
+        {"/frame/camera/width", 2e6},   {"/frame/camera/fx", 1e300},
+    };
+    for (const auto& [pointer, value] : cases) {
+        INFO(pointer);
+        json j = good;
+        if (!j["frame"].contains("camera")) {
+            j["frame"]["camera"] = {{"width", 640}, {"height", 480}, {"fx", 500.0},
+                                    {"fy", 500.0},  {"cx", 320.0},   {"cy", 240.0}};
+        }
+        REQUIRE(scene_schema::validate(j).empty());
+        j[json::json_pointer(pointer)] = value;
+        const auto issues = scene_schema::validate(j);
+        REQUIRE(issues.size() == 1);
+        CHECK(issues[0].pointer == pointer);
+        CHECK(issues[0].rule.rfind("must be between", 0) == 0);
+    }
 }

@@ -22,6 +22,16 @@ inline constexpr int kSchemaMajor = 1;
 /// The only coordinate convention of version 1: KITTI's rectified left camera.
 inline constexpr const char* kConventionKittiCamera = "kitti_camera";
 
+/// Bounds of the numbers in an entity file (the schema's "minimum"/"maximum"): far beyond any
+/// scene a camera sees, close enough that every reader can turn them into ints and floats.
+inline constexpr double kMaxPosition_m = 1e5;                 ///< |x|, |y|, |z| of a box centre
+inline constexpr double kMaxSize_m = 1e4;                     ///< W, H, L and the stereo baseline
+inline constexpr double kMaxTheta_rad = 1e3;                  ///< |theta|
+inline constexpr double kMaxClassId = 2147483647.0;           ///< class_id fits an int
+inline constexpr double kMaxPointCount = 9007199254740991.0;  ///< 2^53 - 1: exact in a double
+inline constexpr double kMaxImageSide_px = 1e6;               ///< camera width and height
+inline constexpr double kMaxPixelValue_px = 1e9;              ///< |fx|, |fy|, |cx|, |cy|
+
 /// A validation or read failure, located by a JSON pointer into the document.
 class SchemaError : public std::runtime_error {
   public:

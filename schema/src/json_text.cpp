@@ -1,0 +1,141 @@
+#include "scene_schema/json_text.hpp"
+
+#include <string>
+#include <vector>
+
+#include "scene_schema/entities.hpp"
+
+namespace scene_schema {
+
+namespace {
+
+using nlohmann::json;
+
+/// Builds the document with nlohmann's own DOM builder while keeping the path to the value
+/// being read, so an error can be located by a JSON pointer; refuses nesting past a depth.
+class PathTrackingSax {
+  public:
+    PathTrackingSax(json& root, std::size_t max_depth) : dom_(root, false), max_depth_(max_depth) {}
+
+    bool null() { return value() && dom_.null() && done(); }
+    bool boolean(bool v) { return value() && dom_.boolean(v) && done(); }
+    bool number_integer(json::number_integer_t v) {
+        return value() && dom_.number_integer(v) && done();
+    }
+    bool number_unsigned(json::number_unsigned_t v) {
+        return value() && dom_.number_unsigned(v) && done();
+    }
+    bool number_float(json::number_float_t v, const json::string_t& s) {
+        return value() && dom_.number_float(v, s) && done();
+    }
+    bool string(json::string_t& v) { return value() && dom_.string(v) && done(); }
+    bool binary(json::binary_t& v) { return value() && dom_.binary(v) && done(); }
+
+    bool start_object(std::size_t n) { return open(false) && dom_.start_object(n); }
+    bool key(json::string_t& k) {
+        levels_.back().key = k;
+        levels_.back().has_key = true;
+        return dom_.key(k);
+    }
+    bool end_object() {
+        levels_.pop_back();
+        return dom_.end_object() && done();
+    }
+    bool start_array(std::size_t n) { return open(true) && dom_.start_array(n); }
+    bool end_array() {
+        levels_.pop_back();
+        return dom_.end_array() && done();
+    }
+
+    template <class Exception>
+    bool parse_error(std::size_t /*position*/, const std::string& /*last_token*/,
+                     const Exception& ex) {
+        std::string what = ex.what();
+        // nlohmann: "[json.exception.parse_error.101] parse error at line 1, column 2: ..."
+        if (auto pos = what.find("] "); pos != std::string::npos) what = what.substr(pos + 2);
+        fail("not valid JSON: " + what);
+        return false;
+    }
+
+    /// The first problem met, at its pointer; empty rule when the text was read.
+    const std::string& pointer() const { return pointer_; }
+    const std::string& rule() const { return rule_; }
+
+  private:
+    struct Level {
+        bool is_array = false;
+        std::size_t count = 0;  ///< elements started so far (arrays)
+        std::string key;        ///< member being read (objects)
+        bool has_key = false;   ///< between a member's key and the end of its value
+    };
+
+    /// A value ended: its object is between members again.
+    bool done() {
+        if (!levels_.empty()) levels_.back().has_key = false;
+        return true;
+    }
+
+    /// Counts a value into its enclosing array.
+    bool value() {
+        if (!levels_.empty() && levels_.back().is_array) ++levels_.back().count;
+        return true;
+    }
+
+    bool open(bool is_array) {
+        if (levels_.size() >= max_depth_) {
+            fail("nested deeper than " + std::to_string(max_depth_) + " levels");
+            return false;
+        }
+        value();
+        levels_.push_back({is_array, 0, {}, false});
+        return true;
+    }
+
+    void fail(std::string rule) {
+        if (!rule_.empty()) return;
+        rule_ = std::move(rule);
+        pointer_.clear();
+        for (std::size_t i = 0; i < levels_.size(); ++i) {
+            const Level& level = levels_[i];
+            if (level.is_array) {
+                pointer_ += '/';
+                // The innermost array is reading its next element; outer ones, their last.
+                const bool innermost = i + 1 == levels_.size();
+                pointer_ +=
+                    std::to_string(innermost || level.count == 0 ? level.count : level.count - 1);
+                continue;
+            }
+            if (!level.has_key) break;  // between members: the object itself
+            pointer_ += '/';
+            for (char c : level.key) {  // RFC 6901 escaping
+                if (c == '~') {
+                    pointer_ += "~0";
+                } else if (c == '/') {
+                    pointer_ += "~1";
+                } else {
+                    pointer_ += c;
+                }
+            }
+        }
+    }
+
+    nlohmann::detail::json_sax_dom_parser<json> dom_;
+    std::size_t max_depth_;
+    std::vector<Level> levels_;
+    std::string pointer_;
+    std::string rule_;
+};
+
+}  // namespace
+
+json parse_json(std::string_view text, std::size_t max_depth) {
+    json root;
+    PathTrackingSax sax(root, max_depth);
+    const bool ok = json::sax_parse(text.begin(), text.end(), &sax);
+    if (!ok || !sax.rule().empty()) {
+        throw SchemaError(sax.pointer(), sax.rule().empty() ? "not valid JSON" : sax.rule());
+    }
+    return root;
+}
+
+}  // namespace scene_schema
