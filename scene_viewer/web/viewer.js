@@ -6,7 +6,6 @@
     'use strict';
 
     const data = window.SCENE_VIEWER_DATA;
-    const blobs = window.SCENE_VIEWER_BLOBS || {};
     const params = new URLSearchParams(window.location.search);
     const statusBox = document.getElementById('status');
     const canvas = document.getElementById('view');
@@ -20,12 +19,28 @@
             resolveReady = resolve;
             rejectReady = reject;
         }),
-        firstFrameMs: null,
+        firstFrameMs: null,  // performance.now() at the first frame
+        cloudFrameMs: null,  // ... at the first frame with the cloud (its sample)
+        fullFrameMs: null,   // ... at the first frame with every cloud point
         view: 'camera',
         frames: 0,
+        timings: {},  // performance.now() at each loading step
     };
+    const mark = (name) => { api.timings[name] = performance.now(); };
+    mark('scripts');
     window.viewer = api;
     if (params.get('ui') === '0') document.body.classList.add('no-ui');
+
+    /// True on a software WebGL (SwiftShader, llvmpipe), where multisampling halves the frame rate.
+    function softwareWebgl() {
+        const probe = document.createElement('canvas').getContext('webgl2');
+        if (!probe) return false;
+        const info = probe.getExtension('WEBGL_debug_renderer_info');
+        const name = info ? String(probe.getParameter(info.UNMASKED_RENDERER_WEBGL)) : '';
+        const lose = probe.getExtension('WEBGL_lose_context');
+        if (lose) lose.loseContext();
+        return /swiftshader|llvmpipe|softpipe/i.test(name);
+    }
 
     const show = {
         cloud: true, ego: true, grid: true, background: true, models: true, boxes: false,
@@ -33,7 +48,7 @@
     const hiddenClasses = new Set();
     const hiddenLayers = new Set();
 
-    const renderer = new THREE.WebGLRenderer({ canvas, antialias: true, alpha: true });
+    const renderer = new THREE.WebGLRenderer({ canvas, antialias: !softwareWebgl(), alpha: true });
     renderer.setPixelRatio(window.devicePixelRatio || 1);
     const scene = new THREE.Scene();
     const perspective = new THREE.PerspectiveCamera(60, 1, data.views.camera.near,
@@ -42,6 +57,8 @@
     let camera = perspective;
     let controls = null;
     let dirty = true;
+    let lastMotion = -Infinity;  // performance.now() of the last moving frame
+    let coarse = false;          // drawing the cloud's moving_points sample
 
     const entityObjects = [];  // {layer, entity, object} of every drawn entity
     const egoObjects = [];
@@ -58,6 +75,7 @@
     }
 
     function decodeBase64(text) {
+        if (Uint8Array.fromBase64) return Uint8Array.fromBase64(text).buffer;
         const binary = atob(text);
         const bytes = new Uint8Array(binary.length);
         for (let i = 0; i < binary.length; ++i) bytes[i] = binary.charCodeAt(i);
@@ -65,10 +83,25 @@
     }
 
     function parseGlb(name) {
+        const blobs = window.SCENE_VIEWER_BLOBS || {};
         if (!(name in blobs)) return Promise.reject(new Error('missing data for ' + name));
         const loader = new THREE.GLTFLoader();
+        const bytes = decodeBase64(blobs[name]);
+        delete blobs[name];  // the page keeps the geometry, not the text
+        return new Promise((resolve, reject) => loader.parse(bytes, '', resolve, reject));
+    }
+
+    /// Resolves once the deferred cloud script has run (file:// pages cannot fetch it).
+    function cloudScriptLoaded() {
         return new Promise((resolve, reject) => {
-            loader.parse(decodeBase64(blobs[name]), '', resolve, reject);
+            const blobs = window.SCENE_VIEWER_BLOBS || {};
+            const tag = document.getElementById('cloud-data');
+            if (data.cloud.file in blobs || !tag) {
+                resolve();
+                return;
+            }
+            tag.addEventListener('load', () => resolve());
+            tag.addEventListener('error', () => reject(new Error('cannot load data/cloud-glb.js')));
         });
     }
 
@@ -234,7 +267,10 @@
     function makeControls() {
         if (controls) controls.dispose();
         controls = new THREE.OrbitControls(camera, canvas);
-        controls.addEventListener('change', () => { dirty = true; });
+        controls.addEventListener('change', () => {
+            dirty = true;
+            lastMotion = performance.now();
+        });
         controls.addEventListener('start', () => {
             if (api.view === 'camera') {
                 api.view = 'free';
@@ -480,6 +516,19 @@
         }
     }
 
+    // --- level of detail: a uniform sample of the cloud while the view moves ---
+    /// Draws each class's first share of points (the export shuffled them) or all of them.
+    function setCloudDetail(sample) {
+        const total = data.cloud ? data.cloud.points : 0;
+        const budget = data.moving_points;
+        coarse = sample && budget > 0 && total > budget;
+        for (const c of cloudObjects) {
+            const count = c.object.geometry.getAttribute('position').count;
+            c.object.geometry.setDrawRange(0, coarse ? Math.ceil(count * budget / total) : Infinity);
+        }
+        dirty = true;
+    }
+
     // --- frame loop ---
     function resize() {
         const { w, h } = canvasSize();
@@ -487,12 +536,18 @@
         updateProjection();
     }
 
-    function frame() {
-        if (controls && controls.update()) dirty = true;
+    function frame(now) {
+        if (controls && controls.update()) {
+            dirty = true;
+            lastMotion = now;
+        }
+        const moving = now - lastMotion < 300;
+        if (moving !== coarse && data.cloud) setCloudDetail(moving);
         if (dirty) {
             renderer.render(scene, camera);
             dirty = false;
             ++api.frames;
+            if (!coarse && api.fullFrameMs === null) api.fullFrameMs = performance.now();
         }
         requestAnimationFrame(frame);
     }
@@ -536,19 +591,34 @@
         const sceneGltf = await parseGlb(data.scene_file);
         addSceneModels(sceneGltf);
         addBoxes();
-        if (data.cloud) addCloud(await parseGlb(data.cloud.file));
+        mark('scene');
         addGrid();
         buildPanel();
         window.addEventListener('resize', resize);
         resize();
         setView(params.get('view') || 'camera');
         renderer.render(scene, camera);
-        requestAnimationFrame(() => {
-            api.firstFrameMs = performance.now();
-            setStatus('');
-            resolveReady();
-            requestAnimationFrame(frame);
-        });
+        mark('rendered');
+        // The first frame shows the entities; the cloud follows, first as a sample, then all of
+        // it once nothing moves.
+        await new Promise((resolve) => requestAnimationFrame(resolve));
+        api.firstFrameMs = performance.now();
+        if (data.cloud) {
+            setStatus('loading the point cloud…');
+            await cloudScriptLoaded();
+            addCloud(await parseGlb(data.cloud.file));
+            setCloudDetail(true);
+            lastMotion = performance.now();
+            applyVisibility();
+            renderer.render(scene, camera);
+            await new Promise((resolve) => requestAnimationFrame(resolve));
+            api.cloudFrameMs = performance.now();
+        } else {
+            api.fullFrameMs = api.firstFrameMs;
+        }
+        setStatus('');
+        resolveReady();
+        requestAnimationFrame(frame);
     }
 
     start().catch((error) => {

@@ -1,5 +1,6 @@
 #include <catch2/catch.hpp>
 
+#include <algorithm>
 #include <cstdint>
 #include <cstring>
 #include <filesystem>
@@ -105,15 +106,32 @@ TEST_CASE("a cloud becomes one glTF POINTS mesh per class in the glTF frame", "[
     const auto& view = glb.json.at("bufferViews")[position.at("bufferView").get<std::size_t>()];
     const auto offset = view.find("byteOffset");
     const std::size_t at = offset == view.end() ? 0 : offset->get<std::size_t>();
-    float xyz[3];
-    std::memcpy(xyz, glb.bin.data() + at, sizeof xyz);
-    const glm::vec3 want = kitti_to_gl(cloud.positions_kitti[0]);
-    CHECK(xyz[0] == want.x);
-    CHECK(xyz[1] == want.y);
-    CHECK(xyz[2] == want.z);
+    glm::vec3 got[2];
+    std::memcpy(got, glb.bin.data() + at, sizeof got);
+    // The class's points, in a shuffled order.
+    const glm::vec3 a = kitti_to_gl(cloud.positions_kitti[0]);
+    const glm::vec3 b = kitti_to_gl(cloud.positions_kitti[2]);
+    CHECK(((got[0] == a && got[1] == b) || (got[0] == b && got[1] == a)));
     const auto& colour = accessors[car.at("attributes").at("COLOR_0").get<std::size_t>()];
     CHECK(colour.at("normalized") == true);
     CHECK(colour.at("componentType") == 5121);  // unsigned byte
+}
+
+TEST_CASE("a cloud's points are shuffled the same way every time", "[web]") {
+    PointCloud cloud;
+    for (int i = 0; i < 1000; ++i) cloud.positions_kitti.emplace_back(float(i), 0.0f, 10.0f);
+    const std::vector<unsigned char> first = point_cloud_glb_bytes(cloud);
+    CHECK(first == point_cloud_glb_bytes(cloud));
+    const Glb glb = split_glb(first);
+    const auto& view = glb.json.at("bufferViews")[0];
+    const auto offset = view.find("byteOffset");
+    const std::size_t at = offset == view.end() ? 0 : offset->get<std::size_t>();
+    std::vector<glm::vec3> got(1000);
+    std::memcpy(got.data(), glb.bin.data() + at, got.size() * sizeof(glm::vec3));
+    // The first tenth is a sample of the whole range, not its first tenth.
+    float first_tenth_max = 0.0f;
+    for (int i = 0; i < 100; ++i) first_tenth_max = std::max(first_tenth_max, got[i].x);
+    CHECK(first_tenth_max > 800.0f);
 }
 
 TEST_CASE("a cloud with mismatched colours is refused", "[web]") {
@@ -141,7 +159,8 @@ TEST_CASE("the viewer folder carries the page, the data and the views of views.c
     }
     const std::string& html = files.at("index.html");
     CHECK(html.find("<title>a&lt;b</title>") == 0);
-    CHECK(html.find("<script src=\"data/cloud-glb.js\"></script>") != std::string::npos);
+    CHECK(html.find("<script id=\"cloud-data\" src=\"data/cloud-glb.js\" defer></script>") !=
+          std::string::npos);
     CHECK(files.at("data/scene-glb.js").find("\"scene.glb\"] = \"Z2xURg==\";") !=
           std::string::npos);
 

@@ -81,6 +81,10 @@ CLI::App* add(CLI::App& app, Options& o) {
     html->add_option("--title", o.title, "page title (default: the first file's name)");
     html->add_option("--point-size", o.point_size_px, "cloud point size in pixels")
         ->capture_default_str();
+    html->add_option("--moving-points", o.moving_points,
+                     "cloud points drawn while the view moves (a uniform sample; all once it "
+                     "stops), 0 = all")
+        ->capture_default_str();
     return html;
 }
 
@@ -95,10 +99,11 @@ int run(const Options& o) {
     viewer.title =
         o.title.empty() ? std::filesystem::path(o.inputs.front()).stem().string() : o.title;
     viewer.point_size_px = o.point_size_px;
+    viewer.moving_points = o.moving_points;
     try {
         viewer.validate();
     } catch (const std::invalid_argument& e) {
-        throw Failure{"bad usage", e.what(), "--point-size", 2};
+        throw Failure{"bad usage", e.what(), "--point-size/--moving-points", 2};
     }
     const std::filesystem::path web_dir =
         o.web_dir.empty() ? default_viewer_assets_dir() : std::filesystem::path(o.web_dir);

@@ -21,6 +21,7 @@ struct Options {
     bool no_ego = false;              ///< no ego car
     std::string title;                ///< page title, "" = the first file's stem
     float point_size_px = 2.0f;       ///< cloud point size, pixels
+    int moving_points = 30000;        ///< cloud points drawn while the view moves, 0 = all
     std::string web_dir;              ///< viewer's static files, "" = the build's
 };
 

@@ -1,7 +1,9 @@
 // The point cloud as binary glTF POINTS meshes, one per class, for the browser viewer.
+#include <algorithm>
 #include <cmath>
 #include <limits>
 #include <map>
+#include <random>
 #include <sstream>
 #include <stdexcept>
 
@@ -119,6 +121,9 @@ std::vector<unsigned char> point_cloud_glb_bytes(const PointCloud& cloud) {
         if (!std::isfinite(p.x) || !std::isfinite(p.y) || !std::isfinite(p.z)) continue;
         by_class[cloud.class_ids.empty() ? kNoClass : cloud.class_ids[i]].push_back(i);
     }
+    // A fixed-seed shuffle: every prefix of a class is a uniform sample of it.
+    std::mt19937 random(20240607u);
+    for (auto& [class_id, indices] : by_class) std::shuffle(indices.begin(), indices.end(), random);
     tinygltf::Model gltf;
     gltf.asset.version = "2.0";
     gltf.asset.generator = "stereoscene scene-render";

@@ -131,7 +131,8 @@ std::string data_script(const ViewerScene& scene, const ViewerOptions& options) 
         {"layers", layers},
         {"scene_file", "scene.glb"},
         {"cloud", cloud},
-        {"point_size", options.point_size_px}};
+        {"point_size", options.point_size_px},
+        {"moving_points", options.moving_points}};
     return "window.SCENE_VIEWER_DATA = " +
            data.dump(-1, ' ', false, nlohmann::json::error_handler_t::replace) + ";\n";
 }
@@ -179,6 +180,7 @@ std::string html_escape(const std::string& text) {
 void ViewerOptions::validate() const {
     if (!(point_size_px > 0.0f && point_size_px <= 64.0f))
         throw std::invalid_argument("point_size_px must be in (0, 64] pixels");
+    if (moving_points < 0) throw std::invalid_argument("moving_points must be >= 0");
 }
 
 ViewerAssets load_viewer_assets(const std::filesystem::path& dir) {
@@ -236,7 +238,8 @@ std::map<std::string, std::string> viewer_files(const ViewerScene& scene,
         const std::vector<unsigned char> cloud = point_cloud_glb_bytes(*scene.cloud);
         files["cloud.glb"].assign(cloud.begin(), cloud.end());
         files["data/cloud-glb.js"] = blob_script("cloud.glb", files["cloud.glb"]);
-        scripts += "<script src=\"data/cloud-glb.js\"></script>\n";
+        // Deferred: the page draws the scene first and adds the cloud once this has run.
+        scripts += "<script id=\"cloud-data\" src=\"data/cloud-glb.js\" defer></script>\n";
     }
     if (!scene.background_name.empty()) files[scene.background_name] = scene.background_bytes;
     std::string html = replace_all(assets.index_html, "{{TITLE}}", html_escape(options.title));

@@ -2,6 +2,7 @@
 // playwright-core (never a downloaded browser), and PNG reading through pngjs.
 import { createRequire } from 'node:module';
 import fs from 'node:fs';
+import http from 'node:http';
 import path from 'node:path';
 import { pathToFileURL } from 'node:url';
 
@@ -42,12 +43,31 @@ export async function launch(playwright, executable) {
     return context;
 }
 
-/// Opens the viewer folder's index.html from disk; records console errors, page errors and
-/// every request that leaves the folder.
+const kTypes = { '.html': 'text/html', '.js': 'text/javascript', '.css': 'text/css',
+                 '.png': 'image/png', '.glb': 'model/gltf-binary' };
+
+/// A static file server for `folder` on the loopback interface (a free port); close() stops it.
+export async function serveFolder(folder) {
+    const root = path.resolve(folder);
+    const server = http.createServer((request, response) => {
+        const file = path.join(root, decodeURIComponent(new URL(request.url, 'http://x').pathname));
+        if (!file.startsWith(root + path.sep) || !fs.existsSync(file) || !fs.statSync(file).isFile()) {
+            response.writeHead(404).end();
+            return;
+        }
+        response.writeHead(200, { 'content-type': kTypes[path.extname(file)] || 'application/octet-stream' });
+        fs.createReadStream(file).pipe(response);
+    });
+    await new Promise((resolve) => server.listen(0, '127.0.0.1', resolve));
+    return { url: `http://127.0.0.1:${server.address().port}/`, close: () => server.close() };
+}
+
+/// Opens the viewer's index.html, from disk or (`folder` an http URL ending in /) a server;
+/// records console errors, page errors and every request that leaves the folder.
 export async function openViewer(context, folder, query, viewport) {
     const page = await context.newPage();
     if (viewport) await page.setViewportSize(viewport);
-    const base = pathToFileURL(path.resolve(folder)).href + '/';
+    const base = folder.startsWith('http') ? folder : pathToFileURL(path.resolve(folder)).href + '/';
     const report = { errors: [], outside: [], requests: 0 };
     page.on('console', (m) => { if (m.type() === 'error') report.errors.push(m.text()); });
     page.on('pageerror', (e) => report.errors.push(String(e)));

@@ -2,13 +2,14 @@
 //   camera: the camera view's screenshot against scene-render's own render of the same file
 //           (the same silhouettes within a few pixels, whatever the shading), no errors logged,
 //           no request outside the folder.
-//   pick:   a pointer at a car's projected centre shows that car's id in the details pane.
+//   pick:   a pointer at a car's projected centre shows that car's id in the details pane, the
+//           folder served by a static web server on the loopback interface.
 // usage: node viewer_test.mjs camera|pick SCENE_RENDER ENTITIES.json OUT_DIR NODE_MODULES CHROMIUM
 // Exit 0 pass, 1 fail, 77 skipped (chromium or the npm packages missing).
 import { spawnSync } from 'node:child_process';
 import fs from 'node:fs';
 import path from 'node:path';
-import { launch, loadModules, openViewer, readPng } from './browser.mjs';
+import { launch, loadModules, openViewer, readPng, serveFolder } from './browser.mjs';
 
 const [mode, sceneRender, entitiesFile, outDir, nodeModules, chromium] = process.argv.slice(2);
 const { playwright, PNG } = loadModules(nodeModules);
@@ -142,8 +143,9 @@ async function pickTest() {
     const viewerDir = path.join(outDir, 'viewer');
     run(['html', entitiesFile, '--out', viewerDir]);
     const context = await launch(playwright, chromium);
+    const server = await serveFolder(viewerDir);
     try {
-        const { page, report } = await openViewer(context, viewerDir, '',
+        const { page, report } = await openViewer(context, server.url, '',
                                                   { width: k.width, height: k.height });
         // The pinhole projection of the box centre, computed here from the file (not the page).
         const u = k.fx * car.x / car.z + k.cx, v = k.fy * car.y / car.z + k.cy;
@@ -160,6 +162,7 @@ async function pickTest() {
         await page.mouse.click(k.cx, 2);
         if (await page.locator('#details').isVisible()) fail('the pane stays after a click on the sky');
     } finally {
+        server.close();
         await context.close();
     }
 }

@@ -35,6 +35,7 @@ struct ViewerScene {
 struct ViewerOptions {
     std::string title = "scene";  ///< page title
     float point_size_px = 2.0f;   ///< cloud point size, pixels, > 0
+    int moving_points = 30000;    ///< cloud points drawn while the view moves, 0 = all
     /// Throws std::invalid_argument naming the bad field.
     void validate() const;
 };
@@ -57,6 +58,8 @@ std::filesystem::path default_viewer_assets_dir();
 /// The point cloud as binary glTF: one POINTS mesh per class (node "cloud_class_<id>", or
 /// "cloud" without classes), positions in the glTF frame (+Y up, metres), COLOR_0 as
 /// normalised linear bytes when the cloud has colours, else the class colour as material.
+/// Each class's points are in a fixed pseudo-random order, so any prefix is a uniform sample
+/// (the viewer draws a prefix while the view moves).
 std::vector<unsigned char> point_cloud_glb_bytes(const PointCloud& cloud);
 
 /// Standard base64 (RFC 4648, with padding).
