@@ -139,9 +139,11 @@
             const lambert = materials.map(toLambert);
             object.material = Array.isArray(object.material) ? lambert : lambert[0];
         });
+        const groundClasses = new Set(data.classes.filter((c) => c.ground).map((c) => c.name));
         for (const object of gltf.scene.children) {
             const name = object.userData.name !== undefined ? object.userData.name : object.name;
             const entity = byId.get(name) || byId.get(object.name);
+            if (entity && groundClasses.has(entity.class)) paintFirst(object);
             if (entity) {
                 entityObjects.push({ layer: 0, entity, object, kind: 'model' });
             } else if (name === 'ego') {
@@ -149,6 +151,18 @@
             }
         }
         scene.add(gltf.scene);
+    }
+
+    /// Ground patches are painted first and write no depth, so whatever stands on them covers
+    /// them. Depth alone is not enough: on SwiftShader (software WebGL) a patch that reaches
+    /// closer than the near plane (a road starting at the camera, z = 0) gets wrong depths and
+    /// is drawn over the cars.
+    function paintFirst(object) {
+        object.traverse((o) => {
+            if (!o.isMesh) return;
+            o.renderOrder = -1;
+            for (const m of Array.isArray(o.material) ? o.material : [o.material]) m.depthWrite = false;
+        });
     }
 
     // --- every file's entities as boxes in the file's colour (the comparison overlay) ---

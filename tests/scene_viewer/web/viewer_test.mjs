@@ -1,7 +1,8 @@
 // Browser tests of `scene-render html` (label browser): the page in Debian's headless chromium.
 //   camera: the camera view's screenshot against scene-render's own render of the same file
 //           (the same silhouettes within a few pixels, whatever the shading), no errors logged,
-//           no request outside the folder.
+//           no request outside the folder; objects alone against the background, then the
+//           whole street with the cars' blue bodies compared (what hides what).
 //   pick:   a pointer at a car's projected centre shows that car's id in the details pane, the
 //           folder served by a static web server on the loopback interface.
 // usage: node viewer_test.mjs camera|pick SCENE_RENDER ENTITIES.json OUT_DIR NODE_MODULES CHROMIUM
@@ -26,6 +27,16 @@ function fail(message) {
 function run(args) {
     const r = spawnSync(sceneRender, args, { encoding: 'utf8' });
     if (r.status !== 0) fail('scene-render ' + args.join(' ') + ' exited ' + r.status + ': ' + r.stderr);
+}
+
+/// Pixels of the cars' blue body colour, whatever the shading.
+function carBlue(png) {
+    const mask = new Uint8Array(png.width * png.height);
+    for (let i = 0; i < mask.length; ++i) {
+        const r = png.data[4 * i], g = png.data[4 * i + 1], b = png.data[4 * i + 2];
+        mask[i] = b > 35 && b > 3 * Math.max(r, g) + 30 ? 1 : 0;
+    }
+    return mask;
 }
 
 /// Pixels that differ from the lit background (205, 215, 228) by more than `threshold`.
@@ -95,43 +106,57 @@ function objectsOnly(file) {
     return { out, doc };
 }
 
+/// Renders `file` in the camera view with scene-render and in the viewer; returns both images.
+async function cameraPair(context, file, name, k) {
+    const viewerDir = path.join(outDir, name);
+    run(['html', file, '--out', viewerDir]);
+    const reference = path.join(outDir, name + '-reference.png');
+    run([file, '--view', 'camera', '-o', reference]);
+    const { page, report } = await openViewer(context, viewerDir, '?ui=0',
+                                              { width: k.width, height: k.height });
+    const shot = path.join(outDir, name + '-viewer.png');
+    await page.screenshot({ path: shot });
+    checkReport(report);
+    const a = readPng(PNG, shot), b = readPng(PNG, reference);
+    if (a.width !== b.width || a.height !== b.height) {
+        fail(`screenshot ${a.width}x${a.height}, reference ${b.width}x${b.height}`);
+    }
+    return { a, b, shot, reference };
+}
+
 async function cameraTest() {
     const { out: objects, doc } = objectsOnly(entitiesFile);
     const k = doc.frame.camera;
-    const viewerDir = path.join(outDir, 'viewer');
-    run(['html', objects, '--out', viewerDir]);
-    const reference = path.join(outDir, 'reference.png');
-    run([objects, '--view', 'camera', '-o', reference]);
     const context = await launch(playwright, chromium);
     try {
-        const { page, report } = await openViewer(context, viewerDir, '?ui=0',
-                                                  { width: k.width, height: k.height });
-        const shot = path.join(outDir, 'viewer.png');
-        await page.screenshot({ path: shot });
-        checkReport(report);
-        const a = readPng(PNG, shot), b = readPng(PNG, reference);
-        if (a.width !== b.width || a.height !== b.height) {
-            fail(`screenshot ${a.width}x${a.height}, reference ${b.width}x${b.height}`);
-        }
-        const ma = foreground(a, 40), mb = foreground(b, 40);
-        const count = (m) => m.reduce((s, v) => s + v, 0);
-        let both = 0, either = 0;
-        for (let i = 0; i < ma.length; ++i) {
-            both += ma[i] & mb[i];
-            either += ma[i] | mb[i];
-        }
-        const iou = both / either;
-        const viewerOut = outsideShare(ma, mb, a.width, a.height, 3);
-        const referenceOut = outsideShare(mb, ma, a.width, a.height, 3);
-        console.log(`foreground px: viewer ${count(ma)}, scene-render ${count(mb)}; IoU ${iou.toFixed(3)};` +
-                    ` farther than 3 px: viewer ${(100 * viewerOut).toFixed(2)} %,` +
-                    ` scene-render ${(100 * referenceOut).toFixed(2)} %`);
-        if (count(mb) < 2000) fail('the reference render shows almost nothing');
-        if (viewerOut > 0.02 || referenceOut > 0.02 || iou < 0.85) {
-            fail('the viewer and scene-render disagree (see ' + shot + ' and ' + reference + ')');
-        }
+        const { a, b, shot, reference } = await cameraPair(context, objects, 'objects', k);
+        compareMasks(foreground(a, 40), foreground(b, 40), a, 'foreground', shot, reference);
+        const street = await cameraPair(context, entitiesFile, 'street', k);
+        compareMasks(carBlue(street.a), carBlue(street.b), street.a, 'car-blue', street.shot,
+                     street.reference);
     } finally {
         await context.close();
+    }
+}
+
+/// Fails unless two masks agree: IoU >= 0.85 and at most 2 % of either farther than 3 px
+/// from the other.
+function compareMasks(ma, mb, a, what, shot, reference) {
+    const count = (m) => m.reduce((s, v) => s + v, 0);
+    let both = 0, either = 0;
+    for (let i = 0; i < ma.length; ++i) {
+        both += ma[i] & mb[i];
+        either += ma[i] | mb[i];
+    }
+    const iou = both / either;
+    const viewerOut = outsideShare(ma, mb, a.width, a.height, 3);
+    const referenceOut = outsideShare(mb, ma, a.width, a.height, 3);
+    console.log(`${what} px: viewer ${count(ma)}, scene-render ${count(mb)}; IoU ${iou.toFixed(3)};` +
+                ` farther than 3 px: viewer ${(100 * viewerOut).toFixed(2)} %,` +
+                ` scene-render ${(100 * referenceOut).toFixed(2)} %`);
+    if (count(mb) < 2000) fail(`the reference render shows almost no ${what} pixels`);
+    if (viewerOut > 0.02 || referenceOut > 0.02 || iou < 0.85) {
+        fail(`the viewer and scene-render disagree on ${what} pixels (see ${shot} and ${reference})`);
     }
 }
 
