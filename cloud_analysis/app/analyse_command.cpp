@@ -45,6 +45,12 @@ void add_settings_flags(CLI::App& cmd, AnalyseArgs& a) {
                    "KITTI camera index of the right image")
         ->capture_default_str()
         ->group(in);
+    cmd.add_option("--semantics", a.options.semantics,
+                   "classes from: labels (the semantic image), geometry (the stereo pair alone, "
+                   "docs/stereo-only.md) or auto (labels when a semantic image is given)")
+        ->check(CLI::IsMember({"labels", "geometry", "auto"}))
+        ->capture_default_str()
+        ->group(in);
     cmd.add_option("--palette", a.options.palette,
                    "semantic palette: cityscapes, carla, thesis or a palette JSON file")
         ->capture_default_str()
@@ -148,6 +154,10 @@ void add_output_flags(CLI::App& cmd, AnalyseArgs& a) {
     cmd.add_option("--disparity-kitti", a.disparity_kitti,
                    "KITTI 16-bit disparity PNG (d*256, 0 = none)")
         ->group(out);
+    cmd.add_option("--semantic-out", a.semantic_out,
+                   "PNG of the per-pixel classes used, in the palette's colours (with "
+                   "--semantics geometry: what the geometry decided)")
+        ->group(out);
     cmd.add_option("--gt-disparity", a.gt_disparity,
                    "KITTI GT disparity PNG: print D1-all, EPE and density to stderr")
         ->group(out);
@@ -238,6 +248,17 @@ std::string entity_json(const cloud_analysis::LoadedInputs& in,
             ? cloud_analysis::extract_entities(r.cloud, in.palette, r.camera, extract)
             : cloud_analysis::extract_entities(r.points, in.palette, extract);
     doc.frame.id = in.paths.frame_id;
+    if (r.geometry) {
+        // Classes from geometry are guesses the labelled path does not make: less confidence.
+        for (auto& e : doc.entities) e.confidence *= cloud_analysis::geometry::kConfidenceScale;
+        const auto& g = r.geometry->ground;
+        doc.extra["stereo_ground"] = {{"found", g.found},
+                                      {"camera_height_m", g.camera_height_m},
+                                      {"pitch_deg", g.pitch_deg},
+                                      {"roll_deg", g.roll_deg},
+                                      {"horizon_v_px", g.horizon_v_px},
+                                      {"problem", g.problem}};
+    }
     scene_schema::CameraIntrinsics cam;
     cam.width_px = r.camera.width_px;
     cam.height_px = r.camera.height_px;
@@ -282,7 +303,8 @@ LoadedRun load_run(const AnalyseArgs& a) {
         {a.pcd.string(), "--pcd"},
         {a.ply.string(), "--ply"},
         {a.disparity_png.string(), "--disparity-png"},
-        {a.disparity_kitti.string(), "--disparity-kitti"}};
+        {a.disparity_kitti.string(), "--disparity-kitti"},
+        {a.semantic_out.string(), "--semantic-out"}};
     int to_stdout = 0;
     for (const auto& [path, flag] : all_outputs) {
         if (path.empty()) continue;
@@ -332,9 +354,12 @@ RunReport analyse_loaded_and_write(const LoadedRun& run, const AnalyseArgs& a,
     cloud_analysis::AnalyseResult r = cloud_analysis::analyse(
         in, options_for_outputs(a, run.extract, in.palette, any_cloud), matcher);
     timings.insert(timings.end(), r.timings.begin(), r.timings.end());
-    if (a.warnings && in.semantic.empty()) {
+    if (a.warnings && r.geometry) {
+        for (const auto& w : r.geometry->warnings) std::cerr << kTool << ": warning: " << w << "\n";
+    }
+    if (a.warnings && r.semantics == "none") {
         std::cerr << kTool << ": warning: no semantic image: every point is void\n";
-    } else if (a.warnings && r.classes.void_pixels > 0) {
+    } else if (a.warnings && r.semantics == "labels" && r.classes.void_pixels > 0) {
         std::cerr << kTool << ": warning: " << r.classes.void_pixels
                   << " semantic pixels have colours not in palette '" << in.palette.name
                   << "' and count as void (" << a.paths.semantic.string() << ")\n";
@@ -380,6 +405,22 @@ RunReport analyse_loaded_and_write(const LoadedRun& run, const AnalyseArgs& a,
     }
     if (!a.disparity_png.empty() || !a.disparity_kitti.empty()) {
         timings.push_back({"encode disparity", ms_since(t)});
+    }
+    if (!a.semantic_out.empty()) {
+        t = Clock::now();
+        cloud_analysis::ClassImage classes = r.classes;
+        if (classes.class_index.empty()) {  // no semantic image: every pixel void
+            classes.width_px = r.camera.width_px;
+            classes.height_px = r.camera.height_px;
+            classes.class_index.assign(
+                static_cast<std::size_t>(classes.width_px) * classes.height_px,
+                cloud_analysis::kVoidClass);
+        }
+        outputs.push_back({a.semantic_out.string(),
+                           cloud_analysis::encode_png(
+                               cloud_analysis::geometry::colour_classes(classes, in.palette)),
+                           "--semantic-out"});
+        timings.push_back({"encode semantic", ms_since(t)});
     }
     // Every output exists in memory now: only writing is left.
     std::vector<std::filesystem::path> written;

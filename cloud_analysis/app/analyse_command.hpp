@@ -30,6 +30,7 @@ struct AnalyseArgs {
     std::filesystem::path class_config;
     std::string entities;
     std::filesystem::path xyz, pcd, ply, disparity_png, disparity_kitti, gt_disparity;
+    std::filesystem::path semantic_out;  ///< --semantic-out: the classes used, as a PNG
     bool timings = false;
     bool fsync_clouds = false;  ///< --fsync-clouds: the clouds are durable too
     bool warnings = true;       ///< print the inputs' warnings (bench: on its first run only)

@@ -15,6 +15,7 @@
 #include "cloud_analysis/synthetic.hpp"
 #include "evaluate_command.hpp"
 #include "perf_commands.hpp"
+#include "score_semantics_command.hpp"
 
 namespace {
 
@@ -49,7 +50,8 @@ int run_make_sample(const SampleArgs& a) {
 
 bool is_subcommand(const std::string& arg) {
     return arg == "analyse" || arg == "evaluate" || arg == "export-kitti" || arg == "make-sample" ||
-           arg == "batch" || arg == "bench" || arg == "report" || arg == "help";
+           arg == "batch" || arg == "bench" || arg == "report" || arg == "score-semantics" ||
+           arg == "help";
 }
 
 }  // namespace
@@ -67,8 +69,8 @@ int main(int argc, char** argv) {
     CLI::App app{
         "cloud-analysis: rectified stereo pair + calibration + semantic image -> "
         "disparity, labelled metric point cloud and entity file.\n"
-        "Commands: analyse (default), evaluate, export-kitti, make-sample, batch, report, bench. "
-        "Exit "
+        "Commands: analyse (default), evaluate, export-kitti, make-sample, batch, report, bench, "
+        "score-semantics. Exit "
         "codes: 0 ok, 1 "
         "failure, 2 usage, 3 (evaluate) a bar was missed."};
     app.set_version_flag("--version", std::string(kTool) + " " + STEREOSCENE_VERSION);
@@ -94,6 +96,9 @@ int main(int argc, char** argv) {
     CLI::App* report = cloud_analysis::app::add_report_command(app, report_args);
     cloud_analysis::app::BenchArgs bench_args;
     CLI::App* bench = cloud_analysis::app::add_bench_command(app, bench_args);
+
+    cloud_analysis::app::ScoreSemanticsArgs score_args;
+    CLI::App* score = cloud_analysis::app::add_score_semantics_command(app, score_args);
 
     SampleArgs sample_args;
     CLI::App* sample = app.add_subcommand(
@@ -127,6 +132,7 @@ int main(int argc, char** argv) {
         }
         if (*evaluate) return cloud_analysis::app::run_evaluate(evaluate_args);
         if (*export_kitti) return cloud_analysis::app::run_export_kitti(export_args);
+        if (*score) return cloud_analysis::app::run_score_semantics(score_args);
         std::cout << app.help();
         return 0;
     } catch (const CLI::ParseError& e) {

@@ -50,6 +50,10 @@ InputPaths kitti_layout(const std::filesystem::path& root, const std::string& fr
 
 void AnalyseOptions::validate() const {
     if (palette.empty()) throw std::invalid_argument("palette: must not be empty");
+    if (semantics != "labels" && semantics != "geometry" && semantics != "auto") {
+        throw std::invalid_argument("semantics: must be labels, geometry or auto");
+    }
+    geometry.validate();
     calibration.validate();
     disparity.validate();
     reproject.validate();
@@ -157,18 +161,27 @@ AnalyseResult analyse(const LoadedInputs& in, const AnalyseOptions& options,
     }
     // The class lookup does not depend on the disparity: it runs beside the matcher, and the
     // "semantic" lap below is only the wait for it.
+    r.semantics = semantics_path(in, options);
     std::future<ClassImage> classes;
-    if (!semantic->empty()) {
+    if (r.semantics == "labels") {
         classes = std::async(std::launch::async,
                              [semantic, &in] { return classify_pixels(*semantic, in.palette); });
     }
     r.disparity = matcher.compute(*left, *right);
     watch.lap("disparity");
-    if (classes.valid()) r.classes = classes.get();
-    watch.lap("semantic");
     if (!r.disparity.any_valid()) {
         throw std::runtime_error("empty disparity: no pixel has a valid disparity (" +
                                  in.paths.left.string() + ")");
+    }
+    if (classes.valid()) r.classes = classes.get();
+    if (r.semantics != "geometry") {
+        watch.lap("semantic");
+    } else {
+        r.geometry =
+            geometry::derive_semantics(r.disparity, r.camera, *left, in.palette, options.geometry);
+        r.classes = std::move(r.geometry->classes);
+        r.geometry->classes = ClassImage{};
+        watch.lap("geometry");
     }
     if (options.class_points_only) {
         r.points = reproject_by_class(r.disparity, r.camera, r.classes, options.reproject,
@@ -185,6 +198,12 @@ AnalyseResult analyse(const LoadedInputs& in, const AnalyseOptions& options,
                                  " m (--max-range)");
     }
     return r;
+}
+
+std::string semantics_path(const LoadedInputs& in, const AnalyseOptions& o) {
+    if (o.semantics == "geometry") return "geometry";
+    if (!in.semantic.empty()) return "labels";
+    return o.semantics == "auto" ? "geometry" : "none";
 }
 
 nlohmann::json describe_run(const LoadedInputs& in, const AnalyseOptions& o,
@@ -211,6 +230,7 @@ nlohmann::json describe_run(const LoadedInputs& in, const AnalyseOptions& o,
                         {"right_camera", o.calibration.right_camera},
                         {"raw", o.raw}};
     j["palette"] = in.palette.name;
+    j["semantics"] = semantics_path(in, o);
     j["disparity"] = {{"min_disparity", d.min_disparity},
                       {"num_disparities", d.num_disparities},
                       {"block_size", d.block_size},

@@ -503,3 +503,69 @@ TEST_CASE("the palette flag takes a palette file path as well as a bundled name"
     CHECK(missing.code == 1);
     CHECK(missing.err.find("none.json") != std::string::npos);
 }
+
+namespace {
+
+const fs::path kStreet = fs::path(STEREOSCENE_SAMPLES_DIR) / "rendered" / "street";
+
+/// The rendered street's pair and calibration, without its semantic image.
+std::string street_pair(const fs::path& calib = kStreet / "calib" / "calib_cam_to_cam.txt") {
+    return " --left " + quote((kStreet / "image_2" / "000000.png").string()) + " --right " +
+           quote((kStreet / "image_3" / "000000.png").string()) + " --calib " +
+           quote(calib.string()) + " --frame 000000";
+}
+
+}  // namespace
+
+TEST_CASE("without a semantic image the stereo pair alone gives cars, and the file says so",
+          "[cli][geometry]") {
+    const auto dir = scratch("stereo_only");
+    const fs::path semantic = dir / "derived.png";
+    const Run r =
+        run(tool() + street_pair() + " -o - --semantic-out " + quote(semantic.string()), dir);
+    REQUIRE(r.code == 0);
+    CHECK(r.err.find("every point is void") == std::string::npos);
+    const auto doc = nlohmann::json::parse(r.out);
+    CHECK(doc["source"]["semantics"] == "geometry");
+    CHECK(doc["stereo_ground"]["camera_height_m"].get<double>() == Approx(1.65).margin(0.1));
+    int cars = 0;
+    for (const auto& e : doc["entities"]) {
+        if (e["class"] != "car") continue;
+        ++cars;
+        CHECK(e["confidence"].get<double>() <= 0.6);  // geometry's classes: less confidence
+    }
+    CHECK(cars >= 5);
+    CHECK(fs::file_size(semantic) > 1000);
+
+    // Asked for, the labelled path says "labels" and leaves confidence as it was.
+    const Run labelled =
+        run(tool() + street_pair() + " --semantic " +
+                quote((kStreet / "semantic_rgb" / "000000.png").string()) + " -o -",
+            dir);
+    REQUIRE(labelled.code == 0);
+    CHECK(nlohmann::json::parse(labelled.out)["source"]["semantics"] == "labels");
+    const Run forced = run(tool() + street_pair() + " --semantic " +
+                               quote((kStreet / "semantic_rgb" / "000000.png").string()) +
+                               " --semantics geometry -o -",
+                           dir);
+    REQUIRE(forced.code == 0);
+    CHECK(nlohmann::json::parse(forced.out)["source"]["semantics"] == "geometry");
+    CHECK(run(tool() + street_pair() + " --semantics colour -o -", dir).code == 2);
+}
+
+TEST_CASE("a calibration whose baseline puts the road 10 m down warns, writes, and finds no car",
+          "[cli][geometry]") {
+    const auto dir = scratch("stereo_only_bad");
+    // The street's rig with six times its baseline: every depth six times too far.
+    std::ofstream(dir / "calib.yaml") << "fx: 721.5377\nfy: 721.5377\ncx: 609.5593\n"
+                                         "cy: 172.854\nbaseline_m: 3.24\n";
+    const fs::path out = dir / "entities.json";
+    const Run r = run(tool() + street_pair(dir / "calib.yaml") + " -o " + quote(out.string()), dir);
+    REQUIRE(r.code == 0);
+    CHECK(r.err.find("warning: no ground found: the fitted road lies") != std::string::npos);
+    CHECK(r.err.find("baseline") != std::string::npos);
+    REQUIRE(fs::exists(out));
+    const auto doc = nlohmann::json::parse(slurp(out));
+    CHECK(doc["stereo_ground"]["found"] == false);
+    for (const auto& e : doc["entities"]) CHECK(e["class"] != "car");
+}

@@ -12,6 +12,7 @@
 
 #include "cloud_analysis/calibration.hpp"
 #include "cloud_analysis/disparity.hpp"
+#include "cloud_analysis/geometry/scene_geometry.hpp"
 #include "cloud_analysis/io.hpp"
 #include "cloud_analysis/reproject.hpp"
 #include "cloud_analysis/semantic.hpp"
@@ -40,6 +41,10 @@ struct AnalyseOptions {
     bool raw = false;                    ///< inputs are unrectified: undistort + rectify first
     DisparityOptions disparity;          ///< SGBM and post-filters
     ReprojectOptions reproject;          ///< range limits
+    /// Where the per-pixel classes come from: "labels" (the semantic image), "geometry" (the
+    /// stereo pair alone, docs/stereo-only.md) or "auto" (labels when a semantic image is given).
+    std::string semantics = "auto";
+    geometry::GeometryOptions geometry;  ///< the stereo-only path's settings
     /// When set, analyse builds no cloud: it reprojects straight into the entity extractor's
     /// per-class points (AnalyseResult::points, see reproject_by_class), for runs whose only
     /// output is entities. Unset: the labelled cloud (AnalyseResult::cloud).
@@ -77,9 +82,12 @@ struct StageTiming {
 
 /// Products of the chain.
 struct AnalyseResult {
-    StereoCamera camera;               ///< rectified rig used
-    DisparityMap disparity;            ///< left disparity, px
-    ClassImage classes;                ///< per-pixel classes (empty without semantic image)
+    StereoCamera camera;     ///< rectified rig used
+    DisparityMap disparity;  ///< left disparity, px
+    ClassImage classes;      ///< per-pixel classes (empty without semantic image)
+    std::string semantics;   ///< "labels", "geometry" or "none" (no classes)
+    std::optional<geometry::SceneGeometry> geometry;  ///< stereo-only path: ground, segments,
+                                                      ///< warnings (its classes moved to classes)
     LabeledCloud cloud;                ///< metric labelled points (empty with class_points_only)
     ClassPoints points;                ///< with class_points_only: the extractor's points
     std::size_t cloud_points = 0;      ///< points of the cloud, built or not
@@ -93,6 +101,10 @@ AnalyseResult analyse(const LoadedInputs& inputs, const AnalyseOptions& options)
 /// As above with a matcher kept across frames (its options replace options.disparity).
 AnalyseResult analyse(const LoadedInputs& inputs, const AnalyseOptions& options,
                       DisparityMatcher& matcher);
+
+/// Which path makes the classes of `inputs` under `options`: "labels", "geometry" or "none"
+/// ("labels" asked for without a semantic image).
+std::string semantics_path(const LoadedInputs& inputs, const AnalyseOptions& options);
 
 /// The `source` block of the entity file: tool, version, inputs, calibration, parameters.
 nlohmann::json describe_run(const LoadedInputs& inputs, const AnalyseOptions& options,

@@ -1,0 +1,118 @@
+#pragma once
+
+/// Scene understanding from the stereo pair alone: the road plane fitted without labels, the
+/// obstacles standing on it segmented in u-disparity space (Labayrade et al., "Real Time
+/// Obstacle Detection in Stereovision on Non Flat Road Geometry Through V-disparity
+/// Representation", IV 2002; Badino et al., "The Stixel World", DAGM 2009, for cutting each
+/// column into ground / object / sky) and classified by rules on their metric shape, written
+/// as a per-pixel class image in the palette's classes so that the labelled extractor runs on
+/// it unchanged. See docs/stereo-only.md.
+
+#include <cstdint>
+#include <string>
+#include <vector>
+
+#include "cloud_analysis/ground.hpp"
+#include "cloud_analysis/io.hpp"
+#include "cloud_analysis/semantic.hpp"
+#include "cloud_analysis/types.hpp"
+
+namespace cloud_analysis::geometry {
+
+/// Entities made from classes the geometry decided carry this share of the confidence the
+/// labelled path gives the same support (docs/entities.md, "Confidence").
+inline constexpr double kConfidenceScale = 0.6;
+
+/// Settings of derive_semantics.
+struct GeometryOptions {
+    double ground_max_range_m = 35.0;    ///< only pixels nearer than this vote for the road, m
+    double ground_inlier_m = 0.08;       ///< RANSAC inlier distance of the road plane, metres
+    double ground_tolerance_m = 0.12;    ///< pixels this close to the plane are road (at 0 m), m
+    double disparity_noise_px = 1.0;     ///< disparity error the road tolerance grows with, px
+    double min_camera_height_m = 0.3;    ///< a plane nearer the camera than this is no road, m
+    double max_camera_height_m = 4.0;    ///< a plane farther below the camera is no road, m
+    double max_depth_m = 60.0;           ///< obstacle pixels beyond this stay unlabelled, m
+    double max_obstacle_height_m = 6.0;  ///< heights above this count as this, metres
+    int column_bin_px = 4;               ///< u-disparity cell width, pixels, >= 1
+    double disparity_bin_share = 0.04;   ///< u-disparity bins are 1 px or this share of the
+                                         ///< disparity wide, whichever is wider, (0, 1)
+    double link_depth_m = 0.8;           ///< cells closer in depth than this join, metres
+    int min_cell_pixels = 3;             ///< sparser u-disparity cells are noise, pixels, >= 1
+    double min_cell_height_m = 0.2;      ///< ... and so are cells holding fewer pixels than a
+                                         ///< surface this tall across the cell would, metres
+    double low_cut_m = 0.35;             ///< pixels lower than this above the road take their
+                                         ///< cell's class, or sidewalk/terrain alone, metres
+    double tall_share = 0.3;             ///< cells with more of their pixels above
+                                         ///< car_max_height_m are tall (walls, trees), (0, 1]
+    double car_min_height_m = 0.9;       ///< car tops lie between this ...
+    double car_max_height_m = 2.3;       ///< ... and this above the road, metres
+    double car_min_width_m = 1.2;        ///< narrower objects are persons or poles, metres
+    double building_min_height_m = 2.6;  ///< taller objects are buildings (or trees), metres
+    double wall_top_spread_m = 0.15;     ///< a thin segment whose tops (25th-97th percentile) vary
+                                         ///< less than this is a wall or fence, metres
+    double wall_max_thickness_m = 0.8;   ///< ... when its footprint is thinner than this, metres
+    double pole_max_width_m = 0.6;       ///< tall objects narrower than this are poles, metres
+    double low_max_height_m = 0.6;       ///< objects lower than this are kerbs or low plants, m
+    double green_fraction = 0.45;        ///< objects with more green pixels are vegetation, (0,1]
+    /// Throws std::invalid_argument naming the bad field.
+    void validate() const;
+};
+
+/// The road plane found without labels and what it implies about the camera.
+struct GroundEstimate {
+    bool found = false;            ///< a plausible road plane was found
+    GroundPlane plane;             ///< the plane (camera frame), valid when found
+    double camera_height_m = 0.0;  ///< camera centre above the plane, metres
+    double pitch_deg = 0.0;        ///< camera pitch against the road (positive: looks down), deg
+    double roll_deg = 0.0;         ///< camera roll against the road, degrees
+    double horizon_v_px = 0.0;     ///< image row of the horizon at the principal column, px
+    std::string problem;           ///< why no road was accepted, empty when found
+};
+
+/// One obstacle segment and the class the rules gave it.
+struct Segment {
+    std::uint16_t class_index = kVoidClass;  ///< palette class, kVoidClass when unmapped
+    std::string label;                       ///< rule's class name, e.g. "car"
+    std::size_t pixels = 0;                  ///< obstacle pixels
+    double top_m = 0.0;                      ///< robust top above the road, metres
+    double width_m = 0.0;                    ///< footprint extent along its main axis, metres
+    double depth_m = 0.0;                    ///< median distance, metres
+    double green = 0.0;                      ///< share of green pixels, [0, 1]
+};
+
+/// What the geometry decided.
+struct SceneGeometry {
+    ClassImage classes;                 ///< per-pixel palette class (void where undecided)
+    GroundEstimate ground;              ///< the road plane
+    std::vector<Segment> segments;      ///< obstacles, largest first
+    std::vector<std::string> warnings;  ///< one line each, for the user
+};
+
+/// Derives a class image from a disparity map and its rig: road (plane within a depth-aware
+/// tolerance), sky (no disparity or beyond max_depth_m above the horizon), and obstacles
+/// classed car, person, pole, vegetation, building, sidewalk/terrain (low) or static.
+/// Class names missing from `palette` stay void. `left` (grey or RGB, same size) gives the
+/// green share; grey images give none. No road: only sky is labelled and a warning says why.
+SceneGeometry derive_semantics(const DisparityMap& disparity, const StereoCamera& camera,
+                               const ImageU8& left, const Palette& palette,
+                               const GeometryOptions& options);
+
+/// The road plane alone (RANSAC over the lower image's points, fit_ground_plane).
+GroundEstimate estimate_ground(const DisparityMap& disparity, const StereoCamera& camera,
+                               const GeometryOptions& options);
+
+/// RGB image of a class image in the palette's colours (void black).
+ImageU8 colour_classes(const ClassImage& classes, const Palette& palette);
+
+/// Pixel accuracy and per-class IoU of a class image against a reference class image.
+struct SemanticScore {
+    std::size_t pixels = 0;  ///< reference pixels scored (not void in the reference)
+    double accuracy = 0.0;   ///< share of them with the same class
+    std::vector<std::pair<std::string, double>> iou;  ///< per requested class, -1 when absent
+};
+
+/// Scores `estimate` against `reference` (same size, same palette) on `class_names`.
+SemanticScore score_semantics(const ClassImage& estimate, const ClassImage& reference,
+                              const Palette& palette, const std::vector<std::string>& class_names);
+
+}  // namespace cloud_analysis::geometry

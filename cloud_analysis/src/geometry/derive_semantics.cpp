@@ -1,0 +1,422 @@
+#include <algorithm>
+#include <cmath>
+#include <numeric>
+#include <stdexcept>
+#include <tuple>
+#include <utility>
+#include <vector>
+
+#include "cloud_analysis/geometry/scene_geometry.hpp"
+
+namespace cloud_analysis::geometry {
+namespace {
+
+/// Palette indices of the classes the rules decide (kVoidClass when the palette lacks one).
+struct Classes {
+    std::uint16_t road, sidewalk, terrain, car, person, pole, vegetation, building, wall, sky,
+        other;
+    explicit Classes(const Palette& p)
+        : road(find_class(p, "road")),
+          sidewalk(find_class(p, "sidewalk")),
+          terrain(find_class(p, "terrain")),
+          car(find_class(p, "car")),
+          person(find_class(p, "person")),
+          pole(find_class(p, "pole")),
+          vegetation(find_class(p, "vegetation")),
+          building(find_class(p, "building")),
+          wall(find_class(p, "wall") != kVoidClass ? find_class(p, "wall")
+                                                   : find_class(p, "building")),
+          sky(find_class(p, "sky")),
+          other(find_class(p, "static")) {}
+};
+
+/// One u-disparity cell: the obstacle pixels of a column band at one disparity.
+struct Cell {
+    int count = 0;          ///< obstacle pixels at or above low_cut_m
+    int green = 0;          ///< of them green
+    int tall = 0;           ///< of them above car_max_height_m
+    float top1 = -1e9f;     ///< highest height above the road, metres
+    float top2 = -1e9f;     ///< second highest (robust top)
+    float low = 1e9f;       ///< lowest height, metres
+    int top_v = 1 << 30;    ///< row of its highest pixel (smallest v)
+    int top_u = 0;          ///< column of that pixel
+    bool occluded = false;  ///< a nearer surface lies right above that pixel: top unknown
+    int segment = -1;       ///< segment index once linked; -1: sparse (noise)
+    bool is_tall = false;
+};
+
+/// The rig's depth of disparity d and the pixel grid, shared by the passes.
+struct Rig {
+    double fb = 0.0, offset = 0.0, cx = 0.0, cy = 0.0, fx = 0.0, fy = 0.0;
+    explicit Rig(const StereoCamera& c)
+        : fb(c.fx_px * c.baseline_m),
+          offset(c.cx_px - c.cx_right_px),
+          cx(c.cx_px),
+          cy(c.cy_px),
+          fx(c.fx_px),
+          fy(c.fy_px) {}
+};
+
+/// The u-disparity grid and each pixel's place in it.
+struct Grid {
+    int bins_u = 0, bins_d = 0;
+    std::vector<int> bin_of_tenth;   ///< disparity bin of floor(10 d)
+    std::vector<double> bin_centre;  ///< disparity at the centre of each bin, px
+    std::vector<Cell> cells;
+    std::vector<std::int32_t> pixel_cell;  ///< per pixel: its cell, -1 when none
+    std::vector<char> pixel_low;           ///< per pixel: below low_cut_m
+    std::vector<char> pixel_green;         ///< per low pixel: green
+};
+
+int find_root(std::vector<int>& parent, int i) {
+    while (parent[i] != i) {
+        parent[i] = parent[parent[i]];
+        i = parent[i];
+    }
+    return i;
+}
+
+void unite(std::vector<int>& parent, int a, int b) {
+    a = find_root(parent, a);
+    b = find_root(parent, b);
+    if (a != b) parent[std::max(a, b)] = std::min(a, b);
+}
+
+bool is_green(const ImageU8& left, int u, int v) {
+    if (left.channels != 3) return false;
+    const std::uint8_t* p = left.at(u, v);
+    const int r = p[0], g = p[1], b = p[2];
+    return g >= r + 6 && g * 10 >= r * 11 && g * 10 >= b * 11;
+}
+
+double quantile(std::vector<float>& v, double q) {
+    if (v.empty()) return 0.0;
+    const std::size_t k = std::min(v.size() - 1, static_cast<std::size_t>(q * (v.size() - 1)));
+    std::nth_element(v.begin(), v.begin() + static_cast<std::ptrdiff_t>(k), v.end());
+    return double{v[k]};
+}
+
+/// Extents of a weighted footprint (x, z, weight) along its main axis and across it (2-98 %),
+/// metres.
+std::pair<double, double> footprint_extents(const std::vector<Eigen::Vector3d>& pts) {
+    double wsum = 0.0;
+    Eigen::Vector2d mean = Eigen::Vector2d::Zero();
+    for (const auto& p : pts) {
+        mean += p.z() * p.head<2>();
+        wsum += p.z();
+    }
+    if (wsum <= 0.0) return {0.0, 0.0};
+    mean /= wsum;
+    Eigen::Matrix2d cov = Eigen::Matrix2d::Zero();
+    for (const auto& p : pts) {
+        const Eigen::Vector2d q = p.head<2>() - mean;
+        cov += p.z() * q * q.transpose();
+    }
+    const double tr = cov.trace(), det = cov(0, 0) * cov(1, 1) - cov(0, 1) * cov(1, 0);
+    const double l1 = tr / 2.0 + std::sqrt(std::max(0.0, tr * tr / 4.0 - det));
+    Eigen::Vector2d axis(cov(0, 1), l1 - cov(0, 0));
+    if (axis.norm() < 1e-12) {
+        axis = cov(0, 0) >= cov(1, 1) ? Eigen::Vector2d(1, 0) : Eigen::Vector2d(0, 1);
+    }
+    axis.normalize();
+    const Eigen::Vector2d normal(-axis.y(), axis.x());
+    std::vector<float> along, across;
+    along.reserve(pts.size());
+    across.reserve(pts.size());
+    for (const auto& p : pts) {
+        along.push_back(static_cast<float>(axis.dot(p.head<2>() - mean)));
+        across.push_back(static_cast<float>(normal.dot(p.head<2>() - mean)));
+    }
+    const double length = quantile(along, 0.98) - quantile(along, 0.02);
+    return {length, quantile(across, 0.98) - quantile(across, 0.02)};
+}
+
+/// Disparity bins 1 px wide, widening to `share` of the disparity near the camera (where 1 px
+/// is a few centimetres of depth and an oblique surface would scatter over many bins).
+void make_bins(double max_d, double share, Grid& g) {
+    const auto tenths = static_cast<std::size_t>(std::max(0.0, max_d) * 10.0) + 2;
+    g.bin_of_tenth.resize(tenths);
+    g.bin_centre.clear();
+    double start = 0.0;
+    std::size_t t = 0;
+    while (t < tenths) {
+        const double width = std::max(1.0, share * start);
+        const double end = start + width;
+        const int bin = static_cast<int>(g.bin_centre.size());
+        for (; t < tenths && static_cast<double>(t) < end * 10.0; ++t) g.bin_of_tenth[t] = bin;
+        g.bin_centre.push_back(start + width / 2.0);
+        start = end;
+    }
+    g.bins_d = static_cast<int>(g.bin_centre.size());
+}
+
+/// Pass 1: road pixels labelled, every other pixel above the road counted in its cell.
+Grid fill_grid(const DisparityMap& disparity, const Rig& rig, const ImageU8& left,
+               const GroundEstimate& ground, const GeometryOptions& o, std::uint16_t road,
+               ClassImage& out) {
+    const int w = disparity.width_px, h = disparity.height_px;
+    double max_d = 0.0;
+    for (const float d : disparity.disparity_px) max_d = std::max(max_d, double{d} - rig.offset);
+    Grid g;
+    g.bins_u = (w + o.column_bin_px - 1) / o.column_bin_px;
+    make_bins(max_d, o.disparity_bin_share, g);
+    g.cells.resize(static_cast<std::size_t>(g.bins_u) * g.bins_d);
+    g.pixel_cell.assign(static_cast<std::size_t>(w) * h, -1);
+    g.pixel_low.assign(g.pixel_cell.size(), 0);
+    g.pixel_green.assign(g.pixel_cell.size(), 0);
+    const Eigen::Vector3d n = ground.plane.normal;
+    const double plane_d = ground.plane.d;
+    const double min_d = rig.fb / o.max_depth_m;
+    // Height error of a road point at depth z for a disparity error e: h_cam * z * e / (f B).
+    const double slope = o.disparity_noise_px * plane_d / rig.fb;
+    const auto tall_m = static_cast<float>(o.car_max_height_m);
+    for (int v = 0; v < h; ++v) {
+        const std::size_t row = static_cast<std::size_t>(v) * w;
+        const double row_term = n.y() * (v - rig.cy) / rig.fy + n.z();
+        for (int u = 0; u < w; ++u) {
+            const double raw = double{disparity.disparity_px[row + u]};
+            const double d = raw - rig.offset;
+            if (!(raw > 0.0) || !(d > min_d)) continue;
+            const double z = rig.fb / d;
+            const double height = (n.x() * (u - rig.cx) / rig.fx + row_term) * z + plane_d;
+            const double tolerance = o.ground_tolerance_m + slope * z;
+            if (height < -std::max(0.5, 3.0 * tolerance)) continue;  // under the road: mismatch
+            if (height <= tolerance) {
+                out.class_index[row + u] = road;
+                continue;
+            }
+            const int cell = (u / o.column_bin_px) * g.bins_d +
+                             g.bin_of_tenth[static_cast<std::size_t>(d * 10.0)];
+            g.pixel_cell[row + u] = cell;
+            const bool green = is_green(left, u, v);
+            if (height < o.low_cut_m) {
+                g.pixel_low[row + u] = 1;
+                g.pixel_green[row + u] = green ? 1 : 0;
+                continue;
+            }
+            Cell& c = g.cells[static_cast<std::size_t>(cell)];
+            const float hf = static_cast<float>(std::min(height, o.max_obstacle_height_m));
+            ++c.count;
+            c.tall += hf > tall_m ? 1 : 0;
+            c.green += green ? 1 : 0;
+            if (hf > c.top1) {
+                c.top2 = c.top1;
+                c.top1 = hf;
+            } else if (hf > c.top2) {
+                c.top2 = hf;
+            }
+            c.low = std::min(c.low, hf);
+            if (v < c.top_v) {
+                c.top_v = v;
+                c.top_u = u;
+            }
+        }
+    }
+    return g;
+}
+
+/// Whether the first disparity above a cell's highest pixel (within a few rows) is nearer: then
+/// an occluder (a tree's crown over a wall's foot) hides the cell's real top.
+bool top_occluded(const DisparityMap& disparity, const Cell& c, double cell_d) {
+    const int w = disparity.width_px;
+    for (int v = c.top_v - 1; v >= std::max(0, c.top_v - 6); --v) {
+        const double d = double{disparity.disparity_px[static_cast<std::size_t>(v) * w + c.top_u]};
+        if (!(d > 0.0)) continue;
+        return d > cell_d * 1.15 + 1.0;
+    }
+    return false;
+}
+
+/// Pass 2: dense cells linked to dense cells of the same kind (tall or not) in the next two
+/// column bands within link_depth_m; returns each dense cell's root (-1 for sparse cells).
+std::vector<int> link_cells(Grid& g, const DisparityMap& disparity, const Rig& rig,
+                            const GeometryOptions& o) {
+    std::vector<int> parent(g.cells.size(), -1);
+    for (int bd = 0; bd < g.bins_d; ++bd) {
+        // Pixels a surface min_cell_height_m tall fills in a cell at this disparity.
+        const double expected = o.min_cell_height_m * rig.fy *
+                                g.bin_centre[static_cast<std::size_t>(bd)] / rig.fb *
+                                o.column_bin_px;
+        const int min_count = std::max(o.min_cell_pixels, static_cast<int>(expected));
+        for (int bu = 0; bu < g.bins_u; ++bu) {
+            const int i = bu * g.bins_d + bd;
+            Cell& c = g.cells[static_cast<std::size_t>(i)];
+            if (c.count < min_count) continue;
+            parent[static_cast<std::size_t>(i)] = i;
+            c.is_tall = c.tall > o.tall_share * c.count;
+            c.occluded = top_occluded(disparity, c, g.bin_centre[static_cast<std::size_t>(bd)]);
+        }
+    }
+    for (int bu = 0; bu < g.bins_u; ++bu) {
+        for (int bd = 0; bd < g.bins_d; ++bd) {
+            const int i = bu * g.bins_d + bd;
+            if (parent[static_cast<std::size_t>(i)] < 0) continue;
+            const bool tall = g.cells[static_cast<std::size_t>(i)].is_tall;
+            const double dd = g.bin_centre[static_cast<std::size_t>(bd)];
+            const double bin_width = std::max(1.0, o.disparity_bin_share * dd);
+            const int reach = std::clamp(
+                static_cast<int>(std::ceil(o.link_depth_m * dd * dd / rig.fb / bin_width)), 1, 6);
+            for (int du = 0; du <= 2 && bu + du < g.bins_u; ++du) {
+                for (int k = (du == 0 ? 1 : -reach); k <= reach; ++k) {
+                    const int nd = bd + k;
+                    if (nd < 0 || nd >= g.bins_d) continue;
+                    const int j = (bu + du) * g.bins_d + nd;
+                    if (parent[static_cast<std::size_t>(j)] >= 0 &&
+                        g.cells[static_cast<std::size_t>(j)].is_tall == tall) {
+                        unite(parent, i, j);
+                    }
+                }
+            }
+        }
+    }
+    return parent;
+}
+
+/// Statistics of one linked segment, gathered from its cells.
+struct SegmentStats {
+    std::size_t pixels = 0, green = 0, occluded = 0;
+    bool tall = false;
+    std::vector<float> tops, lows, depths;
+    std::vector<Eigen::Vector3d> footprint;  ///< (x, z, pixels) of each cell
+};
+
+std::vector<SegmentStats> gather_segments(Grid& g, std::vector<int>& parent, const Rig& rig,
+                                          const GeometryOptions& o) {
+    std::vector<int> root_segment(g.cells.size(), -1);
+    std::vector<SegmentStats> stats;
+    for (int i = 0; i < static_cast<int>(g.cells.size()); ++i) {
+        if (parent[static_cast<std::size_t>(i)] < 0) continue;
+        Cell& c = g.cells[static_cast<std::size_t>(i)];
+        int& s = root_segment[static_cast<std::size_t>(find_root(parent, i))];
+        if (s < 0) {
+            s = static_cast<int>(stats.size());
+            stats.emplace_back();
+            stats.back().tall = c.is_tall;
+        }
+        c.segment = s;
+        SegmentStats& st = stats[static_cast<std::size_t>(s)];
+        st.pixels += static_cast<std::size_t>(c.count);
+        st.green += static_cast<std::size_t>(c.green);
+        st.occluded += c.occluded ? static_cast<std::size_t>(c.count) : 0;
+        st.tops.push_back(c.count > 1 ? c.top2 : c.top1);
+        st.lows.push_back(c.low);
+        const double z = rig.fb / g.bin_centre[static_cast<std::size_t>(i % g.bins_d)];
+        const double u = ((i / g.bins_d) + 0.5) * o.column_bin_px;
+        st.depths.push_back(static_cast<float>(z));
+        st.footprint.emplace_back((u - rig.cx) * z / rig.fx, z, c.count);
+    }
+    return stats;
+}
+
+/// The rules: a class for a segment from its height, width and green share.
+Segment classify(SegmentStats& st, const Classes& cls, const GeometryOptions& o) {
+    Segment seg;
+    seg.pixels = st.pixels;
+    seg.top_m = quantile(st.tops, 0.97);
+    // A wall or fence keeps one height along its length; a car's tops range from its bonnet
+    // or boot (0.8-1.1 m) to its roof.
+    const double top_spread = seg.top_m - quantile(st.tops, 0.25);
+    const double low = quantile(st.lows, 0.1);
+    double thickness = 0.0;
+    std::tie(seg.width_m, thickness) = footprint_extents(st.footprint);
+    seg.depth_m = quantile(st.depths, 0.5);
+    seg.green = st.pixels ? static_cast<double>(st.green) / st.pixels : 0.0;
+    const auto set = [&](std::uint16_t c, const char* label) {
+        seg.class_index = c;
+        seg.label = label;
+    };
+    const bool green = seg.green >= o.green_fraction;
+    const bool narrow = seg.width_m < o.pole_max_width_m;
+    if (seg.top_m < o.low_max_height_m) {
+        green ? set(cls.terrain, "terrain") : set(cls.sidewalk, "sidewalk");
+    } else if (green) {
+        set(cls.vegetation, "vegetation");
+    } else if (st.tall || seg.top_m >= o.building_min_height_m) {
+        narrow ? set(cls.pole, "pole") : set(cls.building, "building");
+    } else if (seg.width_m < o.car_min_width_m) {
+        if (seg.top_m >= 1.0 && seg.top_m <= 2.2 && !narrow) {
+            set(cls.person, "person");
+        } else {
+            narrow&& seg.top_m >= 2.0 ? set(cls.pole, "pole") : set(cls.other, "static");
+        }
+    } else if (top_spread < o.wall_top_spread_m && thickness < o.wall_max_thickness_m) {
+        set(cls.wall, "wall");
+    } else if (2 * st.occluded > st.pixels) {
+        set(cls.other, "static");  // its top is hidden: no telling a car from a wall's foot
+    } else if (seg.top_m >= o.car_min_height_m && seg.top_m <= o.car_max_height_m &&
+               low < o.low_max_height_m) {
+        set(cls.car, "car");
+    } else {
+        set(cls.other, "static");
+    }
+    return seg;
+}
+
+/// Sky above the horizon wherever no segment holds the pixel.
+void label_sky(const Grid* g, int w, double horizon_v, std::uint16_t sky, ClassImage& out) {
+    if (sky == kVoidClass) return;
+    const int rows = std::clamp(static_cast<int>(std::floor(horizon_v)), 0, out.height_px);
+    for (std::size_t p = 0; p < static_cast<std::size_t>(rows) * w; ++p) {
+        if (out.class_index[p] != kVoidClass) continue;
+        const std::int32_t cell = g ? g->pixel_cell[p] : -1;
+        if (cell < 0 || g->cells[static_cast<std::size_t>(cell)].segment < 0) {
+            out.class_index[p] = sky;
+        }
+    }
+}
+
+}  // namespace
+
+SceneGeometry derive_semantics(const DisparityMap& disparity, const StereoCamera& camera,
+                               const ImageU8& left, const Palette& palette,
+                               const GeometryOptions& o) {
+    o.validate();
+    const int w = disparity.width_px, h = disparity.height_px;
+    if (!left.empty() && (left.width_px != w || left.height_px != h)) {
+        throw std::invalid_argument("left image and disparity differ in size");
+    }
+    if (!(camera.baseline_m > 0.0) || !(camera.fx_px > 0.0) || !(camera.fy_px > 0.0)) {
+        throw std::invalid_argument("camera: fx, fy and baseline must be > 0");
+    }
+    const Classes cls(palette);
+    const Rig rig(camera);
+    SceneGeometry out;
+    out.classes.width_px = w;
+    out.classes.height_px = h;
+    out.classes.class_index.assign(static_cast<std::size_t>(w) * h, kVoidClass);
+    out.ground = estimate_ground(disparity, camera, o);
+    if (!out.ground.found) {
+        out.warnings.push_back("no ground found: " + out.ground.problem +
+                               "; only sky is labelled, no objects");
+        for (std::size_t p = 0; p < out.classes.class_index.size(); ++p) {
+            if (!(disparity.disparity_px[p] > 0.0f)) out.classes.class_index[p] = cls.sky;
+        }
+        if (cls.sky == kVoidClass)
+            out.classes.class_index.assign(out.classes.class_index.size(), kVoidClass);
+        return out;
+    }
+    Grid grid = fill_grid(disparity, rig, left, out.ground, o, cls.road, out.classes);
+    std::vector<int> parent = link_cells(grid, disparity, rig, o);
+    std::vector<SegmentStats> stats = gather_segments(grid, parent, rig, o);
+    std::vector<std::uint16_t> segment_class(stats.size(), kVoidClass);
+    for (std::size_t s = 0; s < stats.size(); ++s) {
+        out.segments.push_back(classify(stats[s], cls, o));
+        segment_class[s] = out.segments.back().class_index;
+    }
+    for (std::size_t p = 0; p < grid.pixel_cell.size(); ++p) {
+        const std::int32_t cell = grid.pixel_cell[p];
+        if (cell < 0) continue;
+        const int s = grid.cells[static_cast<std::size_t>(cell)].segment;
+        if (s >= 0) {
+            out.classes.class_index[p] = segment_class[static_cast<std::size_t>(s)];
+        } else if (grid.pixel_low[p]) {
+            out.classes.class_index[p] = grid.pixel_green[p] ? cls.terrain : cls.sidewalk;
+        }
+    }
+    label_sky(&grid, w, out.ground.horizon_v_px, cls.sky, out.classes);
+    std::stable_sort(out.segments.begin(), out.segments.end(),
+                     [](const Segment& a, const Segment& b) { return a.pixels > b.pixels; });
+    return out;
+}
+
+}  // namespace cloud_analysis::geometry

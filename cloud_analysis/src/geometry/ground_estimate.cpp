@@ -1,0 +1,129 @@
+#include <cmath>
+#include <sstream>
+#include <stdexcept>
+#include <vector>
+
+#include "cloud_analysis/geometry/scene_geometry.hpp"
+
+namespace cloud_analysis::geometry {
+namespace {
+
+constexpr double kRadToDeg = 57.29577951308232;
+
+std::string metres(double value) {
+    std::ostringstream s;
+    s.precision(2);
+    s << std::fixed << value << " m";
+    return s.str();
+}
+
+}  // namespace
+
+void GeometryOptions::validate() const {
+    const auto positive = [](double v, const char* name) {
+        if (!(v > 0.0)) throw std::invalid_argument(std::string(name) + ": must be > 0");
+    };
+    positive(ground_max_range_m, "geometry.ground_max_range_m");
+    positive(ground_inlier_m, "geometry.ground_inlier_m");
+    positive(ground_tolerance_m, "geometry.ground_tolerance_m");
+    if (!(disparity_noise_px >= 0.0)) {
+        throw std::invalid_argument("geometry.disparity_noise_px: must be >= 0");
+    }
+    positive(min_camera_height_m, "geometry.min_camera_height_m");
+    if (!(max_camera_height_m > min_camera_height_m)) {
+        throw std::invalid_argument(
+            "geometry.max_camera_height_m: must be > geometry.min_camera_height_m");
+    }
+    positive(max_depth_m, "geometry.max_depth_m");
+    positive(max_obstacle_height_m, "geometry.max_obstacle_height_m");
+    if (column_bin_px < 1) throw std::invalid_argument("geometry.column_bin_px: must be >= 1");
+    positive(link_depth_m, "geometry.link_depth_m");
+    if (!(disparity_bin_share > 0.0 && disparity_bin_share < 1.0)) {
+        throw std::invalid_argument("geometry.disparity_bin_share: must be in (0, 1)");
+    }
+    if (min_cell_pixels < 1) throw std::invalid_argument("geometry.min_cell_pixels: must be >= 1");
+    positive(car_min_height_m, "geometry.car_min_height_m");
+    if (!(car_max_height_m > car_min_height_m)) {
+        throw std::invalid_argument("geometry.car_max_height_m: must be > car_min_height_m");
+    }
+    positive(car_min_width_m, "geometry.car_min_width_m");
+    positive(building_min_height_m, "geometry.building_min_height_m");
+    positive(pole_max_width_m, "geometry.pole_max_width_m");
+    positive(wall_top_spread_m, "geometry.wall_top_spread_m");
+    positive(wall_max_thickness_m, "geometry.wall_max_thickness_m");
+    positive(low_max_height_m, "geometry.low_max_height_m");
+    if (!(min_cell_height_m >= 0.0)) {
+        throw std::invalid_argument("geometry.min_cell_height_m: must be >= 0");
+    }
+    positive(low_cut_m, "geometry.low_cut_m");
+    if (!(tall_share > 0.0 && tall_share <= 1.0)) {
+        throw std::invalid_argument("geometry.tall_share: must be in (0, 1]");
+    }
+    if (!(green_fraction > 0.0 && green_fraction <= 1.0)) {
+        throw std::invalid_argument("geometry.green_fraction: must be in (0, 1]");
+    }
+}
+
+GroundEstimate estimate_ground(const DisparityMap& disparity, const StereoCamera& camera,
+                               const GeometryOptions& options) {
+    options.validate();
+    GroundEstimate out;
+    const double fb = camera.fx_px * camera.baseline_m;
+    const double offset_px = camera.cx_px - camera.cx_right_px;
+    // The lower image (below the principal row) holds the road in front of a car's camera; every
+    // 2nd row and 4th column is plenty for a plane (fit_ground_plane subsamples to 20k anyway).
+    // Every depth is kept: a wrong baseline puts the whole road beyond the range, and the
+    // plane it gives then names the fault (fit_ground_plane applies the range).
+    std::vector<Eigen::Vector3f> points;
+    std::size_t in_range = 0;
+    const int w = disparity.width_px;
+    const int h = disparity.height_px;
+    const int first_row = std::max(0, static_cast<int>(std::ceil(camera.cy_px)));
+    for (int v = first_row; v < h; v += 2) {
+        const float* row = disparity.disparity_px.data() + static_cast<std::size_t>(v) * w;
+        for (int u = 0; u < w; u += 4) {
+            const double d = double{row[u]} - offset_px;
+            if (!(row[u] > 0.0f) || !(d > 0.0)) continue;
+            const double z = fb / d;
+            in_range += z < options.ground_max_range_m ? 1 : 0;
+            points.emplace_back(static_cast<float>((u - camera.cx_px) * z / camera.fx_px),
+                                static_cast<float>((v - camera.cy_px) * z / camera.fy_px),
+                                static_cast<float>(z));
+        }
+    }
+    GroundOptions ransac;
+    ransac.inlier_distance_m = options.ground_inlier_m;
+    ransac.max_range_m = options.ground_max_range_m;
+    ransac.min_inliers = std::max<std::size_t>(200, in_range / 10);
+    auto plane = fit_ground_plane(points, ransac);
+    if (!plane && in_range < points.size() / 2) {
+        ransac.max_range_m = 1e6;
+        ransac.min_inliers = std::max<std::size_t>(200, points.size() / 10);
+        plane = fit_ground_plane(points, ransac);
+    }
+    if (!plane) {
+        out.problem = "no level plane among the lower image's " + std::to_string(points.size()) +
+                      " points (" + std::to_string(in_range) + " within " +
+                      metres(options.ground_max_range_m) + ")" +
+                      " (camera facing a wall, or no road in view?)";
+        return out;
+    }
+    out.plane = *plane;
+    out.camera_height_m = plane->camera_height_m();
+    const Eigen::Vector3d& n = plane->normal;
+    out.pitch_deg = std::asin(std::clamp(-n.z(), -1.0, 1.0)) * kRadToDeg;
+    out.roll_deg = std::atan2(n.x(), -n.y()) * kRadToDeg;
+    out.horizon_v_px = camera.cy_px - camera.fy_px * n.z() / n.y();
+    if (out.camera_height_m < options.min_camera_height_m ||
+        out.camera_height_m > options.max_camera_height_m) {
+        out.problem = "the fitted road lies " + metres(out.camera_height_m) +
+                      " below the camera, outside " + metres(options.min_camera_height_m) + " to " +
+                      metres(options.max_camera_height_m) +
+                      " (check the calibration's baseline and focal length)";
+        return out;
+    }
+    out.found = true;
+    return out;
+}
+
+}  // namespace cloud_analysis::geometry

@@ -1,0 +1,35 @@
+# The closed loop without labels: every committed rendered sample analysed with
+# --semantics geometry (its semantic image ignored) and scored against its scene file with the
+# stereo-only bars of docs/stereo-only.md: every car at least a quarter visible within 30 m
+# found, median centre error <= 0.5 m, median heading error <= 10 degrees.
+include_guard(GLOBAL)
+
+set(STEREOSCENE_STEREO_ONLY_BARS
+    --bar-class car --bar-range 30 --require-recall 1.0 --max-median-centre-error 0.5
+    --max-median-heading-error 10)
+set(_so_samples ${PROJECT_SOURCE_DIR}/samples/rendered)
+set(_so_out ${CMAKE_CURRENT_BINARY_DIR}/stereo_only_out)
+file(MAKE_DIRECTORY ${_so_out})
+file(GLOB _so_calibs LIST_DIRECTORIES false ${_so_samples}/*/calib/calib_cam_to_cam.txt)
+foreach(_calib IN LISTS _so_calibs)
+    get_filename_component(_dir ${_calib} DIRECTORY)
+    get_filename_component(_dir ${_dir} DIRECTORY)
+    get_filename_component(_scene ${_dir} NAME)
+    set(_truth ${_so_samples}/scenes/${_scene}.json)
+    if(NOT EXISTS ${_truth})
+        continue()
+    endif()
+    set(_entities ${_so_out}/${_scene}-000000.json)
+    set(_name "stereo-only closed loop ${_scene}/000000")
+    add_test(NAME "${_name}: cloud-analysis --semantics geometry reconstructs the scene"
+        COMMAND $<TARGET_FILE:cloud-analysis> --kitti-root ${_dir} --frame 000000
+            --semantics geometry -o ${_entities})
+    set_tests_properties("${_name}: cloud-analysis --semantics geometry reconstructs the scene"
+        PROPERTIES FIXTURES_SETUP "stereo_only_${_scene}" LABELS closed_loop)
+    add_test(NAME "${_name}: cars within 30 m meet the stereo-only bars"
+        COMMAND $<TARGET_FILE:cloud-analysis> evaluate --entities ${_entities}
+            --reference ${_truth} ${STEREOSCENE_STEREO_ONLY_BARS} --min-visible-fraction 0.25
+            --kitti-root ${_dir} --frame 000000 --json ${_so_out}/${_scene}-000000-eval.json)
+    set_tests_properties("${_name}: cars within 30 m meet the stereo-only bars"
+        PROPERTIES FIXTURES_REQUIRED "stereo_only_${_scene}" LABELS closed_loop)
+endforeach()

@@ -1,0 +1,159 @@
+#include <algorithm>
+#include <cmath>
+#include <string>
+
+#include <catch2/catch.hpp>
+
+#include "cloud_analysis/geometry/scene_geometry.hpp"
+#include "cloud_analysis/semantic.hpp"
+
+using cloud_analysis::DisparityMap;
+using cloud_analysis::ImageU8;
+using cloud_analysis::kNoDisparity;
+using cloud_analysis::StereoCamera;
+using namespace cloud_analysis::geometry;
+
+namespace {
+
+/// KITTI's rig at its size: fx = fy = 721.5 px, baseline 0.54 m.
+StereoCamera kitti_rig() {
+    StereoCamera c;
+    c.width_px = 1242;
+    c.height_px = 375;
+    c.fx_px = c.fy_px = 721.5;
+    c.cx_px = c.cx_right_px = 621.0;
+    c.cy_px = 187.5;
+    c.baseline_m = 0.54;
+    return c;
+}
+
+/// An upright box (x from x0 to x1, face at depth z, from the road up to top_m) in a scene.
+struct Box {
+    double x0, x1, z, top_m;
+};
+
+/// Ray casting of a flat road `height_m` below the camera (pitch 0) and upright boxes facing
+/// the camera; sky (no disparity) above the horizon where nothing is hit.
+DisparityMap render(const StereoCamera& c, double height_m, const std::vector<Box>& boxes) {
+    DisparityMap d;
+    d.width_px = c.width_px;
+    d.height_px = c.height_px;
+    d.disparity_px.assign(static_cast<std::size_t>(c.width_px) * c.height_px, kNoDisparity);
+    const double fb = c.fx_px * c.baseline_m;
+    for (int v = 0; v < c.height_px; ++v) {
+        const double y = (v - c.cy_px) / c.fy_px;  // ray (x, y, 1)
+        for (int u = 0; u < c.width_px; ++u) {
+            const double x = (u - c.cx_px) / c.fx_px;
+            double z = y > 1e-6 ? height_m / y : 1e9;
+            for (const Box& b : boxes) {
+                const double px = x * b.z, py = y * b.z;
+                if (b.z < z && px >= b.x0 && px <= b.x1 && py <= height_m &&
+                    py >= height_m - b.top_m) {
+                    z = b.z;
+                }
+            }
+            if (z < 200.0) {
+                d.disparity_px[static_cast<std::size_t>(v) * c.width_px + u] =
+                    static_cast<float>(fb / z);
+            }
+        }
+    }
+    return d;
+}
+
+std::string class_at(const SceneGeometry& g, const cloud_analysis::Palette& p, int u, int v) {
+    const auto c = g.classes.class_index[static_cast<std::size_t>(v) * g.classes.width_px + u];
+    return c == cloud_analysis::kVoidClass ? "void" : p.classes[c].name;
+}
+
+/// Pixel of the point (x, height above road, z) for the rig at 1.65 m.
+std::pair<int, int> pixel_of(const StereoCamera& c, double x, double up_m, double z) {
+    return {static_cast<int>(c.cx_px + c.fx_px * x / z),
+            static_cast<int>(c.cy_px + c.fy_px * (1.65 - up_m) / z)};
+}
+
+}  // namespace
+
+TEST_CASE("a road 1.65 m below gives the camera height, no pitch, and road pixels", "[geometry]") {
+    const StereoCamera cam = kitti_rig();
+    const auto palette = cloud_analysis::load_palette("cityscapes");
+    const SceneGeometry g = derive_semantics(render(cam, 1.65, {}), cam, ImageU8{}, palette, {});
+    REQUIRE(g.ground.found);
+    CHECK(g.ground.camera_height_m == Approx(1.65).margin(0.02));
+    CHECK(g.ground.pitch_deg == Approx(0.0).margin(0.2));
+    CHECK(g.ground.horizon_v_px == Approx(187.5).margin(2.0));
+    CHECK(g.warnings.empty());
+    CHECK(class_at(g, palette, 600, 300) == "road");
+    CHECK(class_at(g, palette, 600, 50) == "sky");
+}
+
+TEST_CASE("a car-sized box on the road is car, a tall wide one building, a thin one pole",
+          "[geometry]") {
+    const StereoCamera cam = kitti_rig();
+    const auto palette = cloud_analysis::load_palette("cityscapes");
+    const std::vector<Box> boxes = {{-1.0, 0.8, 10.0, 1.5},   // a car's back
+                                    {3.5, 12.0, 15.0, 8.0},   // a facade
+                                    {-4.0, -3.8, 8.0, 4.0}};  // a pole
+    const SceneGeometry g = derive_semantics(render(cam, 1.65, boxes), cam, ImageU8{}, palette, {});
+    REQUIRE(g.ground.found);
+    const auto [cu, cv] = pixel_of(cam, 0.0, 0.8, 10.0);
+    CHECK(class_at(g, palette, cu, cv) == "car");
+    const auto [bu, bv] = pixel_of(cam, 6.0, 2.0, 15.0);
+    CHECK(class_at(g, palette, bu, bv) == "building");
+    const auto [pu, pv] = pixel_of(cam, -3.9, 2.0, 8.0);
+    CHECK(class_at(g, palette, pu, pv) == "pole");
+    const auto [ru, rv] = pixel_of(cam, 0.0, 0.0, 8.0);
+    CHECK(class_at(g, palette, ru, rv) == "road");
+}
+
+TEST_CASE("a wall filling the view or a wrong baseline gives no ground and a warning",
+          "[geometry]") {
+    StereoCamera cam = kitti_rig();
+    const auto palette = cloud_analysis::load_palette("cityscapes");
+    const SceneGeometry wall = derive_semantics(render(cam, 1.65, {{-50.0, 50.0, 4.0, 20.0}}), cam,
+                                                ImageU8{}, palette, {});
+    CHECK_FALSE(wall.ground.found);
+    REQUIRE(wall.warnings.size() == 1);
+    CHECK_THAT(wall.warnings[0], Catch::Contains("no ground found"));
+    const auto sky = cloud_analysis::find_class(palette, "sky");
+    CHECK(std::all_of(wall.classes.class_index.begin(), wall.classes.class_index.end(),
+                      [&](auto c) { return c == cloud_analysis::kVoidClass || c == sky; }));
+    // The same road analysed with six times the baseline lies 9.9 m below the camera.
+    const DisparityMap road = render(cam, 1.65, {{-1.0, 0.8, 10.0, 1.5}});
+    cam.baseline_m *= 6.0;
+    const SceneGeometry wrong = derive_semantics(road, cam, ImageU8{}, palette, {});
+    CHECK_FALSE(wrong.ground.found);
+    CHECK(wrong.ground.camera_height_m == Approx(9.9).margin(0.1));
+    REQUIRE(wrong.warnings.size() == 1);
+    CHECK_THAT(wrong.warnings[0], Catch::Contains("baseline"));
+    const auto car = cloud_analysis::find_class(palette, "car");
+    CHECK(std::count(wrong.classes.class_index.begin(), wrong.classes.class_index.end(), car) == 0);
+}
+
+TEST_CASE("semantic scores count equal pixels and per-class IoU", "[geometry]") {
+    const auto palette = cloud_analysis::load_palette("cityscapes");
+    const auto road = cloud_analysis::find_class(palette, "road");
+    const auto car = cloud_analysis::find_class(palette, "car");
+    cloud_analysis::ClassImage truth{2, 2, {road, road, car, cloud_analysis::kVoidClass}, 1};
+    cloud_analysis::ClassImage estimate{2, 2, {road, car, car, car}, 0};
+    const SemanticScore s = score_semantics(estimate, truth, palette, {"road", "car", "sky"});
+    CHECK(s.pixels == 3);
+    CHECK(s.accuracy == Approx(2.0 / 3.0));
+    REQUIRE(s.iou.size() == 3);
+    CHECK(s.iou[0].second == Approx(0.5));  // road: 1 both / 2 either
+    CHECK(s.iou[1].second == Approx(0.5));  // car: 1 both / 2 either (void pixel not scored)
+    CHECK(s.iou[2].second == Approx(-1.0));
+    const ImageU8 rgb = colour_classes(estimate, palette);
+    CHECK(rgb.channels == 3);
+    CHECK(rgb.data[0] == 128);  // road 128, 64, 128
+    CHECK(rgb.data[5] == 142);  // car 0, 0, 142
+}
+
+TEST_CASE("geometry options name the bad field", "[geometry]") {
+    GeometryOptions o;
+    o.column_bin_px = 0;
+    CHECK_THROWS_WITH(o.validate(), Catch::Contains("column_bin_px"));
+    o = GeometryOptions{};
+    o.max_camera_height_m = 0.1;
+    CHECK_THROWS_WITH(o.validate(), Catch::Contains("max_camera_height_m"));
+}
