@@ -2,7 +2,8 @@
 # The closed loop, side by side for the extractors: for every rendered sample
 # (<samples>/<scene>/ in KITTI layout, truth <samples>/<scene>/scene.json or
 # <samples>/scenes/<scene>.json) run cloud-analysis with the default settings and
-# --method instances|centroid|variance, score each against the truth with `evaluate` and the
+# --method instances|centroid|variance and the stereo-only path (--semantics geometry, the
+# semantic image ignored; its own CI bars are in docs/stereo-only.md), score each against the truth with `evaluate` and the
 # bars of docs/evaluation.md "Closed loop", and print one Markdown table.
 # usage: scripts/closed-loop.sh [--no-build] [--build-dir DIR] [--samples DIR] [--out DIR]
 #        [--render]   (--render: first render <samples>/scenes/*.json with scene-render sensors
@@ -61,9 +62,11 @@ for calib in "$samples"/*/calib/calib_cam_to_cam.txt; do
     [ -f "$truth" ] || { echo "closed-loop.sh: $dir has no scene file; skipped" >&2; continue; }
     for image in "$dir"/image_2/*.png; do
         frame=$(basename "$image" .png)
-        for method in instances centroid variance; do
+        for method in instances centroid variance stereo-only; do
             base="$out_dir/$name-$frame-$method"
-            "$ca" --kitti-root "$dir" --frame "$frame" --method "$method" -o "$base.json" \
+            flags=(--method "$method")
+            [ "$method" = stereo-only ] && flags=(--semantics geometry)
+            "$ca" --kitti-root "$dir" --frame "$frame" "${flags[@]}" -o "$base.json" \
                 2>"$base.log"
             code=0
             "$ca" evaluate --entities "$base.json" --reference "$truth" "${bars[@]}" \

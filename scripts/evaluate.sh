@@ -1,7 +1,8 @@
 #!/usr/bin/env bash
 # Runs the whole KITTI evaluation of cloud-analysis (docs/evaluation.md) and prints the tables:
 # disparity of the tuned defaults vs OpenCV's sample settings, car entities vs the instance
-# ground truth, the ground plane, and the thesis's one-per-class extractors.
+# ground truth, the ground plane, the thesis's one-per-class extractors, and the stereo-only
+# path (--semantics geometry: the semantic image ignored; docs/stereo-only.md) beside them.
 # usage: scripts/evaluate.sh [--no-build] [--build-dir DIR] [--kitti-root DIR] [--out DIR] [frames...]
 #   default frames: 000000_10 000001_10; default KITTI root: ../shared/data/kitti15
 set -euo pipefail
@@ -50,6 +51,21 @@ for f in "${frames[@]}"; do
             --entities "$out_dir/$f-$preset.json" --occluder-gap 0 --fallback-max-points -1 \
             --json "$out_dir/$f-$preset-eval-oldrule.json" >/dev/null
     done
+    # The stereo-only path: tuned disparity, classes from the geometry, the semantic image unread.
+    "$ca" --kitti-root "$kitti_root" --frame "$f" --semantics geometry \
+        -o "$out_dir/$f-stereo-only.json" --disparity-kitti "$out_dir/$f-stereo-only-disp.png" \
+        --semantic-out "$out_dir/$f-stereo-only-semantic.png" 2>"$out_dir/$f-stereo-only.log"
+    echo "--- stereo only (--semantics geometry), tuned disparity"
+    "$ca" evaluate --kitti-root "$kitti_root" --frame "$f" \
+        --entities "$out_dir/$f-stereo-only.json" --disparity "$out_dir/$f-stereo-only-disp.png" \
+        --json "$out_dir/$f-stereo-only-eval.json"
+    "$ca" evaluate --kitti-root "$kitti_root" --frame "$f" \
+        --entities "$out_dir/$f-stereo-only.json" --occluder-gap 0 --fallback-max-points -1 \
+        --json "$out_dir/$f-stereo-only-eval-oldrule.json" >/dev/null
+    if [ -f "$kitti_root/semantic_rgb/$f.png" ]; then
+        "$ca" score-semantics --estimate "$out_dir/$f-stereo-only-semantic.png" \
+            --truth "$kitti_root/semantic_rgb/$f.png" --json "$out_dir/$f-stereo-only-semantic.json"
+    fi
     echo "--- thesis extractors (one entity per class), tuned disparity"
     for method in centroid average variance; do
         "$ca" --kitti-root "$kitti_root" --frame "$f" --method "$method" \
@@ -86,7 +102,7 @@ def cars(preset, suffix=""):
             f"(scorable {t['entities_matched']}/{scor} = {100*prec_s:.1f} %; "
             f"{t['fallback_matched']} matched by the 2D fallback)")
 
-for preset in ("tuned", "opencv-sample"):
+for preset in ("tuned", "opencv-sample", "stereo-only"):
     d1, dens, heights = [], [], []
     for f in frames:
         ev = json.load(open(os.path.join(out, f"{f}-{preset}-eval.json")))
@@ -101,6 +117,12 @@ for preset in ("tuned", "opencv-sample"):
           cars(preset, "-oldrule"))
     print(f"{'':14s} camera height above the fitted road plane: " +
           " / ".join(f"{h:.3f} m" for h in heights))
+for f in frames:
+    path = os.path.join(out, f"{f}-stereo-only-semantic.json")
+    if os.path.exists(path):
+        sc = json.load(open(path))
+        iou = ", ".join(f"{k} {v:.3f}" if v is not None else f"{k} -" for k, v in sc["iou"].items())
+        print(f"stereo-only semantic image {f}: pixel accuracy {sc['accuracy']:.3f}, IoU {iou}")
 
 print("GT cars (docs/evaluation.md 'Cars'): mask pixels, GT disparity pixels kept as the car's "
       "own surface / dropped as occluders, range of the kept points' centroid")
