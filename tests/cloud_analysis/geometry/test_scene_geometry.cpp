@@ -87,13 +87,17 @@ TEST_CASE("a road 1.65 m below gives the camera height, no pitch, and road pixel
     CHECK(class_at(g, palette, 600, 50) == "sky");
 }
 
-TEST_CASE("a car-sized box on the road is car, a tall wide one building, a thin one pole",
+TEST_CASE("a car-shaped object on the road is car, a facade building, a pole pole, a board wall",
           "[geometry]") {
     const StereoCamera cam = kitti_rig();
     const auto palette = cloud_analysis::load_palette("cityscapes");
-    const std::vector<Box> boxes = {{-1.0, 0.8, 10.0, 1.5},   // a car's back
-                                    {3.5, 12.0, 15.0, 8.0},   // a facade
-                                    {-4.0, -3.8, 8.0, 4.0}};  // a pole
+    // A car seen from behind: its back up to the boot lid, the cabin 0.6 m farther up to the
+    // roof (a flat board with one top is a wall or fence: last line).
+    const std::vector<Box> boxes = {{-1.0, 0.8, 10.0, 1.0},     // a car's back
+                                    {-0.8, 0.6, 10.6, 1.5},     // its cabin
+                                    {3.5, 12.0, 15.0, 8.0},     // a facade
+                                    {-4.0, -3.8, 8.0, 4.0},     // a pole
+                                    {-12.0, -6.0, 14.0, 1.2}};  // a garden wall
     const SceneGeometry g = derive_semantics(render(cam, 1.65, boxes), cam, ImageU8{}, palette, {});
     REQUIRE(g.ground.found);
     const auto [cu, cv] = pixel_of(cam, 0.0, 0.8, 10.0);
@@ -104,6 +108,8 @@ TEST_CASE("a car-sized box on the road is car, a tall wide one building, a thin 
     CHECK(class_at(g, palette, pu, pv) == "pole");
     const auto [ru, rv] = pixel_of(cam, 0.0, 0.0, 8.0);
     CHECK(class_at(g, palette, ru, rv) == "road");
+    const auto [wu, wv] = pixel_of(cam, -9.0, 0.8, 14.0);
+    CHECK(class_at(g, palette, wu, wv) == "wall");
 }
 
 TEST_CASE("a wall filling the view or a wrong baseline gives no ground and a warning",
