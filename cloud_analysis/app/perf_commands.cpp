@@ -89,12 +89,15 @@ struct FinishJob {
     std::filesystem::path stem;  ///< out-dir/<frame>
     bool disparity_kitti = false;
     std::vector<std::string> cloud_formats;
+    std::filesystem::path gt_disparity;  ///< scored against when set (--evaluate)
 };
 
 /// What finishing a frame gave: an error text ("" when none) and its milliseconds.
 struct Finished {
     std::string error;
     double ms = 0.0;
+    std::optional<DisparityScore> score;  ///< with ground truth
+    std::string evaluation_error;         ///< why the ground truth could not be used
 };
 
 /// Extracts the entities, formats every output and writes them, all or nothing. The entity
@@ -127,6 +130,14 @@ Finished finish_frame(FinishJob job) {
         std::error_code ignored;
         for (const auto& path : written) std::filesystem::remove(path, ignored);
         done.error = e.what();
+    }
+    if (done.error.empty() && !job.gt_disparity.empty()) {
+        try {
+            done.score =
+                score_disparity(job.result.disparity, read_kitti_disparity(job.gt_disparity));
+        } catch (const std::exception& e) {
+            done.evaluation_error = e.what();
+        }
     }
     done.ms = ms_between(start, Clock::now());
     return done;
@@ -174,6 +185,9 @@ CLI::App* add_batch_command(CLI::App& app, BatchArgs& a) {
                     "SLURM_ARRAY_TASK_ID/SLURM_ARRAY_TASK_COUNT when set, else all)");
     cmd->add_flag("--resume", a.resume,
                   "skip frames whose outputs are all there, complete and valid");
+    cmd->add_flag("--evaluate", a.evaluate,
+                  "score each frame's disparity against <kitti-root>/disp_occ_0/<frame>.png "
+                  "when present (D1-all, EPE, density in the report)");
     cmd->add_flag("--quiet,-q", a.quiet, "no progress and no summary line (errors only)");
     cmd->add_option("--progress-every", a.progress_every_s,
                     "seconds between progress lines when stderr is not a terminal")
@@ -316,6 +330,7 @@ int run_batch(const BatchArgs& a) {
         bar_open = false;
     };
     nlohmann::json per_frame = nlohmann::json::array();
+    DisparityTally evaluation;
     std::future<LoadedFrame> next;
     if (n > 0) next = std::async(std::launch::async, load, 0);
     std::future<Finished> finishing;
@@ -325,6 +340,17 @@ int run_batch(const BatchArgs& a) {
         if (!finishing.valid()) return;
         const Finished done = finishing.get();
         per_frame[finishing_record]["finish_ms"] = done.ms;
+        if (done.score) {
+            evaluation.add(*done.score);
+            per_frame[finishing_record]["d1_all"] = done.score->d1_all;
+            per_frame[finishing_record]["epe_px"] = done.score->epe_px;
+        }
+        if (!done.evaluation_error.empty()) {
+            std::fprintf(stderr, "%s%s: warning: frame %s: not scored: %s\n", bar_open ? "\n" : "",
+                         kTool, finishing_frame.c_str(), done.evaluation_error.c_str());
+            bar_open = false;
+            per_frame[finishing_record]["evaluation_error"] = done.evaluation_error;
+        }
         if (!done.error.empty()) {
             fail(finishing_frame, done.error);
             per_frame[finishing_record]["error"] = done.error;
@@ -360,9 +386,16 @@ int run_batch(const BatchArgs& a) {
                 AnalyseResult r = analyse(*frame.inputs, options, matcher);
                 for (const auto& s : r.timings) record[s.stage + "_ms"] = s.ms;
                 record["points"] = r.cloud_points;
-                job =
-                    FinishJob{std::move(*frame.inputs), std::move(r),      &a.settings,    &extract,
-                              a.out_dir / frame.frame,  a.disparity_kitti, a.cloud_formats};
+                const auto gt = a.kitti_root / "disp_occ_0" / (frame.frame + ".png");
+                const bool scored = a.evaluate && std::filesystem::exists(gt);
+                job = FinishJob{std::move(*frame.inputs),
+                                std::move(r),
+                                &a.settings,
+                                &extract,
+                                a.out_dir / frame.frame,
+                                a.disparity_kitti,
+                                a.cloud_formats,
+                                scored ? gt : std::filesystem::path()};
             } catch (const std::exception& e) {
                 fail(frame.frame, e.what());
                 record["error"] = e.what();
@@ -399,25 +432,25 @@ int run_batch(const BatchArgs& a) {
                      cpu_ms_per_frame, 100.0 * busy);
     }
     if (!a.report.empty()) {
-        const nlohmann::json report = {
-            {"shard", {{"index", a.shard.index}, {"count", a.shard.count}}},
-            {"list_frames", a.list_frames},
-            {"frames", a.frames.size()},
-            {"done", n - failed},
-            {"skipped", skipped},
-            {"failed", failed},
-            {"failures", failures},
-            {"started_at", started_at},
-            {"ended_at", unix_seconds()},
-            {"seconds", seconds},
-            {"fps", fps},
-            {"cpu_seconds", cpu},
-            {"peak_rss_mb", peak_rss_mb()},
-            {"cpu_ms_per_frame", cpu_ms_per_frame},
-            {"cores", cores},
-            {"cores_busy", busy},
-            {"preset", a.settings.preset},
-            {"per_frame", per_frame}};
+        nlohmann::json report = {{"shard", {{"index", a.shard.index}, {"count", a.shard.count}}},
+                                 {"list_frames", a.list_frames},
+                                 {"frames", a.frames.size()},
+                                 {"done", n - failed},
+                                 {"skipped", skipped},
+                                 {"failed", failed},
+                                 {"failures", failures},
+                                 {"started_at", started_at},
+                                 {"ended_at", unix_seconds()},
+                                 {"seconds", seconds},
+                                 {"fps", fps},
+                                 {"cpu_seconds", cpu},
+                                 {"peak_rss_mb", peak_rss_mb()},
+                                 {"cpu_ms_per_frame", cpu_ms_per_frame},
+                                 {"cores", cores},
+                                 {"cores_busy", busy},
+                                 {"preset", a.settings.preset},
+                                 {"per_frame", per_frame}};
+        if (evaluation.frames > 0) report["evaluation"] = evaluation.to_json();
         write_output({a.report.string(), report.dump(1) + "\n", "--report"});
     }
     return failed == 0 ? 0 : 1;
@@ -483,6 +516,14 @@ int run_report(const ReportArgs& a) {
                  merged["skipped"].get<std::size_t>(), merged["failed"].get<std::size_t>(),
                  merged["fps"].get<double>(), merged["wall_seconds"].get<double>(),
                  merged["cpu_ms_per_frame"].get<double>(), merged["peak_rss_mb"].get<double>());
+    if (merged.contains("evaluation")) {
+        const auto& e = merged["evaluation"];
+        std::fprintf(stderr,
+                     "%s: report: disparity over %zu frames with ground truth: D1-all %.2f %%, "
+                     "EPE %.2f px, density %.1f %%\n",
+                     kTool, e["frames"].get<std::size_t>(), 100.0 * e["d1_all"].get<double>(),
+                     e["epe_px"].get<double>(), 100.0 * e["density"].get<double>());
+    }
     return merged["missing_shards"].empty() && merged["failed"].get<std::size_t>() == 0 ? 0 : 1;
 }
 

@@ -32,6 +32,7 @@ struct BatchArgs {
     std::size_t list_frames = 0;             ///< frames in the whole list, before sharding
     bool resume = false;                     ///< --resume: skip frames already complete and valid
     bool quiet = false;                      ///< --quiet: no progress, no summary line
+    bool evaluate = false;                   ///< --evaluate: score disparity where GT exists
     double progress_every_s = 10.0;          ///< --progress-every: seconds between log lines
 };
 

@@ -28,17 +28,17 @@ trap 'code=$?; [ "$code" = 0 ] || log_dump' EXIT
 # A KITTI-layout root of 12 frames: the three rendered scenes, four times each (links).
 shards=3
 root="$work/kitti"
-mkdir -p "$root"/{image_2,image_3,semantic_rgb,calib}
+mkdir -p "$root"/{image_2,image_3,semantic_rgb,disp_occ_0,calib}
 scenes=(street parking-row thesis-one-car)
 : >"$work/list"
 for i in $(seq 0 11); do
     frame=$(printf '%06d' "$i")
     scene="$samples/rendered/${scenes[i % 3]}"
-    for d in image_2 image_3 semantic_rgb; do ln -s "$scene/$d/000000.png" "$root/$d/$frame.png"; done
+    for d in image_2 image_3 semantic_rgb disp_occ_0; do ln -s "$scene/$d/000000.png" "$root/$d/$frame.png"; done
     ln -s "$scene/calib/calib_cam_to_cam.txt" "$root/calib/$frame.txt"
     echo "$frame" >>"$work/list"
 done
-settings=(--preset fast)
+settings=(--preset fast --evaluate)
 
 step "plain run"
 # The reference: one process, the whole list.
@@ -95,6 +95,9 @@ skipped = int(sys.argv[2])
 want = {"shards": 3, "shards_reported": 3, "frames": 12, "failed": 0, "skipped": skipped,
         "done": 12 - skipped, "missing_shards": []}
 bad = {k: (r.get(k), v) for k, v in want.items() if r.get(k) != v}
+# Every frame the reporting runs analysed is scored against disp_occ_0 (not the resumed ones).
+if r.get("evaluation", {}).get("frames") != 12 - skipped or not 0 < r["evaluation"]["d1_all"] < 1:
+    bad["evaluation"] = (r.get("evaluation"), "frames done, D1-all in (0, 1)")
 if bad or not r["fps"] > 0 or not r["cpu_seconds"] > 0:
     print("slurm_array: report fields (got, want):", bad, file=sys.stderr)
     sys.exit(1)

@@ -89,3 +89,39 @@ TEST_CASE("no reports at all: every shard missing, nothing done", "[report]") {
     CHECK(merged["frames"] == 0);
     CHECK(merged["fps"].get<double>() == 0.0);
 }
+
+TEST_CASE("disparity scores pool over pixels and merge exactly across shards", "[report]") {
+    DisparityScore a;
+    a.gt_pixels = 100;
+    a.est_pixels = 80;
+    a.d1_all = 0.5;
+    a.epe_px = 2.0;
+    DisparityScore b;
+    b.gt_pixels = 300;
+    b.est_pixels = 300;
+    b.d1_all = 0.1;
+    b.epe_px = 1.0;
+    DisparityTally one;
+    one.add(a);
+    one.add(b);
+    // Pooled, not the mean of 50 % and 10 %: (50 + 30) / 400.
+    CHECK(one.to_json()["d1_all"].get<double>() == Approx(0.2));
+    CHECK(one.to_json()["epe_px"].get<double>() == Approx((160.0 + 300.0) / 380.0));
+    CHECK(one.to_json()["density"].get<double>() == Approx(0.95));
+
+    json r0 = shard_report(0, 2, 1, 0, 0, 0.0, 1.0);
+    json r1 = shard_report(1, 2, 1, 0, 0, 0.0, 1.0);
+    DisparityTally ta, tb;
+    ta.add(a);
+    tb.add(b);
+    r0["evaluation"] = ta.to_json();
+    r1["evaluation"] = tb.to_json();
+    const json merged = merge_batch_reports({r0, r1}, 2);
+    REQUIRE(merged.contains("evaluation"));
+    CHECK(merged["evaluation"]["frames"] == 2);
+    CHECK(merged["evaluation"]["d1_all"].get<double>() == Approx(0.2));
+    CHECK_FALSE(
+        merge_batch_reports({shard_report(0, 1, 1, 0, 0, 0.0, 1.0)}, 1).contains("evaluation"));
+    r1["evaluation"].erase("gt_pixels");
+    CHECK_THROWS_WITH(merge_batch_reports({r0, r1}, 2), Catch::Contains("gt_pixels"));
+}

@@ -49,6 +49,52 @@ int shard_index(const nlohmann::json& report, int shards, std::size_t position) 
 
 }  // namespace
 
+void DisparityTally::add(const DisparityScore& score) {
+    ++frames;
+    gt_pixels += score.gt_pixels;
+    est_pixels += score.est_pixels;
+    outlier_pixels += score.d1_all * static_cast<double>(score.gt_pixels);
+    error_sum_px += score.epe_px * static_cast<double>(score.est_pixels);
+}
+
+void DisparityTally::add(const DisparityTally& other) {
+    frames += other.frames;
+    gt_pixels += other.gt_pixels;
+    est_pixels += other.est_pixels;
+    outlier_pixels += other.outlier_pixels;
+    error_sum_px += other.error_sum_px;
+}
+
+nlohmann::json DisparityTally::to_json() const {
+    const auto ratio = [](double num, std::size_t den) {
+        return den > 0 ? num / static_cast<double>(den) : 0.0;
+    };
+    return {{"frames", frames},
+            {"gt_pixels", gt_pixels},
+            {"est_pixels", est_pixels},
+            {"outlier_pixels", outlier_pixels},
+            {"error_sum_px", error_sum_px},
+            {"d1_all", ratio(outlier_pixels, gt_pixels)},
+            {"epe_px", ratio(error_sum_px, est_pixels)},
+            {"density", ratio(static_cast<double>(est_pixels), gt_pixels)}};
+}
+
+DisparityTally DisparityTally::from_json(const nlohmann::json& json) {
+    for (const char* key :
+         {"frames", "gt_pixels", "est_pixels", "outlier_pixels", "error_sum_px"}) {
+        if (!json.is_object() || !json.contains(key) || !json[key].is_number()) {
+            throw std::invalid_argument(std::string("evaluation: no number '") + key + "'");
+        }
+    }
+    DisparityTally t;
+    t.frames = json["frames"].get<std::size_t>();
+    t.gt_pixels = json["gt_pixels"].get<std::size_t>();
+    t.est_pixels = json["est_pixels"].get<std::size_t>();
+    t.outlier_pixels = json["outlier_pixels"].get<double>();
+    t.error_sum_px = json["error_sum_px"].get<double>();
+    return t;
+}
+
 nlohmann::json merge_batch_reports(const std::vector<nlohmann::json>& reports, int shards) {
     if (shards < 1) throw std::invalid_argument("shards: must be >= 1");
     std::map<int, const nlohmann::json*> by_index;
@@ -66,6 +112,8 @@ nlohmann::json merge_batch_reports(const std::vector<nlohmann::json>& reports, i
     nlohmann::json per_shard = nlohmann::json::array();
     nlohmann::json missing = nlohmann::json::array();
     std::string preset;
+    DisparityTally evaluation;
+    bool evaluated = false;
     for (int index = 0; index < shards; ++index) {
         const auto it = by_index.find(index);
         if (it == by_index.end()) {
@@ -88,6 +136,10 @@ nlohmann::json merge_batch_reports(const std::vector<nlohmann::json>& reports, i
                 failures.emplace_back(string_or(f, "frame", "?"), string_or(f, "error", "?"));
             }
         }
+        if (r.contains("evaluation")) {
+            evaluation.add(DisparityTally::from_json(r["evaluation"]));
+            evaluated = true;
+        }
         const std::string p = string_or(r, "preset", "");
         preset = preset.empty() || preset == p ? p : "mixed";
         per_shard.push_back({{"index", index},
@@ -106,23 +158,26 @@ nlohmann::json merge_batch_reports(const std::vector<nlohmann::json>& reports, i
     }
     const double wall = by_index.empty() ? 0.0 : ended - started;
     const auto per = [](double num, double den) { return den > 0.0 ? num / den : 0.0; };
-    return {{"shards", shards},
-            {"shards_reported", by_index.size()},
-            {"missing_shards", missing},
-            {"frames", frames},
-            {"done", done},
-            {"skipped", skipped},
-            {"failed", failed},
-            {"failures", failure_list},
-            {"wall_seconds", wall},
-            {"fps", per(static_cast<double>(done), wall)},
-            {"task_seconds", task_seconds},
-            {"fps_per_task", per(static_cast<double>(done), task_seconds)},
-            {"cpu_seconds", cpu_seconds},
-            {"cpu_ms_per_frame", 1000.0 * per(cpu_seconds, static_cast<double>(done))},
-            {"peak_rss_mb", peak_rss_mb},
-            {"preset", preset},
-            {"per_shard", per_shard}};
+    nlohmann::json merged = {
+        {"shards", shards},
+        {"shards_reported", by_index.size()},
+        {"missing_shards", missing},
+        {"frames", frames},
+        {"done", done},
+        {"skipped", skipped},
+        {"failed", failed},
+        {"failures", failure_list},
+        {"wall_seconds", wall},
+        {"fps", per(static_cast<double>(done), wall)},
+        {"task_seconds", task_seconds},
+        {"fps_per_task", per(static_cast<double>(done), task_seconds)},
+        {"cpu_seconds", cpu_seconds},
+        {"cpu_ms_per_frame", 1000.0 * per(cpu_seconds, static_cast<double>(done))},
+        {"peak_rss_mb", peak_rss_mb},
+        {"preset", preset},
+        {"per_shard", per_shard}};
+    if (evaluated) merged["evaluation"] = evaluation.to_json();
+    return merged;
 }
 
 }  // namespace cloud_analysis
