@@ -121,6 +121,18 @@ void add_settings_flags(CLI::App& cmd, AnalyseArgs& a) {
     cmd.add_option("--wls-sigma", d.wls_sigma_colour, "WLS edge sensitivity")
         ->capture_default_str()
         ->group(sg);
+    cmd.add_option("--matcher", d.matcher,
+                   "sgbm (cv::StereoSGBM) or sgm (the project's census SGM: grey, 3 paths, "
+                   "AVX2; uses the range, uniqueness, disp12, speckle and downscale flags)")
+        ->check(CLI::IsMember({"sgbm", "sgm"}))
+        ->capture_default_str()
+        ->group(sg);
+    cmd.add_option("--sgm-p1", d.sgm.p1, "sgm: penalty of +-1 px changes, census bits")
+        ->capture_default_str()
+        ->group(sg);
+    cmd.add_option("--sgm-p2", d.sgm.p2, "sgm: penalty of larger changes, census bits")
+        ->capture_default_str()
+        ->group(sg);
 
     const std::string cl = "Cloud and entities";
     cmd.add_option("--max-range", a.options.reproject.max_range_m,

@@ -51,6 +51,16 @@ void DisparityOptions::validate() const {
     if (!(wls_lambda > 0.0)) bad("wls_lambda", "must be > 0");
     if (!(wls_sigma_colour > 0.0)) bad("wls_sigma_colour", "must be > 0");
     if (downscale != 1 && downscale != 2) bad("downscale", "must be 1 or 2");
+    if (matcher != "sgbm" && matcher != "sgm") bad("matcher", "must be sgbm or sgm");
+    if (matcher == "sgm") {
+        sgm.validate();
+        if (min_disparity < 0) bad("min_disparity", "must be >= 0 with the sgm matcher");
+        if (num_disparities / downscale > 256) bad("num_disparities", "must be <= 256 with sgm");
+        if (uniqueness_ratio > 99) bad("uniqueness_ratio", "must be 0..99 with the sgm matcher");
+        if (colour) bad("colour", "the sgm matcher matches grey views");
+        if (lr_check) bad("lr_check", "the sgm matcher checks with disp12_max_diff");
+        if (wls) bad("wls", "the sgm matcher has no WLS filter");
+    }
 }
 
 DisparityOptions opencv_sample_disparity_options() {
@@ -100,6 +110,29 @@ struct DisparityMatcher::Impl {
     cv::Ptr<cv::StereoMatcher> right_matcher;                 // lr-check / WLS only
     cv::Ptr<cv::ximgproc::DisparityWLSFilter> wls;            // WLS only
     cv::Mat lp, rp, raw_left, raw_right, filtered, up, grey;  // reused buffers
+    std::unique_ptr<SgmMatcher> own;                          // "sgm" matcher only
+    cv::Mat speckle_buffer;                                   // its speckle filter's
+
+    /// The left disparity of lp and rp into raw_left (CV_16S, disparity * 16).
+    void match_left() {
+        if (!own) {
+            sgbm->compute(lp, rp, raw_left);
+            return;
+        }
+        raw_left.create(lp.size(), CV_16S);
+        SgmRange range;
+        range.min_disparity = options.min_disparity;
+        range.num_disparities = matched_disparities();
+        range.uniqueness_ratio = options.uniqueness_ratio;
+        range.disp12_max_diff = options.disp12_max_diff;
+        own->compute(lp.data, rp.data, lp.step, lp.cols, lp.rows, pad(), range,
+                     raw_left.ptr<std::int16_t>(), raw_left.step1());
+        if (options.speckle_window_size > 0) {
+            cv::filterSpeckles(raw_left, (options.min_disparity - 1) * 16,
+                               options.speckle_window_size, 16 * options.speckle_range,
+                               speckle_buffer);
+        }
+    }
 
     int pad() const {
         return options.pad_left ? std::max(0, options.min_disparity + matched_disparities()) : 0;
@@ -172,6 +205,7 @@ DisparityMatcher::DisparityMatcher(const DisparityOptions& options)
                                          options.disp12_max_diff, options.pre_filter_cap,
                                          options.uniqueness_ratio, options.speckle_window_size,
                                          options.speckle_range, sgbm_mode(options.mode));
+    if (options.matcher == "sgm") impl_->own = std::make_unique<SgmMatcher>(options.sgm);
     if (options.lr_check || options.wls) {
         impl_->right_matcher = cv::ximgproc::createRightMatcher(impl_->sgbm);
     }
@@ -192,7 +226,7 @@ double DisparityMatcher::time_matcher_only_ms(const ImageU8& left, const ImageU8
     Impl& m = *impl_;
     m.prepare(left, right);
     const auto start = std::chrono::steady_clock::now();
-    m.sgbm->compute(m.lp, m.rp, m.raw_left);
+    m.match_left();
     return std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - start)
         .count();
 }
@@ -201,7 +235,7 @@ DisparityMap DisparityMatcher::compute(const ImageU8& left, const ImageU8& right
     Impl& m = *impl_;
     const DisparityOptions& options = m.options;
     m.prepare(left, right);
-    m.sgbm->compute(m.lp, m.rp, m.raw_left);  // CV_16S, disparity * 16
+    m.match_left();  // CV_16S, disparity * 16
     const bool need_right = options.lr_check || options.wls;
     if (need_right) m.right_matcher->compute(m.rp, m.lp, m.raw_right);  // negative disparities
     cv::Mat raw_left = m.raw_left;

@@ -11,6 +11,7 @@
 #include <string>
 
 #include "cloud_analysis/io.hpp"
+#include "cloud_analysis/stereo/sgm.hpp"
 
 namespace cloud_analysis {
 
@@ -36,6 +37,11 @@ struct DisparityOptions {
     double wls_lambda = 500.0;       ///< WLS smoothness weight (ximgproc sample: 8000)
     double wls_sigma_colour = 0.8;   ///< WLS edge sensitivity (ximgproc sample: 1.5)
     int downscale = 1;  ///< match at 1/downscale resolution (1 or 2) and upsample the map, x
+    /// "sgbm" (cv::StereoSGBM with the fields above) or "sgm" (the project's census SGM,
+    /// stereo/sgm.hpp: grey, no WLS or full lr_check; shares the range, uniqueness,
+    /// disp12_max_diff, speckle, padding and downscale fields)
+    std::string matcher = "sgbm";
+    SgmOptions sgm;  ///< settings of the "sgm" matcher
     /// Throws std::invalid_argument naming the first bad field.
     void validate() const;
 };
@@ -63,8 +69,9 @@ class DisparityMatcher {
     /// Disparity of the left image. Images must have the same size and channel count.
     DisparityMap compute(const ImageU8& left, const ImageU8& right);
 
-    /// Milliseconds of the OpenCV matcher call alone (cv::StereoSGBM::compute on the same grey,
-    /// scaled and padded views compute() builds): the floor the rest of the pipeline adds to.
+    /// Milliseconds of the matcher call alone (cv::StereoSGBM::compute, or the census SGM with
+    /// its speckle filter, on the same grey, scaled and padded views compute() builds): the
+    /// floor the rest of the pipeline adds to.
     double time_matcher_only_ms(const ImageU8& left, const ImageU8& right);
 
     const DisparityOptions& options() const;

@@ -1,0 +1,248 @@
+#include "cloud_analysis/stereo/sgm.hpp"
+
+#include <algorithm>
+#include <cstdlib>
+#include <stdexcept>
+#include <vector>
+
+#include <opencv2/core.hpp>
+
+#include "sgm_row.hpp"
+
+namespace cloud_analysis {
+namespace {
+
+using sgm_detail::kInvalid;
+using sgm_detail::kMaxDisparities;
+using sgm_detail::SgmRow;
+
+[[noreturn]] void bad(const std::string& field, const std::string& rule) {
+    throw std::invalid_argument(field + ": " + rule);
+}
+
+/// A 32-byte aligned array that only grows (kept across frames).
+template <typename T>
+class AlignedArray {
+  public:
+    T* data() { return data_.get(); }
+    void reserve(std::size_t n) {
+        if (n <= size_) return;
+        const std::size_t bytes = (n * sizeof(T) + 31) / 32 * 32;
+        data_.reset(static_cast<T*>(std::aligned_alloc(32, bytes)));
+        if (!data_) throw std::bad_alloc();
+        size_ = n;
+    }
+
+  private:
+    struct Free {
+        void operator()(T* p) const { std::free(p); }
+    };
+    std::unique_ptr<T, Free> data_;
+    std::size_t size_ = 0;
+};
+
+/// Centre-symmetric census over 9x7: bit k of the 31 is I(p + o_k) > I(p - o_k) for the offsets
+/// o_k of one half of the window; coordinates clamped at the borders. `reversed` stores the
+/// row from right to left (the layout the cost loops read contiguously).
+void census_row(const std::uint8_t* img, std::size_t stride, int w, int h, int y,
+                std::uint32_t* bits, std::uint32_t* out, bool reversed) {
+    std::fill(bits, bits + w, 0u);
+    int bit = 0;
+    for (int dy = 0; dy <= 3; ++dy) {
+        const std::uint8_t* a = img + static_cast<std::size_t>(std::min(y + dy, h - 1)) * stride;
+        const std::uint8_t* b = img + static_cast<std::size_t>(std::max(y - dy, 0)) * stride;
+        for (int dx = -4; dx <= 4; ++dx) {
+            if (dy == 0 && dx <= 0) continue;
+            const int lo = std::min(std::abs(dx), w);
+            const int hi = std::max(lo, w - std::abs(dx));
+            for (int x = lo; x < hi; ++x) {
+                bits[x] |= static_cast<std::uint32_t>(a[x + dx] > b[x - dx]) << bit;
+            }
+            for (int x = 0; x < w; ++x) {
+                if (x >= lo && x < hi) continue;
+                const int xa = std::clamp(x + dx, 0, w - 1), xb = std::clamp(x - dx, 0, w - 1);
+                bits[x] |= static_cast<std::uint32_t>(a[xa] > b[xb]) << bit;
+            }
+            ++bit;
+        }
+    }
+    if (reversed) {
+        std::reverse_copy(bits, bits + w, out);
+    } else {
+        std::copy(bits, bits + w, out);
+    }
+}
+
+}  // namespace
+
+bool sgm_has_avx2() {
+#if defined(__x86_64__) || defined(__i386__)
+    return __builtin_cpu_supports("avx2");
+#else
+    return false;
+#endif
+}
+
+void SgmOptions::validate() const {
+    if (p1 < 1) bad("p1", "must be >= 1");
+    if (p2 <= p1) bad("p2", "must be > p1");
+    if (p2 > 8000) bad("p2", "must be <= 8000 (16-bit path sums)");
+    if (stripes < 1) bad("stripes", "must be >= 1");
+    if (warmup_rows < 0) bad("warmup_rows", "must be >= 0");
+    if (kernel != "auto" && kernel != "avx2" && kernel != "portable") {
+        bad("kernel", "must be auto, avx2 or portable");
+    }
+    if (kernel == "avx2" && !sgm_has_avx2()) bad("kernel", "this CPU has no AVX2");
+}
+
+/// Per-stripe working rows: a stripe runs on one thread at a time.
+struct StripeBuffers {
+    AlignedArray<std::uint16_t> cost, sum, top, top_min, right_cost;
+    AlignedArray<std::int16_t> disparity, right_disp;
+};
+
+struct SgmMatcher::Impl {
+    SgmOptions options;
+    bool avx2 = false;
+    std::vector<std::uint32_t> census_left, census_right_rev;
+    std::vector<StripeBuffers> stripes;
+    std::size_t cells = 0;
+
+    void match_stripe(SgmRow row, int y0, int y1, int warm_from, const SgmRange& range,
+                      std::int16_t* out, std::size_t out_stride) const;
+};
+
+SgmMatcher::SgmMatcher(const SgmOptions& options) : impl_(std::make_unique<Impl>()) {
+    options.validate();
+    impl_->options = options;
+    impl_->avx2 = options.kernel == "avx2" || (options.kernel == "auto" && sgm_has_avx2());
+}
+
+SgmMatcher::~SgmMatcher() = default;
+SgmMatcher::SgmMatcher(SgmMatcher&&) noexcept = default;
+SgmMatcher& SgmMatcher::operator=(SgmMatcher&&) noexcept = default;
+
+std::size_t SgmMatcher::last_cells() const { return impl_->cells; }
+
+void SgmMatcher::Impl::match_stripe(SgmRow row, int y0, int y1, int warm_from,
+                                    const SgmRange& range, std::int16_t* out,
+                                    std::size_t out_stride) const {
+    const int w = row.width;
+    const std::size_t pixels = static_cast<std::size_t>(w - row.x_begin);
+    const std::size_t volume = pixels * static_cast<std::size_t>(row.num_disparities);
+    std::fill(row.top, row.top + volume, std::uint16_t{0});  // a path starts at its cost
+    std::fill(row.top_min, row.top_min + pixels, std::uint16_t{0});
+    const auto warmup = avx2 ? sgm_detail::warmup_row_avx2 : sgm_detail::warmup_row_portable;
+    const auto match = avx2 ? sgm_detail::match_row_avx2 : sgm_detail::match_row_portable;
+    const std::int16_t invalid = static_cast<std::int16_t>((range.min_disparity - 1) * 16);
+    for (int y = warm_from; y < y1; ++y) {
+        row.census_left = census_left.data() + static_cast<std::size_t>(y) * w;
+        row.census_right_rev = census_right_rev.data() + static_cast<std::size_t>(y) * w;
+        if (y < y0) {
+            warmup(row);
+            continue;
+        }
+        match(row);
+        // Left-right check against the right view's winners (cv::StereoSGBM's disp12MaxDiff:
+        // a pixel fails when both neighbouring integer disparities disagree).
+        std::int16_t* dst = out + static_cast<std::size_t>(y) * out_stride;
+        const std::int16_t* right = row.right_disp;
+        const int max_diff = range.disp12_max_diff;
+        for (int x = 0; x < w; ++x) {
+            const int d = row.disparity[x];
+            if (d == kInvalid) {
+                dst[x] = invalid;
+                continue;
+            }
+            dst[x] = static_cast<std::int16_t>(d);
+            if (max_diff < 0) continue;
+            const int d_lo = d >> 4, d_hi = (d + 15) >> 4;
+            const int x_lo = x - d_lo, x_hi = x - d_hi;
+            if (x_lo >= 0 && x_lo < w && right[x_lo] >= 0 &&
+                std::abs(right[x_lo] - d_lo) > max_diff && x_hi >= 0 && x_hi < w &&
+                right[x_hi] >= 0 && std::abs(right[x_hi] - d_hi) > max_diff) {
+                dst[x] = invalid;
+            }
+        }
+    }
+}
+
+void SgmMatcher::compute(const std::uint8_t* left, const std::uint8_t* right, std::size_t stride,
+                         int width, int height, int first_column, const SgmRange& range,
+                         std::int16_t* out, std::size_t out_stride) {
+    Impl& m = *impl_;
+    if (range.min_disparity < 0) bad("min_disparity", "must be >= 0 for the sgm matcher");
+    if (range.num_disparities < 16 || range.num_disparities % 16 != 0 ||
+        range.num_disparities > kMaxDisparities) {
+        bad("num_disparities", "must be a multiple of 16, 16..256 for the sgm matcher");
+    }
+    if (range.uniqueness_ratio < 0 || range.uniqueness_ratio > 99) {
+        bad("uniqueness_ratio", "must be 0..99");
+    }
+    if (width <= 0 || height <= 0) bad("images", "must not be empty");
+    const std::int16_t invalid = static_cast<std::int16_t>((range.min_disparity - 1) * 16);
+    const int nd = range.num_disparities;
+    const int x_begin = std::max(first_column, range.min_disparity + nd - 1);
+    m.cells = 0;
+    if (x_begin >= width) {
+        for (int y = 0; y < height; ++y) {
+            std::fill(out + static_cast<std::size_t>(y) * out_stride,
+                      out + static_cast<std::size_t>(y) * out_stride + width, invalid);
+        }
+        return;
+    }
+    const std::size_t plane = static_cast<std::size_t>(width) * height;
+    m.census_left.resize(plane);
+    m.census_right_rev.resize(plane);
+    cv::parallel_for_(cv::Range(0, height), [&](const cv::Range& rows) {
+        std::vector<std::uint32_t> bits(static_cast<std::size_t>(width));
+        for (int y = rows.start; y < rows.end; ++y) {
+            const std::size_t at = static_cast<std::size_t>(y) * width;
+            census_row(left, stride, width, height, y, bits.data(), m.census_left.data() + at,
+                       false);
+            census_row(right, stride, width, height, y, bits.data(), m.census_right_rev.data() + at,
+                       true);
+        }
+    });
+
+    const int n = std::min(m.options.stripes, height);
+    if (static_cast<int>(m.stripes.size()) < n) m.stripes.resize(static_cast<std::size_t>(n));
+    const std::size_t pixels = static_cast<std::size_t>(width - x_begin);
+    const std::size_t volume = pixels * static_cast<std::size_t>(nd);
+    for (int s = 0; s < n; ++s) {
+        const int y0 = s * height / n, y1 = (s + 1) * height / n;
+        m.cells += static_cast<std::size_t>(y1 - std::max(0, y0 - m.options.warmup_rows)) * volume;
+    }
+    cv::parallel_for_(cv::Range(0, n), [&](const cv::Range& which) {
+        for (int s = which.start; s < which.end; ++s) {
+            StripeBuffers& b = m.stripes[static_cast<std::size_t>(s)];
+            b.cost.reserve(volume);
+            b.sum.reserve(volume);
+            b.top.reserve(volume);
+            b.top_min.reserve(pixels);
+            b.right_cost.reserve(static_cast<std::size_t>(width));
+            b.disparity.reserve(static_cast<std::size_t>(width));
+            b.right_disp.reserve(static_cast<std::size_t>(width));
+            SgmRow row;
+            row.width = width;
+            row.x_begin = x_begin;
+            row.num_disparities = nd;
+            row.min_disparity = range.min_disparity;
+            row.p1 = static_cast<std::uint16_t>(m.options.p1);
+            row.p2 = static_cast<std::uint16_t>(m.options.p2);
+            row.cost = b.cost.data();
+            row.sum = b.sum.data();
+            row.top = b.top.data();
+            row.top_min = b.top_min.data();
+            row.uniqueness_ratio = range.uniqueness_ratio;
+            row.disparity = b.disparity.data();
+            row.right_cost = b.right_cost.data();
+            row.right_disp = b.right_disp.data();
+            const int y0 = s * height / n, y1 = (s + 1) * height / n;
+            m.match_stripe(row, y0, y1, std::max(0, y0 - m.options.warmup_rows), range, out,
+                           out_stride);
+        }
+    });
+}
+
+}  // namespace cloud_analysis
