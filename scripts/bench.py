@@ -2,7 +2,7 @@
 """Benchmarks of cloud-analysis and scene-render (docs/performance.md); a benchmark, never a test.
 
 usage: scripts/bench.py --build BUILD_DIR [--out out/bench] [--runs 5] [--batch-frames 100]
-                        [--parts table,batch,presets,scaling] [--plots docs/images]
+                        [--parts table,batch,presets,scaling,matchers] [--plots docs/images]
 
 table    per-stage medians of `cloud-analysis bench` (entities; entities + three clouds), for
          frames from memory (as from a camera: the stages after decoding) and from PNG files
@@ -15,6 +15,9 @@ presets  tuned / fast / quality: D1-all on kitti15 (--gt-disparity) and the car 
          `cloud-analysis evaluate`, beside the matcher and pipeline time.
 scaling  time vs pixels (1/4, 1/2, 1, 2 x KITTI) and vs disparities (64..256); scene-render vs
          entities (10..10000); PNG plots into --plots.
+matchers the project's census SGM (--matcher sgm) beside cv::StereoSGBM: both timed interleaved
+         in one `cloud-analysis bench` process (wall and CPU ms), and their D1-all and car
+         recall/precision from `evaluate`, on kitti15 and the rendered samples, per preset.
 Everything goes to OUT/bench.json and a Markdown table on stdout. Reads shared data in place.
 """
 import argparse
@@ -29,6 +32,8 @@ import sys
 ROOT = pathlib.Path(__file__).resolve().parent.parent
 KITTI = ROOT.parent / "shared" / "data" / "kitti15"
 KITTI_FRAMES = ["000000_10", "000001_10"]  # frames with semantic_rgb and disp_occ_0
+RENDERED = ROOT / "samples" / "rendered"
+RENDERED_SCENES = ["street", "parking-row", "thesis-one-car"]
 
 
 def log(*a):
@@ -149,8 +154,10 @@ def part_batch(a, tool, result):
           "RSS first / median / last frame MB | peak RSS MB |")
     print("|---|---|---|---|---|---|---|---|---|---|")
     for root, frames in roots:
-        for preset, method in [("tuned", "instances"), ("tuned", "centroid"),
-                               ("fast", "instances")]:
+        for preset, method, extra in [("tuned", "instances", []), ("tuned", "centroid", []),
+                                      ("fast", "instances", []),
+                                      ("tuned", "instances", ["--matcher", "sgm"]),
+                                      ("fast", "instances", ["--matcher", "sgm"])]:
             out = a.out / "batch"
             out.mkdir(parents=True, exist_ok=True)
             listing = out / "frames.txt"
@@ -159,7 +166,7 @@ def part_batch(a, tool, result):
             report = out / "report.json"
             load = os.getloadavg()[0]
             r = run([tool, "batch", "--kitti-root", root, "--list", listing, "--out-dir", out,
-                     "--preset", preset, "--method", method, "--report", report])
+                     "--preset", preset, "--method", method, "--report", report, *extra])
             if r.returncode != 0:
                 sys.exit(f"batch failed: {r.stderr}")
             rep = json.loads(report.read_text())
@@ -171,8 +178,9 @@ def part_batch(a, tool, result):
                              wait_load_ms=waits[0], wait_finish_ms=waits[1])
             result["batch"].append(rep_short)
             src = "synthetic 1242x375" if "synthetic" in str(root) else "kitti15 " + "+".join(frames)
-            rep_short["label"] = f"{src}, {preset}, {method}"
-            print(f"| {src} | {preset} | {method} | {rep['fps']:.2f} | "
+            name = preset + (" + sgm" if extra else "")
+            rep_short["label"] = f"{src}, {name}, {method}"
+            print(f"| {src} | {name} | {method} | {rep['fps']:.2f} | "
                   f"{rep['cpu_ms_per_frame']:.0f} | {100 * rep['cores_busy']:.0f} | {load:.1f} | "
                   f"{waits[0]:.1f} / {waits[1]:.1f} | "
                   f"{rss[0]:.0f} / "
@@ -225,6 +233,63 @@ def part_presets(a, tool, result):
                   f"{100 * row['d1_all']:.2f} | {100 * row['density']:.1f} | "
                   f"{c['gt_owed_matched']}/{c['gt_owed']} | {100 * c['precision']:.0f} % "
                   f"({100 * c['precision_scorable']:.0f} %) | {row['centre_m']:.2f} |")
+
+
+def matcher_accuracy(tool, root, frame, reference, flags, out):
+    """D1-all and car recall/precision of one run (`evaluate`; rendered scenes by their truth)."""
+    tag = "-".join([root.name, frame] + [f.strip("-") for f in flags])
+    ent, disp, ev = out / f"{tag}.json", out / f"{tag}.png", out / f"{tag}-eval.json"
+    r = run([tool, "--kitti-root", root, "--frame", frame, *flags, "-o", ent,
+             "--disparity-kitti", disp])
+    if r.returncode != 0:
+        sys.exit(r.stderr)
+    cmd = [tool, "evaluate", "--entities", ent, "--disparity", disp, "--kitti-root", root,
+           "--frame", frame, "--json", ev]
+    if reference:
+        cmd += ["--reference", reference, "--min-visible-fraction", "0.25"]
+    r = run(cmd)
+    if r.returncode not in (0, 3):
+        sys.exit(r.stderr)
+    e = json.loads(ev.read_text())
+    if reference:
+        car = e["entities"]["classes"]["car"]["bins"]["all"]
+        recall, precision = car["recall"], car["precision"]
+    else:
+        recall, precision = e["cars"]["recall"], e["cars"]["precision"]
+    return {"d1_all": e["disparity"]["d1_all"], "density": e["disparity"]["density"],
+            "car_recall": recall, "car_precision": precision}
+
+
+def part_matchers(a, tool, result):
+    inputs = [(RENDERED / s, "000000", RENDERED / "scenes" / f"{s}.json")
+              for s in RENDERED_SCENES]
+    if (KITTI / "image_2").is_dir():
+        inputs += [(KITTI, f, None) for f in KITTI_FRAMES]
+    result["matchers"] = []
+    print("\n### census SGM (--matcher sgm) beside cv::StereoSGBM, timed in one process\n")
+    print("| input | preset | SGBM ms | SGM ms | speed-up | SGBM CPU ms | SGM CPU ms | "
+          "D1-all % SGBM / SGM | car recall SGBM / SGM | car precision SGBM / SGM |")
+    print("|---|---|---|---|---|---|---|---|---|---|")
+    out = a.out / "matchers"
+    out.mkdir(parents=True, exist_ok=True)
+    for preset in ["tuned", "fast"]:
+        for root, frame, reference in inputs:
+            b = bench(tool, ["--kitti-root", root, "--frame", frame], a.out / "work", a.runs,
+                      ["--preset", preset, "--matcher", "sgm"])
+            acc = [matcher_accuracy(tool, root, frame, reference,
+                                    ["--preset", preset, "--matcher", m], out)
+                   for m in ("sgbm", "sgm")]
+            row = {"input": f"{root.name} {frame}", "preset": preset,
+                   "sgbm_ms": b["reference_matcher_ms"], "sgm_ms": b["matcher_ms"],
+                   "sgbm_cpu_ms": b["reference_matcher_cpu_ms"], "sgm_cpu_ms": b["matcher_cpu_ms"],
+                   "sgbm": acc[0], "sgm": acc[1]}
+            result["matchers"].append(row)
+            pair = lambda k, scale=1.0, fmt=".2f": (f"{scale * acc[0][k]:{fmt}} / "
+                                                    f"{scale * acc[1][k]:{fmt}}")
+            print(f"| {row['input']} | {preset} | {row['sgbm_ms']:.1f} | {row['sgm_ms']:.1f} | "
+                  f"{row['sgbm_ms'] / row['sgm_ms']:.2f} | {row['sgbm_cpu_ms']:.1f} | "
+                  f"{row['sgm_cpu_ms']:.1f} | {pair('d1_all', 100.0)} | "
+                  f"{pair('car_recall')} | {pair('car_precision')} |")
 
 
 def part_scaling(a, tool, render, result):
@@ -325,7 +390,7 @@ def main():
     p.add_argument("--runs", type=int, default=5)
     p.add_argument("--batch-frames", type=int, default=100)
     p.add_argument("--render-frames", type=int, default=30)
-    p.add_argument("--parts", default="table,batch,presets,scaling")
+    p.add_argument("--parts", default="table,batch,presets,scaling,matchers")
     p.add_argument("--plots", default="")
     p.add_argument("--render", type=pathlib.Path, help="scene-render binary (default: BUILD's)")
     a = p.parse_args()
@@ -358,6 +423,8 @@ def main():
         part_presets(a, tool, result)
     if "scaling" in parts:
         part_scaling(a, tool, render, result)
+    if "matchers" in parts:
+        part_matchers(a, tool, result)
     result["load_average_at_end"] = os.getloadavg()
     (a.out / "bench.json").write_text(json.dumps(result, indent=1) + "\n")
     log(f"wrote {a.out / 'bench.json'}")

@@ -133,6 +133,13 @@ void add_settings_flags(CLI::App& cmd, AnalyseArgs& a) {
     cmd.add_option("--sgm-p2", d.sgm.p2, "sgm: penalty of larger changes, census bits")
         ->capture_default_str()
         ->group(sg);
+    cmd.add_option("--sgm-subpixel", d.sgm.subpixel, "sgm: parabola or equiangular")
+        ->check(CLI::IsMember({"parabola", "equiangular"}))
+        ->capture_default_str()
+        ->group(sg);
+    cmd.add_flag("--sgm-median,!--no-sgm-median", d.sgm.median3,
+                 "sgm: 3x3 median of the disparity before the speckle filter")
+        ->group(sg);
 
     const std::string cl = "Cloud and entities";
     cmd.add_option("--max-range", a.options.reproject.max_range_m,

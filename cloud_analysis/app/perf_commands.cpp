@@ -8,6 +8,7 @@
 #include <chrono>
 #include <cstdio>
 #include <cstdlib>
+#include <ctime>
 #include <exception>
 #include <fstream>
 #include <future>
@@ -556,11 +557,18 @@ int run_bench(const BenchArgs& a) {
     //  - memory: the frame is already decoded (as a camera delivers it); the stages after
     //    decoding, from the matcher to the written entity file (and clouds);
     //  - files: the same plus reading and decoding the PNG files and the class config.
-    // The floor is the OpenCV matcher call alone, on the views compute() prepares. It is timed
+    // The floor is the matcher call alone, on the views compute() prepares. It is timed
     // interleaved with the rows (matcher, row 1, ..., row 4, matcher, ...) so that all of them
     // see the same load of the machine over time. One matcher serves every row, as in a batch.
     DisparityMatcher matcher(a.analyse.options.disparity);
-    std::vector<double> matcher_ms;
+    std::vector<double> matcher_ms, matcher_cpu_ms;
+    // Another matcher is timed beside cv::StereoSGBM with the same options, interleaved.
+    const bool own_matcher = a.analyse.options.disparity.matcher != "sgbm";
+    DisparityOptions reference_options = a.analyse.options.disparity;
+    reference_options.matcher = "sgbm";
+    std::optional<DisparityMatcher> reference;
+    if (own_matcher) reference.emplace(reference_options);
+    std::vector<double> reference_ms, reference_cpu_ms;
 
     struct Row {
         std::string input;  // "memory" or "files"
@@ -595,8 +603,18 @@ int run_bench(const BenchArgs& a) {
 
     for (int i = 0; i < a.warmup + a.runs; ++i) {
         const bool timed = i >= a.warmup;
-        const double ms = matcher.time_matcher_only_ms(in.left, in.right);
-        if (timed) matcher_ms.push_back(ms);
+        const auto time_one = [&](DisparityMatcher& m, std::vector<double>& wall,
+                                  std::vector<double>& cpu) {
+            const std::clock_t c0 = std::clock();  // process CPU time: all threads
+            const double ms = m.time_matcher_only_ms(in.left, in.right);
+            const double cpu_ms = 1000.0 * static_cast<double>(std::clock() - c0) / CLOCKS_PER_SEC;
+            if (timed) {
+                wall.push_back(ms);
+                cpu.push_back(cpu_ms);
+            }
+        };
+        time_one(matcher, matcher_ms, matcher_cpu_ms);
+        if (reference) time_one(*reference, reference_ms, reference_cpu_ms);
         for (Row& row : rows) {
             // Every row reads the same frame: its warnings are said once, on the first run.
             row.args.warnings = i == 0 && &row == &rows.front();
@@ -649,7 +667,12 @@ int run_bench(const BenchArgs& a) {
         {"inputs",
          {{"memory", "frames from memory (as from a camera): stages after decoding"},
           {"files", "frames from PNG files (including decode)"}}},
+        {"matcher", d.matcher},
         {"matcher_ms", floor_ms},
+        {"matcher_cpu_ms", median(matcher_cpu_ms)},
+        {"reference_matcher_ms", own_matcher ? median(reference_ms) : floor_ms},
+        {"reference_matcher_cpu_ms",
+         own_matcher ? median(reference_cpu_ms) : median(matcher_cpu_ms)},
         {"rows", rows_json},
         {"peak_rss_mb", peak_rss_mb()}};
     write_output({a.json, result.dump(1) + "\n", "--json"});

@@ -111,7 +111,7 @@ struct DisparityMatcher::Impl {
     cv::Ptr<cv::ximgproc::DisparityWLSFilter> wls;            // WLS only
     cv::Mat lp, rp, raw_left, raw_right, filtered, up, grey;  // reused buffers
     std::unique_ptr<SgmMatcher> own;                          // "sgm" matcher only
-    cv::Mat speckle_buffer;                                   // its speckle filter's
+    cv::Mat speckle_buffer, median_in, median_out;            // its post-filters'
 
     /// The left disparity of lp and rp into raw_left (CV_16S, disparity * 16).
     void match_left() {
@@ -127,6 +127,13 @@ struct DisparityMatcher::Impl {
         range.disp12_max_diff = options.disp12_max_diff;
         own->compute(lp.data, rp.data, lp.step, lp.cols, lp.rows, pad(), range,
                      raw_left.ptr<std::int16_t>(), raw_left.step1());
+        if (options.sgm.median3) {
+            // As 16-bit unsigned (the invalid value becomes 0), which medianBlur takes.
+            const int invalid = (options.min_disparity - 1) * 16;
+            raw_left.convertTo(median_in, CV_16U, 1.0, -invalid);
+            cv::medianBlur(median_in, median_out, 3);
+            median_out.convertTo(raw_left, CV_16S, 1.0, invalid);
+        }
         if (options.speckle_window_size > 0) {
             cv::filterSpeckles(raw_left, (options.min_disparity - 1) * 16,
                                options.speckle_window_size, 16 * options.speckle_range,

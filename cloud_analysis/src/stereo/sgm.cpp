@@ -7,6 +7,10 @@
 
 #include <opencv2/core.hpp>
 
+#if defined(__SSE2__)
+#include <emmintrin.h>
+#endif
+
 #include "sgm_row.hpp"
 
 namespace cloud_analysis {
@@ -42,34 +46,57 @@ class AlignedArray {
 };
 
 /// Centre-symmetric census over 9x7: bit k of the 31 is I(p + o_k) > I(p - o_k) for the offsets
-/// o_k of one half of the window; coordinates clamped at the borders. `reversed` stores the
-/// row from right to left (the layout the cost loops read contiguously).
+/// o_k of one half of the window; coordinates clamped at the borders. The bits are gathered in
+/// four byte planes (8 comparisons each: byte lanes vectorise) and joined at the end;
+/// `reversed` stores the row from right to left (the layout the cost loops read contiguously).
 void census_row(const std::uint8_t* img, std::size_t stride, int w, int h, int y,
-                std::uint32_t* bits, std::uint32_t* out, bool reversed) {
-    std::fill(bits, bits + w, 0u);
+                std::uint8_t* planes, std::uint32_t* out, bool reversed) {
+    std::fill(planes, planes + 4 * static_cast<std::size_t>(w), std::uint8_t{0});
     int bit = 0;
     for (int dy = 0; dy <= 3; ++dy) {
         const std::uint8_t* a = img + static_cast<std::size_t>(std::min(y + dy, h - 1)) * stride;
         const std::uint8_t* b = img + static_cast<std::size_t>(std::max(y - dy, 0)) * stride;
         for (int dx = -4; dx <= 4; ++dx) {
             if (dy == 0 && dx <= 0) continue;
+            std::uint8_t* plane = planes + static_cast<std::size_t>(bit >> 3) * w;
+            const std::uint8_t value = static_cast<std::uint8_t>(1u << (bit & 7));
             const int lo = std::min(std::abs(dx), w);
             const int hi = std::max(lo, w - std::abs(dx));
-            for (int x = lo; x < hi; ++x) {
-                bits[x] |= static_cast<std::uint32_t>(a[x + dx] > b[x - dx]) << bit;
+            const std::uint8_t* ap = a + dx;
+            const std::uint8_t* bp = b - dx;
+            int x = lo;
+#if defined(__SSE2__)
+            // Unsigned bytes compared as signed after flipping the top bit; 16 pixels a step.
+            const __m128i flip = _mm_set1_epi8(static_cast<char>(0x80));
+            const __m128i bitv = _mm_set1_epi8(static_cast<char>(value));
+            for (; x + 16 <= hi; x += 16) {
+                const __m128i av = _mm_loadu_si128(reinterpret_cast<const __m128i*>(ap + x));
+                const __m128i bv = _mm_loadu_si128(reinterpret_cast<const __m128i*>(bp + x));
+                const __m128i gt = _mm_cmpgt_epi8(_mm_xor_si128(av, flip), _mm_xor_si128(bv, flip));
+                __m128i* dst = reinterpret_cast<__m128i*>(plane + x);
+                _mm_storeu_si128(dst, _mm_or_si128(_mm_loadu_si128(dst), _mm_and_si128(gt, bitv)));
+            }
+#endif
+            for (; x < hi; ++x) {
+                plane[x] = static_cast<std::uint8_t>(plane[x] | (ap[x] > bp[x] ? value : 0));
             }
             for (int x = 0; x < w; ++x) {
                 if (x >= lo && x < hi) continue;
                 const int xa = std::clamp(x + dx, 0, w - 1), xb = std::clamp(x - dx, 0, w - 1);
-                bits[x] |= static_cast<std::uint32_t>(a[xa] > b[xb]) << bit;
+                if (a[xa] > b[xb]) plane[x] = static_cast<std::uint8_t>(plane[x] | value);
             }
             ++bit;
         }
     }
-    if (reversed) {
-        std::reverse_copy(bits, bits + w, out);
-    } else {
-        std::copy(bits, bits + w, out);
+    const std::uint8_t* p0 = planes;
+    const std::uint8_t* p1 = planes + w;
+    const std::uint8_t* p2 = planes + 2 * static_cast<std::size_t>(w);
+    const std::uint8_t* p3 = planes + 3 * static_cast<std::size_t>(w);
+    for (int x = 0; x < w; ++x) {
+        const std::uint32_t c = p0[x] | static_cast<std::uint32_t>(p1[x]) << 8 |
+                                static_cast<std::uint32_t>(p2[x]) << 16 |
+                                static_cast<std::uint32_t>(p3[x]) << 24;
+        out[reversed ? w - 1 - x : x] = c;
     }
 }
 
@@ -89,6 +116,9 @@ void SgmOptions::validate() const {
     if (p2 > 8000) bad("p2", "must be <= 8000 (16-bit path sums)");
     if (stripes < 1) bad("stripes", "must be >= 1");
     if (warmup_rows < 0) bad("warmup_rows", "must be >= 0");
+    if (subpixel != "parabola" && subpixel != "equiangular") {
+        bad("subpixel", "must be parabola or equiangular");
+    }
     if (kernel != "auto" && kernel != "avx2" && kernel != "portable") {
         bad("kernel", "must be auto, avx2 or portable");
     }
@@ -195,13 +225,13 @@ void SgmMatcher::compute(const std::uint8_t* left, const std::uint8_t* right, st
     m.census_left.resize(plane);
     m.census_right_rev.resize(plane);
     cv::parallel_for_(cv::Range(0, height), [&](const cv::Range& rows) {
-        std::vector<std::uint32_t> bits(static_cast<std::size_t>(width));
+        std::vector<std::uint8_t> planes(4 * static_cast<std::size_t>(width));
         for (int y = rows.start; y < rows.end; ++y) {
             const std::size_t at = static_cast<std::size_t>(y) * width;
-            census_row(left, stride, width, height, y, bits.data(), m.census_left.data() + at,
+            census_row(left, stride, width, height, y, planes.data(), m.census_left.data() + at,
                        false);
-            census_row(right, stride, width, height, y, bits.data(), m.census_right_rev.data() + at,
-                       true);
+            census_row(right, stride, width, height, y, planes.data(),
+                       m.census_right_rev.data() + at, true);
         }
     });
 
@@ -235,6 +265,7 @@ void SgmMatcher::compute(const std::uint8_t* left, const std::uint8_t* right, st
             row.top = b.top.data();
             row.top_min = b.top_min.data();
             row.uniqueness_ratio = range.uniqueness_ratio;
+            row.equiangular = m.options.subpixel == "equiangular";
             row.disparity = b.disparity.data();
             row.right_cost = b.right_cost.data();
             row.right_disp = b.right_disp.data();

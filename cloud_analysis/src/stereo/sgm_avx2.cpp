@@ -190,7 +190,8 @@ inline void backward_pixel(const SgmRow& r, int x, RowPath& rl) {
         r.right_cost[xr] = static_cast<std::uint16_t>(min_s);
         r.right_disp[xr] = static_cast<std::int16_t>(best + r.min_disparity);
     }
-    r.disparity[x] = static_cast<std::int16_t>(subpixel16(s, best, nd) + r.min_disparity * 16);
+    r.disparity[x] =
+        static_cast<std::int16_t>(subpixel16(s, best, nd, r.equiangular) + r.min_disparity * 16);
 }
 
 }  // namespace

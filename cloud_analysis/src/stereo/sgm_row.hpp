@@ -20,10 +20,11 @@ struct SgmRow {
     std::uint16_t p1 = 0;                             ///< small-step penalty
     std::uint16_t p2 = 0;                             ///< large-step penalty
     std::uint16_t* cost = nullptr;                    ///< scratch: pixel costs of the row
-    std::uint16_t* sum = nullptr;         ///< scratch: left-to-right + top-down path costs
-    std::uint16_t* top = nullptr;         ///< top-down path of the row above; updated in place
-    std::uint16_t* top_min = nullptr;     ///< its minimum per pixel; updated in place
-    int uniqueness_ratio = 0;             ///< %, 0 = off
+    std::uint16_t* sum = nullptr;      ///< scratch: left-to-right + top-down path costs
+    std::uint16_t* top = nullptr;      ///< top-down path of the row above; updated in place
+    std::uint16_t* top_min = nullptr;  ///< its minimum per pixel; updated in place
+    int uniqueness_ratio = 0;          ///< %, 0 = off
+    bool equiangular = false;  ///< sub-pixel step by equiangular lines instead of a parabola
     std::int16_t* disparity = nullptr;    ///< out: disparity * 16 from x_begin, or kInvalid
     std::uint16_t* right_cost = nullptr;  ///< out: best cost seen per right-view column
     std::int16_t* right_disp = nullptr;   ///< out: its disparity (px, -1 = none)
@@ -44,11 +45,19 @@ void match_row_avx2(const SgmRow& row);
 // the linker cannot hand the AVX2 file's copy to code that runs on any CPU.
 namespace {
 
-/// Sub-pixel disparity * 16 of index `best` from its neighbours' sums (cv::StereoSGBM's
-/// parabola), without the min_disparity offset.
-inline int subpixel16(const std::uint16_t* s, int best, int num_disparities) {
+/// Sub-pixel disparity * 16 of index `best` from its neighbours' sums, without the
+/// min_disparity offset: cv::StereoSGBM's parabola, or the equiangular fit (Shimizu & Okutomi,
+/// "Sub-pixel estimation error cancellation on area-based matching", IJCV 2005) that suits
+/// census costs.
+inline int subpixel16(const std::uint16_t* s, int best, int num_disparities, bool equiangular) {
     if (best <= 0 || best >= num_disparities - 1) return best * 16;
     const int left = s[best - 1], right = s[best + 1], centre = s[best];
+    if (equiangular) {
+        const int denom = 2 * ((left > right ? left : right) - centre);
+        if (denom <= 0) return best * 16;
+        const int num = (left - right) * 16;
+        return best * 16 + (num + (num >= 0 ? denom / 2 : -denom / 2)) / denom;
+    }
     int denom2 = left + right - 2 * centre;
     if (denom2 < 1) denom2 = 1;
     return best * 16 + ((left - right) * 16 + denom2) / (denom2 * 2);

@@ -23,7 +23,9 @@ struct SgmOptions {
     int p2 = 86;           ///< penalty of a larger change, census bits, > p1
     int stripes = 4;       ///< row stripes matched independently (in parallel), >= 1
     int warmup_rows = 16;  ///< rows above a stripe that prime its top-down path, >= 0
-    std::string kernel = "auto";  ///< "auto" (AVX2 when the CPU has it), "avx2" or "portable"
+    std::string subpixel = "parabola";  ///< "parabola" (cv::StereoSGBM's) or "equiangular"
+    bool median3 = false;               ///< 3x3 median of the disparity before the speckle filter
+    std::string kernel = "auto";        ///< "auto" (AVX2 when the CPU has it), "avx2" or "portable"
     /// Throws std::invalid_argument naming the first bad field.
     void validate() const;
 };
