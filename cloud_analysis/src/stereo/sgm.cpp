@@ -80,11 +80,15 @@ void census_row(const std::uint8_t* img, std::size_t stride, int w, int h, int y
             for (; x < hi; ++x) {
                 plane[x] = static_cast<std::uint8_t>(plane[x] | (ap[x] > bp[x] ? value : 0));
             }
-            for (int x = 0; x < w; ++x) {
-                if (x >= lo && x < hi) continue;
-                const int xa = std::clamp(x + dx, 0, w - 1), xb = std::clamp(x - dx, 0, w - 1);
-                if (a[xa] > b[xb]) plane[x] = static_cast<std::uint8_t>(plane[x] | value);
-            }
+            const auto border = [&](int from, int to) {  // clamped coordinates
+                for (int u = from; u < to; ++u) {
+                    const int ua = std::clamp(u + dx, 0, w - 1);
+                    const int ub = std::clamp(u - dx, 0, w - 1);
+                    if (a[ua] > b[ub]) plane[u] = static_cast<std::uint8_t>(plane[u] | value);
+                }
+            };
+            border(0, lo);
+            border(hi, w);
             ++bit;
         }
     }
