@@ -17,14 +17,15 @@
 namespace cloud_analysis {
 
 /// Settings of the census SGM matcher proper (the shared ones, disparity range, uniqueness,
-/// left-right check and speckles, live in DisparityOptions).
+/// left-right check and speckles, live in DisparityOptions). Penalties and the median tuned on
+/// the rendered samples (samples/rendered; docs/performance.md).
 struct SgmOptions {
-    int p1 = 7;            ///< penalty of a +-1 px disparity change, census bits (cost 0..31)
-    int p2 = 86;           ///< penalty of a larger change, census bits, > p1
+    int p1 = 30;           ///< penalty of a +-1 px disparity change, census bits (cost 0..31)
+    int p2 = 1200;         ///< penalty of a larger change, census bits, > p1
     int stripes = 4;       ///< row stripes matched independently (in parallel), >= 1
     int warmup_rows = 16;  ///< rows above a stripe that prime its top-down path, >= 0
     std::string subpixel = "parabola";  ///< "parabola" (cv::StereoSGBM's) or "equiangular"
-    bool median3 = false;               ///< 3x3 median of the disparity before the speckle filter
+    bool median3 = true;                ///< 3x3 median of the disparity before the speckle filter
     std::string kernel = "auto";        ///< "auto" (AVX2 when the CPU has it), "avx2" or "portable"
     /// Throws std::invalid_argument naming the first bad field.
     void validate() const;
