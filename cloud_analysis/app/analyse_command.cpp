@@ -237,8 +237,8 @@ void resolve(AnalyseArgs& a, const CLI::App& cmd) {
     resolve_settings(a, cmd);
 }
 
-scene_schema::FileSync cloud_sync(const AnalyseArgs& a) {
-    return a.fsync_clouds ? scene_schema::FileSync::kDurable : scene_schema::FileSync::kAtomicOnly;
+stereoscene::support::FileSync cloud_sync(const AnalyseArgs& a) {
+    return a.fsync_clouds ? stereoscene::support::FileSync::kDurable : stereoscene::support::FileSync::kAtomicOnly;
 }
 
 void write_output(const PendingOutput& out) {
@@ -246,7 +246,7 @@ void write_output(const PendingOutput& out) {
         std::fwrite(out.bytes.data(), 1, out.bytes.size(), stdout);
         std::fflush(stdout);
     } else {
-        scene_schema::write_file_atomic(out.path, out.bytes, out.sync);
+        stereoscene::support::write_file_atomic(out.path, out.bytes, out.sync);
     }
 }
 

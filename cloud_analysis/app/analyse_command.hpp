@@ -42,7 +42,7 @@ struct PendingOutput {
     std::string bytes;  ///< whole file
     std::string label;  ///< flag that asked for it (for --timings)
     /// Clouds are written without fsync unless --fsync-clouds (docs/cli.md "Durability").
-    scene_schema::FileSync sync = scene_schema::FileSync::kDurable;
+    stereoscene::support::FileSync sync = stereoscene::support::FileSync::kDurable;
 };
 
 /// Input flags of one frame (--left ... --kitti-root --frame).
@@ -60,7 +60,7 @@ void resolve(AnalyseArgs& a, const CLI::App& cmd);
 /// Writes one output atomically (or to stdout for "-").
 void write_output(const PendingOutput& out);
 /// How the cloud files are written: fsync'ed only with --fsync-clouds.
-scene_schema::FileSync cloud_sync(const AnalyseArgs& a);
+stereoscene::support::FileSync cloud_sync(const AnalyseArgs& a);
 
 /// Extraction settings of the flags, with the class config read and validated.
 cloud_analysis::ExtractOptions extract_options(const AnalyseArgs& a);

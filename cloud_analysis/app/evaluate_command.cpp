@@ -578,7 +578,7 @@ int run_evaluate(const EvaluateArgs& args) {
     if (json_to_stdout) {
         std::cout << json_text;
     } else if (!args.json.empty()) {
-        scene_schema::write_file_atomic(args.json, json_text);
+        stereoscene::support::write_file_atomic(args.json, json_text);
     }
     for (const auto& m : missed_bars) std::cerr << "cloud-analysis: bar missed: " << m << "\n";
     return missed_bars.empty() ? 0 : kExitBarMissed;
@@ -633,7 +633,7 @@ int run_export_kitti(const ExportKittiArgs& args) {
     if (args.output == "-") {
         std::cout << text;
     } else {
-        scene_schema::write_file_atomic(args.output, text);
+        stereoscene::support::write_file_atomic(args.output, text);
     }
     return 0;
 }

@@ -8,7 +8,7 @@
 
 #include <CLI/CLI.hpp>
 #include <scene_schema/entities.hpp>
-#include <scene_schema/process.hpp>
+#include <stereoscene/support/process.hpp>
 
 #include "analyse_command.hpp"
 #include "cloud_analysis/io.hpp"
@@ -57,7 +57,7 @@ bool is_subcommand(const std::string& arg) {
 }  // namespace
 
 int main(int argc, char** argv) {
-    scene_schema::keep_freed_memory();
+    stereoscene::support::keep_freed_memory();
     // `analyse` is the default command: insert it unless a subcommand or --version is first.
     std::vector<std::string> args(argv + 1, argv + argc);
     if (args.empty() || (!is_subcommand(args[0]) && args[0] != "--version")) {

@@ -5,6 +5,8 @@
 
 #include <nlohmann/json.hpp>
 
+#include "stereoscene/support/asset_dir.hpp"
+
 namespace cloud_analysis {
 namespace {
 
@@ -73,7 +75,9 @@ Palette parse_palette(std::string_view json_text, const std::string& origin) {
     return palette;
 }
 
-std::filesystem::path bundled_palette_dir() { return STEREOSCENE_PALETTE_DIR; }
+std::filesystem::path bundled_palette_dir() {
+    return stereoscene::support::asset_dir() / "palettes";
+}
 
 Palette load_palette(const std::string& name_or_path) {
     std::filesystem::path path(name_or_path);

@@ -17,7 +17,6 @@
 
 #include "commands/html_command.hpp"
 #include "scene_schema/entities.hpp"
-#include "scene_schema/process.hpp"
 #include "scene_viewer/assets/class_table.hpp"
 #include "scene_viewer/assets/image_io.hpp"
 #include "scene_viewer/figure/grid_figure.hpp"
@@ -27,6 +26,9 @@
 #include "scene_viewer/render/image.hpp"
 #include "scene_viewer/render/scene_renderer.hpp"
 #include "scene_viewer/sensors/stereo_sensors.hpp"
+#include "stereoscene/support/atomic_file.hpp"
+#include "stereoscene/support/error_line.hpp"
+#include "stereoscene/support/process.hpp"
 
 namespace {
 
@@ -564,7 +566,7 @@ int run(int argc, char** argv) {
     }
     if (!glb.empty()) {
         try {
-            scene_schema::write_file_atomic(
+            stereoscene::support::write_file_atomic(
                 glb, std::string_view(reinterpret_cast<const char*>(glb_bytes.data()),
                                       glb_bytes.size()));
         } catch (const std::exception& e) {
@@ -577,19 +579,19 @@ int run(int argc, char** argv) {
 }  // namespace
 
 int main(int argc, char** argv) {
-    scene_schema::keep_freed_memory();
+    stereoscene::support::keep_freed_memory();
+    using stereoscene::support::error_line;
     try {
         return run(argc, argv);
     } catch (const Failure& f) {
-        std::cerr << "scene-render: error: " << f.what << ": " << f.detail << " (" << f.where
-                  << ")\n";
+        std::cerr << error_line("scene-render", f.where, f.what + ": " + f.detail) << "\n";
         return f.code;
     } catch (const scene_render::html_command::Failure& f) {
-        std::cerr << "scene-render: error: " << f.what << ": " << f.detail << " (" << f.where
-                  << ")\n";
+        std::cerr << error_line("scene-render", f.where, f.what + ": " + f.detail) << "\n";
         return f.code;
     } catch (const std::exception& e) {
-        std::cerr << "scene-render: error: rendering failed: " << e.what() << " (scene-render)\n";
+        std::cerr << error_line("scene-render", "", std::string("rendering failed: ") + e.what())
+                  << "\n";
         return 1;
     }
 }

@@ -71,7 +71,7 @@ endfunction()
 
 sensors_cli_test("on an invalid scene exits 1 and writes nothing" bad
     ARGS sensors ${_sensors_bad} --out ${_sensors_out}/bad CODE 1
-    STDERR "invalid entity file: /entities/1/W: .*bad_width.json")
+    STDERR "error: [^\n]*bad_width.json: invalid entity file: /entities/1/W: ")
 sensors_cli_test("on a missing scene exits 1 and writes nothing" missing
     ARGS sensors ${_sensors_out}/none.json --out ${_sensors_out}/missing CODE 1
     STDERR "cannot read entity file")

@@ -201,26 +201,6 @@ TEST_CASE("dump_checked gives dump's text and refuses what check refuses", "[sch
     CHECK_THROWS_AS(scene_schema::dump_checked(bad), SchemaError);
 }
 
-TEST_CASE("an atomic write without fsync replaces the file whole and leaves no temp file",
-          "[schema]") {
-    ScratchDir dir;
-    const fs::path target = dir.path / "cloud.xyz";
-    for (const auto sync :
-         {scene_schema::FileSync::kDurable, scene_schema::FileSync::kAtomicOnly}) {
-        scene_schema::write_file_atomic(target, "old contents\n", sync);
-        CHECK(slurp(target) == "old contents\n");
-        const std::string big(3 << 20, 'x');  // several write() calls
-        scene_schema::write_file_atomic(target, big, sync);
-        CHECK(slurp(target) == big);
-    }
-    CHECK_THROWS_AS(scene_schema::write_file_atomic(dir.path / "no-such-dir" / "c.xyz", "x",
-                                                    scene_schema::FileSync::kAtomicOnly),
-                    scene_schema::FileError);
-    std::size_t count = 0;
-    for ([[maybe_unused]] const auto& entry : fs::directory_iterator(dir.path)) ++count;
-    CHECK(count == 1);  // only cloud.xyz
-}
-
 TEST_CASE("read errors name the file", "[schema]") {
     const fs::path truncated =
         fs::path(STEREOSCENE_TEST_DATA_DIR) / "schema" / "broken" / "truncated.json";

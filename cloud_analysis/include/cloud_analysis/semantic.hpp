@@ -23,7 +23,7 @@ Palette parse_palette(std::string_view json_text, const std::string& origin);
 /// "thesis") is looked up in the bundled palette folder.
 Palette load_palette(const std::string& name_or_path);
 
-/// Folder of the bundled palettes (assets/palettes of the source tree).
+/// Folder of the bundled palettes: palettes/ in stereoscene::support::asset_dir().
 std::filesystem::path bundled_palette_dir();
 
 /// Index of the class with this colour, or kVoidClass.

@@ -8,6 +8,8 @@
 
 #include <nlohmann/json.hpp>
 
+#include "stereoscene/support/asset_dir.hpp"
+
 namespace scene_viewer {
 namespace {
 
@@ -145,7 +147,7 @@ ClassTable load_class_table(const std::filesystem::path& path) {
 }
 
 std::filesystem::path default_class_table_path() {
-    return std::filesystem::path(SCENE_VIEWER_ASSETS_DIR) / "classes" / "render_classes.json";
+    return stereoscene::support::asset_dir() / "classes" / "render_classes.json";
 }
 
 const char* to_string(RenderKind kind) {

@@ -9,9 +9,9 @@
 #include <utility>
 
 #include <tiny_gltf.h>
-#include <scene_schema/entities.hpp>
 
 #include "scene_viewer/assets/image_io.hpp"
+#include "stereoscene/support/atomic_file.hpp"
 
 namespace scene_viewer {
 namespace {
@@ -206,8 +206,8 @@ void export_scene_glb(const std::vector<PlacedModel>& scene, const std::filesyst
     } catch (const std::exception& e) {
         throw std::runtime_error(path.string() + ": " + e.what());
     }
-    // scene_schema::FileError (a std::runtime_error) already names the path.
-    scene_schema::write_file_atomic(
+    // stereoscene::support::FileError (a std::runtime_error) already names the path.
+    stereoscene::support::write_file_atomic(
         path, std::string_view(reinterpret_cast<const char*>(bytes.data()), bytes.size()));
 }
 

@@ -5,8 +5,8 @@
 #include <cstring>
 #include <stdexcept>
 
-#include "scene_schema/entities.hpp"
 #include "scene_viewer/assets/image_io.hpp"
+#include "stereoscene/support/atomic_file.hpp"
 
 namespace scene_viewer {
 
@@ -33,7 +33,7 @@ void write_png(const std::filesystem::path& path, const ImageRgba8& image, int z
         }
         return;
     }
-    scene_schema::write_file_atomic(
+    stereoscene::support::write_file_atomic(
         path, std::string_view(reinterpret_cast<const char*>(bytes.data()), bytes.size()));
 }
 

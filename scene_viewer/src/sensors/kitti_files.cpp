@@ -8,9 +8,9 @@
 
 #include <nlohmann/json.hpp>
 
-#include "scene_schema/entities.hpp"
 #include "scene_viewer/assets/image_io.hpp"
 #include "scene_viewer/sensors/stereo_sensors.hpp"
+#include "stereoscene/support/atomic_file.hpp"
 
 namespace scene_viewer {
 
@@ -150,8 +150,10 @@ void write_files(const std::filesystem::path& root,
         const std::filesystem::path path = root / relative;
         std::error_code ec;
         std::filesystem::create_directories(path.parent_path(), ec);
-        if (ec) throw scene_schema::FileError(path.parent_path().string() + ": " + ec.message());
-        scene_schema::write_file_atomic(path, bytes);
+        if (ec)
+            throw stereoscene::support::FileError(path.parent_path().string() + ": " +
+                                                  ec.message());
+        stereoscene::support::write_file_atomic(path, bytes);
     }
 }
 

@@ -13,6 +13,8 @@
 
 #include <nlohmann/json.hpp>
 
+#include "stereoscene/support/atomic_file.hpp"
+
 namespace scene_schema {
 
 /// Major.minor.patch of the format this library writes; files with another major are refused.
@@ -128,23 +130,8 @@ EntityDocument read_file(const std::filesystem::path& path);
 /// Validates, then writes atomically (temp file beside the target, then rename).
 void write_file(const EntityDocument& document, const std::filesystem::path& path);
 
-/// A file could not be read or parsed; what() is "<path>: <pointer>: <rule>".
-class FileError : public std::runtime_error {
-  public:
-    using std::runtime_error::runtime_error;
-};
-
-/// Whether write_file_atomic waits for the disk.
-enum class FileSync {
-    kDurable,     ///< fsync before the rename: the file survives a power loss once written
-    kAtomicOnly,  ///< no fsync: other processes, and this one after a crash, still see the
-                  ///< whole old file or the whole new one; a power loss may lose it
-};
-
-/// Writes bytes to `path` atomically: a temp file in the same folder, flushed (fsync'ed when
-/// `sync` is kDurable), then renamed. On failure nothing is left behind and FileError is
-/// thrown. Shared by both tools.
-void write_file_atomic(const std::filesystem::path& path, std::string_view bytes,
-                       FileSync sync = FileSync::kDurable);
+/// A file could not be read, parsed or written; what() is "<path>: <pointer>: <rule>" or
+/// "<path>: <reason>".
+using FileError = stereoscene::support::FileError;
 
 }  // namespace scene_schema

@@ -45,7 +45,7 @@ struct ClassTable {
 /// must name existing files. Throws std::runtime_error "<file>: <JSON pointer>: <reason>".
 ClassTable load_class_table(const std::filesystem::path& path);
 
-/// The project's own table, assets/classes/render_classes.json of the source tree.
+/// The project's own table: classes/render_classes.json in stereoscene::support::asset_dir().
 std::filesystem::path default_class_table_path();
 
 /// "object", "ground" or "block".
