@@ -7,6 +7,8 @@
 
 #include <CLI/CLI.hpp>
 
+#include "common.hpp"
+
 namespace scene_render::html_command {
 
 /// Flags of `scene-render html`.
@@ -25,13 +27,8 @@ struct Options {
     std::string web_dir;              ///< viewer's static files, "" = the build's
 };
 
-/// A failure with the parts of the one-line message and the exit code (1 failure, 2 usage).
-struct Failure {
-    std::string what;
-    std::string detail;
-    std::string where;
-    int code = 1;
-};
+/// The failure every command throws (common.hpp).
+using Failure = scene_render::Failure;
 
 /// Adds the `html` subcommand, filling `options` when parsed.
 CLI::App* add(CLI::App& app, Options& options);

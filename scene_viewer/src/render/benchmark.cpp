@@ -9,6 +9,17 @@
 
 namespace scene_viewer {
 
+std::vector<BenchmarkRow> benchmark_rows(int msaa_samples) {
+    std::vector<BenchmarkRow> rows = {{"lit fxaa", Shading::lit, Antialias::fxaa},
+                                      {"lit none", Shading::lit, Antialias::none},
+                                      {"semantic", Shading::semantic, Antialias::none}};
+    if (msaa_samples > 1) {
+        rows.insert(rows.begin() + 1,
+                    {"lit msaa " + std::to_string(msaa_samples), Shading::lit, Antialias::msaa});
+    }
+    return rows;
+}
+
 void BenchmarkOptions::validate() const {
     if (frames < 1 || frames > 100000) throw std::invalid_argument("frames must be in 1..100000");
     if (warmup_frames < 0) throw std::invalid_argument("warmup_frames must be >= 0");

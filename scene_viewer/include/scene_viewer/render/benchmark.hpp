@@ -3,6 +3,9 @@
 /// A frame-rate benchmark: one renderer, one uploaded scene, many frames with readback, and the
 /// PNG encoding timed separately.
 
+#include <string>
+#include <vector>
+
 #include "scene_schema/entities.hpp"
 #include "scene_viewer/render/scene_renderer.hpp"
 
@@ -27,6 +30,17 @@ struct BenchmarkResult {
     std::size_t png_bytes = 0;  ///< size of one encoded frame
     std::size_t triangles = 0;  ///< triangles drawn per frame
 };
+
+/// One row of the benchmark table: a shading and its antialiasing.
+struct BenchmarkRow {
+    std::string name;     ///< the row's label, e.g. "lit msaa 4"
+    Shading shading;      ///< shading of the row
+    Antialias antialias;  ///< antialiasing of the row
+};
+
+/// The rows to time: the default (lit fxaa) first, then what it replaces (msaa with
+/// `msaa_samples`, only when above 1) and what it costs over none, then semantic.
+std::vector<BenchmarkRow> benchmark_rows(int msaa_samples);
 
 /// A street of `count` cars (rows of 5 lanes), with road and sidewalks, and camera intrinsics.
 scene_schema::EntityDocument make_benchmark_document(int count);

@@ -1,0 +1,111 @@
+#include "sensors.hpp"
+
+#include <cerrno>
+#include <cstring>
+#include <fstream>
+#include <map>
+#include <sstream>
+#include <stdexcept>
+
+namespace scene_render {
+
+using namespace scene_viewer;
+
+CLI::App* add_sensors_command(CLI::App& app, SensorsArgs& a) {
+    CLI::App* s = app.add_subcommand(
+        "sensors",
+        "render a stereo rig's view of a scene in a KITTI-like folder (see docs/cli.md)");
+    SensorOptions& o = a.options;
+    s->add_option("input", a.input, "entity file: the scene (KITTI camera frame)")->required();
+    s->add_option("--out", a.out, "output folder (KITTI layout)")->required();
+    s->add_option("--frame", a.frame, "frame name of the files")->capture_default_str();
+    s->add_option("--seed", o.sensor.seed, "seed of the sensor noise")->capture_default_str();
+    s->add_option("--rig", a.rig,
+                  "rig from a KITTI calib_cam_to_cam.txt (P_rect_02, P_rect_03, S_rect_02); "
+                  "default: the file's frame.camera, else KITTI's");
+    s->add_option("--size", a.size,
+                  "image size WxH; the intrinsics scale with it (default: the file's "
+                  "frame.camera, else KITTI's 1242x375)");
+    s->add_option("--baseline", a.baseline_m,
+                  "stereo baseline in metres (default: the file's, else 0.54)");
+    s->add_option("--camera-height", o.rig.camera_height_m,
+                  "camera above the road in metres (ground underlay)")
+        ->capture_default_str();
+    s->add_option("--noise", o.sensor.noise_sigma,
+                  "Gaussian noise, standard deviation in 8-bit levels")
+        ->capture_default_str();
+    s->add_option("--blur", o.sensor.blur_sigma_px, "Gaussian blur, standard deviation in pixels")
+        ->capture_default_str();
+    s->add_option("--right-gain", o.sensor.right_gain,
+                  "gain of the right camera relative to the left")
+        ->capture_default_str();
+    s->add_flag("--vignetting", o.sensor.vignetting, "darken the corners of both images");
+    s->add_option("--msaa", o.msaa_samples, "colour images: multisample count, 0 = off")
+        ->capture_default_str();
+    s->add_flag("--no-ground", a.no_ground, "no terrain underlay under the road level");
+    s->add_flag("--boxes", a.boxes, "draw every entity as a box (no glTF models)");
+    s->add_option("--classes", a.classes,
+                  "class table (default: assets/classes/render_classes.json)");
+    return s;
+}
+
+namespace {
+
+/// The rig: the document's (or KITTI's), replaced by --rig, then resized and re-based.
+StereoRig resolve_rig(const SensorsArgs& a, const scene_schema::EntityDocument& document) {
+    StereoRig rig = rig_for(document, a.options.rig);
+    if (!a.rig.empty()) {
+        std::ifstream in(a.rig, std::ios::binary);
+        if (!in) throw Failure{"cannot read rig", std::strerror(errno), a.rig};
+        std::stringstream text;
+        text << in.rdbuf();
+        try {
+            const double height = rig.camera_height_m;
+            rig = parse_kitti_calib(text.str());
+            rig.camera_height_m = height;
+        } catch (const std::invalid_argument& e) {
+            throw Failure{"invalid rig", e.what(), a.rig};
+        }
+    }
+    if (!a.size.empty()) {
+        const auto [w, h] = size_flag(a.size, "--size");
+        rig = rig.resized(w, h);
+    }
+    if (a.baseline_m) rig.baseline_m = *a.baseline_m;
+    return rig;
+}
+
+}  // namespace
+
+int run_sensors(SensorsArgs a) {
+    const auto document = read_entities(a.input);
+    a.options.rig = resolve_rig(a, document);
+    a.options.ground_underlay = !a.no_ground;
+    try {
+        a.options.validate();
+    } catch (const std::invalid_argument& e) {
+        usage(e.what(), "sensors");
+    }
+    try {
+        check_frame_name(a.frame);
+    } catch (const std::invalid_argument& e) {
+        usage(e.what(), "--frame");
+    }
+    const auto classes = read_classes(a.boxes, a.classes);
+    auto gpu = start_gpu(classes);
+    std::map<std::string, std::string> files;
+    try {
+        files =
+            kitti_layout_files(render_stereo_frame(gpu->renderer, document, a.options), a.frame);
+    } catch (const std::invalid_argument& e) {
+        throw Failure{"cannot render the sensors", e.what(), a.input};
+    }
+    try {
+        write_files(a.out, files);
+    } catch (const std::exception& e) {
+        throw Failure{"cannot write the sensor files", e.what(), a.out};
+    }
+    return 0;
+}
+
+}  // namespace scene_render

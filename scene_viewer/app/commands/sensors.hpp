@@ -1,0 +1,31 @@
+#pragma once
+
+/// `sensors`: a stereo rig's view of a scene, written as a KITTI-like folder.
+
+#include <optional>
+#include <string>
+
+#include "common.hpp"
+#include "scene_viewer/sensors/stereo_sensors.hpp"
+
+namespace scene_render {
+
+struct SensorsArgs {
+    std::string input;                    ///< entity file: the scene (KITTI camera frame)
+    std::string out;                      ///< output folder (KITTI layout)
+    std::string frame = "000000";         ///< frame name of the files
+    std::string rig;                      ///< KITTI calib_cam_to_cam.txt; empty: the file's camera
+    std::string size;                     ///< image size WxH; empty: the rig's
+    std::optional<double> baseline_m;     ///< stereo baseline, metres; none: the rig's
+    bool no_ground = false;               ///< no terrain underlay under the road level
+    bool boxes = false;                   ///< boxes instead of glTF models
+    std::string classes;                  ///< class table; empty: the bundled one
+    scene_viewer::SensorOptions options;  ///< noise, blur, gain, vignetting, MSAA, seed
+};
+
+CLI::App* add_sensors_command(CLI::App& app, SensorsArgs& args);
+
+/// Renders and writes the frame's files; throws Failure.
+int run_sensors(SensorsArgs args);
+
+}  // namespace scene_render
