@@ -60,6 +60,44 @@ TEST_CASE("Component pools store components contiguously and find them by entity
     CHECK(world.transforms.size() == 0);
 }
 
+TEST_CASE("for_each visits the entities that have every component, in the first pool's order",
+          "[ecs]") {
+    World world;
+    const EntityId a = world.create(), b = world.create(), c = world.create();
+    world.meshes.set(c, MeshRef{3});
+    world.meshes.set(a, MeshRef{1});
+    world.meshes.set(b, MeshRef{2});
+    world.materials.set(a, Material{});
+    world.materials.set(c, Material{});
+    world.sources.set(c, SourceEntity{0, "c", 26, "car"});
+    world.sources.set(b, SourceEntity{1, "b", 26, "car"});
+
+    std::vector<EntityId> seen;
+    for_each([&](EntityId e, MeshRef&, Material&) { seen.push_back(e); }, world.meshes,
+             world.materials);
+    CHECK(seen == std::vector<EntityId>{c, a});  // b has no material
+
+    seen.clear();
+    for_each([&](EntityId e, MeshRef&, Material&, SourceEntity&) { seen.push_back(e); },
+             world.meshes, world.materials, world.sources);
+    CHECK(seen == std::vector<EntityId>{c});
+
+    // Components are handed out by reference: writes land in the pools.
+    for_each([](EntityId, MeshRef& m) { m.model += 10; }, world.meshes);
+    CHECK(world.meshes.get(b)->model == 12);
+
+    // Const pools give const components, and the join is driven by the first pool.
+    const World& view = world;
+    std::uint32_t sum = 0;
+    for_each([&](EntityId, const SourceEntity&, const MeshRef& m) { sum += m.model; }, view.sources,
+             view.meshes);
+    CHECK(sum == 13 + 12);
+    const World empty;
+    seen.clear();
+    for_each([&](EntityId e, const Material&) { seen.push_back(e); }, empty.materials);
+    CHECK(seen.empty());
+}
+
 TEST_CASE("An entity becomes one draw whose world matrix places, turns and scales the box",
           "[ecs][systems]") {
     NullDevice device;

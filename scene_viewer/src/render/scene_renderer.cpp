@@ -13,42 +13,6 @@
 
 namespace scene_viewer {
 
-Shading parse_shading(const std::string& name) {
-    if (name == "lit") return Shading::lit;
-    if (name == "semantic") return Shading::semantic;
-    if (name == "instance") return Shading::instance;
-    throw std::invalid_argument("unknown shading '" + name + "' (lit, semantic, instance)");
-}
-
-Antialias parse_antialias(const std::string& name) {
-    if (name == "fxaa") return Antialias::fxaa;
-    if (name == "msaa") return Antialias::msaa;
-    if (name == "none") return Antialias::none;
-    throw std::invalid_argument("unknown antialiasing '" + name + "' (fxaa, msaa, none)");
-}
-
-void RenderOptions::validate() const {
-    if (width_px < 1 || width_px > kMaxImageSide)
-        throw std::invalid_argument("width_px must be in 1.." + std::to_string(kMaxImageSide));
-    if (height_px < 1 || height_px > kMaxImageSide)
-        throw std::invalid_argument("height_px must be in 1.." + std::to_string(kMaxImageSide));
-    if (msaa_samples < 0 || msaa_samples > 16)
-        throw std::invalid_argument("msaa_samples must be in 0..16");
-    // FXAA renders into a second single-sample target: it counts as 2 samples.
-    const bool lit = shading == Shading::lit;
-    const int samples_per_pixel = !lit                           ? 1
-                                  : antialias == Antialias::msaa ? std::max(1, msaa_samples)
-                                  : antialias == Antialias::fxaa ? 2
-                                                                 : 1;
-    if (static_cast<long long>(width_px) * height_px * samples_per_pixel > kMaxFrameSamples)
-        throw std::invalid_argument("width_px * height_px * msaa_samples (2 for fxaa) must be <= " +
-                                    std::to_string(kMaxFrameSamples) +
-                                    " (lower --size or --msaa, or --antialias none)");
-    if (!(point_size_px >= 1.0f && point_size_px <= 64.0f))
-        throw std::invalid_argument("point_size_px must be in 1..64");
-    view.validate();
-}
-
 SceneRenderer::SceneRenderer(Device& device) : device_(&device), models_(device) {
     models_.put("box", unit_box_mesh());
 }
@@ -86,43 +50,36 @@ ImageRgba8 SceneRenderer::render_frame() {
 
 std::set<std::string> SceneRenderer::classes_drawn_as_boxes() const {
     std::set<std::string> names;
-    const auto& owners = world_.meshes.owners();
-    const auto& meshes = world_.meshes.dense();
-    for (std::size_t i = 0; i < meshes.size(); ++i) {
-        const SourceEntity* source = world_.sources.get(owners[i]);
-        if (source == nullptr || source->index < 0) continue;
-        if (is_ground_class(source->class_id, source->class_name)) continue;
-        if (models_.at(meshes[i].model).key == "box") names.insert(source->class_name);
-    }
+    const auto collect = [&](EntityId, const MeshRef& mesh, const SourceEntity& source) {
+        if (source.index < 0 || is_ground_class(source.class_id, source.class_name)) return;
+        if (models_.at(mesh.model).key == "box") names.insert(source.class_name);
+    };
+    for_each(collect, world_.meshes, world_.sources);
     return names;
 }
 
 std::vector<PlacedModel> SceneRenderer::placed_models() {
     update_world_matrices(world_);
     std::vector<PlacedModel> placed;
-    const auto& owners = world_.meshes.owners();
-    const auto& meshes = world_.meshes.dense();
-    for (std::size_t i = 0; i < meshes.size(); ++i) {
-        const EntityId e = owners[i];
-        const SourceEntity* source = world_.sources.get(e);
-        const WorldMatrix* world_matrix = world_.world_matrices.get(e);
-        if (source == nullptr || world_matrix == nullptr || !meshes[i].fit_to_transform) continue;
-        const std::string& key = models_.at(meshes[i].model).key;
+    const auto place = [&](EntityId, const MeshRef& mesh, const SourceEntity& source,
+                           const WorldMatrix& world_matrix) {
+        if (!mesh.fit_to_transform) return;
+        const std::string& key = models_.at(mesh.model).key;
         const Model* model = nullptr;
         if (key.rfind("class:", 0) == 0) {
             model = &class_models_.at(key.substr(6));
         } else {
-            auto it = export_boxes_.find(source->class_name);
+            auto it = export_boxes_.find(source.class_name);
             if (it == export_boxes_.end()) {
-                const Rgb8 colour = class_colour(source->class_id, source->class_name);
-                it =
-                    export_boxes_.emplace(source->class_name, make_box_model(linear_colour(colour)))
-                        .first;
+                const Rgb8 colour = class_colour(source.class_id, source.class_name);
+                it = export_boxes_.emplace(source.class_name, make_box_model(linear_colour(colour)))
+                         .first;
             }
             model = &it->second;
         }
-        placed.push_back(PlacedModel{model, world_matrix->value, source->id});
-    }
+        placed.push_back(PlacedModel{model, world_matrix.value, source.id});
+    };
+    for_each(place, world_.meshes, world_.sources, world_.world_matrices);
     return placed;
 }
 

@@ -3,9 +3,11 @@
 #include <algorithm>
 #include <cmath>
 
+#include "scene_viewer/render/colours.hpp"
 #include "scene_viewer/render/coordinates.hpp"
 #include "scene_viewer/render/palette.hpp"
-#include "scene_viewer/render/scene_renderer.hpp"
+#include "scene_viewer/render/render_options.hpp"
+#include "scene_viewer/views/views.hpp"
 
 namespace scene_viewer {
 

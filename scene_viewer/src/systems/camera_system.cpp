@@ -1,5 +1,7 @@
 #include "scene_viewer/systems/camera_system.hpp"
 
+#include "scene_viewer/views/views.hpp"
+
 namespace scene_viewer {
 
 void update_cameras(World& world) {

@@ -12,28 +12,23 @@ void render_world(const World& world, const ModelLibrary& models, Device& device
     setup.height_px = camera.height_px;
     const glm::mat4 view_projection = camera.projection * camera.view;
     device.begin_frame(setup);
-    const auto& owners = world.meshes.owners();
-    const auto& meshes = world.meshes.dense();
-    for (std::size_t i = 0; i < meshes.size(); ++i) {
-        const EntityId e = owners[i];
-        const Material* material = world.materials.get(e);
-        const WorldMatrix* world_matrix = world.world_matrices.get(e);
-        if (material == nullptr || world_matrix == nullptr) continue;
-        const UploadedModel& model = models.at(meshes[i].model);
-        for (const UploadedPrimitive& p : model.primitives) {
+    const auto draw = [&](EntityId, const MeshRef& mesh, const Material& material,
+                          const WorldMatrix& world_matrix) {
+        for (const UploadedPrimitive& p : models.at(mesh.model).primitives) {
             DrawCall call;
             call.mesh = p.mesh;
-            call.texture = material->lit ? p.texture : TextureHandle{};
-            call.model = world_matrix->value * p.node_transform;
+            call.texture = material.lit ? p.texture : TextureHandle{};
+            call.model = world_matrix.value * p.node_transform;
             call.view_projection = view_projection;
-            call.colour = material->lit ? material->colour * p.base_colour : material->colour;
-            call.lit = material->lit;
-            call.vertex_colour = material->vertex_colour;
-            call.point_size_px = material->point_size_px;
-            call.procedural = material->procedural;
+            call.colour = material.lit ? material.colour * p.base_colour : material.colour;
+            call.lit = material.lit;
+            call.vertex_colour = material.vertex_colour;
+            call.point_size_px = material.point_size_px;
+            call.procedural = material.procedural;
             device.draw(call);
         }
-    }
+    };
+    for_each(draw, world.meshes, world.materials, world.world_matrices);
     device.end_frame();
 }
 

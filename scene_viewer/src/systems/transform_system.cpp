@@ -5,11 +5,9 @@
 namespace scene_viewer {
 
 void update_world_matrices(World& world) {
-    const auto& owners = world.meshes.owners();
-    const auto& meshes = world.meshes.dense();
-    for (std::size_t i = 0; i < meshes.size(); ++i) {
-        const EntityId e = owners[i];
-        const MeshRef& mesh = meshes[i];
+    // Every mesh gets a world matrix: helpers without a Transform (grid, cloud) are already in
+    // world metres and take the frame change alone.
+    const auto place = [&](EntityId e, const MeshRef& mesh) {
         const Transform* t = world.transforms.get(e);
         glm::mat4 m = gl_from_kitti();
         if (mesh.fit_to_transform && t != nullptr) {
@@ -20,7 +18,8 @@ void update_world_matrices(World& world) {
         } else {
             world.world_matrices.set(e, WorldMatrix{m});
         }
-    }
+    };
+    for_each(place, world.meshes);
 }
 
 }  // namespace scene_viewer

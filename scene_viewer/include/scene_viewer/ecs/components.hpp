@@ -8,7 +8,7 @@
 
 #include <glm/glm.hpp>
 
-#include "scene_viewer/views/views.hpp"
+#include "scene_viewer/ecs/view_spec.hpp"
 
 namespace scene_viewer {
 

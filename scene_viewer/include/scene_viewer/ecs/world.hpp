@@ -5,6 +5,7 @@
 
 #include <cstdint>
 #include <limits>
+#include <tuple>
 #include <vector>
 
 #include "scene_viewer/ecs/components.hpp"
@@ -47,6 +48,22 @@ class ComponentPool {
     std::vector<T> dense_;
     std::vector<EntityId> owners_;
 };
+
+/// Calls f(entity, first_component, other_components...) for every entity that has a component
+/// in each pool, in the order of `first`'s dense array (the pool that drives the join). Pools
+/// passed const give const components. f must not add to or remove from the pools.
+template <class F, class First, class... Rest>
+void for_each(F&& f, First& first, Rest&... rest) {
+    const auto& owners = first.owners();
+    auto& dense = first.dense();
+    for (std::size_t i = 0; i < dense.size(); ++i) {
+        const EntityId e = owners[i];
+        const auto components = std::make_tuple(rest.get(e)...);
+        const bool all = std::apply([](auto*... p) { return ((p != nullptr) && ...); }, components);
+        if (!all) continue;
+        std::apply([&](auto*... p) { f(e, dense[i], *p...); }, components);
+    }
+}
 
 /// All entities and their components (the thesis's Engine holds one World).
 struct World {
