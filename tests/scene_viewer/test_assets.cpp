@@ -8,9 +8,12 @@
 
 #include <unistd.h>
 
+#include <nlohmann/json.hpp>
+
 #include <scene_viewer/assets/class_table.hpp>
 #include <scene_viewer/assets/gltf_loader.hpp>
 #include <scene_viewer/assets/image_io.hpp>
+#include <scene_viewer/render/palette.hpp>
 
 namespace fs = std::filesystem;
 using scene_viewer::load_model;
@@ -106,43 +109,79 @@ TEST_CASE("the shipped car faces +z: headlights at the front, tail lights at the
     CHECK(taillight_z < -2.0f);
 }
 
+namespace {
+
+/// The bundled Cityscapes palette, the one source of class names, ids and colours.
+struct PaletteClass {
+    int id;
+    std::array<std::uint8_t, 3> colour;
+};
+std::map<std::string, PaletteClass> cityscapes_palette() {
+    std::ifstream in(fs::path(STEREOSCENE_SOURCE_DIR) / "assets" / "palettes" / "cityscapes.json");
+    const nlohmann::json j = nlohmann::json::parse(in);
+    std::map<std::string, PaletteClass> out;
+    for (const auto& c : j.at("classes")) {
+        out[c.at("name").get<std::string>()] =
+            PaletteClass{c.at("id").get<int>(), c.at("colour").get<std::array<std::uint8_t, 3>>()};
+    }
+    return out;
+}
+
+}  // namespace
+
+TEST_CASE("the class table and the renderer's palette agree with the palette file", "[assets]") {
+    const auto palette = cityscapes_palette();
+    REQUIRE(palette.size() > 20);
+    const scene_viewer::ClassTable table =
+        scene_viewer::load_class_table(scene_viewer::default_class_table_path());
+    for (const scene_viewer::RenderClass& c : table.classes) {
+        INFO(c.name);
+        REQUIRE(palette.count(c.name) == 1);
+        CHECK(c.class_id == palette.at(c.name).id);
+        CHECK(c.colour_srgb == palette.at(c.name).colour);
+    }
+    int known = 0;
+    for (int id = 0; id < 256; ++id) {
+        const auto entry = scene_viewer::cityscapes_by_id(id);
+        if (!entry) continue;
+        ++known;
+        INFO(entry->name);
+        REQUIRE(palette.count(entry->name) == 1);
+        CHECK(palette.at(entry->name).id == id);
+        CHECK(entry->colour == palette.at(entry->name).colour);
+        CHECK(scene_viewer::cityscapes_by_name(entry->name)->class_id == id);
+    }
+    CHECK(known == 21);
+    for (const auto& [name, c] : palette) {
+        const auto entry = scene_viewer::cityscapes_by_name(name);
+        if (entry) CHECK(entry->class_id == c.id);
+    }
+}
+
 TEST_CASE("the class table maps every class to its labelId, palette colour and model", "[assets]") {
     const scene_viewer::ClassTable table =
         scene_viewer::load_class_table(scene_viewer::default_class_table_path());
+    const auto palette = cityscapes_palette();
     struct Expected {
         const char* name;
-        int id;
-        std::array<std::uint8_t, 3> colour;
         scene_viewer::RenderKind kind;
     };
     using K = scene_viewer::RenderKind;
     const Expected expected[] = {
-        {"road", 7, {128, 64, 128}, K::Ground},
-        {"sidewalk", 8, {244, 35, 232}, K::Ground},
-        {"building", 11, {70, 70, 70}, K::Block},
-        {"wall", 12, {102, 102, 156}, K::Block},
-        {"fence", 13, {190, 153, 153}, K::Block},
-        {"pole", 17, {153, 153, 153}, K::Object},
-        {"traffic light", 19, {250, 170, 30}, K::Object},
-        {"traffic sign", 20, {220, 220, 0}, K::Object},
-        {"vegetation", 21, {107, 142, 35}, K::Object},
-        {"terrain", 22, {152, 251, 152}, K::Ground},
-        {"person", 24, {220, 20, 60}, K::Object},
-        {"rider", 25, {255, 0, 0}, K::Object},
-        {"car", 26, {0, 0, 142}, K::Object},
-        {"truck", 27, {0, 0, 70}, K::Object},
-        {"bus", 28, {0, 60, 100}, K::Object},
-        {"train", 31, {0, 80, 100}, K::Object},
-        {"motorcycle", 32, {0, 0, 230}, K::Object},
-        {"bicycle", 33, {119, 11, 32}, K::Object},
+        {"road", K::Ground},          {"sidewalk", K::Ground},     {"building", K::Block},
+        {"wall", K::Block},           {"fence", K::Block},         {"pole", K::Object},
+        {"traffic light", K::Object}, {"traffic sign", K::Object}, {"vegetation", K::Object},
+        {"terrain", K::Ground},       {"person", K::Object},       {"rider", K::Object},
+        {"car", K::Object},           {"truck", K::Object},        {"bus", K::Object},
+        {"train", K::Object},         {"motorcycle", K::Object},   {"bicycle", K::Object},
     };
     CHECK(table.classes.size() == std::size(expected));
     for (const Expected& e : expected) {
         INFO(e.name);
         const scene_viewer::RenderClass* row = table.find(std::string_view(e.name));
         REQUIRE(row != nullptr);
-        CHECK(table.find(e.id) == row);
-        CHECK(row->colour_srgb == e.colour);
+        CHECK(table.find(palette.at(e.name).id) == row);
+        CHECK(row->colour_srgb == palette.at(e.name).colour);
         CHECK(row->kind == e.kind);
     }
     for (const char* name : {"car", "truck", "bus", "person", "rider", "bicycle", "motorcycle",

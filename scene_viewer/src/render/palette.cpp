@@ -7,29 +7,10 @@ namespace scene_viewer {
 
 namespace {
 
-// Cityscapes labels (cityscapesScripts helpers/labels.py), the classes the project uses.
+// The Cityscapes classes the renderer draws: names, labelIds and colours generated from
+// assets/palettes/cityscapes.json (scene_viewer/CMakeLists.txt), ground patches marked.
 constexpr PaletteEntry kCityscapes[] = {
-    {7, "road", {128, 64, 128}, true},
-    {8, "sidewalk", {244, 35, 232}, true},
-    {9, "parking", {250, 170, 160}, true},
-    {10, "rail track", {230, 150, 140}, true},
-    {11, "building", {70, 70, 70}, false},
-    {12, "wall", {102, 102, 156}, false},
-    {13, "fence", {190, 153, 153}, false},
-    {17, "pole", {153, 153, 153}, false},
-    {19, "traffic light", {250, 170, 30}, false},
-    {20, "traffic sign", {220, 220, 0}, false},
-    {21, "vegetation", {107, 142, 35}, false},
-    {22, "terrain", {152, 251, 152}, true},
-    {23, "sky", {70, 130, 180}, false},
-    {24, "person", {220, 20, 60}, false},
-    {25, "rider", {255, 0, 0}, false},
-    {26, "car", {0, 0, 142}, false},
-    {27, "truck", {0, 0, 70}, false},
-    {28, "bus", {0, 60, 100}, false},
-    {31, "train", {0, 80, 100}, false},
-    {32, "motorcycle", {0, 0, 230}, false},
-    {33, "bicycle", {119, 11, 32}, false},
+#include "scene_viewer/cityscapes_table.inc"
 };
 
 }  // namespace
