@@ -1,4 +1,4 @@
-# The closed loop of issue 5: for every committed rendered sample (samples/rendered/<scene>/ in
+# The closed loop: for every committed rendered sample (samples/rendered/<scene>/ in
 # KITTI layout, ground truth samples/rendered/<scene>/scene.json or
 # samples/rendered/scenes/<scene>.json), run cloud-analysis with the default settings, then
 # score the entities against the scene file with the bars of docs/evaluation.md "Closed loop".
@@ -108,8 +108,8 @@ foreach(_calib IN LISTS _loop_calibs)
     endforeach()
 endforeach()
 # The same scenes rendered at test time with KITTI's full rig (scene-render sensors' default:
-# 1242x375, fx 721.5 px, baseline 0.54 m, seed 0), as issue 5 asks of CI: render the samples'
-# sensors, reconstruct, score. These run with the issue's bars for every scene; the committed
+# 1242x375, fx 721.5 px, baseline 0.54 m, seed 0): render the samples' sensors, reconstruct,
+# score. These run with the closed loop's bars for every scene; the committed
 # samples are the same renders, so these also check that scene-render still makes frames on
 # which the loop meets the bars.
 if(TARGET scene-render)

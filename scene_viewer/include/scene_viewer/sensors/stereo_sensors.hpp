@@ -1,6 +1,6 @@
 #pragma once
 
-/// Synthetic stereo sensors (issue 5): what a rectified stereo rig sees of a known scene. The
+/// Synthetic stereo sensors: what a rectified stereo rig sees of a known scene. The
 /// left and right colour images (world-fixed procedural texture, sky, light, then a seeded sensor
 /// model), the semantic and KITTI instance images, ground-truth disparity and depth of the left
 /// view, and the rig's calibration in KITTI's calib_cam_to_cam.txt form. Like CARLA's
