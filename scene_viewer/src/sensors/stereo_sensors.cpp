@@ -132,26 +132,30 @@ std::vector<float> disparity_from_window_depth(const std::vector<float>& window_
     return disparity;
 }
 
-StereoFrame render_stereo_frame(SceneRenderer& renderer,
-                                const scene_schema::EntityDocument& document,
-                                const SensorOptions& options) {
-    options.validate();
-    const StereoRig& rig = options.rig;
-    scene_schema::EntityDocument scene = document;
-    if (options.ground_underlay) {
-        // Appended after the file's entities, so their instance ids do not change. Its top lies
-        // 1 cm under the road level, under any road patch of the file.
-        scene_schema::Entity underlay;
-        underlay.id = kUnderlayId;
-        underlay.class_name = "terrain";
-        underlay.class_id = 22;
-        underlay.theta = -M_PI / 2;
-        underlay.W = underlay.L = options.underlay_size_m;
-        underlay.H = 0.02;
-        underlay.y = rig.camera_height_m + 0.02;
-        scene.entities.push_back(underlay);
-    }
+namespace {
 
+/// The document's entities, plus (when asked) a terrain underlay. The underlay is appended
+/// after the file's entities, so their instance ids do not change; its top lies 1 cm under the
+/// road level, under any road patch of the file.
+scene_schema::EntityDocument scene_with_underlay(const scene_schema::EntityDocument& document,
+                                                 const SensorOptions& options) {
+    scene_schema::EntityDocument scene = document;
+    if (!options.ground_underlay) return scene;
+    scene_schema::Entity underlay;
+    underlay.id = kUnderlayId;
+    underlay.class_name = "terrain";
+    underlay.class_id = 22;
+    underlay.theta = -M_PI / 2;
+    underlay.W = underlay.L = options.underlay_size_m;
+    underlay.H = 0.02;
+    underlay.y = options.rig.camera_height_m + 0.02;
+    scene.entities.push_back(underlay);
+    return scene;
+}
+
+/// Render options of the rig's left camera: its intrinsics, procedural texture, MSAA.
+RenderOptions rig_render_options(const SensorOptions& options) {
+    const StereoRig& rig = options.rig;
     RenderOptions o;
     o.width_px = rig.width_px;
     o.height_px = rig.height_px;
@@ -176,23 +180,14 @@ StereoFrame render_stereo_frame(SceneRenderer& renderer,
     o.procedural_texture = true;
     o.antialias = Antialias::msaa;
     o.msaa_samples = options.msaa_samples;
+    return o;
+}
 
-    StereoFrame frame;
-    frame.rig = rig;
-    o.shading = Shading::lit;
-    const ImageRgba8 left = renderer.render(scene, nullptr, o);
-    o.view.camera_position_kitti = {static_cast<float>(rig.baseline_m), 0.0f, 0.0f};
-    const ImageRgba8 right = renderer.render(scene, nullptr, o);
-    o.view.camera_position_kitti = glm::vec3(0.0f);
-    frame.left = apply_sensor_model(composite_sky(left, rig.cy_px), 0, options.sensor);
-    frame.right = apply_sensor_model(composite_sky(right, rig.cy_px), 1, options.sensor);
-
-    o.shading = Shading::semantic;
-    const ImageRgba8 semantic = renderer.render(scene, nullptr, o);
-    const std::vector<float> window_depth = renderer.read_depth();
-    o.shading = Shading::instance;
-    const ImageRgba8 instance = renderer.render(scene, nullptr, o);
-
+/// The semantic (sky where nothing was drawn), instance, disparity and depth images of the
+/// left view from its semantic and instance renders and window depth.
+void fill_ground_truth(StereoFrame& frame, const ImageRgba8& semantic, const ImageRgba8& instance,
+                       const std::vector<float>& window_depth, const SensorOptions& options) {
+    const StereoRig& rig = options.rig;
     const int w = rig.width_px, h = rig.height_px;
     const std::size_t count = static_cast<std::size_t>(w) * h;
     const Rgb8 sky = class_colour(23, "sky");
@@ -218,8 +213,14 @@ StereoFrame render_stereo_frame(SceneRenderer& renderer,
             frame.depth_mm.values[i] = mm <= 65535 ? static_cast<std::uint16_t>(mm) : 0;
         }
     }
+}
 
-    // Visibility of every thing entity: its pixels in the instance image, and alone.
+/// Visibility of every thing entity: its pixels in the instance image, and alone (rendered
+/// with `o`, instance shading).
+void add_visibility(StereoFrame& frame, SceneRenderer& renderer,
+                    const scene_schema::EntityDocument& document,
+                    const scene_schema::EntityDocument& scene, const RenderOptions& o) {
+    const std::size_t count = frame.instance.values.size();
     std::vector<int> class_ids;
     for (const auto& e : scene.entities) class_ids.push_back(e.class_id);
     const std::vector<std::uint16_t> ids = kitti_instance_ids(class_ids);
@@ -240,6 +241,35 @@ StereoFrame render_stereo_frame(SceneRenderer& renderer,
         for (std::size_t i = 0; i < count; ++i) record.unoccluded_px += solo.pixels[i * 4 + 3] != 0;
         frame.visibility.push_back(record);
     }
+}
+
+}  // namespace
+
+StereoFrame render_stereo_frame(SceneRenderer& renderer,
+                                const scene_schema::EntityDocument& document,
+                                const SensorOptions& options) {
+    options.validate();
+    const StereoRig& rig = options.rig;
+    const scene_schema::EntityDocument scene = scene_with_underlay(document, options);
+    RenderOptions o = rig_render_options(options);
+
+    StereoFrame frame;
+    frame.rig = rig;
+    o.shading = Shading::lit;
+    const ImageRgba8 left = renderer.render(scene, nullptr, o);
+    o.view.camera_position_kitti = {static_cast<float>(rig.baseline_m), 0.0f, 0.0f};
+    const ImageRgba8 right = renderer.render(scene, nullptr, o);
+    o.view.camera_position_kitti = glm::vec3(0.0f);
+    frame.left = apply_sensor_model(composite_sky(left, rig.cy_px), 0, options.sensor);
+    frame.right = apply_sensor_model(composite_sky(right, rig.cy_px), 1, options.sensor);
+
+    o.shading = Shading::semantic;
+    const ImageRgba8 semantic = renderer.render(scene, nullptr, o);
+    const std::vector<float> window_depth = renderer.read_depth();
+    o.shading = Shading::instance;
+    const ImageRgba8 instance = renderer.render(scene, nullptr, o);
+    fill_ground_truth(frame, semantic, instance, window_depth, options);
+    add_visibility(frame, renderer, document, scene, o);
     return frame;
 }
 

@@ -66,11 +66,10 @@ MeshData cloud_mesh(const PointCloud& cloud, Shading shading) {
     return m;
 }
 
-}  // namespace
-
-void build_scene(World& world, const scene_schema::EntityDocument& document,
-                 const PointCloud* cloud, const RenderOptions& options, ModelLibrary& models) {
-    world.clear();
+/// One entity per document entity (ground classes as flat patches on their box's bottom face);
+/// returns the top of the highest ground patch (KITTI y), or the default camera height.
+float add_document_entities(World& world, const scene_schema::EntityDocument& document,
+                            const RenderOptions& options, ModelLibrary& models) {
     const bool lit = options.shading == Shading::lit;
     const std::uint32_t box = *models.find("box");
     float ground_top_y = kDefaultCameraHeight;
@@ -126,35 +125,41 @@ void build_scene(World& world, const scene_schema::EntityDocument& document,
         world.sources.set(
             e, SourceEntity{static_cast<std::int32_t>(i), src.id, src.class_id, src.class_name});
     }
+    return ground_top_y;
+}
 
-    const ViewKind kind = options.view.kind;
-    if (options.ego && kind != ViewKind::camera) {
-        // The ego car under the camera: KITTI's camera sits 1.65 m above the road, about 1 m
-        // ahead of the car's centre.
-        const EntityId e = world.create();
-        const float car_h = 1.5f;
-        world.transforms.set(
-            e,
-            Transform{{0.0f, ground_top_y - 0.5f * car_h, -1.0f}, -M_PI / 2, {1.8f, car_h, 4.4f}});
-        MeshRef mesh{box, glm::mat4(1.0f), true};
-        glm::vec4 lit_colour = to_colour(kLitEgoColour);
-        if (auto m = models.find("class:car")) {
-            const UploadedModel& model = models.at(*m);
-            mesh = MeshRef{*m, fit_bounds_to_unit_cube(model.bounds_min, model.bounds_max), true};
-            lit_colour = glm::vec4(1.0f);
-        }
-        world.meshes.set(e, mesh);
-        Material material;
-        material.colour = lit ? lit_colour : to_colour(class_colour(26, "car"));
-        material.lit = lit;
-        world.materials.set(e, material);
-        world.sources.set(e, SourceEntity{-1, "ego", 26, "car"});
+/// The ego car under the camera: KITTI's camera sits 1.65 m above the road, about 1 m ahead of
+/// the car's centre.
+void add_ego(World& world, const RenderOptions& options, ModelLibrary& models, float ground_top_y) {
+    const bool lit = options.shading == Shading::lit;
+    const EntityId e = world.create();
+    const float car_h = 1.5f;
+    world.transforms.set(
+        e, Transform{{0.0f, ground_top_y - 0.5f * car_h, -1.0f}, -M_PI / 2, {1.8f, car_h, 4.4f}});
+    MeshRef mesh{*models.find("box"), glm::mat4(1.0f), true};
+    glm::vec4 lit_colour = to_colour(kLitEgoColour);
+    if (auto m = models.find("class:car")) {
+        const UploadedModel& model = models.at(*m);
+        mesh = MeshRef{*m, fit_bounds_to_unit_cube(model.bounds_min, model.bounds_max), true};
+        lit_colour = glm::vec4(1.0f);
     }
+    world.meshes.set(e, mesh);
+    Material material;
+    material.colour = lit ? lit_colour : to_colour(class_colour(26, "car"));
+    material.lit = lit;
+    world.materials.set(e, material);
+    world.sources.set(e, SourceEntity{-1, "ego", 26, "car"});
+}
 
+/// The camera entity: the options' view, the frame's camera for the camera view, a BEV framing
+/// every entity when asked. Returns the camera's view.
+ViewSpec add_camera(World& world, const scene_schema::EntityDocument& document,
+                    const RenderOptions& options) {
     Camera camera;
     camera.width_px = options.width_px;
     camera.height_px = options.height_px;
     camera.spec = options.view;
+    const ViewKind kind = options.view.kind;
     if (kind == ViewKind::camera && !camera.spec.intrinsics) {
         camera.spec.intrinsics = document.frame.camera;
     }
@@ -167,36 +172,53 @@ void build_scene(World& world, const scene_schema::EntityDocument& document,
     const EntityId camera_entity = world.create();
     world.cameras.set(camera_entity, camera);
     world.sources.set(camera_entity, SourceEntity{-1, "camera", 0, ""});
+    return camera.spec;
+}
 
-    if (kind == ViewKind::bev && options.grid) {
-        const float aspect =
-            static_cast<float>(options.width_px) / static_cast<float>(options.height_px);
-        const float hh = camera.spec.bev_half_height_m, hw = hh * aspect;
-        const glm::vec2 c = camera.spec.bev_centre_xz;
-        // Just above the highest ground patch: visible on the road, hidden under objects.
-        const int step = grid_step_m(static_cast<float>(options.height_px) / (2.0f * hh));
-        const std::uint32_t grid = models.put(
-            "grid", grid_mesh(c.x - hw, c.x + hw, c.y - hh, c.y + hh, ground_top_y - 0.01f, step));
-        const EntityId e = world.create();
-        world.meshes.set(e, MeshRef{grid, glm::mat4(1.0f), false});
-        Material material;
-        material.lit = false;
-        material.vertex_colour = true;
-        world.materials.set(e, material);
-        world.sources.set(e, SourceEntity{-1, "grid", 0, ""});
-    }
+/// The BEV's metre grid over the camera's view, just above the highest ground patch: visible
+/// on the road, hidden under objects.
+void add_grid(World& world, const RenderOptions& options, const ViewSpec& spec,
+              ModelLibrary& models, float ground_top_y) {
+    const float aspect =
+        static_cast<float>(options.width_px) / static_cast<float>(options.height_px);
+    const float hh = spec.bev_half_height_m, hw = hh * aspect;
+    const glm::vec2 c = spec.bev_centre_xz;
+    const int step = grid_step_m(static_cast<float>(options.height_px) / (2.0f * hh));
+    const std::uint32_t grid = models.put(
+        "grid", grid_mesh(c.x - hw, c.x + hw, c.y - hh, c.y + hh, ground_top_y - 0.01f, step));
+    const EntityId e = world.create();
+    world.meshes.set(e, MeshRef{grid, glm::mat4(1.0f), false});
+    Material material;
+    material.lit = false;
+    material.vertex_colour = true;
+    world.materials.set(e, material);
+    world.sources.set(e, SourceEntity{-1, "grid", 0, ""});
+}
 
-    if (cloud != nullptr && cloud->size() > 0) {
-        const std::uint32_t points = models.put("cloud", cloud_mesh(*cloud, options.shading));
-        const EntityId e = world.create();
-        world.meshes.set(e, MeshRef{points, glm::mat4(1.0f), false});
-        Material material;
-        material.lit = false;
-        material.vertex_colour = true;
-        material.point_size_px = options.point_size_px;
-        world.materials.set(e, material);
-        world.sources.set(e, SourceEntity{-1, "cloud", 0, ""});
-    }
+void add_cloud(World& world, const PointCloud& cloud, const RenderOptions& options,
+               ModelLibrary& models) {
+    const std::uint32_t points = models.put("cloud", cloud_mesh(cloud, options.shading));
+    const EntityId e = world.create();
+    world.meshes.set(e, MeshRef{points, glm::mat4(1.0f), false});
+    Material material;
+    material.lit = false;
+    material.vertex_colour = true;
+    material.point_size_px = options.point_size_px;
+    world.materials.set(e, material);
+    world.sources.set(e, SourceEntity{-1, "cloud", 0, ""});
+}
+
+}  // namespace
+
+void build_scene(World& world, const scene_schema::EntityDocument& document,
+                 const PointCloud* cloud, const RenderOptions& options, ModelLibrary& models) {
+    world.clear();
+    const float ground_top_y = add_document_entities(world, document, options, models);
+    const ViewKind kind = options.view.kind;
+    if (options.ego && kind != ViewKind::camera) add_ego(world, options, models, ground_top_y);
+    const ViewSpec spec = add_camera(world, document, options);
+    if (kind == ViewKind::bev && options.grid) add_grid(world, options, spec, models, ground_top_y);
+    if (cloud != nullptr && cloud->size() > 0) add_cloud(world, *cloud, options, models);
 }
 
 }  // namespace scene_viewer
