@@ -10,6 +10,8 @@ install(TARGETS cloud-analysis scene-render RUNTIME DESTINATION ${CMAKE_INSTALL_
 install(DIRECTORY ${PROJECT_SOURCE_DIR}/assets/ DESTINATION ${STEREOSCENE_INSTALL_DATADIR}/assets)
 install(FILES ${PROJECT_SOURCE_DIR}/schema/entities.schema.json
     DESTINATION ${STEREOSCENE_INSTALL_DATADIR}/schema)
+# The browser viewer's files as the build gathered them (three.js only where npm installed it).
+install(DIRECTORY ${PROJECT_BINARY_DIR}/scene_viewer/web/ DESTINATION ${STEREOSCENE_INSTALL_DATADIR}/web)
 install(DIRECTORY ${PROJECT_SOURCE_DIR}/samples/synthetic/
     DESTINATION ${STEREOSCENE_INSTALL_DATADIR}/samples/synthetic)
 install(FILES ${PROJECT_SOURCE_DIR}/LICENSE ${PROJECT_SOURCE_DIR}/README.md

@@ -50,6 +50,15 @@ if(NOT magic STREQUAL "89504e47")
     message(FATAL_ERROR "render.png is not a PNG")
 endif()
 
+# The browser viewer's folder from the install's web files (three.js is bundled only where npm
+# installed it: scripts/install-deps.sh).
+if(VIEWER_THREE)
+    run(COMMAND ${bin}/scene-render html entities.json --out viewer CODE 0 DIR ${WORK}/elsewhere)
+    if(NOT EXISTS ${WORK}/elsewhere/viewer/index.html)
+        message(FATAL_ERROR "scene-render html wrote no index.html")
+    endif()
+endif()
+
 # Without the moved install's palette and class table the tools fail naming those files.
 file(REMOVE ${share}/assets/palettes/cityscapes.json ${share}/assets/classes/render_classes.json)
 run(COMMAND ${analyse} -o again.json CODE 1 DIR ${WORK}/elsewhere

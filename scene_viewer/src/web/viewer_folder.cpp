@@ -15,6 +15,7 @@
 #include "scene_viewer/render/palette.hpp"
 #include "scene_viewer/render/scene_renderer.hpp"
 #include "scene_viewer/views/views.hpp"
+#include "stereoscene/support/asset_dir.hpp"
 
 namespace scene_viewer {
 namespace {
@@ -192,7 +193,20 @@ ViewerAssets load_viewer_assets(const std::filesystem::path& dir) {
     return a;
 }
 
-std::filesystem::path default_viewer_assets_dir() { return SCENE_VIEWER_WEB_DIR; }
+namespace {
+
+/// The viewer's files in an install, relative to the folder holding the executable.
+constexpr const char* kInstalledViewerFromBin = "../share/stereoscene/web";
+
+}  // namespace
+
+std::filesystem::path default_viewer_assets_dir() {
+    std::error_code ec;
+    const std::filesystem::path bin = stereoscene::support::executable_dir();
+    const std::filesystem::path installed = (bin / kInstalledViewerFromBin).lexically_normal();
+    if (!bin.empty() && std::filesystem::is_directory(installed, ec)) return installed;
+    return SCENE_VIEWER_WEB_DIR;
+}
 
 std::string base64_encode(const unsigned char* data, std::size_t size) {
     static constexpr char kDigits[] =

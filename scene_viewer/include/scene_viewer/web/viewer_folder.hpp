@@ -52,7 +52,8 @@ struct ViewerAssets {
 /// Reads the viewer's static files from `dir`; throws std::runtime_error naming a missing file.
 ViewerAssets load_viewer_assets(const std::filesystem::path& dir);
 
-/// Where the build put the viewer's static files (scene_viewer/web of the build tree).
+/// The viewer's static files: share/stereoscene/web of an install (beside the executable's
+/// folder), else where the build put them (scene_viewer/web of the build tree).
 std::filesystem::path default_viewer_assets_dir();
 
 /// The point cloud as binary glTF: one POINTS mesh per class (node "cloud_class_<id>", or
