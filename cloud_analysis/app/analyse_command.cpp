@@ -8,9 +8,9 @@
 
 #include <scene_schema/entities.hpp>
 
-#include "cloud_analysis/cloud_io.hpp"
-#include "cloud_analysis/disparity.hpp"
-#include "cloud_analysis/extract.hpp"
+#include "cloud_analysis/cloud/cloud_io.hpp"
+#include "cloud_analysis/entities/extract.hpp"
+#include "cloud_analysis/stereo/disparity.hpp"
 
 namespace cloud_analysis::app {
 

@@ -11,9 +11,9 @@
 #include <CLI/CLI.hpp>
 #include <scene_schema/entities.hpp>
 
-#include "cloud_analysis/disparity.hpp"
-#include "cloud_analysis/extract.hpp"
-#include "cloud_analysis/pipeline.hpp"
+#include "cloud_analysis/entities/extract.hpp"
+#include "cloud_analysis/pipeline/pipeline.hpp"
+#include "cloud_analysis/stereo/disparity.hpp"
 
 namespace cloud_analysis::app {
 

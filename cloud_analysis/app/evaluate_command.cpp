@@ -11,12 +11,12 @@
 #include <nlohmann/json.hpp>
 #include <scene_schema/entities.hpp>
 
-#include "cloud_analysis/calibration.hpp"
-#include "cloud_analysis/disparity.hpp"
-#include "cloud_analysis/entity_eval.hpp"
-#include "cloud_analysis/evaluate.hpp"
-#include "cloud_analysis/io.hpp"
-#include "cloud_analysis/kitti_labels.hpp"
+#include "cloud_analysis/evaluation/entity_eval.hpp"
+#include "cloud_analysis/evaluation/evaluate.hpp"
+#include "cloud_analysis/evaluation/kitti_labels.hpp"
+#include "cloud_analysis/io/io.hpp"
+#include "cloud_analysis/stereo/calibration.hpp"
+#include "cloud_analysis/stereo/disparity.hpp"
 
 namespace cloud_analysis::app {
 namespace {

@@ -10,7 +10,7 @@
 
 #include <CLI/CLI.hpp>
 
-#include "cloud_analysis/entity_eval.hpp"
+#include "cloud_analysis/evaluation/entity_eval.hpp"
 
 namespace cloud_analysis::app {
 

@@ -11,8 +11,8 @@
 #include <stereoscene/support/process.hpp>
 
 #include "analyse_command.hpp"
-#include "cloud_analysis/io.hpp"
-#include "cloud_analysis/synthetic.hpp"
+#include "cloud_analysis/io/io.hpp"
+#include "cloud_analysis/synthetic/synthetic.hpp"
 #include "evaluate_command.hpp"
 #include "perf_commands.hpp"
 #include "score_semantics_command.hpp"

@@ -19,10 +19,10 @@
 #include <nlohmann/json.hpp>
 #include <scene_schema/entities.hpp>
 
-#include "cloud_analysis/cloud_io.hpp"
-#include "cloud_analysis/disparity.hpp"
+#include "cloud_analysis/cloud/cloud_io.hpp"
 #include "cloud_analysis/pipeline/batch_report.hpp"
 #include "cloud_analysis/pipeline/resume.hpp"
+#include "cloud_analysis/stereo/disparity.hpp"
 #include "cloud_analysis/support/progress.hpp"
 
 namespace cloud_analysis::app {

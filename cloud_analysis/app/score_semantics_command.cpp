@@ -6,9 +6,9 @@
 #include <nlohmann/json.hpp>
 
 #include "analyse_command.hpp"
+#include "cloud_analysis/cloud/semantic.hpp"
 #include "cloud_analysis/geometry/scene_geometry.hpp"
-#include "cloud_analysis/io.hpp"
-#include "cloud_analysis/semantic.hpp"
+#include "cloud_analysis/io/io.hpp"
 
 namespace cloud_analysis::app {
 

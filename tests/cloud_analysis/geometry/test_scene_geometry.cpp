@@ -4,8 +4,8 @@
 
 #include <catch2/catch.hpp>
 
+#include "cloud_analysis/cloud/semantic.hpp"
 #include "cloud_analysis/geometry/scene_geometry.hpp"
-#include "cloud_analysis/semantic.hpp"
 
 using cloud_analysis::DisparityMap;
 using cloud_analysis::ImageU8;

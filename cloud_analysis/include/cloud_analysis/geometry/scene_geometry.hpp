@@ -12,10 +12,10 @@
 #include <string>
 #include <vector>
 
-#include "cloud_analysis/ground.hpp"
-#include "cloud_analysis/io.hpp"
-#include "cloud_analysis/semantic.hpp"
-#include "cloud_analysis/types.hpp"
+#include "cloud_analysis/cloud/semantic.hpp"
+#include "cloud_analysis/cloud/types.hpp"
+#include "cloud_analysis/entities/ground.hpp"
+#include "cloud_analysis/io/io.hpp"
 
 namespace cloud_analysis::geometry {
 

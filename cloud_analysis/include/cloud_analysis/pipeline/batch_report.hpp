@@ -9,7 +9,7 @@
 
 #include <nlohmann/json.hpp>
 
-#include "cloud_analysis/disparity.hpp"
+#include "cloud_analysis/stereo/disparity.hpp"
 
 namespace cloud_analysis {
 

@@ -1,0 +1,32 @@
+#pragma once
+
+/// Writers of a LabeledCloud in the three formats viewers read (docs/clouds.md):
+/// - ASCII .xyz, header `//X Y Z R G B Class Intensity` (CloudCompare's ASCII reader);
+/// - PCD v0.7 binary, fields `x y z rgb label` (PCL; rgb packed as uint32 in a float field);
+/// - PLY 1.0 binary little endian, float x y z, uchar red green blue, int scalar_class.
+/// Class is the palette class id (Cityscapes labelId), 0 for void pixels. Each formatter builds
+/// the whole file in one buffer (no per-point iostream).
+
+#include <filesystem>
+#include <string>
+
+#include "cloud_analysis/cloud/types.hpp"
+
+namespace cloud_analysis {
+
+/// The supported cloud file formats.
+enum class CloudFormat { kXyz, kPcd, kPly };
+
+/// Format from a file extension (.xyz, .pcd, .ply); throws std::invalid_argument otherwise.
+CloudFormat cloud_format_from_path(const std::filesystem::path& path);
+
+/// Class id written for void points.
+inline constexpr int kVoidClassId = 0;
+
+/// Whole-file bytes of the cloud in the format.
+std::string format_xyz(const LabeledCloud& cloud, const Palette& palette);
+std::string format_pcd(const LabeledCloud& cloud, const Palette& palette);
+std::string format_ply(const LabeledCloud& cloud, const Palette& palette);
+std::string format_cloud(const LabeledCloud& cloud, const Palette& palette, CloudFormat format);
+
+}  // namespace cloud_analysis

@@ -1,0 +1,45 @@
+#pragma once
+
+/// Metric reprojection of a disparity map with the Q matrix of the rig, and semantic
+/// association of each point with the class of its pixel.
+
+#include "cloud_analysis/cloud/semantic.hpp"
+#include "cloud_analysis/cloud/types.hpp"
+#include "cloud_analysis/io/io.hpp"
+
+namespace cloud_analysis {
+
+/// Which reprojected pixels become points.
+struct ReprojectOptions {
+    double max_range_m = 80.0;      ///< points farther than this from the camera are dropped, m
+    double min_disparity_px = 0.0;  ///< disparities at or below this are dropped, px
+    bool keep_void = true;          ///< keep points whose pixel has no palette class
+    /// Throws std::invalid_argument naming the first bad field.
+    void validate() const;
+};
+
+/// Which points of each palette class the entity extractor takes (see ClassPoints).
+struct ClassSelection {
+    /// Per palette class: keep pixel columns u with (u & column_mask) == 0, i.e.
+    /// column_step - 1 for a power-of-two step; 0 keeps every column.
+    std::vector<std::uint32_t> column_mask;
+    std::vector<char> keep_pixels;  ///< per palette class: record each point's pixel
+    double max_depth_m = 60.0;      ///< keep points with 0 < z < this, metres
+};
+
+/// One point per pixel with a valid disparity within range, in the rectified left camera frame
+/// (x right, y down, z forward, metres), coloured from `left` (grey or RGB) and labelled from
+/// `classes` (an empty ClassImage labels everything void). Images must match the map's size.
+LabeledCloud reproject(const DisparityMap& disparity, const StereoCamera& camera,
+                       const ImageU8& left, const ClassImage& classes,
+                       const ReprojectOptions& options);
+
+/// The extractor's points straight from the disparity, without building the cloud: equal to
+/// reprojecting (as above) and splitting the cloud by class (points_by_class in extract.hpp)
+/// with `selection`, at a fraction of the cost. `selection` has one entry per palette class;
+/// class indices at or past it count as void.
+ClassPoints reproject_by_class(const DisparityMap& disparity, const StereoCamera& camera,
+                               const ClassImage& classes, const ReprojectOptions& options,
+                               const ClassSelection& selection);
+
+}  // namespace cloud_analysis

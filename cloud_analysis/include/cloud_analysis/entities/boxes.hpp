@@ -1,0 +1,78 @@
+#pragma once
+
+/// Upright oriented boxes: footprint by L-shape fitting (Zhang et al., "Efficient L-Shape
+/// Fitting for Vehicle Detection Using Laser Scanners", IV 2017, closeness criterion) in the
+/// ground plane, completion with a class size prior away from the camera, and the thesis's
+/// one-box-per-class extractors (centre of mass, average box, variance box).
+
+#include <optional>
+#include <vector>
+
+#include <Eigen/Core>
+
+#include "cloud_analysis/entities/ground.hpp"
+
+namespace cloud_analysis {
+
+/// An upright box in the camera frame (KITTI convention, centre of the box).
+struct OrientedBox {
+    Eigen::Vector3d centre_m = Eigen::Vector3d::Zero();  ///< box centre, metres
+    double theta = 0.0;  ///< yaw about +y, heading (cos t, 0, -sin t), radians
+    double L_m = 1.0;    ///< length along the heading, metres
+    double W_m = 1.0;    ///< width across the heading, metres
+    double H_m = 1.0;    ///< height, metres
+};
+
+/// Settings of fit_upright_box.
+struct BoxFitOptions {
+    double prior_L_m = 0.0;         ///< class length prior, metres (0 = no completion)
+    double prior_W_m = 0.0;         ///< class width prior, metres (0 = no completion)
+    double prior_H_m = 0.0;         ///< class height prior, metres (0 = observed height)
+    double angle_step_deg = 1.0;    ///< L-shape search step, degrees, in (0, 10]
+    double min_extent_m = 0.05;     ///< smallest box side, metres, > 0
+    double trim_fraction = 0.02;    ///< fraction of points trimmed at each end per axis, [0, 0.2)
+    bool rest_on_ground = true;     ///< bottom on the plane (else the lowest point)
+    double face_tolerance_m = 0.2;  ///< distance of a point from a straight face, metres, > 0
+    double face_share = 0.5;        ///< a straight face across the viewing ray holding this
+                                    ///< share of the points and longer than 1.2 prior widths
+                                    ///< is a long side, [0, 1] (0 = off)
+    std::optional<double> yaw_rad;  ///< heading imposed instead of the L-shape search, radians
+                                    ///< (cars cut from a row seen front-on), finite
+    /// Throws std::invalid_argument naming the bad field.
+    void validate() const;
+};
+
+/// Fits an upright box to points (camera frame). With a ground plane the box stands on it;
+/// with priors the footprint is completed away from the camera. theta is in [-pi, 0]: the
+/// heading is the one of the two opposite directions pointing away from the camera (z >= 0).
+OrientedBox fit_upright_box(const std::vector<Eigen::Vector3f>& points_m,
+                            const std::optional<GroundPlane>& ground, const BoxFitOptions& options);
+
+/// As fit_upright_box for weighted points, each standing for `weight` points at its place
+/// (voxel centroids weighted by their point counts, so that a stuff cluster costs its voxels,
+/// not its points): closeness terms and quantiles are weighted, and the L-shape angle is
+/// searched in 5 degree steps, then in angle_step_deg steps within 5 degrees of the best. No
+/// straight-face rule (it counts points); weights finite and > 0, one per point.
+OrientedBox fit_upright_box_weighted(const std::vector<Eigen::Vector3f>& points_m,
+                                     const std::vector<float>& weights,
+                                     const std::optional<GroundPlane>& ground,
+                                     const BoxFitOptions& options);
+
+/// Heading yaw (radians, [-pi, 0]) of the best L-shape footprint of points given in the
+/// (x, z) plane; exposed for tests.
+double lshape_yaw(const std::vector<Eigen::Vector2d>& xz_m, double angle_step_deg);
+
+/// Wraps an angle to [-pi, pi].
+double normalize_angle(double radians);
+
+/// Thesis extractors (one box per class, theta 0).
+/// Centre of mass: the mean of the points, size given by the caller.
+OrientedBox centroid_box(const std::vector<Eigen::Vector3f>& points_m,
+                         const Eigen::Vector3d& size_LHW_m);
+/// Average box: per axis direction the mean offset of the points on that side of the centre,
+/// times 2, is the half-extent on that side (a uniform box gives its own size).
+OrientedBox average_box(const std::vector<Eigen::Vector3f>& points_m);
+/// Variance box: extent 2 * sqrt(3) * sigma per axis (exact for a uniform distribution).
+OrientedBox variance_box(const std::vector<Eigen::Vector3f>& points_m);
+
+}  // namespace cloud_analysis

@@ -1,0 +1,85 @@
+#pragma once
+
+/// Cloud -> entities: the thesis's one-per-class extractors ("centroid", "average",
+/// "variance") and the default "instances" extractor (ground plane, per-class clustering,
+/// oriented prior-completed boxes for things, oriented extents for stuff). See docs/entities.md.
+
+#include <string>
+#include <vector>
+
+#include <scene_schema/entities.hpp>
+
+#include "cloud_analysis/cloud/reproject.hpp"
+#include "cloud_analysis/cloud/types.hpp"
+#include "cloud_analysis/entities/class_config.hpp"
+#include "cloud_analysis/entities/ground.hpp"
+
+namespace cloud_analysis {
+
+/// Settings of extract_entities.
+struct ExtractOptions {
+    std::string method = "instances";      ///< "instances" | "centroid" | "average" | "variance"
+    ClassConfig classes;                   ///< per-class settings (load_class_config)
+    GroundOptions ground;                  ///< RANSAC settings of the ground plane
+    std::string clustering = "euclidean";  ///< things: "euclidean" (3D, hash grid) or "image"
+                                           ///< (pixel components refined by depth)
+    int image_radius_px = 2;               ///< "image": pixel neighbourhood linked, >= 1
+    double max_range_m = 60.0;             ///< points farther than this (z) are ignored, metres
+    std::vector<std::string> ground_classes = {"road", "sidewalk", "parking"};  ///< plane votes
+    double outlier_margin_m = 0.5;          ///< thing points farther than near + prior diagonal +
+                                            ///< this (bird's-eye range) are stereo smear, metres
+    double shadow_fraction = 0.5;           ///< a thing cluster with more of its pixels than this
+                                            ///< inside a nearer same-class cluster's row extents
+                                            ///< (fragments: next to them) is a wrong-match shadow,
+                                            ///< (0, 1]
+    int shadow_radius_px = 10;              ///< margin of those extents, columns (and, for
+                                            ///< fragments, rows above and below), pixels, >= 0
+    double fragment_height_fraction = 0.3;  ///< a thing cluster whose points span less than
+                                            ///< this * prior_H_m vertically (or with fewer than
+                                            ///< min_points, a row piece) is a fragment, [0, 1]
+    double min_height_fraction = 0.3;       ///< things lower than this * prior_H_m above the ground
+                                            ///< are mislabelled ground, [0, 1)
+    double row_low_fraction = 0.7;  ///< a thing blob at least two prior widths long whose top
+                                    ///< stays below this * its highest top for row_low_extent_m
+                                    ///< across it from the camera's side (bonnets) is a row side
+                                    ///< by side seen front-on, [0, 1), 0 = off
+    double row_low_extent_m = 0.6;  ///< that low extent, metres, > 0
+    double row_gap_m = 0.6;         ///< gap between things in a row: pitch = prior W + this
+                                    ///< side by side, prior L + this end to end, metres, >= 0
+    double stuff_on_thing_fraction = 0.5;  ///< a stuff entity with more than this share of its
+                                           ///< footprint inside thing boxes is dropped (stuff
+                                           ///< smeared onto a thing's silhouette), (0, 1],
+                                           ///< 1 = off
+    /// Threads: the classes and a thing class's clusters are shared among this many (and a
+    /// cloud's split by class among as many chunks); the result does not depend on it, >= 1
+    int threads = 2;
+    /// Throws std::invalid_argument naming the bad field.
+    void validate() const;
+};
+
+/// Which points of each palette class the extractor takes: stuff on every column_step-th pixel
+/// column, pixels for things, depth within options.max_range_m.
+ClassSelection class_selection(const Palette& palette, const ExtractOptions& options);
+
+/// A labelled cloud split by class with `selection` (on up to `threads` threads; the result
+/// does not depend on it). Columns are thinned only when the cloud has its pixels.
+ClassPoints points_by_class(const LabeledCloud& cloud, const ClassSelection& selection,
+                            int threads = 2);
+
+/// Builds the entities of a labelled cloud's points split by class (points_by_class, or
+/// reproject_by_class without a cloud; either with class_selection(palette, options)): ids
+/// "<class>-<n>", point_count and confidence on each; sky and void never. The caller fills
+/// frame and source. With method "instances" the ground plane, when found, is reported in
+/// document.extra["ground_plane"] (normal, d, camera_height_m, inliers). The result passes
+/// scene_schema::check() once the caller has set frame.id.
+scene_schema::EntityDocument extract_entities(const ClassPoints& points, const Palette& palette,
+                                              const ExtractOptions& options);
+
+/// The same from the labelled cloud: extract_entities(points_by_class(cloud, ...), ...).
+/// `camera` is not needed by the current extractors (image-space steps use the cloud's pixel
+/// indices); it stays in the signature for stages that project.
+scene_schema::EntityDocument extract_entities(const LabeledCloud& cloud, const Palette& palette,
+                                              const StereoCamera& camera,
+                                              const ExtractOptions& options);
+
+}  // namespace cloud_analysis

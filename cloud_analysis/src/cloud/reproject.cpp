@@ -1,0 +1,291 @@
+#include "cloud_analysis/cloud/reproject.hpp"
+
+#include <algorithm>
+#include <cmath>
+#include <stdexcept>
+#include <utility>
+#include <vector>
+
+#include <opencv2/core.hpp>
+
+#include "cloud_analysis/stereo/calibration.hpp"
+
+namespace cloud_analysis {
+namespace {
+
+/// The reprojection of one pixel row at a time, shared by reproject and reproject_by_class so
+/// that both keep exactly the same points with exactly the same coordinates.
+class RowReprojector {
+  public:
+    RowReprojector(const DisparityMap& disparity, const StereoCamera& camera,
+                   const ClassImage& classes, const ReprojectOptions& options)
+        : disparity_(disparity), classes_(classes), options_(options) {
+        options.validate();
+        const int w = disparity.width_px;
+        labelled_ = !classes.class_index.empty();
+        if (labelled_ && (classes.width_px != w || classes.height_px != disparity.height_px)) {
+            throw std::invalid_argument("semantic image and disparity differ in size");
+        }
+        if (!(camera.baseline_m > 0.0) || !(camera.fx_px > 0.0) || !(camera.fy_px > 0.0)) {
+            throw std::invalid_argument("camera: fx, fy and baseline must be > 0");
+        }
+        // (X, Y, Z, W) = Q (u, v, d, 1) with OpenCV's Q (reprojection_matrix): X = u - cx,
+        // Y = (v - cy) fx / fy, Z = fx, W = (d - (cx - cx_right)) / B. Only W depends on d, so
+        // the 4x4 product reduces to one reciprocal per point; rows and columns are precomputed.
+        Q_ = reprojection_matrix(camera);
+        z_num_ = Q_(2, 3);
+        x_num_.resize(static_cast<std::size_t>(w));
+        x_num_sq_.resize(x_num_.size());
+        for (int u = 0; u < w; ++u) {
+            const auto i = static_cast<std::size_t>(u);
+            x_num_[i] = Q_(0, 0) * u + Q_(0, 3);
+            x_num_sq_[i] = x_num_[i] * x_num_[i];
+        }
+        max_range_sq_ = options.max_range_m * options.max_range_m;
+    }
+
+    int width() const { return disparity_.width_px; }
+    int height() const { return disparity_.height_px; }
+
+    std::size_t row_start(int v) const {
+        return static_cast<std::size_t>(v) * static_cast<std::size_t>(width());
+    }
+
+    /// Calls emit(u, y_num, w_h, class) for each pixel of row v that becomes a point and whose
+    /// column and class `wanted` accepts (tested first), in order. The range test needs no
+    /// division: |(X, Y, Z)| / W <= r  <=>  |(X, Y, Z)|^2 <= r^2 W^2, W > 0.
+    template <typename Wanted, typename Emit>
+    void for_each_point(int v, Wanted&& wanted, Emit&& emit) const {
+        const Row r = row(v);
+        const bool keep_void = options_.keep_void;
+        for (int u = 0; u < width(); ++u) {
+            const std::uint16_t cls = labelled_ ? r.cls[u] : kVoidClass;
+            if (!wanted(u, cls)) continue;
+            const double d = r.d[u];
+            if (!(d > r.min_d)) continue;
+            if (cls == kVoidClass && !keep_void) continue;
+            const double w_h = r.w_per_px * d + r.w_offset;
+            if (!(w_h > 0.0)) continue;  // at or beyond infinity
+            if (!(x_num_sq_[static_cast<std::size_t>(u)] + r.yz_num_sq <=
+                  max_range_sq_ * w_h * w_h)) {
+                continue;
+            }
+            emit(u, r.y_num, w_h, cls);
+        }
+    }
+
+    /// The same for every pixel.
+    template <typename Emit>
+    void for_each_point(int v, Emit&& emit) const {
+        for_each_point(
+            v, [](int, std::uint16_t) { return true; }, emit);
+    }
+
+    /// Points of row v: the pixels for_each_point emits, counted without branches.
+    std::size_t count_points(int v) const {
+        if (!options_.keep_void && !labelled_) return 0;
+        const Row r = row(v);
+        const bool all_classes = options_.keep_void || !labelled_;
+        std::size_t n = 0;
+        for (int u = 0; u < width(); ++u) {
+            const double d = r.d[u];
+            const double w_h = r.w_per_px * d + r.w_offset;
+            const bool point = (d > r.min_d) & (w_h > 0.0) &
+                               (x_num_sq_[static_cast<std::size_t>(u)] + r.yz_num_sq <=
+                                max_range_sq_ * w_h * w_h) &
+                               (all_classes || r.cls[u] != kVoidClass);
+            n += point ? 1 : 0;
+        }
+        return n;
+    }
+
+    /// The point of column u of a row emitted with (y_num, w_h).
+    Eigen::Vector3f point(int u, double y_num, double w_h) const {
+        const double inv = 1.0 / w_h;
+        return {static_cast<float>(x_num_[static_cast<std::size_t>(u)] * inv),
+                static_cast<float>(y_num * inv), static_cast<float>(z_num_ * inv)};
+    }
+
+    /// Calls body(first_row, last_row) for row stripes in parallel.
+    template <typename Body>
+    void for_stripes(Body&& body) const {
+        const int h = height();
+        cv::parallel_for_(
+            cv::Range(0, h), [&](const cv::Range& rows) { body(rows.start, rows.end); },
+            std::max(1, std::min(h, 16)));
+    }
+
+  private:
+    /// Row v's inputs and the terms that are constant along it.
+    struct Row {
+        const float* d;            ///< disparities, px
+        const std::uint16_t* cls;  ///< classes; null without a class image
+        double y_num;              ///< Y of the row before the division by W
+        double yz_num_sq;          ///< Y^2 + Z^2 before the division by W^2
+        double w_per_px;           ///< W = w_per_px * d + w_offset
+        double w_offset;
+        double min_d;  ///< disparities at or below this give no point
+    };
+    Row row(int v) const {
+        const std::size_t start = row_start(v);
+        const double y_num = Q_(1, 1) * v + Q_(1, 3);
+        return {disparity_.disparity_px.data() + start,
+                labelled_ ? classes_.class_index.data() + start : nullptr,
+                y_num,
+                y_num * y_num + z_num_ * z_num_,
+                Q_(3, 2),
+                Q_(3, 3),
+                options_.min_disparity_px};
+    }
+
+    const DisparityMap& disparity_;
+    const ClassImage& classes_;
+    const ReprojectOptions& options_;
+    bool labelled_ = false;
+    Eigen::Matrix4d Q_;
+    double z_num_ = 0.0;
+    std::vector<double> x_num_, x_num_sq_;
+    double max_range_sq_ = 0.0;
+};
+
+}  // namespace
+
+void ReprojectOptions::validate() const {
+    if (!(max_range_m > 0.0)) throw std::invalid_argument("max_range_m: must be > 0");
+    if (!(min_disparity_px >= 0.0)) throw std::invalid_argument("min_disparity_px: must be >= 0");
+}
+
+LabeledCloud reproject(const DisparityMap& disparity, const StereoCamera& camera,
+                       const ImageU8& left, const ClassImage& classes,
+                       const ReprojectOptions& options) {
+    if (left.width_px != disparity.width_px || left.height_px != disparity.height_px) {
+        throw std::invalid_argument("left image and disparity differ in size");
+    }
+    const RowReprojector rows(disparity, camera, classes, options);
+    const int h = rows.height();
+    const bool grey = left.channels != 3;
+    // Rows in parallel stripes, twice: the points of each row are counted, then written from
+    // the row's offset (the same tests in the same order, so the counts hold): the cloud comes
+    // out in pixel order, as from one pass.
+    std::vector<std::size_t> offset(static_cast<std::size_t>(h) + 1, 0);
+    rows.for_stripes([&](int first, int last) {
+        for (int v = first; v < last; ++v) {
+            offset[static_cast<std::size_t>(v) + 1] = rows.count_points(v);
+        }
+    });
+    for (std::size_t v = 0; v < static_cast<std::size_t>(h); ++v) offset[v + 1] += offset[v];
+    LabeledCloud cloud;
+    cloud.width_px = rows.width();
+    cloud.height_px = h;
+    const std::size_t n = offset.back();
+    cloud.xyz_m.resize(n);
+    cloud.colour.resize(n);
+    cloud.class_index.resize(n);
+    cloud.pixel.resize(n);
+    rows.for_stripes([&](int first, int last) {
+        for (int v = first; v < last; ++v) {
+            const std::size_t row = rows.row_start(v);
+            const std::uint8_t* img_row =
+                left.data.data() + row * static_cast<std::size_t>(left.channels);
+            std::size_t at = offset[static_cast<std::size_t>(v)];
+            rows.for_each_point(v, [&](int u, double y_num, double w_h, std::uint16_t cls) {
+                cloud.xyz_m[at] = rows.point(u, y_num, w_h);
+                const std::uint8_t* c =
+                    grey ? img_row + u : img_row + 3 * static_cast<std::size_t>(u);
+                cloud.colour[at] = grey ? Rgb{c[0], c[0], c[0]} : Rgb{c[0], c[1], c[2]};
+                cloud.class_index[at] = cls;
+                cloud.pixel[at] = static_cast<std::uint32_t>(row + static_cast<std::size_t>(u));
+                ++at;
+            });
+        }
+    });
+    return cloud;
+}
+
+ClassPoints reproject_by_class(const DisparityMap& disparity, const StereoCamera& camera,
+                               const ClassImage& classes, const ReprojectOptions& options,
+                               const ClassSelection& selection) {
+    if (selection.keep_pixels.size() != selection.column_mask.size()) {
+        throw std::invalid_argument("selection: column_mask and keep_pixels differ in size");
+    }
+    const RowReprojector rows(disparity, camera, classes, options);
+    const int h = rows.height();
+    const std::size_t k_count = selection.column_mask.size();
+    const double max_depth = selection.max_depth_m;
+    // The extractor's own tests on a point of class cls at column u (as points_by_class makes
+    // them on the cloud).
+    const auto selected = [&](int u, std::uint16_t cls) {
+        return cls < k_count && (static_cast<std::uint32_t>(u) & selection.column_mask[cls]) == 0;
+    };
+    const auto in_depth = [&](const Eigen::Vector3f& p) {
+        return p.z() > 0.0f && double{p.z()} < max_depth && p.allFinite();
+    };
+    // One pass over the pixels in parallel row stripes keeps each stripe's selected points (and
+    // counts its points of every class); a second one copies them to their classes, stripes in
+    // order: every class comes out in pixel order.
+    struct Taken {
+        Eigen::Vector3f xyz;
+        std::uint32_t pixel;
+        std::uint16_t cls;
+    };
+    const int stripes = std::max(1, std::min(h, 16));
+    const auto first_row = [&](int s) { return static_cast<int>(std::int64_t{h} * s / stripes); };
+    std::vector<std::vector<Taken>> taken(static_cast<std::size_t>(stripes));
+    // Per stripe and class (the last slot: every point of the stripe).
+    const std::size_t slots = k_count + 1;
+    std::vector<std::size_t> count(static_cast<std::size_t>(stripes) * slots, 0);
+    cv::parallel_for_(cv::Range(0, stripes), [&](const cv::Range& range) {
+        for (int s = range.start; s < range.end; ++s) {
+            auto& mine = taken[static_cast<std::size_t>(s)];
+            mine.reserve(static_cast<std::size_t>(first_row(s + 1) - first_row(s)) *
+                         static_cast<std::size_t>(rows.width()));
+            std::size_t* n = count.data() + static_cast<std::size_t>(s) * slots;
+            for (int v = first_row(s); v < first_row(s + 1); ++v) {
+                const std::size_t row = rows.row_start(v);
+                n[k_count] += rows.count_points(v);
+                rows.for_each_point(
+                    v, selected, [&](int u, double y_num, double w_h, std::uint16_t cls) {
+                        const Eigen::Vector3f p = rows.point(u, y_num, w_h);
+                        if (!in_depth(p)) return;
+                        ++n[cls];
+                        mine.push_back(
+                            {p, static_cast<std::uint32_t>(row + static_cast<std::size_t>(u)),
+                             cls});
+                    });
+            }
+        }
+    });
+    ClassPoints out;
+    out.width_px = rows.width();
+    out.height_px = h;
+    out.xyz_m.resize(k_count);
+    out.pixel.resize(k_count);
+    out.weight.resize(k_count);
+    for (std::size_t k = 0; k < k_count; ++k) {
+        out.weight[k] = std::size_t{selection.column_mask[k]} + 1;
+    }
+    // Counts become offsets: per class, stripes in order.
+    std::vector<std::size_t> total(slots, 0);
+    for (std::size_t s = 0; s < static_cast<std::size_t>(stripes); ++s) {
+        for (std::size_t k = 0; k < slots; ++k) {
+            total[k] += std::exchange(count[s * slots + k], total[k]);
+        }
+    }
+    out.cloud_points = total[k_count];
+    for (std::size_t k = 0; k < k_count; ++k) {
+        out.xyz_m[k].resize(total[k]);
+        if (selection.keep_pixels[k]) out.pixel[k].resize(total[k]);
+    }
+    cv::parallel_for_(cv::Range(0, stripes), [&](const cv::Range& range) {
+        for (int s = range.start; s < range.end; ++s) {
+            std::size_t* at = count.data() + static_cast<std::size_t>(s) * slots;
+            for (const Taken& t : taken[static_cast<std::size_t>(s)]) {
+                if (selection.keep_pixels[t.cls]) out.pixel[t.cls][at[t.cls]] = t.pixel;
+                out.xyz_m[t.cls][at[t.cls]++] = t.xyz;
+            }
+        }
+    });
+    return out;
+}
+
+}  // namespace cloud_analysis

@@ -1,0 +1,191 @@
+#include <catch2/catch.hpp>
+
+#include <random>
+
+#include <Eigen/Core>
+
+#include "cloud_analysis/cloud/reproject.hpp"
+#include "cloud_analysis/entities/extract.hpp"
+#include "cloud_analysis/stereo/calibration.hpp"
+
+using namespace cloud_analysis;
+
+namespace {
+
+StereoCamera kitti_like_camera(int w, int h) {
+    StereoCamera cam;
+    cam.width_px = w;
+    cam.height_px = h;
+    cam.fx_px = 721.5;
+    cam.fy_px = 719.0;  // not square: exercises Q(1,1) = fx / fy
+    cam.cx_px = 30.0;
+    cam.cx_right_px = 26.5;  // cx - cx_right = 3.5 px: disparities below that are beyond infinity
+    cam.cy_px = 12.0;
+    cam.baseline_m = 0.54;
+    return cam;
+}
+
+/// The definition: (X, Y, Z, W) = Q (u, v, d, 1), one 4x4 product per pixel, pushed back in
+/// pixel order.
+LabeledCloud naive_reproject(const DisparityMap& map, const StereoCamera& cam, const ImageU8& img,
+                             const ClassImage& classes, const ReprojectOptions& o) {
+    const Eigen::Matrix4d Q = reprojection_matrix(cam);
+    LabeledCloud cloud;
+    for (int v = 0; v < map.height_px; ++v) {
+        for (int u = 0; u < map.width_px; ++u) {
+            const std::size_t i = static_cast<std::size_t>(v) * map.width_px + u;
+            const double d = map.disparity_px[i];
+            if (!(d > o.min_disparity_px)) continue;
+            const std::uint16_t cls =
+                classes.class_index.empty() ? kVoidClass : classes.class_index[i];
+            if (cls == kVoidClass && !o.keep_void) continue;
+            const Eigen::Vector4d p = Q * Eigen::Vector4d(u, v, d, 1.0);
+            if (!(p[3] > 0.0)) continue;
+            const Eigen::Vector3d xyz = p.head<3>() / p[3];
+            if (!(xyz.squaredNorm() <= o.max_range_m * o.max_range_m)) continue;
+            cloud.xyz_m.push_back(xyz.cast<float>());
+            const std::uint8_t* c = img.at(u, v);
+            cloud.colour.push_back(img.channels == 3 ? Rgb{c[0], c[1], c[2]}
+                                                     : Rgb{c[0], c[0], c[0]});
+            cloud.class_index.push_back(cls);
+            cloud.pixel.push_back(static_cast<std::uint32_t>(i));
+        }
+    }
+    return cloud;
+}
+
+/// w x h disparities drawn uniformly from [lo, hi).
+DisparityMap random_disparities(int w, int h, float lo, float hi, std::mt19937& rng) {
+    std::uniform_real_distribution<float> disparity(lo, hi);
+    DisparityMap map{w, h, std::vector<float>(static_cast<std::size_t>(w) * h)};
+    for (auto& d : map.disparity_px) d = disparity(rng);
+    return map;
+}
+
+/// w x h classes drawn uniformly from 0 .. void_index, void_index standing for void.
+ClassImage random_classes(int w, int h, int void_index, std::mt19937& rng) {
+    std::uniform_int_distribution<int> klass(0, void_index);
+    ClassImage classes{w, h, std::vector<std::uint16_t>(static_cast<std::size_t>(w) * h), 0};
+    for (auto& c : classes.class_index) {
+        const int k = klass(rng);
+        c = k == void_index ? kVoidClass : static_cast<std::uint16_t>(k);
+    }
+    return classes;
+}
+
+}  // namespace
+
+TEST_CASE("the reprojection agrees with the 4x4 Q product on random maps", "[reproject]") {
+    const int w = 64, h = 24;
+    const std::size_t n = static_cast<std::size_t>(w) * h;
+    std::mt19937 rng(11);
+    const DisparityMap map =
+        random_disparities(w, h, -2.0f, 40.0f, rng);  // some missing, some < 3.5
+    std::uniform_int_distribution<int> byte(0, 255);
+    ImageU8 rgb{w, h, 3, std::vector<std::uint8_t>(n * 3)};
+    for (auto& b : rgb.data) b = static_cast<std::uint8_t>(byte(rng));
+    ImageU8 grey{w, h, 1, std::vector<std::uint8_t>(n)};
+    for (auto& b : grey.data) b = static_cast<std::uint8_t>(byte(rng));
+    const ClassImage classes = random_classes(w, h, 4, rng);
+    const StereoCamera cam = kitti_like_camera(w, h);
+
+    ReprojectOptions options;
+    options.max_range_m = 60.0;  // drops the disparities just above 3.5 px
+    options.min_disparity_px = 0.5;
+    for (const bool keep_void : {true, false}) {
+        for (const ImageU8* img : {&rgb, &grey}) {
+            for (const ClassImage& cls : {classes, ClassImage{}}) {
+                options.keep_void = keep_void;
+                const LabeledCloud got = reproject(map, cam, *img, cls, options);
+                const LabeledCloud want = naive_reproject(map, cam, *img, cls, options);
+                REQUIRE(got.size() == want.size());
+                REQUIRE(got.width_px == w);
+                REQUIRE(got.height_px == h);
+                CHECK(got.pixel == want.pixel);
+                CHECK(got.class_index == want.class_index);
+                CHECK(got.colour == want.colour);
+                for (std::size_t i = 0; i < got.size(); ++i) {
+                    for (int k = 0; k < 3; ++k) {
+                        CHECK(got.xyz_m[i][k] == Approx(want.xyz_m[i][k]).epsilon(1e-6));
+                    }
+                }
+            }
+        }
+    }
+    // The filters did something: void points, far points and points beyond infinity.
+    options.keep_void = false;
+    const std::size_t labelled = reproject(map, cam, grey, classes, options).size();
+    options.keep_void = true;
+    const std::size_t all = reproject(map, cam, grey, classes, options).size();
+    CHECK(labelled < all);
+    CHECK(all < map.valid_count());
+}
+
+TEST_CASE("disparities at or below cx - cx_right are beyond infinity and give no point",
+          "[reproject]") {
+    const StereoCamera cam = kitti_like_camera(4, 1);
+    DisparityMap map{4, 1, {3.0f, 3.5f, 4.0f, 13.5f}};
+    const ImageU8 grey{4, 1, 1, {10, 20, 30, 40}};
+    ReprojectOptions options;
+    options.max_range_m = 1000.0;
+    const LabeledCloud cloud = reproject(map, cam, grey, ClassImage{}, options);
+    REQUIRE(cloud.size() == 2);
+    CHECK(cloud.pixel == std::vector<std::uint32_t>{2, 3});
+    // Z = fx B / (d - (cx - cx_right)): 10 px of effective disparity at u = 3 -> 38.961 m.
+    CHECK(cloud.xyz_m[1].z() == Approx(721.5 * 0.54 / 10.0).epsilon(1e-6));
+    CHECK(cloud.colour[1] == Rgb{40, 40, 40});
+}
+
+TEST_CASE("a disparity map has a valid pixel when any pixel holds a value", "[reproject]") {
+    DisparityMap map;
+    map.width_px = 4;
+    map.height_px = 3;
+    map.disparity_px.assign(12, 0.0f);
+    CHECK_FALSE(map.any_valid());
+    CHECK(map.valid_count() == 0);
+    map.disparity_px[11] = 0.5f;
+    CHECK(map.any_valid());
+    CHECK(map.valid_count() == 1);
+}
+
+TEST_CASE("reprojecting by class gives the split of the reprojected cloud, without the cloud",
+          "[reproject]") {
+    const int w = 96, h = 40;
+    const std::size_t n = static_cast<std::size_t>(w) * h;
+    std::mt19937 rng(5);
+    const DisparityMap map = random_disparities(w, h, -2.0f, 60.0f, rng);
+    const ImageU8 grey{w, h, 1, std::vector<std::uint8_t>(n, 128)};
+    const ClassImage classes = random_classes(w, h, 5, rng);  // 4 = past the selection
+    const StereoCamera cam = kitti_like_camera(w, h);
+    // Class 0 every column with pixels (a thing), 1 every 4th column, 2 every 2nd, 3 every 8th.
+    ClassSelection selection;
+    selection.column_mask = {0, 3, 1, 7};
+    selection.keep_pixels = {1, 0, 0, 1};
+    selection.max_depth_m = 30.0;  // below the reprojection's range: both limits apply
+    ReprojectOptions options;
+    options.max_range_m = 50.0;
+    for (const bool keep_void : {true, false}) {
+        options.keep_void = keep_void;
+        const LabeledCloud cloud = reproject(map, cam, grey, classes, options);
+        const ClassPoints want = points_by_class(cloud, selection, 2);
+        const ClassPoints got = reproject_by_class(map, cam, classes, options, selection);
+        CHECK(got.cloud_points == cloud.size());
+        CHECK(got.width_px == w);
+        CHECK(got.height_px == h);
+        CHECK(got.weight == std::vector<std::size_t>{1, 4, 2, 8});
+        CHECK(got.pixel == want.pixel);
+        REQUIRE(got.xyz_m.size() == 4);
+        for (std::size_t k = 0; k < 4; ++k) {
+            CHECK(got.xyz_m[k] == want.xyz_m[k]);  // the same floats, in pixel order
+            CHECK_FALSE(got.xyz_m[k].empty());
+            for (const auto& p : got.xyz_m[k]) CHECK(p.z() < 30.0f);
+        }
+        CHECK(got.pixel[1].empty());
+        // Thinned columns and pixels of the kept points.
+        for (const std::uint32_t p : got.pixel[3]) CHECK(p % w % 8 == 0);
+    }
+    ClassSelection bad = selection;
+    bad.keep_pixels.pop_back();
+    CHECK_THROWS_WITH(reproject_by_class(map, cam, classes, options, bad),
+                      Catch::Contains("keep_pixels"));
+}

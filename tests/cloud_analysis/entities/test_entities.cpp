@@ -1,0 +1,673 @@
+#include <algorithm>
+#include <cmath>
+#include <vector>
+
+#include <catch2/catch.hpp>
+
+#include "cloud_analysis/cloud/semantic.hpp"
+#include "cloud_analysis/entities/extract.hpp"
+
+using namespace cloud_analysis;
+
+namespace {
+
+constexpr double kPi = 3.14159265358979323846;
+
+/// A tiny palette: road, sky, car (thing).
+Palette test_palette() {
+    Palette p;
+    p.name = "test";
+    p.classes = {{"road", 7, false, {128, 64, 128}},
+                 {"sky", 23, false, {70, 130, 180}},
+                 {"car", 26, true, {0, 0, 142}}};
+    return p;
+}
+
+void add_point(LabeledCloud& cloud, const Eigen::Vector3f& p, std::uint16_t cls) {
+    cloud.xyz_m.push_back(p);
+    cloud.colour.push_back({0, 0, 0});
+    cloud.class_index.push_back(cls);
+    cloud.pixel.push_back(static_cast<std::uint32_t>(cloud.pixel.size()));
+}
+
+/// Rear and right side of a car heading along +z, standing on y = 1.65.
+void add_car(LabeledCloud& cloud, float x, float z) {
+    for (float y = 1.65f - 1.5f; y <= 1.65f; y += 0.05f) {
+        for (float a = -0.9f; a <= 0.9f; a += 0.05f) add_point(cloud, {x + a, y, z - 2.1f}, 2);
+        for (float b = -2.1f; b <= 2.1f; b += 0.05f) {
+            add_point(cloud, {x + (x < 0 ? 0.9f : -0.9f), y, z + b}, 2);
+        }
+    }
+}
+
+/// Road y = 1.65 from z 3 to 40, x -6..6, and a sky patch far away.
+LabeledCloud test_scene() {
+    LabeledCloud cloud;
+    for (float x = -6.0f; x <= 6.0f; x += 0.25f) {
+        for (float z = 3.0f; z <= 40.0f; z += 0.25f) add_point(cloud, {x, 1.65f, z}, 0);
+    }
+    for (float x = -5.0f; x <= 5.0f; x += 0.5f) add_point(cloud, {x, -10.0f, 50.0f}, 1);
+    add_car(cloud, -3.5f, 12.0f);
+    add_car(cloud, 3.5f, 20.0f);
+    return cloud;
+}
+
+ExtractOptions options_with_bundled_config(const std::string& method) {
+    ExtractOptions o;
+    o.method = method;
+    o.classes = load_class_config(std::string(STEREOSCENE_SOURCE_DIR) +
+                                  "/assets/classes/entity_config.json");
+    return o;
+}
+
+}  // namespace
+
+TEST_CASE("the bundled class config loads with the documented car prior", "[entities]") {
+    const ClassConfig c = load_class_config(std::string(STEREOSCENE_SOURCE_DIR) +
+                                            "/assets/classes/entity_config.json");
+    const ClassSettings car = c.find("car");
+    CHECK(car.thing);
+    CHECK(car.prior_L_m == 4.2);
+    CHECK(car.prior_W_m == 1.8);
+    CHECK(car.prior_H_m == 1.5);
+    CHECK_FALSE(c.find("sky").entity);
+    CHECK(c.find("some class nobody listed").name == "some class nobody listed");
+    CHECK(default_class_config_path().filename() == "entity_config.json");
+}
+
+TEST_CASE("voxels double with depth where the clustering distance doubles, up to voxel_max_m",
+          "[entities]") {
+    const ClassConfig c = load_class_config(std::string(STEREOSCENE_SOURCE_DIR) +
+                                            "/assets/classes/entity_config.json");
+    // Stuff: 1 m at 10 m growing linearly, capped at 2 m: 0.4 m voxels, 0.8 m from 20 m.
+    const std::vector<double> stuff = c.find("vegetation").voxel_doubling_depths();
+    REQUIRE(stuff.size() == 1);
+    CHECK(stuff[0] == Approx(20.0));
+    // Things keep their fine voxels (voxel_max_m 0).
+    CHECK(c.find("car").voxel_doubling_depths().empty());
+    // Cars' distance (0.4 m at 10 m growing with z^2, capped at 1.5 m) with a larger voxel_max_m:
+    // doubled (0.8 m) at 10 * sqrt(2) m; 1.6 m is over the cap.
+    ClassSettings car = c.find("car");
+    car.voxel_max_m = 0.8;
+    const std::vector<double> car_depths = car.voxel_doubling_depths();
+    REQUIRE(car_depths.size() == 1);
+    CHECK(car_depths[0] == Approx(10.0 * std::sqrt(2.0)));
+    ClassSettings s;
+    s.voxel_m = 0.1;
+    s.cluster_distance_m = 0.5;
+    s.cluster_growth = 1.0;
+    s.cluster_distance_max_m = 100.0;
+    CHECK(s.voxel_doubling_depths().empty());  // voxel_max_m 0: the edge stays voxel_m
+    s.voxel_max_m = 0.4;
+    CHECK(s.voxel_doubling_depths() == std::vector<double>{20.0, 40.0});
+    s.cluster_growth = 0.0;
+    CHECK(s.voxel_doubling_depths().empty());  // a constant distance never doubles
+    CHECK_THROWS_WITH(
+        parse_class_config(R"({"classes": [{"name": "car", "voxel_m": 0.4, "voxel_max_m": 0.2}]})",
+                           "x"),
+        Catch::Contains("voxel_max_m"));
+}
+
+TEST_CASE("a malformed class config names the bad member", "[entities]") {
+    CHECK_THROWS_WITH(parse_class_config(R"({"classes": [{"name": "car", "min_points": 0}]})", "x"),
+                      Catch::Contains("min_points"));
+    CHECK_THROWS_WITH(parse_class_config(R"({"classes": [{"name": "car", "prior_L": 4}]})", "x"),
+                      Catch::Contains("/classes/0/prior_L: unknown member"));
+    CHECK_THROWS_WITH(parse_class_config(R"({"classes": [{"thing": true}]})", "x"),
+                      Catch::Contains("/classes/0/name"));
+    CHECK_THROWS_WITH(parse_class_config("{", "cfg.json"), Catch::Contains("cfg.json"));
+    CHECK_THROWS_WITH(parse_class_config(R"({"classes": [], "clases": []})", "x"),
+                      Catch::Contains("/clases: unknown member"));
+}
+
+TEST_CASE("instances: two cars become two oriented car entities on the fitted road", "[entities]") {
+    const auto doc = extract_entities(test_scene(), test_palette(), StereoCamera{},
+                                      options_with_bundled_config("instances"));
+    std::vector<scene_schema::Entity> cars;
+    int roads = 0;
+    for (const auto& e : doc.entities) {
+        CHECK(e.class_name != "sky");
+        CHECK(e.point_count > 0);
+        CHECK(e.confidence > 0.0);
+        CHECK(e.confidence <= 1.0);
+        if (e.class_name == "car") cars.push_back(e);
+        if (e.class_name == "road") ++roads;
+    }
+    CHECK(roads == 1);
+    REQUIRE(cars.size() == 2);
+    std::sort(cars.begin(), cars.end(), [](const auto& a, const auto& b) { return a.z < b.z; });
+    CHECK(cars[0].x == Approx(-3.5).margin(0.15));
+    CHECK(cars[0].z == Approx(12.0).margin(0.15));
+    CHECK(cars[1].x == Approx(3.5).margin(0.15));
+    CHECK(cars[1].z == Approx(20.0).margin(0.15));
+    for (const auto& c : cars) {
+        CHECK(c.theta == Approx(-kPi / 2.0).margin(0.05));
+        CHECK(c.L == Approx(4.2).margin(0.15));
+        CHECK(c.W == Approx(1.8).margin(0.15));
+        CHECK(c.y == Approx(1.65 - 0.75).margin(0.1));
+        CHECK(c.id.rfind("car-", 0) == 0);
+    }
+    REQUIRE(doc.extra.contains("ground_plane"));
+    CHECK(doc.extra["ground_plane"]["camera_height_m"].get<double>() == Approx(1.65).margin(0.02));
+    scene_schema::EntityDocument full = doc;
+    full.frame.id = "test";
+    CHECK_NOTHROW(scene_schema::check(full));
+}
+
+TEST_CASE("a parked row merged into one blob is split into car-sized boxes", "[entities]") {
+    LabeledCloud cloud;
+    for (float x = -6.0f; x <= 6.0f; x += 0.25f) {
+        for (float z = 3.0f; z <= 40.0f; z += 0.25f) add_point(cloud, {x, 1.65f, z}, 0);
+    }
+    // Three touching cars along z (bumper to bumper), seen from their right side only.
+    for (float y = 0.15f; y <= 1.65f; y += 0.05f) {
+        for (float z = 10.0f; z <= 22.6f; z += 0.05f) add_point(cloud, {-4.0f, y, z}, 2);
+    }
+    const auto doc = extract_entities(cloud, test_palette(), StereoCamera{},
+                                      options_with_bundled_config("instances"));
+    int cars = 0;
+    for (const auto& e : doc.entities) {
+        if (e.class_name != "car") continue;
+        ++cars;
+        CHECK(e.L < 5.5);
+        CHECK(e.theta == Approx(-kPi / 2.0).margin(0.05));
+    }
+    CHECK(cars == 3);
+}
+
+TEST_CASE("the thesis extractors make one entity per class", "[entities]") {
+    for (const char* method : {"centroid", "average", "variance"}) {
+        const auto doc = extract_entities(test_scene(), test_palette(), StereoCamera{},
+                                          options_with_bundled_config(method));
+        int cars = 0;
+        for (const auto& e : doc.entities) {
+            CHECK(e.class_name != "sky");
+            CHECK(e.theta == 0.0);
+            CHECK(e.method == std::string(method));
+            if (e.class_name == "car") {
+                ++cars;
+                CHECK(e.id == "car-1");
+                // The mean of both cars lies between them.
+                CHECK(e.x == Approx(0.0).margin(0.5));
+            }
+        }
+        CHECK(cars == 1);
+    }
+}
+
+TEST_CASE("extract options name the bad field", "[entities]") {
+    ExtractOptions o;
+    o.method = "magic";
+    CHECK_THROWS_WITH(o.validate(), Catch::Contains("method"));
+    o.method = "instances";
+    o.max_range_m = 0.0;
+    CHECK_THROWS_WITH(o.validate(), Catch::Contains("max_range_m"));
+    o.max_range_m = 60.0;
+    o.row_low_fraction = 1.0;
+    CHECK_THROWS_WITH(o.validate(), Catch::Contains("row_low_fraction"));
+    o.row_low_fraction = 0.7;
+    o.row_low_extent_m = 0.0;
+    CHECK_THROWS_WITH(o.validate(), Catch::Contains("row_low_extent_m"));
+    o.row_low_extent_m = 0.6;
+    o.row_gap_m = -0.1;
+    CHECK_THROWS_WITH(o.validate(), Catch::Contains("row_gap_m"));
+}
+
+TEST_CASE("image-space clustering also separates two cars and keeps each whole", "[entities]") {
+    // Give the scene a pixel grid: each point its own pixel, cars in separate image columns.
+    LabeledCloud cloud = test_scene();
+    cloud.width_px = 2000;
+    cloud.height_px = 2000;
+    for (std::size_t i = 0; i < cloud.size(); ++i) {
+        const auto& p = cloud.xyz_m[i];
+        // Pinhole projection with f = 500 px, principal point (1000, 1000).
+        const long u = std::lround(500.0 * double{p.x()} / double{p.z()} + 1000.0);
+        const long v = std::lround(500.0 * double{p.y()} / double{p.z()} + 1000.0);
+        cloud.pixel[i] =
+            static_cast<std::uint32_t>(std::clamp(v, 0L, 1999L) * 2000 + std::clamp(u, 0L, 1999L));
+    }
+    ExtractOptions o = options_with_bundled_config("instances");
+    o.clustering = "image";
+    o.image_radius_px = 3;
+    const auto doc = extract_entities(cloud, test_palette(), StereoCamera{}, o);
+    int cars = 0;
+    for (const auto& e : doc.entities) {
+        if (e.class_name != "car") continue;
+        ++cars;
+        CHECK(e.L == Approx(4.2).margin(0.15));
+    }
+    CHECK(cars == 2);
+    o.clustering = "voxels";
+    CHECK_THROWS_WITH(o.validate(), Catch::Contains("clustering"));
+}
+
+namespace {
+
+/// Gives every point the pixel of a pinhole camera (f = 500 px, principal point (1000, 1000))
+/// on a 2000 x 2000 grid.
+void project_pixels(LabeledCloud& cloud) {
+    cloud.width_px = 2000;
+    cloud.height_px = 2000;
+    for (std::size_t i = 0; i < cloud.size(); ++i) {
+        const auto& p = cloud.xyz_m[i];
+        const long u = std::lround(500.0 * double{p.x()} / double{p.z()} + 1000.0);
+        const long v = std::lround(500.0 * double{p.y()} / double{p.z()} + 1000.0);
+        cloud.pixel[i] =
+            static_cast<std::uint32_t>(std::clamp(v, 0L, 1999L) * 2000 + std::clamp(u, 0L, 1999L));
+    }
+}
+
+int count_class(const scene_schema::EntityDocument& doc, const std::string& name) {
+    int n = 0;
+    for (const auto& e : doc.entities) n += e.class_name == name ? 1 : 0;
+    return n;
+}
+
+}  // namespace
+
+TEST_CASE("wrong matches interleaved with a near car's pixels are not a second car", "[entities]") {
+    LabeledCloud cloud;
+    for (float x = -6.0f; x <= 6.0f; x += 0.25f) {
+        for (float z = 3.0f; z <= 40.0f; z += 0.25f) add_point(cloud, {x, 1.65f, z}, 0);
+    }
+    // The rear of a car 10 m ahead; every 10th of its pixels matched wrongly at twice the
+    // depth (the same viewing ray, so the same pixel neighbourhood).
+    int k = 0;
+    for (float y = 0.15f; y <= 1.65f; y += 0.02f) {
+        for (float x = -0.9f; x <= 0.9f; x += 0.02f) {
+            const float scale = (k++ % 10 == 0) ? 2.0f : 1.0f;
+            add_point(cloud, {x * scale, y * scale, 10.0f * scale}, 2);
+        }
+    }
+    project_pixels(cloud);
+    ExtractOptions o = options_with_bundled_config("instances");
+    CHECK(count_class(extract_entities(cloud, test_palette(), StereoCamera{}, o), "car") == 1);
+    o.shadow_fraction = 1.0;  // never suppress: the shadow becomes a second car
+    CHECK(count_class(extract_entities(cloud, test_palette(), StereoCamera{}, o), "car") == 2);
+}
+
+namespace {
+
+/// Road y = 1.65 from z 3 to 40, x -6..6.
+void add_road(LabeledCloud& cloud) {
+    for (float x = -6.0f; x <= 6.0f; x += 0.25f) {
+        for (float z = 3.0f; z <= 40.0f; z += 0.25f) add_point(cloud, {x, 1.65f, z}, 0);
+    }
+}
+
+/// The rear face of a car 10 m ahead (x -0.9..0.9, 1.5 m high): pixels u 955-1045 and
+/// v 1007-1082 for project_pixels' camera; optionally with a hole in x -0.7..0.7, y 0.4..1.4
+/// (u 965-1035, v 1020-1070), where the dark body gave no disparity.
+void add_near_rear(LabeledCloud& cloud, bool with_hole) {
+    for (float y = 0.15f; y <= 1.65f; y += 0.02f) {
+        for (float x = -0.9f; x <= 0.9f; x += 0.02f) {
+            if (with_hole && std::abs(x) < 0.7f && y > 0.4f && y < 1.4f) continue;
+            add_point(cloud, {x, y, 10.0f}, 2);
+        }
+    }
+}
+
+}  // namespace
+
+TEST_CASE("wrong matches inside a hole of a nearer car's pixels are not a second car",
+          "[entities][shadow]") {
+    LabeledCloud cloud;
+    add_road(cloud);
+    add_near_rear(cloud, true);
+    // Points 4 m behind, seen through the middle of the hole (u 975-1025, v 1030-1060): every
+    // pixel at least 10 px from the car's own, but inside its extent on every row.
+    for (float y = 0.84f; y <= 1.65f; y += 0.02f) {
+        for (float x = -0.7f; x <= 0.7f; x += 0.02f) add_point(cloud, {x, y, 14.0f}, 2);
+    }
+    project_pixels(cloud);
+    ExtractOptions o = options_with_bundled_config("instances");
+    CHECK(count_class(extract_entities(cloud, test_palette(), StereoCamera{}, o), "car") == 1);
+    o.shadow_fraction = 1.0;  // never suppress: the wrong matches become a second car
+    CHECK(count_class(extract_entities(cloud, test_palette(), StereoCamera{}, o), "car") == 2);
+}
+
+TEST_CASE("a car partly hidden by a nearer one, seen right beside it, is kept",
+          "[entities][shadow]") {
+    LabeledCloud cloud;
+    add_road(cloud);
+    add_near_rear(cloud, false);
+    // The rear of a car 18 m ahead, its right part hidden: only x -2.2..-1.65 is seen, 16 px
+    // immediately left of the nearer car (u 939-954), a real object beside an occluder.
+    for (float y = 0.15f; y <= 1.65f; y += 0.05f) {
+        for (float x = -2.2f; x <= -1.65f; x += 0.02f) add_point(cloud, {x, y, 18.0f}, 2);
+    }
+    project_pixels(cloud);
+    ExtractOptions o = options_with_bundled_config("instances");
+    std::vector<scene_schema::Entity> cars;
+    for (const auto& e : extract_entities(cloud, test_palette(), StereoCamera{}, o).entities) {
+        if (e.class_name == "car") cars.push_back(e);
+    }
+    REQUIRE(cars.size() == 2);
+    std::sort(cars.begin(), cars.end(), [](const auto& a, const auto& b) { return a.z < b.z; });
+    CHECK(cars[1].z > 18.0);
+    o.fragment_height_fraction = 1.0;  // every candidate a fragment: beside counts as a shadow
+    CHECK(count_class(extract_entities(cloud, test_palette(), StereoCamera{}, o), "car") == 1);
+}
+
+TEST_CASE("a thin strip of roof-line smear just above a nearer car is not a car",
+          "[entities][shadow]") {
+    LabeledCloud cloud;
+    add_road(cloud);
+    add_near_rear(cloud, false);
+    // The pixels right above the car's roof (v 1001-1006, u 958-1042), matched to the
+    // background 8 m behind: a strip 0.18 m high at roof height, 900 points.
+    for (float y = 0.036f; y <= 0.216f; y += 0.03f) {
+        for (float x = -1.5f; x <= 1.5f; x += 0.02f) add_point(cloud, {x, y, 18.0f}, 2);
+    }
+    project_pixels(cloud);
+    ExtractOptions o = options_with_bundled_config("instances");
+    CHECK(count_class(extract_entities(cloud, test_palette(), StereoCamera{}, o), "car") == 1);
+    o.fragment_height_fraction = 0.0;  // no fragments: the strip lies on no row of the car
+    CHECK(count_class(extract_entities(cloud, test_palette(), StereoCamera{}, o), "car") == 2);
+    o.fragment_height_fraction = 1.5;
+    CHECK_THROWS_WITH(o.validate(), Catch::Contains("fragment_height_fraction"));
+}
+
+TEST_CASE("a fragment whose box centre falls inside a larger car is dropped", "[entities]") {
+    LabeledCloud cloud = test_scene();
+    // A blob of car points 1 m behind the visible side of the first car (inside its body).
+    for (float y = 0.8f; y <= 1.2f; y += 0.05f) {
+        for (float x = -3.7f; x <= -3.3f; x += 0.05f) {
+            for (float z = 11.8f; z <= 12.2f; z += 0.1f) add_point(cloud, {x, y, z}, 2);
+        }
+    }
+    const auto doc = extract_entities(cloud, test_palette(), StereoCamera{},
+                                      options_with_bundled_config("instances"));
+    CHECK(count_class(doc, "car") == 2);
+}
+
+TEST_CASE("a parked row cut at clear gaps keeps every car although each hides the next",
+          "[entities]") {
+    LabeledCloud cloud;
+    for (float x = -6.0f; x <= 6.0f; x += 0.25f) {
+        for (float z = 3.0f; z <= 40.0f; z += 0.25f) add_point(cloud, {x, 1.65f, z}, 0);
+    }
+    // Three cars parked along z, 0.5 m apart (one blob for the clustering), right sides seen:
+    // in the image each farther car lies right beside the nearer one, as a shadow would.
+    const double starts[] = {8.0, 12.7, 17.4};
+    for (float start : starts) {
+        for (float y = 0.15f; y <= 1.65f; y += 0.05f) {
+            for (float z = start; z <= start + 4.2f; z += 0.05f) add_point(cloud, {-1.1f, y, z}, 2);
+        }
+    }
+    project_pixels(cloud);
+    const auto doc = extract_entities(cloud, test_palette(), StereoCamera{},
+                                      options_with_bundled_config("instances"));
+    std::vector<double> centres;
+    for (const auto& e : doc.entities) {
+        if (e.class_name == "car") centres.push_back(e.z);
+    }
+    std::sort(centres.begin(), centres.end());
+    REQUIRE(centres.size() == 3);
+    for (std::size_t k = 0; k < 3; ++k) CHECK(centres[k] == Approx(starts[k] + 2.1).margin(0.3));
+}
+
+namespace {
+
+/// The camera-facing part of a car heading along x, nose towards the camera at x = x_nose:
+/// the front below the bonnet, the bonnet (0.9 m high, 1 m long), the windscreen and the roof
+/// (1.5 m), 1.8 m wide around z_centre, on the road at y = 1.65.
+void add_car_front_on(LabeledCloud& cloud, float x_nose, float z_centre) {
+    for (float z = z_centre - 0.9f; z <= z_centre + 0.9f; z += 0.05f) {
+        for (float h = 0.3f; h <= 0.9f; h += 0.05f) add_point(cloud, {x_nose, 1.65f - h, z}, 2);
+        for (float x = x_nose; x <= x_nose + 1.0f; x += 0.05f) {
+            add_point(cloud, {x, 1.65f - 0.9f, z}, 2);
+        }
+        for (float x = x_nose + 1.0f; x <= x_nose + 1.6f; x += 0.05f) {
+            add_point(cloud, {x, 1.65f - (0.9f + (x - x_nose - 1.0f)), z}, 2);
+        }
+        for (float x = x_nose + 1.6f; x <= x_nose + 3.0f; x += 0.05f) {
+            add_point(cloud, {x, 1.65f - 1.5f, z}, 2);
+        }
+    }
+}
+
+}  // namespace
+
+TEST_CASE("two cars side by side seen front-on become two cars heading across the blob",
+          "[entities][split]") {
+    LabeledCloud cloud;
+    for (float x = -6.0f; x <= 10.0f; x += 0.25f) {
+        for (float z = 3.0f; z <= 40.0f; z += 0.25f) add_point(cloud, {x, 1.65f, z}, 0);
+    }
+    // Noses at x = 4.35 (centres at x = 6.5 for 4.3 m cars), 0.3 m apart: one blob 3.9 m long
+    // along z, as long as one car seen side-on, but with bonnets in front of the roofs.
+    add_car_front_on(cloud, 4.35f, 7.0f);
+    add_car_front_on(cloud, 4.35f, 9.1f);
+    ExtractOptions o = options_with_bundled_config("instances");
+    std::vector<scene_schema::Entity> cars;
+    for (const auto& e : extract_entities(cloud, test_palette(), StereoCamera{}, o).entities) {
+        if (e.class_name == "car") cars.push_back(e);
+    }
+    std::sort(cars.begin(), cars.end(), [](const auto& a, const auto& b) { return a.z < b.z; });
+    REQUIRE(cars.size() == 2);
+    const double z_true[] = {7.0, 9.1};
+    for (std::size_t k = 0; k < 2; ++k) {
+        CHECK(std::abs(std::sin(cars[k].theta)) < std::sin(10.0 * kPi / 180.0));
+        CHECK(cars[k].x == Approx(6.5).margin(0.4));
+        CHECK(cars[k].z == Approx(z_true[k]).margin(0.3));
+    }
+    o.row_low_fraction = 0.0;  // off: one car heading along z
+    CHECK(count_class(extract_entities(cloud, test_palette(), StereoCamera{}, o), "car") == 1);
+}
+
+TEST_CASE("a car seen side-on, its roof right behind the door line, is not cut across",
+          "[entities][split]") {
+    LabeledCloud cloud;
+    for (float x = -6.0f; x <= 10.0f; x += 0.25f) {
+        for (float z = 3.0f; z <= 40.0f; z += 0.25f) add_point(cloud, {x, 1.65f, z}, 0);
+    }
+    // Heading along z, left side at x = 4.35 seen: door (up to 1 m), 0.2 m of window rising
+    // to the roof (1.45 m) across the rest of the width. Low only over 0.2 m from the camera.
+    for (float z = 12.0f; z <= 16.2f; z += 0.05f) {
+        for (float h = 0.3f; h <= 1.0f; h += 0.05f) add_point(cloud, {4.35f, 1.65f - h, z}, 2);
+        for (float x = 4.35f; x <= 4.55f; x += 0.05f) {
+            add_point(cloud, {x, 1.65f - (1.0f + 2.0f * (x - 4.35f)), z}, 2);
+        }
+        for (float x = 4.55f; x <= 5.9f; x += 0.05f) add_point(cloud, {x, 1.65f - 1.45f, z}, 2);
+    }
+    ExtractOptions o = options_with_bundled_config("instances");
+    const auto doc = extract_entities(cloud, test_palette(), StereoCamera{}, o);
+    REQUIRE(count_class(doc, "car") == 1);
+    for (const auto& e : doc.entities) {
+        if (e.class_name == "car") CHECK(e.theta == Approx(-kPi / 2.0).margin(0.05));
+    }
+    o.row_low_extent_m = 0.1;  // a low band this narrow would count as bonnets
+    CHECK(count_class(extract_entities(cloud, test_palette(), StereoCamera{}, o), "car") == 2);
+}
+
+TEST_CASE("a parked row whose far car is half hidden is cut at its gaps walked from the near end",
+          "[entities][split]") {
+    LabeledCloud cloud;
+    for (float x = -6.0f; x <= 6.0f; x += 0.25f) {
+        for (float z = 3.0f; z <= 40.0f; z += 0.25f) add_point(cloud, {x, 1.65f, z}, 0);
+    }
+    // Sides of three cars 0.45 m apart (one blob); only the first 2 m of the third are seen.
+    // An even division of the seen 11.4 m would cut the second car short.
+    const double starts[] = {8.0, 12.65, 17.3};
+    const float ends[] = {12.2f, 16.85f, 19.3f};
+    for (int k = 0; k < 3; ++k) {
+        for (float y = 0.15f; y <= 1.65f; y += 0.05f) {
+            for (float z = starts[k]; z <= ends[k]; z += 0.05f) add_point(cloud, {-1.1f, y, z}, 2);
+        }
+    }
+    project_pixels(cloud);
+    const auto doc = extract_entities(cloud, test_palette(), StereoCamera{},
+                                      options_with_bundled_config("instances"));
+    std::vector<double> centres;
+    for (const auto& e : doc.entities) {
+        if (e.class_name == "car") centres.push_back(e.z);
+    }
+    std::sort(centres.begin(), centres.end());
+    REQUIRE(centres.size() == 3);
+    for (int k = 0; k < 3; ++k) CHECK(centres[k] == Approx(starts[k] + 2.1).margin(0.3));
+}
+
+TEST_CASE("the sparse far car of a parked row needs only half the class's minimum of points",
+          "[entities][split]") {
+    LabeledCloud cloud;
+    for (float x = -6.0f; x <= 6.0f; x += 0.25f) {
+        for (float z = 3.0f; z <= 40.0f; z += 0.25f) add_point(cloud, {x, 1.65f, z}, 0);
+    }
+    // Two cars seen densely, 0.45 m apart, then 66 points (< 100, the car minimum) of a third.
+    for (float y = 0.15f; y <= 1.65f; y += 0.05f) {
+        for (float z = 8.0f; z <= 12.2f; z += 0.05f) add_point(cloud, {-1.1f, y, z}, 2);
+        for (float z = 12.65f; z <= 16.85f; z += 0.05f) add_point(cloud, {-1.1f, y, z}, 2);
+    }
+    for (int i = 0; i < 6; ++i) {
+        for (int k = 0; k < 11; ++k) {
+            add_point(cloud, {-1.1f, 0.3f + 0.25f * static_cast<float>(i), 17.3f + 0.2f * k}, 2);
+        }
+    }
+    project_pixels(cloud);
+    const auto doc = extract_entities(cloud, test_palette(), StereoCamera{},
+                                      options_with_bundled_config("instances"));
+    std::vector<double> centres;
+    for (const auto& e : doc.entities) {
+        if (e.class_name == "car") centres.push_back(e.z);
+    }
+    std::sort(centres.begin(), centres.end());
+    REQUIRE(centres.size() == 3);
+    CHECK(centres[2] == Approx(17.3 + 2.1).margin(0.3));
+}
+
+TEST_CASE("stuff points smeared onto a thing do not become a stuff entity on it",
+          "[entities][stuff]") {
+    Palette palette = test_palette();
+    palette.classes.push_back({"building", 11, false, {70, 70, 70}});
+    LabeledCloud cloud = test_scene();
+    // A real building front along x = -8, and 1014 building points inside the first car's box
+    // (x -3.5, z 12): the building's label spilling over the car's silhouette, at its depth.
+    for (float z = 5.0f; z <= 25.0f; z += 0.25f) {
+        for (float y = -3.0f; y <= 1.65f; y += 0.25f) add_point(cloud, {-8.0f, y, z}, 3);
+    }
+    for (float x = -3.8f; x <= -3.2f; x += 0.05f) {
+        for (float z = 11.7f; z <= 12.3f; z += 0.05f) {
+            for (float y = 0.65f; y <= 1.15f; y += 0.1f) add_point(cloud, {x, y, z}, 3);
+        }
+    }
+    ExtractOptions o = options_with_bundled_config("instances");
+    auto doc = extract_entities(cloud, palette, StereoCamera{}, o);
+    REQUIRE(count_class(doc, "building") == 1);
+    CHECK(count_class(doc, "car") == 2);
+    for (const auto& e : doc.entities) {
+        if (e.class_name != "building") continue;
+        CHECK(e.id == "building-1");
+        CHECK(e.x == Approx(-8.0).margin(0.3));
+    }
+    o.stuff_on_thing_fraction = 1.0;  // off: the spilled points make a second building
+    CHECK(count_class(extract_entities(cloud, palette, StereoCamera{}, o), "building") == 2);
+    o.stuff_on_thing_fraction = 0.0;
+    CHECK_THROWS_WITH(o.validate(), Catch::Contains("stuff_on_thing_fraction"));
+}
+
+TEST_CASE("classes extracted on several threads give the same entities as on one", "[entities]") {
+    ExtractOptions o = options_with_bundled_config("instances");
+    o.threads = 1;
+    const auto one = extract_entities(test_scene(), test_palette(), StereoCamera{}, o);
+    REQUIRE(one.entities.size() >= 3);  // road and two cars
+    for (int threads : {2, 3, 8}) {
+        o.threads = threads;
+        const auto many = extract_entities(test_scene(), test_palette(), StereoCamera{}, o);
+        CHECK(scene_schema::dump(many) == scene_schema::dump(one));
+    }
+    o.threads = 0;
+    CHECK_THROWS_WITH(o.validate(), Catch::Contains("threads"));
+}
+
+TEST_CASE("a large cloud split by class on several threads gives the entities of one thread",
+          "[entities]") {
+    // 20 m x 40 m of road at 0.05 m (about 320k points, so the split runs in several chunks),
+    // two cars, and behind-the-camera points of both classes between them (dropped by the range
+    // check, leaving gaps the chunks must close).
+    LabeledCloud cloud;
+    std::size_t road_points = 0;
+    for (float x = -10.0f; x <= 10.0f; x += 0.05f) {
+        for (float z = 3.0f; z <= 43.0f; z += 0.05f) {
+            add_point(cloud, {x, 1.65f, z}, 0);
+            ++road_points;
+        }
+        add_point(cloud, {x, 1.65f, -1.0f}, 0);
+        add_point(cloud, {x, 1.0f, -1.0f}, 2);
+    }
+    add_car(cloud, -3.5f, 12.0f);
+    add_car(cloud, 3.5f, 20.0f);
+    REQUIRE(cloud.size() > 4 * 32768);
+    ExtractOptions o = options_with_bundled_config("instances");
+    o.threads = 1;
+    const auto one = extract_entities(cloud, test_palette(), StereoCamera{}, o);
+    REQUIRE(count_class(one, "car") == 2);
+    REQUIRE(count_class(one, "road") == 1);
+    for (const auto& e : one.entities) {
+        if (e.class_name == "road") CHECK(e.point_count == static_cast<std::int64_t>(road_points));
+    }
+    for (int threads : {2, 3, 4}) {
+        o.threads = threads;
+        const auto many = extract_entities(cloud, test_palette(), StereoCamera{}, o);
+        CHECK(scene_schema::dump(many) == scene_schema::dump(one));
+    }
+}
+
+TEST_CASE("stuff taken every fourth pixel column gives the box and point count of every column",
+          "[entities]") {
+    // A road seen as a 400 x 300 pixel image (x across the columns, z along the rows), and a
+    // car on it; the cloud knows its pixels. Road is stuff (column_step 4 in the bundled
+    // config), the car a thing (every point).
+    constexpr int kWidth = 400, kHeight = 300;
+    LabeledCloud cloud;
+    cloud.width_px = kWidth;
+    cloud.height_px = kHeight;
+    for (int v = 0; v < kHeight; ++v) {
+        for (int u = 0; u < kWidth; ++u) {
+            add_point(cloud,
+                      {0.03f * static_cast<float>(u - kWidth / 2), 1.65f,
+                       3.0f + 0.1f * static_cast<float>(v)},
+                      0);
+        }
+    }
+    add_car(cloud, -2.0f, 12.0f);
+    ExtractOptions o = options_with_bundled_config("instances");
+    REQUIRE(o.classes.find("road").column_step == 4);
+    const auto stepped = extract_entities(cloud, test_palette(), StereoCamera{}, o);
+    for (auto& c : o.classes.classes) {
+        if (c.name == "road") c.column_step = 1;
+    }
+    const auto every = extract_entities(cloud, test_palette(), StereoCamera{}, o);
+    REQUIRE(count_class(stepped, "road") == 1);
+    REQUIRE(count_class(every, "road") == 1);
+    REQUIRE(count_class(stepped, "car") == 1);
+    const auto find = [](const scene_schema::EntityDocument& doc, const std::string& name) {
+        for (const auto& e : doc.entities) {
+            if (e.class_name == name) return e;
+        }
+        return scene_schema::Entity{};
+    };
+    const auto a = find(stepped, "road"), b = find(every, "road");
+    CHECK(b.point_count == kWidth * kHeight);
+    CHECK(a.point_count == kWidth * kHeight);  // 100 columns taken, each standing for 4
+    CHECK(std::abs(a.x - b.x) < 0.05);
+    CHECK(std::abs(a.z - b.z) < 0.05);
+    CHECK(std::abs(a.L - b.L) < 0.1);
+    CHECK(std::abs(a.W - b.W) < 0.1);
+    // The car is a thing: all its points, the same box.
+    const auto car_a = find(stepped, "car"), car_b = find(every, "car");
+    CHECK(car_a.point_count == car_b.point_count);
+    CHECK(std::abs(car_a.x - car_b.x) < 1e-6);
+    CHECK(std::abs(car_a.z - car_b.z) < 1e-6);
+    CHECK(std::abs(car_a.theta - car_b.theta) < 1e-9);
+}
+
+TEST_CASE("column_step must be 1, 2, 4 or 8, and 1 for a thing", "[entities]") {
+    CHECK_THROWS_WITH(
+        parse_class_config(R"({"classes": [{"name": "road", "column_step": 3}]})", "x"),
+        Catch::Contains("column_step: must be 1, 2, 4 or 8"));
+    CHECK_THROWS_WITH(
+        parse_class_config(R"({"classes": [{"name": "car", "thing": true, "column_step": 4}]})",
+                           "x"),
+        Catch::Contains("column_step: must be 1 for a thing"));
+}
