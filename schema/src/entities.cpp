@@ -6,6 +6,7 @@
 #include <cmath>
 #include <cstring>
 #include <fstream>
+#include <iostream>
 #include <map>
 #include <random>
 #include <regex>
@@ -401,10 +402,15 @@ EntityDocument parse(std::string_view text) { return from_json(parse_json(text))
 std::string dump(const EntityDocument& document) { return to_json(document).dump(2) + "\n"; }
 
 EntityDocument read_file(const std::filesystem::path& path) {
-    std::ifstream in(path, std::ios::binary);
-    if (!in) throw FileError(path.string() + ": cannot open: " + std::strerror(errno));
     std::ostringstream buffer;
-    buffer << in.rdbuf();
+    if (path == "-") {
+        buffer << std::cin.rdbuf();
+        if (std::cin.bad()) throw FileError("-: cannot read standard input");
+    } else {
+        std::ifstream in(path, std::ios::binary);
+        if (!in) throw FileError(path.string() + ": cannot open: " + std::strerror(errno));
+        buffer << in.rdbuf();
+    }
     try {
         return parse(buffer.str());
     } catch (const SchemaError& e) {

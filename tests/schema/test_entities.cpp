@@ -2,6 +2,7 @@
 
 #include <filesystem>
 #include <fstream>
+#include <iostream>
 #include <limits>
 #include <sstream>
 
@@ -289,5 +290,24 @@ TEST_CASE("numbers beyond the schema's bounds are refused at their pointer", "[s
         REQUIRE(issues.size() == 1);
         CHECK(issues[0].pointer == pointer);
         CHECK(issues[0].rule.rfind("must be between", 0) == 0);
+    }
+}
+
+TEST_CASE("read_file reads standard input for the path -", "[schema]") {
+    std::istringstream input(scene_schema::dump(small_document()));
+    std::streambuf* saved = std::cin.rdbuf(input.rdbuf());
+    const EntityDocument doc = scene_schema::read_file("-");
+    std::cin.rdbuf(saved);
+    CHECK(scene_schema::dump(doc) == scene_schema::dump(small_document()));
+
+    std::istringstream broken("{\"schema_version\": 1}");
+    saved = std::cin.rdbuf(broken.rdbuf());
+    try {
+        scene_schema::read_file("-");
+        std::cin.rdbuf(saved);
+        FAIL("read a broken document from standard input");
+    } catch (const scene_schema::FileError& e) {
+        std::cin.rdbuf(saved);
+        CHECK(std::string(e.what()) == "-: /schema_version: must be a string");
     }
 }

@@ -123,8 +123,8 @@ std::string dump(const EntityDocument& document);
 /// check() then dump(), converting the document to JSON once.
 std::string dump_checked(const EntityDocument& document);
 
-/// Reads and validates a file; errors carry the pointer and the file name is added by the caller
-/// through ReadError.
+/// Reads and validates a file ("-": standard input); throws FileError
+/// "<path>: <pointer>: <rule>".
 EntityDocument read_file(const std::filesystem::path& path);
 
 /// Validates, then writes atomically (temp file beside the target, then rename).
