@@ -164,7 +164,7 @@ void add_settings_flags(CLI::App& cmd, AnalyseArgs& a) {
 void add_output_flags(CLI::App& cmd, AnalyseArgs& a) {
     const std::string out = "Outputs (written only when every stage succeeded)";
     cmd.add_option("-o,--entities", a.entities, "entity JSON file ('-' = stdout)")->group(out);
-    cmd.add_option("--xyz", a.xyz, "ASCII cloud for CloudCompare (//X Y Z R G B Class Intensity)")
+    cmd.add_option("--xyz", a.xyz, "ASCII cloud for CloudCompare (//X Y Z R G B Class Luma)")
         ->group(out);
     cmd.add_option("--pcd", a.pcd, "binary PCD v0.7 cloud for PCL (x y z rgb label)")->group(out);
     cmd.add_option("--ply", a.ply, "binary PLY cloud (x y z, red green blue, scalar_class)")

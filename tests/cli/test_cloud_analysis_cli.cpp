@@ -82,6 +82,19 @@ std::size_t count_lines(const std::string& text) {
     return static_cast<std::size_t>(std::count(text.begin(), text.end(), '\n'));
 }
 
+/// The whitespace-separated numbers of each line of `text`.
+std::vector<std::vector<double>> numeric_rows(const std::string& text) {
+    std::vector<std::vector<double>> rows;
+    std::istringstream lines(text);
+    for (std::string line; std::getline(lines, line);) {
+        std::istringstream cols(line);
+        std::vector<double> row;
+        for (double v; cols >> v;) row.push_back(v);
+        rows.push_back(std::move(row));
+    }
+    return rows;
+}
+
 /// The one file CloudCompare exported into `dir` (it names it after the input and the time).
 fs::path only_export(const fs::path& dir, const std::string& ext) {
     fs::path found;
@@ -244,7 +257,7 @@ TEST_CASE("CloudCompare loads our .xyz and .ply with every point and PCL reads o
             dir);
     REQUIRE(r.code == 0);
     const std::string xyz = slurp(dir / "c.xyz");
-    REQUIRE(xyz.rfind("//X Y Z R G B Class Intensity\n", 0) == 0);
+    REQUIRE(xyz.rfind("//X Y Z R G B Class Luma\n", 0) == 0);
     const std::size_t points = count_lines(xyz) - 1;
     REQUIRE(points > 10000);
     // The clouds are written atomically but not fsync'ed unless asked: the same bytes either way.
@@ -254,7 +267,12 @@ TEST_CASE("CloudCompare loads our .xyz and .ply with every point and PCL reads o
                 .code == 0);
     CHECK(slurp(dir / "durable.xyz") == xyz);
 
-    for (const char* name : {"c.xyz", "c.ply"}) {
+    // Every column survives CloudCompare with its values: x y z r g b class luma from the .xyz
+    // (8 columns), x y z r g b class from the .ply (7), point for point.
+    const std::vector<std::vector<double>> ours = numeric_rows(xyz.substr(xyz.find('\n') + 1));
+    REQUIRE(ours.size() == points);
+    for (const auto& [name, columns] : {std::pair<const char*, std::size_t>{"c.xyz", 8},
+                                        std::pair<const char*, std::size_t>{"c.ply", 7}}) {
         INFO(name);
         const auto sub = scratch(std::string("clients_") + name);
         fs::copy_file(dir / name, sub / name);
@@ -262,14 +280,18 @@ TEST_CASE("CloudCompare loads our .xyz and .ply with every point and PCL reads o
                                quote((sub / name).string()) + " -C_EXPORT_FMT ASC -SAVE_CLOUDS",
                            sub);
         REQUIRE(cc.code == 0);
-        const std::string exported = slurp(only_export(sub, ".asc"));
-        CHECK(count_lines(exported) == points);
-        // x y z r g b and the class scalar field: 7 columns.
-        const std::string first = exported.substr(0, exported.find('\n'));
-        std::istringstream cols(first);
-        int n = 0;
-        for (std::string c; cols >> c;) ++n;
-        CHECK(n == 7);
+        const auto exported = numeric_rows(slurp(only_export(sub, ".asc")));
+        REQUIRE(exported.size() == points);
+        std::size_t mismatches = 0;
+        for (std::size_t i = 0; i < points; ++i) {
+            REQUIRE(exported[i].size() == columns);
+            for (std::size_t c = 0; c < columns; ++c) {
+                // CloudCompare stores coordinates as floats: within a millimetre of our text.
+                const double tolerance = c < 3 ? 1e-3 : 0.0;
+                if (std::abs(exported[i][c] - ours[i][c]) > tolerance) ++mismatches;
+            }
+        }
+        CHECK(mismatches == 0);
     }
 
     const Run pcl = run(quote(PCL_CONVERT_EXE) + " " + quote((dir / "c.pcd").string()) + " " +

@@ -94,7 +94,7 @@ TEST_CASE("A binary PCD reads back and NaN points are dropped", "[cloud]") {
 TEST_CASE("An XYZ file with a // header maps columns by name", "[cloud]") {
     const PointCloud c =
         read_point_cloud(temp_file("a.xyz",
-                                   "//X Y Z R G B Class Intensity\n1.000 2.000 3.000 4 5 6 26 0.5\n"
+                                   "//X Y Z R G B Class Luma\n1.000 2.000 3.000 4 5 6 26 0.5\n"
                                    "-1.5 0.25 9 7 8 9 7 0.1\n"));
     REQUIRE(c.size() == 2);
     CHECK(c.positions_kitti[1] == glm::vec3(-1.5f, 0.25f, 9.0f));

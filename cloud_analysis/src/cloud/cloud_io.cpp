@@ -123,7 +123,7 @@ struct Text {
 /// The .xyz lines of points [begin, end) (no header).
 Text xyz_lines(const LabeledCloud& cloud, const Palette& palette, std::size_t begin,
                std::size_t end) {
-    // Worst case per line: 3 coordinates of 24 chars, 3 colours, class, intensity, separators;
+    // Worst case per line: 3 coordinates of 24 chars, 3 colours, class, luma, separators;
     // a cloud costs its real size (~35 bytes a point), not 120.
     Text text{std::unique_ptr<char[]>(new char[(end - begin) * 120 + 1]), 0};
     char* const start = text.data.get();
@@ -155,7 +155,6 @@ Text xyz_lines(const LabeledCloud& cloud, const Palette& palette, std::size_t be
 }  // namespace
 
 std::string format_xyz(const LabeledCloud& cloud, const Palette& palette) {
-    static constexpr char kHeader[] = "//X Y Z R G B Class Intensity\n";
     // ASCII formatting is the costliest writer: the second half of a large cloud is formatted
     // on a helper thread (2 cores), then the halves are joined.
     constexpr std::size_t kParallelFrom = 100000;
@@ -167,8 +166,8 @@ std::string format_xyz(const LabeledCloud& cloud, const Palette& palette) {
     const Text last = second.get();
     // One copy of each half into the file's bytes.
     std::string out;
-    out.reserve(sizeof(kHeader) - 1 + first.size + last.size);
-    out.append(kHeader, sizeof(kHeader) - 1);
+    out.reserve(kXyzHeader.size() + first.size + last.size);
+    out.append(kXyzHeader);
     out.append(first.data.get(), first.size);
     out.append(last.data.get(), last.size);
     return out;

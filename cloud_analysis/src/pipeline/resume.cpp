@@ -9,6 +9,8 @@
 
 #include <scene_schema/entities.hpp>
 
+#include "cloud_analysis/cloud/cloud_io.hpp"
+
 namespace cloud_analysis {
 namespace {
 
@@ -59,8 +61,8 @@ std::size_t checked_binary(const std::string& bytes, const std::string& header, 
 }
 
 std::size_t xyz_points(const std::string& bytes) {
-    static constexpr std::string_view kHeader = "//X Y Z R G B Class Intensity\n";
-    if (bytes.compare(0, kHeader.size(), kHeader) != 0) throw std::runtime_error("bad header");
+    if (bytes.compare(0, kXyzHeader.size(), kXyzHeader) != 0)
+        throw std::runtime_error("bad header");
     if (bytes.back() != '\n') throw std::runtime_error("last line is cut");
     const auto lines = static_cast<std::size_t>(std::count(bytes.begin(), bytes.end(), '\n'));
     return lines - 1;

@@ -44,7 +44,7 @@ TEST_CASE("the xyz writer prints a // header and one fixed-point line per point"
     std::istringstream in(text);
     std::string line;
     std::getline(in, line);
-    CHECK(line == "//X Y Z R G B Class Intensity");
+    CHECK(line == "//X Y Z R G B Class Luma");
     std::getline(in, line);
     CHECK(line == "1.250 -0.500 20.125 10 20 30 26 18");
     std::getline(in, line);
@@ -132,7 +132,7 @@ TEST_CASE("the fast xyz formatter agrees with iostream on random points", "[clou
     }
     // Naive reference: iostream fixed point, "-0.000" printed as "0.000".
     std::ostringstream ref;
-    ref << "//X Y Z R G B Class Intensity\n" << std::fixed << std::setprecision(3);
+    ref << "//X Y Z R G B Class Luma\n" << std::fixed << std::setprecision(3);
     const auto coordinate = [&](float v) {
         std::ostringstream one;
         one << std::fixed << std::setprecision(3) << static_cast<double>(v);

@@ -1,7 +1,7 @@
 #pragma once
 
 /// Writers of a LabeledCloud in the three formats viewers read (docs/clouds.md):
-/// - ASCII .xyz, header `//X Y Z R G B Class Intensity` (CloudCompare's ASCII reader);
+/// - ASCII .xyz, header kXyzHeader (CloudCompare's ASCII reader);
 /// - PCD v0.7 binary, fields `x y z rgb label` (PCL; rgb packed as uint32 in a float field);
 /// - PLY 1.0 binary little endian, float x y z, uchar red green blue, int scalar_class.
 /// Class is the palette class id (Cityscapes labelId), 0 for void pixels. Each formatter builds
@@ -9,6 +9,7 @@
 
 #include <filesystem>
 #include <string>
+#include <string_view>
 
 #include "cloud_analysis/cloud/types.hpp"
 
@@ -19,6 +20,12 @@ enum class CloudFormat { kXyz, kPcd, kPly };
 
 /// Format from a file extension (.xyz, .pcd, .ply); throws std::invalid_argument otherwise.
 CloudFormat cloud_format_from_path(const std::filesystem::path& path);
+
+/// First line of an .xyz file. CloudCompare reads a header that starts with `//`; it keeps
+/// the RGB columns as colours and every other named column as a scalar field, except one
+/// headed `Intensity`, which it drops when the colours are present (the luma is therefore
+/// called `Luma`).
+inline constexpr std::string_view kXyzHeader = "//X Y Z R G B Class Luma\n";
 
 /// Class id written for void points.
 inline constexpr int kVoidClassId = 0;
