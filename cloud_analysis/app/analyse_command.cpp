@@ -2,6 +2,7 @@
 
 #include <chrono>
 #include <cstdio>
+#include <cstring>
 #include <iostream>
 #include <optional>
 #include <set>
@@ -238,13 +239,18 @@ void resolve(AnalyseArgs& a, const CLI::App& cmd) {
 }
 
 stereoscene::support::FileSync cloud_sync(const AnalyseArgs& a) {
-    return a.fsync_clouds ? stereoscene::support::FileSync::kDurable : stereoscene::support::FileSync::kAtomicOnly;
+    return a.fsync_clouds ? stereoscene::support::FileSync::kDurable
+                          : stereoscene::support::FileSync::kAtomicOnly;
 }
 
 void write_output(const PendingOutput& out) {
     if (out.path == "-") {
-        std::fwrite(out.bytes.data(), 1, out.bytes.size(), stdout);
-        std::fflush(stdout);
+        // SIGPIPE is ignored (main): a reader that went away is an error line, not a signal.
+        if (std::fwrite(out.bytes.data(), 1, out.bytes.size(), stdout) != out.bytes.size() ||
+            std::fflush(stdout) != 0) {
+            throw std::runtime_error(std::string("cannot write output: standard output: ") +
+                                     std::strerror(errno) + " (-)");
+        }
     } else {
         stereoscene::support::write_file_atomic(out.path, out.bytes, out.sync);
     }

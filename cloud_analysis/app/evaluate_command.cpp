@@ -86,7 +86,7 @@ ResolvedPaths resolve(const EvaluateArgs& args) {
         }
         for (const auto& f : inputs) {
             std::error_code ec;
-            if (!fs::is_regular_file(f, ec)) {
+            if (f != "-" && !fs::is_regular_file(f, ec)) {
                 throw std::runtime_error("cannot evaluate: no such file (" + f.string() + ")");
             }
         }
@@ -118,7 +118,7 @@ ResolvedPaths resolve(const EvaluateArgs& args) {
     }
     for (const auto& f : inputs) {
         std::error_code ec;
-        if (!fs::is_regular_file(f, ec)) {
+        if (f != "-" && !fs::is_regular_file(f, ec)) {
             throw std::runtime_error("cannot evaluate: no such file (" + f.string() + ")");
         }
     }
@@ -600,7 +600,7 @@ CLI::App* add_export_kitti_command(CLI::App& app, ExportKittiArgs& args) {
 int run_export_kitti(const ExportKittiArgs& args) {
     for (const auto& f : {args.entities, args.calib}) {
         std::error_code ec;
-        if (!f.empty() && !fs::is_regular_file(f, ec)) {
+        if (!f.empty() && f != "-" && !fs::is_regular_file(f, ec)) {
             throw std::runtime_error("cannot export: no such file (" + f.string() + ")");
         }
     }

@@ -2,6 +2,7 @@
 // cloud (.xyz/.pcd/.ply) and entity file. Thin CLI: parse, validate, call the library, write.
 
 #include <algorithm>
+#include <csignal>
 #include <iostream>
 #include <string>
 #include <vector>
@@ -58,6 +59,7 @@ bool is_subcommand(const std::string& arg) {
 
 int main(int argc, char** argv) {
     stereoscene::support::keep_freed_memory();
+    std::signal(SIGPIPE, SIG_IGN);  // a closed stdout becomes a write error with a message
     // `analyse` is the default command: insert it unless a subcommand or --version is first.
     std::vector<std::string> args(argv + 1, argv + argc);
     if (args.empty() || (!is_subcommand(args[0]) && args[0] != "--version")) {

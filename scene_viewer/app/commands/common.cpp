@@ -109,10 +109,14 @@ std::pair<int, int> size_flag(const std::string& text, const std::string& flag) 
 }
 
 scene_schema::EntityDocument read_entities(const std::string& path) {
-    std::ifstream in(path, std::ios::binary);
-    if (!in) throw Failure{"cannot read entity file", std::strerror(errno), path};
     std::stringstream buffer;
-    buffer << in.rdbuf();
+    if (path == "-") {  // standard input, as in `cloud-analysis ... -o - | scene-render - ...`
+        buffer << std::cin.rdbuf();
+    } else {
+        std::ifstream in(path, std::ios::binary);
+        if (!in) throw Failure{"cannot read entity file", std::strerror(errno), path};
+        buffer << in.rdbuf();
+    }
     try {
         return scene_schema::parse(buffer.str());
     } catch (const scene_schema::SchemaError& e) {
