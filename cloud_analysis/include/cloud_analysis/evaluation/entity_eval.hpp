@@ -4,7 +4,7 @@
 /// scene's truth, or KITTI label_2 read by kitti_labels.hpp). Per class: greedy one-to-one
 /// matching by bird's-eye centre distance, precision and recall, centre, size and heading
 /// errors, bird's-eye-view and 3D IoU of oriented upright boxes, by distance bin; plus the
-/// bars of the closed loop (issue 5). See docs/evaluation.md "Closed loop".
+/// pass bars of the closed loop. See docs/evaluation.md "Closed loop".
 
 #include <array>
 #include <filesystem>

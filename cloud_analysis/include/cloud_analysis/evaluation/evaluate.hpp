@@ -35,7 +35,7 @@ struct GtCar {
     double range_m() const;
 };
 
-/// Matching rule settings (issue 3 item 8).
+/// Settings of the car matching rule (docs/evaluation.md "Cars").
 struct CarMatchOptions {
     std::string car_class = "car";        ///< entity class name scored
     double footprint_margin_m = 0.3;      ///< footprint grown by this on every side, metres
