@@ -1,0 +1,65 @@
+#pragma once
+
+/// Parts of the "instances" extractor shared by its files (see extract.hpp for the stage):
+/// thing candidates before they become entities, the pixel grid they are reasoned on in image
+/// space, and the per-class settings of clustering and box fitting.
+
+#include <cstddef>
+#include <future>
+#include <optional>
+#include <string>
+#include <vector>
+
+#include <scene_schema/entities.hpp>
+
+#include "cloud_analysis/cloud/types.hpp"
+#include "cloud_analysis/entities/boxes.hpp"
+#include "cloud_analysis/entities/class_config.hpp"
+#include "cloud_analysis/entities/cluster.hpp"
+#include "cloud_analysis/entities/ground.hpp"
+
+namespace cloud_analysis::instances {
+
+/// Point indices into one class's points.
+using Indices = std::vector<std::size_t>;
+
+/// The ground plane, fitted on one thread while the classes are clustered on the others.
+using PendingGround = std::shared_future<std::optional<GroundPlane>>;
+
+/// Pixel grid of the source image, to reason about clusters in image space.
+struct PixelGrid {
+    int width_px = 0;   ///< columns; 0 when the pixels are unknown
+    int height_px = 0;  ///< rows; 0 when the pixels are unknown
+    bool valid() const { return width_px > 0 && height_px > 0; }
+};
+
+/// One thing instance before it becomes an entity.
+struct Candidate {
+    OrientedBox box;        ///< fitted box
+    Indices members;        ///< the points of the class it holds
+    double range_m = 0.0;   ///< mean bird's-eye range of the points
+    std::size_t group = 0;  ///< pieces cut from one 3D cluster at clear gaps share a group
+    bool fragment = false;  ///< short (a strip) or sparse (under min_points): edge smear?
+};
+
+/// Clustering and box-fit settings of a class.
+struct ClassFit {
+    ClusterOptions cluster;  ///< distances from the class's settings, min_points 1
+    BoxFitOptions box;       ///< the class's prior (things), resting on the ground (things)
+};
+
+/// The clustering and box-fit settings of class settings `s`.
+ClassFit class_fit(const ClassSettings& s);
+
+/// The entity of a fitted box (sizes at least 1 mm, confidence clamped to [0, 1]); no id.
+scene_schema::Entity make_entity(const ClassInfo& info, const OrientedBox& box,
+                                 std::size_t point_count, double confidence,
+                                 const std::string& method);
+
+/// confidence = n / (n + 2 * min_points): 1/3 at the minimum, -> 1 with many points.
+double confidence_of(std::size_t n, const ClassSettings& s);
+
+/// Keeps the `max_entities` entities with the most points, largest first (stable).
+void keep_largest(std::vector<scene_schema::Entity>& entities, int max_entities);
+
+}  // namespace cloud_analysis::instances

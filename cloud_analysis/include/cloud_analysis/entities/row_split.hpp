@@ -1,0 +1,35 @@
+#pragma once
+
+/// Splitting a thing blob that is too large for its class's prior into the things it holds:
+/// a parked row end to end, things side by side seen front-on, or two things merged across.
+
+#include <optional>
+#include <vector>
+
+#include <Eigen/Core>
+
+#include "cloud_analysis/entities/candidate.hpp"
+#include "cloud_analysis/entities/extract.hpp"
+
+namespace cloud_analysis::instances {
+
+/// Pieces of a split blob; at_gaps when every cut fell in a clear gap (a bin with at most a
+/// quarter of the median occupied bin's points): the pieces are then distinct objects.
+struct Split {
+    std::vector<Indices> parts;     ///< the pieces' points
+    bool at_gaps = false;           ///< every cut in a clear gap
+    std::optional<double> yaw_rad;  ///< heading imposed on the pieces (cars side by side)
+};
+
+/// Pieces of a thing whose box is much longer or wider than its prior (a parked row, or
+/// cars side by side merged by the semantic image); {idx} when it fits the prior.
+Split split_oversized(const std::vector<Eigen::Vector3f>& pts, const Indices& idx,
+                      const OrientedBox& box, const ClassSettings& s,
+                      const std::optional<GroundPlane>& ground, const ExtractOptions& options);
+
+/// Vertical extent of points (2 % to 98 % height quantiles above the ground, or along -y
+/// without a ground plane), metres.
+double height_spread(const std::vector<Eigen::Vector3f>& pts, const Indices& idx,
+                     const std::optional<GroundPlane>& ground);
+
+}  // namespace cloud_analysis::instances

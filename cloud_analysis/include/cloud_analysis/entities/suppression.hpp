@@ -1,0 +1,49 @@
+#pragma once
+
+/// Dropping thing candidates that are not objects of their own (wrong-match shadows and edge
+/// smear behind nearer things, fragments nested in larger things) and stuff entities smeared
+/// onto things' silhouettes.
+
+#include <cstdint>
+#include <vector>
+
+#include <scene_schema/entities.hpp>
+
+#include "cloud_analysis/entities/candidate.hpp"
+
+namespace cloud_analysis::instances {
+
+/// Image-space suppression of "shadows" (candidates visited nearest first, tested against the
+/// accepted ones of other groups nearer by more than min_gap_m):
+/// - a candidate with most of its pixels inside the row extents of a nearer candidate (its
+///   leftmost to rightmost pixel on each row) is dropped: pixels
+///   interleaved with a nearer object's are wrong matches on it (dark, textureless car bodies,
+///   holes in its disparity) reprojected too far. A real object behind another is occluded
+///   there and shows only beside it, so a candidate beside a nearer one is kept;
+/// - a fragment (short or sparse) is dropped when most of its pixels lie within radius_px of
+///   those extents on any row within radius_px above or below: stereo smear along a nearer
+///   object's edges (roof lines matched to the background) is a thin strip beside it.
+/// Pieces of one group (a parked row cut at clear gaps) never suppress each other: each is a
+/// distinct object and the row is connected in space, which a shadow is not.
+std::vector<Candidate> suppress_shadows(std::vector<Candidate> candidates,
+                                        const std::vector<std::uint32_t>& pixels,
+                                        const PixelGrid& grid, double min_gap_m,
+                                        double max_shared_fraction, int radius_px);
+
+/// Drops thing candidates whose centre lies inside the footprint of a candidate with more
+/// points: two objects cannot overlap that much, so the smaller is a fragment of the larger.
+std::vector<Candidate> suppress_nested(std::vector<Candidate> candidates);
+
+/// A thing's bird's-eye footprint: centre, heading's cosine and sine, half length and width.
+struct Footprint {
+    double x, z, c, s, half_L, half_W;
+};
+
+/// The footprints of thing entities.
+std::vector<Footprint> footprints_of(const std::vector<scene_schema::Entity>& things);
+
+/// Share of the bird's-eye footprint of `e` (sampled on a 10 x 10 grid of cell centres) inside
+/// any of the `things` footprints.
+double footprint_share_inside(const scene_schema::Entity& e, const std::vector<Footprint>& things);
+
+}  // namespace cloud_analysis::instances

@@ -1,0 +1,119 @@
+#include "cloud_analysis/entities/suppression.hpp"
+
+#include <algorithm>
+#include <cmath>
+#include <utility>
+
+namespace cloud_analysis::instances {
+
+std::vector<Candidate> suppress_shadows(std::vector<Candidate> candidates,
+                                        const std::vector<std::uint32_t>& pixels,
+                                        const PixelGrid& grid, double min_gap_m,
+                                        double max_shared_fraction, int radius_px) {
+    if (!grid.valid() || candidates.size() < 2) return candidates;
+    std::stable_sort(candidates.begin(), candidates.end(),
+                     [](const auto& a, const auto& b) { return a.range_m < b.range_m; });
+    // Per image row, the column extent of every accepted candidate's pixels on that row.
+    struct Extent {
+        int lo_px;
+        int hi_px;
+        float range_m;
+        std::size_t group;
+    };
+    std::vector<std::vector<Extent>> rows(static_cast<std::size_t>(grid.height_px));
+    const auto width = static_cast<std::uint32_t>(grid.width_px);
+    std::vector<Candidate> kept;
+    for (auto& c : candidates) {
+        const int reach = c.fragment ? radius_px : 0;
+        std::size_t shared = 0;
+        for (std::size_t i : c.members) {
+            const int u = static_cast<int>(pixels[i] % width);
+            const int v = static_cast<int>(pixels[i] / width);
+            bool inside = false;
+            for (int r = std::max(0, v - reach);
+                 r <= std::min(grid.height_px - 1, v + reach) && !inside; ++r) {
+                for (const Extent& e : rows[static_cast<std::size_t>(r)]) {
+                    if (e.group != c.group && double{e.range_m} + min_gap_m < c.range_m &&
+                        u >= e.lo_px - reach && u <= e.hi_px + reach) {
+                        inside = true;
+                        break;
+                    }
+                }
+            }
+            shared += inside ? 1 : 0;
+        }
+        if (static_cast<double>(shared) >
+            max_shared_fraction * static_cast<double>(c.members.size())) {
+            continue;
+        }
+        std::vector<int> lo(rows.size(), grid.width_px), hi(rows.size(), -1);
+        for (std::size_t i : c.members) {
+            const int u = static_cast<int>(pixels[i] % width);
+            const std::size_t v = pixels[i] / width;
+            lo[v] = std::min(lo[v], u);
+            hi[v] = std::max(hi[v], u);
+        }
+        for (std::size_t v = 0; v < rows.size(); ++v) {
+            if (hi[v] >= 0)
+                rows[v].push_back({lo[v], hi[v], static_cast<float>(c.range_m), c.group});
+        }
+        kept.push_back(std::move(c));
+    }
+    return kept;
+}
+
+std::vector<Candidate> suppress_nested(std::vector<Candidate> candidates) {
+    std::stable_sort(candidates.begin(), candidates.end(), [](const auto& a, const auto& b) {
+        return a.members.size() > b.members.size();
+    });
+    std::vector<Candidate> kept;
+    for (auto& c : candidates) {
+        bool nested = false;
+        for (const auto& k : kept) {
+            const double dx = c.box.centre_m.x() - k.box.centre_m.x();
+            const double dz = c.box.centre_m.z() - k.box.centre_m.z();
+            const double along = dx * std::cos(k.box.theta) - dz * std::sin(k.box.theta);
+            const double across = dx * std::sin(k.box.theta) + dz * std::cos(k.box.theta);
+            if (std::abs(along) < k.box.L_m / 2.0 && std::abs(across) < k.box.W_m / 2.0) {
+                nested = true;
+                break;
+            }
+        }
+        if (!nested) kept.push_back(std::move(c));
+    }
+    return kept;
+}
+
+std::vector<Footprint> footprints_of(const std::vector<scene_schema::Entity>& things) {
+    std::vector<Footprint> out;
+    out.reserve(things.size());
+    for (const auto& t : things) {
+        out.push_back({t.x, t.z, std::cos(t.theta), std::sin(t.theta), t.L / 2.0, t.W / 2.0});
+    }
+    return out;
+}
+
+double footprint_share_inside(const scene_schema::Entity& e, const std::vector<Footprint>& things) {
+    constexpr int kSamples = 10;
+    const double c = std::cos(e.theta), sn = std::sin(e.theta);
+    int inside = 0;
+    for (int i = 0; i < kSamples; ++i) {
+        for (int j = 0; j < kSamples; ++j) {
+            // Heading (cos t, -sin t) in x-z; across it (sin t, cos t).
+            const double a = ((i + 0.5) / kSamples - 0.5) * e.L;
+            const double b = ((j + 0.5) / kSamples - 0.5) * e.W;
+            const double x = e.x + a * c + b * sn, z = e.z - a * sn + b * c;
+            for (const auto& t : things) {
+                const double dx = x - t.x, dz = z - t.z;
+                if (std::abs(dx * t.c - dz * t.s) <= t.half_L &&
+                    std::abs(dx * t.s + dz * t.c) <= t.half_W) {
+                    ++inside;
+                    break;
+                }
+            }
+        }
+    }
+    return static_cast<double>(inside) / (kSamples * kSamples);
+}
+
+}  // namespace cloud_analysis::instances

@@ -1,0 +1,262 @@
+#include "cloud_analysis/entities/things.hpp"
+
+#include <algorithm>
+#include <atomic>
+#include <cmath>
+#include <cstdint>
+#include <limits>
+#include <memory>
+#include <tuple>
+#include <utility>
+
+#include "cloud_analysis/entities/image_components.hpp"
+#include "cloud_analysis/entities/row_split.hpp"
+#include "cloud_analysis/entities/suppression.hpp"
+
+namespace cloud_analysis::instances {
+namespace {
+
+/// The points of clusters of voxels, in point order (not the order the clustering visited
+/// them in, so that strided samples of a cluster are spread evenly over its pixels).
+std::vector<Indices> points_of(const std::vector<Indices>& voxel_clusters,
+                               const VoxelGrid& voxels) {
+    constexpr auto kNone = static_cast<std::size_t>(-1);
+    std::vector<std::size_t> cluster_of(voxels.centroid_m.size(), kNone);
+    for (std::size_t c = 0; c < voxel_clusters.size(); ++c) {
+        for (std::size_t v : voxel_clusters[c]) cluster_of[v] = c;
+    }
+    std::vector<Indices> out(voxel_clusters.size());
+    for (std::size_t i = 0; i < voxels.voxel_of.size(); ++i) {
+        const std::size_t c = cluster_of[voxels.voxel_of[i]];
+        if (c != kNone) out[c].push_back(i);
+    }
+    return out;
+}
+
+/// The points pts[idx[0]], pts[idx[1]], ...
+std::vector<Eigen::Vector3f> gather(const std::vector<Eigen::Vector3f>& pts, const Indices& idx) {
+    std::vector<Eigen::Vector3f> out;
+    out.reserve(idx.size());
+    for (std::size_t i : idx) out.push_back(pts[i]);
+    return out;
+}
+
+/// Azimuth bin of a point: lround(atan2(x, z) / 0.5 degrees), clamped to +-360, plus 360.
+/// In front of the camera (z > 0, |x / z| < kMaxSlope) the bin comes from the slope x / z
+/// compared with the tangents of the bin boundaries (a uniform grid of slopes finer than any
+/// bin gives the candidate, one or two comparisons settle it) instead of a call to atan2: the
+/// same bins, up to rounding within ~1e-15 of a boundary.
+class AzimuthBins {
+  public:
+    static constexpr double kBinRad = 0.5 * 3.14159265358979323846 / 180.0;
+    static constexpr long kBins = 360;  // |atan2| <= pi is at most 360 bins either side
+
+    AzimuthBins() {
+        // upper_[b + 180] = tan of the upper boundary of bin b, b in [-180, 180).
+        for (long b = -180; b < 180; ++b) upper_.push_back(std::tan((b + 0.5) * kBinRad));
+        const auto cells = static_cast<std::size_t>(2.0 * kMaxSlope / kStep) + 2;
+        for (std::size_t c = 0; c < cells; ++c) {
+            first_.push_back(settle(-180, -kMaxSlope + static_cast<double>(c) * kStep));
+        }
+    }
+    long operator()(double x, double z) const {
+        if (z > 0.0) {
+            const double t = x / z;
+            if (t > -kMaxSlope && t < kMaxSlope) {
+                const auto c = static_cast<std::size_t>((t + kMaxSlope) * (1.0 / kStep));
+                return settle(first_[c], t) + kBins;
+            }
+        }
+        return std::clamp(std::lround(std::atan2(x, z) / kBinRad), -kBins, kBins) + kBins;
+    }
+
+  private:
+    static constexpr double kMaxSlope = 4.0;  // |x / z| below this (76 degrees) is looked up
+    static constexpr double kStep = 0.004;    // slope grid step; a bin spans >= 0.0087
+    /// The bin (in [-180, 180]) of slope t: the first whose upper boundary lies above t,
+    /// walked to from bin b.
+    long settle(long b, double t) const {
+        while (b < 180 && !(t < upper_[static_cast<std::size_t>(b + 180)])) ++b;
+        while (b > -180 && t < upper_[static_cast<std::size_t>(b + 179)]) --b;
+        return b;
+    }
+    std::vector<double> upper_;
+    std::vector<long> first_;  ///< bin of the lower end of each grid cell
+};
+
+/// Drops stereo smear behind a thing: per viewing direction (0.5 degree azimuth bins), points
+/// farther (bird's-eye range) than the nearest one plus the prior's diagonal plus a margin;
+/// and points implausibly high above or below the ground.
+Indices drop_outliers(const std::vector<Eigen::Vector3f>& pts, const Indices& idx,
+                      const ClassSettings& s, const std::optional<GroundPlane>& ground,
+                      double margin_m) {
+    if (!s.has_prior() || idx.size() < 10) return idx;
+    static const AzimuthBins azimuth_bin;
+    std::vector<double> range(idx.size());
+    std::vector<long> bin(idx.size());
+    std::vector<double> nearest(2 * AzimuthBins::kBins + 1,
+                                std::numeric_limits<double>::infinity());
+    for (std::size_t k = 0; k < idx.size(); ++k) {
+        const double x = pts[idx[k]].x(), z = pts[idx[k]].z();
+        range[k] = std::sqrt(x * x + z * z);  // float inputs: no overflow for hypot to guard
+        bin[k] = azimuth_bin(x, z);
+        double& n = nearest[static_cast<std::size_t>(bin[k])];
+        n = std::min(n, range[k]);
+    }
+    const double depth = std::hypot(s.prior_L_m, s.prior_W_m) + margin_m;
+    Indices kept;
+    kept.reserve(idx.size());
+    for (std::size_t k = 0; k < idx.size(); ++k) {
+        if (range[k] > nearest[static_cast<std::size_t>(bin[k])] + depth) continue;
+        if (ground) {
+            const double h = ground->height(pts[idx[k]].cast<double>());
+            if (h < -0.5 || h > 1.5 * s.prior_H_m + 0.5) continue;
+        }
+        kept.push_back(idx[k]);
+    }
+    return kept.size() >= static_cast<std::size_t>(s.min_points) ? kept : idx;
+}
+
+/// The clusters of a thing class (point indices in point order).
+std::vector<Indices> thing_clusters(const std::vector<Eigen::Vector3f>& pts,
+                                    const std::vector<std::uint32_t>& pixels, const PixelGrid& grid,
+                                    const ClassSettings& s, const ClusterOptions& co,
+                                    const ExtractOptions& options) {
+    if (options.clustering == "image" && grid.valid()) {
+        return image_components(pts, pixels, grid, co, options.image_radius_px);
+    }
+    const VoxelGrid voxels = voxelize(pts, s.voxel_m, s.voxel_doubling_depths());
+    return points_of(euclidean_clusters(voxels.centroid_m, co), voxels);
+}
+
+/// The candidates of thing cluster number `cluster`: its points without smear, fitted, split
+/// when oversized (at most two levels: rows, then side by side) and refitted. Pieces cut at
+/// clear gaps keep the cluster's shadow group (`cluster`); other pieces get groups of their
+/// own, (cluster + 1) * 2^32 + k, unique over the class.
+std::vector<Candidate> candidates_of_cluster(const std::vector<Eigen::Vector3f>& pts,
+                                             Indices members, std::size_t cluster,
+                                             const ClassSettings& s,
+                                             const std::optional<GroundPlane>& ground,
+                                             BoxFitOptions fit, const ExtractOptions& options) {
+    std::vector<Candidate> candidates;
+    members = drop_outliers(pts, members, s, ground, options.outlier_margin_m);
+    std::size_t next_group = (cluster + 1) << 32;
+    // Work items: points, split depth, shadow group, imposed heading.
+    std::vector<std::tuple<Indices, int, std::size_t, std::optional<double>>> work = {
+        {std::move(members), 0, cluster, std::nullopt}};
+    while (!work.empty()) {
+        auto [part, depth, group, yaw] = std::move(work.back());
+        work.pop_back();
+        // A piece of a row (cut at clear gaps or at a front-on row's pitch) is a thing
+        // because the row is: half the minimum suffices for its sparse far end.
+        const bool row_piece = depth > 0 && group == cluster;
+        const auto min_points =
+            static_cast<std::size_t>(row_piece ? s.min_points / 2 : s.min_points);
+        if (part.size() < std::max<std::size_t>(min_points, 1)) continue;
+        fit.yaw_rad = yaw;
+        const OrientedBox box = fit_upright_box(gather(pts, part), ground, fit);
+        if (depth < 2 && !yaw) {
+            Split split = split_oversized(pts, part, box, s, ground, options);
+            if (split.parts.size() > 1) {
+                for (auto& piece : split.parts) {
+                    work.emplace_back(std::move(piece), depth + 1,
+                                      split.at_gaps ? group : next_group++, split.yaw_rad);
+                }
+                continue;
+            }
+        }
+        // A thing whose points all lie near the ground is mislabelled road, not an object.
+        if (s.prior_H_m > 0.0 && ground && box.H_m < options.min_height_fraction * s.prior_H_m) {
+            continue;
+        }
+        Candidate c{box, std::move(part), 0.0, group};
+        if (s.has_prior()) {
+            c.fragment = c.members.size() < static_cast<std::size_t>(s.min_points) ||
+                         height_spread(pts, c.members, ground) <
+                             options.fragment_height_fraction * s.prior_H_m;
+        }
+        for (std::size_t i : c.members) {
+            const double x = pts[i].x(), z = pts[i].z();
+            c.range_m += std::sqrt(x * x + z * z);
+        }
+        c.range_m /= static_cast<double>(c.members.size());
+        candidates.push_back(std::move(c));
+    }
+    return candidates;
+}
+
+/// The entities of a thing class from its clusters' candidates (in cluster order): shadows
+/// and nested fragments suppressed, the largest kept.
+std::vector<scene_schema::Entity> things_of_class(const ClassInfo& info,
+                                                  std::vector<Candidate> candidates,
+                                                  const std::vector<std::uint32_t>& pixels,
+                                                  const PixelGrid& grid, const ClassSettings& s,
+                                                  const ExtractOptions& options) {
+    if (s.has_prior()) {
+        candidates = suppress_shadows(std::move(candidates), pixels, grid, s.prior_W_m,
+                                      options.shadow_fraction, options.shadow_radius_px);
+    }
+    candidates = suppress_nested(std::move(candidates));
+    std::vector<scene_schema::Entity> out;
+    for (const auto& c : candidates) {
+        out.push_back(make_entity(info, c.box, c.members.size(), confidence_of(c.members.size(), s),
+                                  "instances"));
+    }
+    keep_largest(out, s.max_entities);
+    return out;
+}
+
+}  // namespace
+
+void queue_things_of_class(TaskQueue& queue, const ClassInfo& info,
+                           const std::vector<Eigen::Vector3f>& pts,
+                           const std::vector<std::uint32_t>& pixels, const PixelGrid& grid,
+                           const ClassSettings& settings, const PendingGround& pending_ground,
+                           const ExtractOptions& options, std::vector<scene_schema::Entity>& out) {
+    struct Job {
+        ClassSettings s;
+        ClassFit fit;
+        std::vector<Indices> clusters;
+        std::vector<std::vector<Candidate>> candidates;  ///< per cluster
+        std::atomic<std::size_t> left{0};                ///< clusters not fitted yet
+    };
+    auto job = std::make_shared<Job>();
+    job->s = settings;
+    job->fit = class_fit(settings);
+    job->clusters = thing_clusters(pts, pixels, grid, settings, job->fit.cluster, options);
+    job->candidates.resize(job->clusters.size());
+    const auto finish = [&info, &pixels, &grid, &options, &out](Job& j) {
+        std::vector<Candidate> all;
+        for (auto& c : j.candidates) {
+            all.insert(all.end(), std::make_move_iterator(c.begin()),
+                       std::make_move_iterator(c.end()));
+        }
+        out = things_of_class(info, std::move(all), pixels, grid, j.s, options);
+    };
+    // One task per cluster with enough points, the largest first.
+    std::vector<std::size_t> fitted;
+    for (std::size_t c = 0; c < job->clusters.size(); ++c) {
+        if (job->clusters[c].size() >= static_cast<std::size_t>(settings.min_points)) {
+            fitted.push_back(c);
+        }
+    }
+    if (fitted.empty()) {
+        finish(*job);
+        return;
+    }
+    std::stable_sort(fitted.begin(), fitted.end(), [&](std::size_t a, std::size_t b) {
+        return job->clusters[a].size() > job->clusters[b].size();
+    });
+    job->left = fitted.size();
+    std::vector<TaskQueue::Task> tasks;
+    for (const std::size_t c : fitted) {
+        tasks.emplace_back([job, c, finish, &pts, &pending_ground, &options] {
+            job->candidates[c] = candidates_of_cluster(pts, std::move(job->clusters[c]), c, job->s,
+                                                       pending_ground.get(), job->fit.box, options);
+            if (--job->left == 0) finish(*job);
+        });
+    }
+    queue.push_front(std::move(tasks));
+}
+
+}  // namespace cloud_analysis::instances
