@@ -251,4 +251,18 @@ UvTransform texture_transform(const tinygltf::TextureInfo& info) {
     return out;
 }
 
+int append_buffer_view(tinygltf::Model& gltf, const void* data, std::size_t size, int target) {
+    std::vector<unsigned char>& bin = gltf.buffers[0].data;
+    bin.resize((bin.size() + 3u) & ~std::size_t{3u}, 0);  // 4-byte alignment
+    tinygltf::BufferView view;
+    view.buffer = 0;
+    view.byteOffset = bin.size();
+    view.byteLength = size;
+    view.target = target;
+    const auto* bytes = static_cast<const unsigned char*>(data);
+    bin.insert(bin.end(), bytes, bytes + size);
+    gltf.bufferViews.push_back(view);
+    return static_cast<int>(gltf.bufferViews.size()) - 1;
+}
+
 }  // namespace scene_viewer::gltf_detail

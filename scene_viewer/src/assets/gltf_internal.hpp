@@ -1,8 +1,9 @@
 #pragma once
 
-/// Internals of the glTF loader shared by its files: reading a .gltf/.glb safely into tinygltf's
-/// document (gltf_files.cpp) and reading accessors, node transforms and texture transforms out
-/// of it (gltf_accessors.cpp). Private to src/assets.
+/// Internals of the glTF reader and writers shared by their files: reading a .gltf/.glb safely
+/// into tinygltf's document (gltf_files.cpp), reading accessors, node transforms and texture
+/// transforms out of it (gltf_accessors.cpp), and appending data to a document being written
+/// (scene_export.cpp, web/cloud_glb.cpp). Private to the library.
 
 #include <cstdint>
 #include <filesystem>
@@ -35,6 +36,10 @@ struct AccessorView {
     int component_type = 0;
     bool normalized = false;
 };
+
+/// Appends `size` bytes to buffer 0 at a 4-byte aligned offset and a buffer view over them
+/// (`target` 0: none); returns the view's index.
+int append_buffer_view(tinygltf::Model& gltf, const void* data, std::size_t size, int target);
 
 AccessorView view_accessor(const tinygltf::Model& gltf, int index, const std::string& what);
 int component_size(int component_type);

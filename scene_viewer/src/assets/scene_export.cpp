@@ -10,6 +10,7 @@
 
 #include <tiny_gltf.h>
 
+#include "gltf_internal.hpp"
 #include "scene_viewer/assets/image_io.hpp"
 #include "stereoscene/support/atomic_file.hpp"
 
@@ -79,17 +80,7 @@ class Builder {
 
   private:
     int add_view(const void* data, std::size_t size, int target) {
-        std::vector<unsigned char>& bin = gltf_.buffers[0].data;
-        bin.resize((bin.size() + 3u) & ~std::size_t{3u}, 0);  // 4-byte alignment
-        tinygltf::BufferView view;
-        view.buffer = 0;
-        view.byteOffset = bin.size();
-        view.byteLength = size;
-        view.target = target;
-        const auto* bytes = static_cast<const unsigned char*>(data);
-        bin.insert(bin.end(), bytes, bytes + size);
-        gltf_.bufferViews.push_back(view);
-        return static_cast<int>(gltf_.bufferViews.size()) - 1;
+        return gltf_detail::append_buffer_view(gltf_, data, size, target);
     }
 
     template <typename T>

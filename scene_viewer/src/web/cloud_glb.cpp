@@ -9,6 +9,7 @@
 
 #include <tiny_gltf.h>
 
+#include "../assets/gltf_internal.hpp"
 #include "scene_viewer/render/coordinates.hpp"
 #include "scene_viewer/render/palette.hpp"
 #include "scene_viewer/web/viewer_folder.hpp"
@@ -26,24 +27,10 @@ std::uint8_t linear_byte(std::uint8_t srgb) {
     return static_cast<std::uint8_t>(std::lround(linear * 255.0));
 }
 
-int add_view(tinygltf::Model& gltf, const void* data, std::size_t size) {
-    std::vector<unsigned char>& bin = gltf.buffers[0].data;
-    bin.resize((bin.size() + 3u) & ~std::size_t{3u}, 0);  // 4-byte alignment
-    tinygltf::BufferView view;
-    view.buffer = 0;
-    view.byteOffset = bin.size();
-    view.byteLength = size;
-    view.target = kArrayBuffer;
-    const auto* bytes = static_cast<const unsigned char*>(data);
-    bin.insert(bin.end(), bytes, bytes + size);
-    gltf.bufferViews.push_back(view);
-    return static_cast<int>(gltf.bufferViews.size()) - 1;
-}
-
 int add_accessor(tinygltf::Model& gltf, const void* data, std::size_t count, std::size_t stride,
                  int type, int component_type, bool normalized) {
     tinygltf::Accessor accessor;
-    accessor.bufferView = add_view(gltf, data, count * stride);
+    accessor.bufferView = gltf_detail::append_buffer_view(gltf, data, count * stride, kArrayBuffer);
     accessor.componentType = component_type;
     accessor.count = count;
     accessor.type = type;
