@@ -1,5 +1,6 @@
 // cloud-analysis: stereo pair + calibration + semantic image -> disparity, labelled metric
-// cloud (.xyz/.pcd/.ply) and entity file. Thin CLI: parse, validate, call the library, write.
+// cloud (.xyz/.pcd/.ply) and entity file. Thin CLI: parse, validate, call the library, write;
+// one file per command under commands/.
 
 #include <algorithm>
 #include <csignal>
@@ -8,46 +9,21 @@
 #include <vector>
 
 #include <CLI/CLI.hpp>
-#include <scene_schema/entities.hpp>
 #include <stereoscene/support/process.hpp>
 
-#include "analyse_command.hpp"
-#include "cloud_analysis/io/io.hpp"
-#include "cloud_analysis/synthetic/synthetic.hpp"
-#include "evaluate_command.hpp"
-#include "perf_commands.hpp"
-#include "score_semantics_command.hpp"
+#include "commands/analyse.hpp"
+#include "commands/batch.hpp"
+#include "commands/bench.hpp"
+#include "commands/evaluate.hpp"
+#include "commands/export_kitti.hpp"
+#include "commands/make_sample.hpp"
+#include "commands/output.hpp"
+#include "commands/report.hpp"
+#include "commands/score_semantics.hpp"
 
 namespace {
 
 using cloud_analysis::app::kTool;
-using cloud_analysis::app::PendingOutput;
-using cloud_analysis::app::write_output;
-
-/// Flags of `make-sample`.
-struct SampleArgs {
-    std::filesystem::path out;
-    cloud_analysis::SyntheticOptions options;
-};
-
-/// Renders the synthetic scene and writes the bundled sample's files into a folder.
-int run_make_sample(const SampleArgs& a) {
-    const cloud_analysis::SyntheticScene s = cloud_analysis::make_synthetic_scene(a.options);
-    std::filesystem::create_directories(a.out);
-    // Everything is encoded first, then written.
-    const std::vector<PendingOutput> outputs = {
-        {(a.out / "left.png").string(), cloud_analysis::encode_png(s.left), "left"},
-        {(a.out / "right.png").string(), cloud_analysis::encode_png(s.right), "right"},
-        {(a.out / "semantic.png").string(), cloud_analysis::encode_png(s.semantic), "semantic"},
-        {(a.out / "disparity_gt.png").string(),
-         cloud_analysis::encode_kitti_disparity_png(s.disparity), "disparity"},
-        {(a.out / "calib.yaml").string(), cloud_analysis::synthetic_calibration_yaml(s.camera),
-         "calibration"},
-        {(a.out / "truth.json").string(), scene_schema::dump(s.truth), "truth"},
-    };
-    for (const auto& o : outputs) write_output(o);
-    return 0;
-}
 
 bool is_subcommand(const std::string& arg) {
     return arg == "analyse" || arg == "evaluate" || arg == "export-kitti" || arg == "make-sample" ||
@@ -58,6 +34,7 @@ bool is_subcommand(const std::string& arg) {
 }  // namespace
 
 int main(int argc, char** argv) {
+    namespace app_ = cloud_analysis::app;
     stereoscene::support::keep_freed_memory();
     std::signal(SIGPIPE, SIG_IGN);  // a closed stdout becomes a write error with a message
     // `analyse` is the default command: insert it unless a subcommand or --version is first.
@@ -72,69 +49,45 @@ int main(int argc, char** argv) {
         "cloud-analysis: rectified stereo pair + calibration + semantic image -> "
         "disparity, labelled metric point cloud and entity file.\n"
         "Commands: analyse (default), evaluate, export-kitti, make-sample, batch, report, bench, "
-        "score-semantics. Exit "
-        "codes: 0 ok, 1 "
-        "failure, 2 usage, 3 (evaluate) a bar was missed."};
+        "score-semantics. Exit codes: 0 ok, 1 failure, 2 usage, 3 (evaluate) a bar was missed."};
     app.set_version_flag("--version", std::string(kTool) + " " + STEREOSCENE_VERSION);
     app.require_subcommand(0, 1);
-    cloud_analysis::app::AnalyseArgs analyse_args;
-    CLI::App* analyse = app.add_subcommand(
-        "analyse", "stereo pair -> disparity -> cloud -> entities (the default command)");
-    cloud_analysis::app::add_input_flags(*analyse, analyse_args);
-    cloud_analysis::app::add_settings_flags(*analyse, analyse_args);
-    cloud_analysis::app::add_output_flags(*analyse, analyse_args);
-    analyse->footer(
-        "Other commands: evaluate, export-kitti, make-sample, batch, report, bench (each with "
-        "--help).\n"
-        "Exit codes: 0 ok, 1 failure (one line on stderr, no output written), 2 usage error.");
-    cloud_analysis::app::EvaluateArgs evaluate_args;
-    CLI::App* evaluate = cloud_analysis::app::add_evaluate_command(app, evaluate_args);
-    cloud_analysis::app::ExportKittiArgs export_args;
-    CLI::App* export_kitti = cloud_analysis::app::add_export_kitti_command(app, export_args);
-
-    cloud_analysis::app::BatchArgs batch_args;
-    CLI::App* batch = cloud_analysis::app::add_batch_command(app, batch_args);
-    cloud_analysis::app::ReportArgs report_args;
-    CLI::App* report = cloud_analysis::app::add_report_command(app, report_args);
-    cloud_analysis::app::BenchArgs bench_args;
-    CLI::App* bench = cloud_analysis::app::add_bench_command(app, bench_args);
-
-    cloud_analysis::app::ScoreSemanticsArgs score_args;
-    CLI::App* score = cloud_analysis::app::add_score_semantics_command(app, score_args);
-
-    SampleArgs sample_args;
-    CLI::App* sample = app.add_subcommand(
-        "make-sample",
-        "render the synthetic street scene (stereo pair, semantics, calibration, "
-        "ground truth) into a folder");
-    sample->add_option("--out", sample_args.out, "output folder")->required();
-    sample->add_option("--seed", sample_args.options.seed, "texture seed")->capture_default_str();
-    sample->add_option("--width", sample_args.options.width_px, "image width, px")
-        ->capture_default_str();
-    sample->add_option("--height", sample_args.options.height_px, "image height, px")
-        ->capture_default_str();
-    sample->add_option("--fx", sample_args.options.fx_px, "focal length, px")
-        ->capture_default_str();
+    app_::AnalyseArgs analyse_args;
+    CLI::App* analyse = app_::add_analyse_command(app, analyse_args);
+    app_::EvaluateArgs evaluate_args;
+    CLI::App* evaluate = app_::add_evaluate_command(app, evaluate_args);
+    app_::ExportKittiArgs export_args;
+    CLI::App* export_kitti = app_::add_export_kitti_command(app, export_args);
+    app_::BatchArgs batch_args;
+    CLI::App* batch = app_::add_batch_command(app, batch_args);
+    app_::ReportArgs report_args;
+    CLI::App* report = app_::add_report_command(app, report_args);
+    app_::BenchArgs bench_args;
+    CLI::App* bench = app_::add_bench_command(app, bench_args);
+    app_::SampleArgs sample_args;
+    CLI::App* sample = app_::add_make_sample_command(app, sample_args);
+    app_::ScoreSemanticsArgs score_args;
+    CLI::App* score = app_::add_score_semantics_command(app, score_args);
 
     try {
         app.parse(args);
-        if (*sample) return run_make_sample(sample_args);
+        if (*sample) return app_::run_make_sample(sample_args);
         if (*analyse) {
-            cloud_analysis::app::resolve(analyse_args, *analyse);
-            return cloud_analysis::app::run_analyse(analyse_args);
+            app_::resolve(analyse_args, *analyse);
+            return app_::run_analyse(analyse_args);
         }
         if (*batch) {
-            cloud_analysis::app::resolve_batch(batch_args, *batch);
-            return cloud_analysis::app::run_batch(batch_args);
+            app_::resolve_batch(batch_args, *batch);
+            return app_::run_batch(batch_args);
         }
-        if (*report) return cloud_analysis::app::run_report(report_args);
+        if (*report) return app_::run_report(report_args);
         if (*bench) {
-            cloud_analysis::app::resolve(bench_args.analyse, *bench);
-            return cloud_analysis::app::run_bench(bench_args);
+            app_::resolve(bench_args.analyse, *bench);
+            return app_::run_bench(bench_args);
         }
-        if (*evaluate) return cloud_analysis::app::run_evaluate(evaluate_args);
-        if (*export_kitti) return cloud_analysis::app::run_export_kitti(export_args);
-        if (*score) return cloud_analysis::app::run_score_semantics(score_args);
+        if (*evaluate) return app_::run_evaluate(evaluate_args);
+        if (*export_kitti) return app_::run_export_kitti(export_args);
+        if (*score) return app_::run_score_semantics(score_args);
         std::cout << app.help();
         return 0;
     } catch (const CLI::ParseError& e) {

@@ -1,9 +1,9 @@
 #pragma once
 
-/// The `cloud-analysis evaluate` subcommand: scores a run against KITTI-style ground truth
-/// (disparity vs disp_occ_0; car entities vs the instance images' cars) or entity-to-entity
-/// against a reference entity file / KITTI label_2 file, with optional pass bars (exit 3 when
-/// one is missed), and prints a table. Also `export-kitti` (entities -> label_2).
+/// `cloud-analysis evaluate`: scores a run against KITTI-style ground truth (disparity vs
+/// disp_occ_0; car entities vs the instance images' cars) or entity-to-entity against a
+/// reference entity file / KITTI label_2 file, with optional pass bars (exit 3 when one is
+/// missed), and prints a table (cloud_analysis/evaluation/report.hpp).
 
 #include <filesystem>
 #include <string>
@@ -41,13 +41,6 @@ struct EvaluateArgs {
 /// Exit code of `evaluate` when the scores miss a bar (--require-recall, ...).
 inline constexpr int kExitBarMissed = 3;
 
-/// Flags of `export-kitti`, filled by CLI11.
-struct ExportKittiArgs {
-    std::filesystem::path entities;  ///< positional: entity JSON file
-    std::string output;              ///< -o: label_2 text file ("-" = stdout)
-    std::filesystem::path calib;     ///< --calib: camera for alpha/2D boxes (else the file's)
-};
-
 /// Registers `evaluate` on app and binds its flags to args (which must outlive parsing).
 /// main() runs run_evaluate(args) when the returned subcommand was parsed (`if (*sub)`).
 CLI::App* add_evaluate_command(CLI::App& app, EvaluateArgs& args);
@@ -57,12 +50,5 @@ CLI::App* add_evaluate_command(CLI::App& app, EvaluateArgs& args);
 /// for failures (map to exit 1, message "<what failed>: <detail> (<file>)"). Returns 0, or
 /// kExitBarMissed after printing one stderr line per missed bar.
 int run_evaluate(const EvaluateArgs& args);
-
-/// Registers `export-kitti` on app and binds its flags to args.
-CLI::App* add_export_kitti_command(CLI::App& app, ExportKittiArgs& args);
-
-/// Writes the entities of a file as KITTI label_2 lines (atomically); returns 0. Throws like
-/// run_evaluate.
-int run_export_kitti(const ExportKittiArgs& args);
 
 }  // namespace cloud_analysis::app

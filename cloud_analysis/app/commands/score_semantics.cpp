@@ -1,14 +1,14 @@
-#include "score_semantics_command.hpp"
+#include "score_semantics.hpp"
 
 #include <cstdio>
 #include <iostream>
 
 #include <nlohmann/json.hpp>
 
-#include "analyse_command.hpp"
 #include "cloud_analysis/cloud/semantic.hpp"
 #include "cloud_analysis/geometry/scene_geometry.hpp"
 #include "cloud_analysis/io/io.hpp"
+#include "output.hpp"
 
 namespace cloud_analysis::app {
 

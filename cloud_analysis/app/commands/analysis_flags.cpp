@@ -1,16 +1,9 @@
-#include "analyse_command.hpp"
+#include "analysis_flags.hpp"
 
-#include <chrono>
-#include <cstdio>
-#include <cstring>
-#include <iostream>
-#include <optional>
-#include <set>
+#include <stdexcept>
 
-#include <scene_schema/entities.hpp>
-
-#include "cloud_analysis/cloud/cloud_io.hpp"
-#include "cloud_analysis/entities/extract.hpp"
+#include "cloud_analysis/entities/class_config.hpp"
+#include "cloud_analysis/io/io.hpp"
 #include "cloud_analysis/stereo/disparity.hpp"
 
 namespace cloud_analysis::app {
@@ -32,8 +25,10 @@ void add_input_flags(CLI::App& cmd, AnalyseArgs& a) {
         ->group(in);
 }
 
-void add_settings_flags(CLI::App& cmd, AnalyseArgs& a) {
-    auto& d = a.options.disparity;
+namespace {
+
+/// Settings of the inputs: raw images, KITTI camera indices, palette.
+void add_input_settings_flags(CLI::App& cmd, AnalyseArgs& a) {
     const std::string in = "Inputs";
     cmd.add_flag("--raw", a.options.raw,
                  "inputs are unrectified: undistort and rectify with K/D/R_rect first")
@@ -56,7 +51,11 @@ void add_settings_flags(CLI::App& cmd, AnalyseArgs& a) {
                    "semantic palette: cityscapes, carla, thesis or a palette JSON file")
         ->capture_default_str()
         ->group(in);
+}
 
+/// Settings of the matcher: preset and cv::StereoSGBM parameters, post-filters.
+void add_disparity_flags(CLI::App& cmd, AnalyseArgs& a) {
+    auto& d = a.options.disparity;
     const std::string sg = "Disparity (cv::StereoSGBM)";
     cmd.add_option("--preset", a.preset,
                    "starting values: tuned (KITTI-tuned defaults), fast (half-resolution "
@@ -141,7 +140,10 @@ void add_settings_flags(CLI::App& cmd, AnalyseArgs& a) {
     cmd.add_flag("--sgm-median,!--no-sgm-median", d.sgm.median3,
                  "sgm: 3x3 median of the disparity before the speckle filter")
         ->group(sg);
+}
 
+/// Settings of the cloud and the entity extractor.
+void add_cloud_flags(CLI::App& cmd, AnalyseArgs& a) {
     const std::string cl = "Cloud and entities";
     cmd.add_option("--max-range", a.options.reproject.max_range_m,
                    "drop points farther than this from the camera, m")
@@ -160,6 +162,14 @@ void add_settings_flags(CLI::App& cmd, AnalyseArgs& a) {
                  "also fsync the cloud files before renaming them (durable across a power loss; "
                  "about 1 ms per MB): without it they are written atomically but not fsync'ed")
         ->group(cl);
+}
+
+}  // namespace
+
+void add_settings_flags(CLI::App& cmd, AnalyseArgs& a) {
+    add_input_settings_flags(cmd, a);
+    add_disparity_flags(cmd, a);
+    add_cloud_flags(cmd, a);
 }
 
 void add_output_flags(CLI::App& cmd, AnalyseArgs& a) {
@@ -243,19 +253,6 @@ stereoscene::support::FileSync cloud_sync(const AnalyseArgs& a) {
                           : stereoscene::support::FileSync::kAtomicOnly;
 }
 
-void write_output(const PendingOutput& out) {
-    if (out.path == "-") {
-        // SIGPIPE is ignored (main): a reader that went away is an error line, not a signal.
-        if (std::fwrite(out.bytes.data(), 1, out.bytes.size(), stdout) != out.bytes.size() ||
-            std::fflush(stdout) != 0) {
-            throw std::runtime_error(std::string("cannot write output: standard output: ") +
-                                     std::strerror(errno) + " (-)");
-        }
-    } else {
-        stereoscene::support::write_file_atomic(out.path, out.bytes, out.sync);
-    }
-}
-
 cloud_analysis::ExtractOptions extract_options(const AnalyseArgs& a) {
     cloud_analysis::ExtractOptions extract;
     extract.method = a.method;
@@ -263,42 +260,6 @@ cloud_analysis::ExtractOptions extract_options(const AnalyseArgs& a) {
         a.class_config.empty() ? cloud_analysis::default_class_config_path() : a.class_config);
     extract.validate();
     return extract;
-}
-
-std::string entity_json(const cloud_analysis::LoadedInputs& in,
-                        const cloud_analysis::AnalyseResult& r, const AnalyseArgs& a,
-                        const cloud_analysis::ExtractOptions& extract) {
-    scene_schema::EntityDocument doc =
-        r.points.xyz_m.empty()
-            ? cloud_analysis::extract_entities(r.cloud, in.palette, r.camera, extract)
-            : cloud_analysis::extract_entities(r.points, in.palette, extract);
-    doc.frame.id = in.paths.frame_id;
-    if (r.geometry) {
-        // Classes from geometry are guesses the labelled path does not make: less confidence.
-        for (auto& e : doc.entities) e.confidence *= cloud_analysis::geometry::kConfidenceScale;
-        const auto& g = r.geometry->ground;
-        doc.extra["stereo_ground"] = {{"found", g.found},
-                                      {"camera_height_m", g.camera_height_m},
-                                      {"pitch_deg", g.pitch_deg},
-                                      {"roll_deg", g.roll_deg},
-                                      {"horizon_v_px", g.horizon_v_px},
-                                      {"problem", g.problem}};
-    }
-    scene_schema::CameraIntrinsics cam;
-    cam.width_px = r.camera.width_px;
-    cam.height_px = r.camera.height_px;
-    cam.fx_px = r.camera.fx_px;
-    cam.fy_px = r.camera.fy_px;
-    cam.cx_px = r.camera.cx_px;
-    cam.cy_px = r.camera.cy_px;
-    cam.baseline_m = r.camera.baseline_m;
-    doc.frame.camera = cam;
-    nlohmann::json source = cloud_analysis::describe_run(in, a.options, STEREOSCENE_VERSION);
-    source["extract"] = {{"method", a.method},
-                         {"class_config", a.class_config.empty() ? std::string("default")
-                                                                 : a.class_config.string()}};
-    doc.source = source;
-    return scene_schema::dump_checked(doc);
 }
 
 cloud_analysis::AnalyseOptions options_for_outputs(const AnalyseArgs& a,
@@ -310,189 +271,9 @@ cloud_analysis::AnalyseOptions options_for_outputs(const AnalyseArgs& a,
     return options;
 }
 
-LoadedRun load_run(const AnalyseArgs& a) {
-    // Validate everything before the expensive stages.
-    const std::vector<std::pair<std::filesystem::path, const char*>> clouds = {
-        {a.xyz, "--xyz"}, {a.pcd, "--pcd"}, {a.ply, "--ply"}};
-    for (const auto& [path, flag] : clouds) {
-        if (path.empty()) continue;
-        try {
-            cloud_analysis::cloud_format_from_path(path);
-        } catch (const std::invalid_argument& e) {
-            throw CLI::ValidationError(flag, e.what());
-        }
-    }
-    const std::vector<std::pair<std::string, const char*>> all_outputs = {
-        {a.entities, "--entities"},
-        {a.xyz.string(), "--xyz"},
-        {a.pcd.string(), "--pcd"},
-        {a.ply.string(), "--ply"},
-        {a.disparity_png.string(), "--disparity-png"},
-        {a.disparity_kitti.string(), "--disparity-kitti"},
-        {a.semantic_out.string(), "--semantic-out"}};
-    int to_stdout = 0;
-    for (const auto& [path, flag] : all_outputs) {
-        if (path.empty()) continue;
-        if (path == "-") {
-            if (++to_stdout > 1) {
-                throw CLI::ValidationError(flag, "only one output can go to stdout ('-')");
-            }
-            continue;
-        }
-        const std::filesystem::path folder = std::filesystem::path(path).parent_path();
-        if (!folder.empty() && !std::filesystem::is_directory(folder)) {
-            throw std::runtime_error("cannot write output: no such folder (" + folder.string() +
-                                     ", " + flag + ")");
-        }
-    }
-    LoadedRun run{{}, extract_options(a), std::nullopt};
-    run.inputs = cloud_analysis::load_inputs(a.paths, a.options);
-    if (!a.gt_disparity.empty()) {
-        run.gt_disparity = cloud_analysis::read_kitti_disparity(a.gt_disparity);
-        const auto& gt = *run.gt_disparity;
-        const auto& cam = run.inputs.calibration.camera;
-        if (gt.width_px != cam.width_px || gt.height_px != cam.height_px) {
-            throw std::runtime_error(
-                "inputs do not match: GT disparity is " + std::to_string(gt.width_px) + "x" +
-                std::to_string(gt.height_px) + ", rectified images are " +
-                std::to_string(cam.width_px) + "x" + std::to_string(cam.height_px) + " (" +
-                a.gt_disparity.string() + ")");
-        }
-    }
-    return run;
-}
-
-RunReport analyse_loaded_and_write(const LoadedRun& run, const AnalyseArgs& a,
-                                   cloud_analysis::DisparityMatcher& matcher) {
-    using Clock = std::chrono::steady_clock;
-    const auto ms_since = [](Clock::time_point t) {
-        return std::chrono::duration<double, std::milli>(Clock::now() - t).count();
-    };
-    const cloud_analysis::LoadedInputs& in = run.inputs;
-    std::vector<cloud_analysis::StageTiming> timings;
-    if (a.warnings && !in.calibration.note.empty()) {
-        std::cerr << kTool << ": warning: " << in.calibration.note << " (" << in.calibration.source
-                  << ")\n";
-    }
-
-    const bool any_cloud = !a.xyz.empty() || !a.pcd.empty() || !a.ply.empty();
-    cloud_analysis::AnalyseResult r = cloud_analysis::analyse(
-        in, options_for_outputs(a, run.extract, in.palette, any_cloud), matcher);
-    timings.insert(timings.end(), r.timings.begin(), r.timings.end());
-    if (a.warnings && r.geometry) {
-        for (const auto& w : r.geometry->warnings) std::cerr << kTool << ": warning: " << w << "\n";
-    }
-    if (a.warnings && r.semantics == "none") {
-        std::cerr << kTool << ": warning: no semantic image: every point is void\n";
-    } else if (a.warnings && r.semantics == "labels" && r.classes.void_pixels > 0) {
-        std::cerr << kTool << ": warning: " << r.classes.void_pixels
-                  << " semantic pixels have colours not in palette '" << in.palette.name
-                  << "' and count as void (" << a.paths.semantic.string() << ")\n";
-    }
-    if (run.gt_disparity) {
-        const auto s = cloud_analysis::score_disparity(r.disparity, *run.gt_disparity);
-        std::fprintf(stderr,
-                     "%s: disparity vs %s: D1-all %.2f %%, D1-valid %.2f %%, EPE %.3f px, "
-                     "density %.2f %% (%zu GT px)\n",
-                     kTool, a.gt_disparity.string().c_str(), 100.0 * s.d1_all, 100.0 * s.d1_valid,
-                     s.epe_px, 100.0 * s.density, s.gt_pixels);
-    }
-
-    std::vector<PendingOutput> outputs;
-    auto t = Clock::now();
-    if (!a.entities.empty()) {
-        outputs.push_back({a.entities, entity_json(in, r, a, run.extract), "--entities"});
-        timings.push_back({"entities", ms_since(t)});
-    }
-    const std::vector<std::pair<std::filesystem::path, const char*>> clouds = {
-        {a.xyz, "--xyz"}, {a.pcd, "--pcd"}, {a.ply, "--ply"}};
-    for (const auto& [path, flag] : clouds) {
-        if (path.empty()) continue;
-        t = Clock::now();
-        outputs.push_back({path.string(),
-                           cloud_analysis::format_cloud(
-                               r.cloud, in.palette, cloud_analysis::cloud_format_from_path(path)),
-                           flag, cloud_sync(a)});
-        timings.push_back({std::string("format ") + flag, ms_since(t)});
-    }
-    t = Clock::now();
-    if (!a.disparity_png.empty()) {
-        outputs.push_back({a.disparity_png.string(),
-                           cloud_analysis::encode_disparity_preview_png(
-                               r.disparity, a.options.disparity.min_disparity +
-                                                a.options.disparity.num_disparities),
-                           "--disparity-png"});
-    }
-    if (!a.disparity_kitti.empty()) {
-        outputs.push_back({a.disparity_kitti.string(),
-                           cloud_analysis::encode_kitti_disparity_png(r.disparity),
-                           "--disparity-kitti"});
-    }
-    if (!a.disparity_png.empty() || !a.disparity_kitti.empty()) {
-        timings.push_back({"encode disparity", ms_since(t)});
-    }
-    if (!a.semantic_out.empty()) {
-        t = Clock::now();
-        cloud_analysis::ClassImage classes = r.classes;
-        if (classes.class_index.empty()) {  // no semantic image: every pixel void
-            classes.width_px = r.camera.width_px;
-            classes.height_px = r.camera.height_px;
-            classes.class_index.assign(
-                static_cast<std::size_t>(classes.width_px) * classes.height_px,
-                cloud_analysis::kVoidClass);
-        }
-        outputs.push_back({a.semantic_out.string(),
-                           cloud_analysis::encode_png(
-                               cloud_analysis::geometry::colour_classes(classes, in.palette)),
-                           "--semantic-out"});
-        timings.push_back({"encode semantic", ms_since(t)});
-    }
-    // Every output exists in memory now: only writing is left.
-    std::vector<std::filesystem::path> written;
-    try {
-        for (const auto& out : outputs) {
-            t = Clock::now();
-            write_output(out);
-            if (out.path != "-") written.emplace_back(out.path);
-            timings.push_back({"write " + out.label, ms_since(t)});
-        }
-    } catch (...) {
-        // All or nothing: take back the files this run already wrote.
-        std::error_code ignored;
-        for (const auto& path : written) std::filesystem::remove(path, ignored);
-        throw;
-    }
-
-    return {timings, r.cloud_points};
-}
-
-RunReport analyse_and_write(const AnalyseArgs& a, cloud_analysis::DisparityMatcher& matcher) {
-    const auto start = std::chrono::steady_clock::now();
-    const LoadedRun run = load_run(a);
-    const double load_ms =
-        std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - start).count();
-    RunReport report = analyse_loaded_and_write(run, a, matcher);
-    report.timings.insert(report.timings.begin(), {"load", load_ms});
-    return report;
-}
-
-RunReport analyse_and_write(const AnalyseArgs& a) {
-    cloud_analysis::DisparityMatcher matcher(a.options.disparity);
-    return analyse_and_write(a, matcher);
-}
-
-int run_analyse(const AnalyseArgs& a) {
-    const RunReport report = analyse_and_write(a);
-    if (a.timings) {
-        double total = 0.0;
-        for (const auto& s : report.timings) {
-            std::fprintf(stderr, "%s: timing: %-22s %9.1f ms\n", kTool, s.stage.c_str(), s.ms);
-            total += s.ms;
-        }
-        std::fprintf(stderr, "%s: timing: %-22s %9.1f ms (%zu points)\n", kTool, "total", total,
-                     report.points);
-    }
-    return 0;
+cloud_analysis::RunSettings run_settings(const AnalyseArgs& a) {
+    return {a.options, a.class_config.empty() ? std::string("default") : a.class_config.string(),
+            STEREOSCENE_VERSION};
 }
 
 }  // namespace cloud_analysis::app

@@ -1,0 +1,249 @@
+#include "analyse.hpp"
+
+#include <chrono>
+#include <cstdio>
+#include <iostream>
+#include <optional>
+
+#include <scene_schema/entities.hpp>
+
+#include "cloud_analysis/cloud/cloud_io.hpp"
+#include "cloud_analysis/entities/entity_document.hpp"
+#include "cloud_analysis/entities/extract.hpp"
+#include "cloud_analysis/geometry/scene_geometry.hpp"
+#include "output.hpp"
+
+namespace cloud_analysis::app {
+
+CLI::App* add_analyse_command(CLI::App& app, AnalyseArgs& args) {
+    CLI::App* analyse = app.add_subcommand(
+        "analyse", "stereo pair -> disparity -> cloud -> entities (the default command)");
+    add_input_flags(*analyse, args);
+    add_settings_flags(*analyse, args);
+    add_output_flags(*analyse, args);
+    analyse->footer(
+        "Other commands: evaluate, export-kitti, make-sample, batch, report, bench (each with "
+        "--help).\n"
+        "Exit codes: 0 ok, 1 failure (one line on stderr, no output written), 2 usage error.");
+    return analyse;
+}
+
+LoadedRun load_run(const AnalyseArgs& a) {
+    // Validate everything before the expensive stages.
+    const std::vector<std::pair<std::filesystem::path, const char*>> clouds = {
+        {a.xyz, "--xyz"}, {a.pcd, "--pcd"}, {a.ply, "--ply"}};
+    for (const auto& [path, flag] : clouds) {
+        if (path.empty()) continue;
+        try {
+            cloud_analysis::cloud_format_from_path(path);
+        } catch (const std::invalid_argument& e) {
+            throw CLI::ValidationError(flag, e.what());
+        }
+    }
+    const std::vector<std::pair<std::string, const char*>> all_outputs = {
+        {a.entities, "--entities"},
+        {a.xyz.string(), "--xyz"},
+        {a.pcd.string(), "--pcd"},
+        {a.ply.string(), "--ply"},
+        {a.disparity_png.string(), "--disparity-png"},
+        {a.disparity_kitti.string(), "--disparity-kitti"},
+        {a.semantic_out.string(), "--semantic-out"}};
+    int to_stdout = 0;
+    for (const auto& [path, flag] : all_outputs) {
+        if (path.empty()) continue;
+        if (path == "-") {
+            if (++to_stdout > 1) {
+                throw CLI::ValidationError(flag, "only one output can go to stdout ('-')");
+            }
+            continue;
+        }
+        const std::filesystem::path folder = std::filesystem::path(path).parent_path();
+        if (!folder.empty() && !std::filesystem::is_directory(folder)) {
+            throw std::runtime_error("cannot write output: no such folder (" + folder.string() +
+                                     ", " + flag + ")");
+        }
+    }
+    LoadedRun run{{}, extract_options(a), std::nullopt};
+    run.inputs = cloud_analysis::load_inputs(a.paths, a.options);
+    if (!a.gt_disparity.empty()) {
+        run.gt_disparity = cloud_analysis::read_kitti_disparity(a.gt_disparity);
+        const auto& gt = *run.gt_disparity;
+        const auto& cam = run.inputs.calibration.camera;
+        if (gt.width_px != cam.width_px || gt.height_px != cam.height_px) {
+            throw std::runtime_error(
+                "inputs do not match: GT disparity is " + std::to_string(gt.width_px) + "x" +
+                std::to_string(gt.height_px) + ", rectified images are " +
+                std::to_string(cam.width_px) + "x" + std::to_string(cam.height_px) + " (" +
+                a.gt_disparity.string() + ")");
+        }
+    }
+    return run;
+}
+
+namespace {
+
+using Clock = std::chrono::steady_clock;
+
+double ms_since(Clock::time_point t) {
+    return std::chrono::duration<double, std::milli>(Clock::now() - t).count();
+}
+
+/// The inputs' and the analysis's warnings, and the disparity's scores against --gt-disparity,
+/// to stderr.
+void report_analysis(const LoadedRun& run, const cloud_analysis::AnalyseResult& r,
+                     const AnalyseArgs& a) {
+    const cloud_analysis::LoadedInputs& in = run.inputs;
+    if (a.warnings && r.geometry) {
+        for (const auto& w : r.geometry->warnings) std::cerr << kTool << ": warning: " << w << "\n";
+    }
+    if (a.warnings && r.semantics == "none") {
+        std::cerr << kTool << ": warning: no semantic image: every point is void\n";
+    } else if (a.warnings && r.semantics == "labels" && r.classes.void_pixels > 0) {
+        std::cerr << kTool << ": warning: " << r.classes.void_pixels
+                  << " semantic pixels have colours not in palette '" << in.palette.name
+                  << "' and count as void (" << a.paths.semantic.string() << ")\n";
+    }
+    if (run.gt_disparity) {
+        const auto s = cloud_analysis::score_disparity(r.disparity, *run.gt_disparity);
+        std::fprintf(stderr,
+                     "%s: disparity vs %s: D1-all %.2f %%, D1-valid %.2f %%, EPE %.3f px, "
+                     "density %.2f %% (%zu GT px)\n",
+                     kTool, a.gt_disparity.string().c_str(), 100.0 * s.d1_all, 100.0 * s.d1_valid,
+                     s.epe_px, 100.0 * s.density, s.gt_pixels);
+    }
+}
+
+/// The per-pixel classes the analysis used, in the palette's colours, as a PNG (every pixel void
+/// when there were none).
+std::string encode_semantic_png(const cloud_analysis::AnalyseResult& r,
+                                const cloud_analysis::Palette& palette) {
+    cloud_analysis::ClassImage classes = r.classes;
+    if (classes.class_index.empty()) {
+        classes.width_px = r.camera.width_px;
+        classes.height_px = r.camera.height_px;
+        classes.class_index.assign(static_cast<std::size_t>(classes.width_px) * classes.height_px,
+                                   cloud_analysis::kVoidClass);
+    }
+    return cloud_analysis::encode_png(cloud_analysis::geometry::colour_classes(classes, palette));
+}
+
+/// Every output the flags ask for, formatted in memory (each step's time into `timings`).
+std::vector<PendingOutput> format_outputs(const LoadedRun& run,
+                                          const cloud_analysis::AnalyseResult& r,
+                                          const AnalyseArgs& a,
+                                          std::vector<cloud_analysis::StageTiming>& timings) {
+    const cloud_analysis::LoadedInputs& in = run.inputs;
+    std::vector<PendingOutput> outputs;
+    auto t = Clock::now();
+    if (!a.entities.empty()) {
+        outputs.push_back({a.entities,
+                           cloud_analysis::entity_json(in, r, run.extract, run_settings(a)),
+                           "--entities"});
+        timings.push_back({"entities", ms_since(t)});
+    }
+    const std::vector<std::pair<std::filesystem::path, const char*>> clouds = {
+        {a.xyz, "--xyz"}, {a.pcd, "--pcd"}, {a.ply, "--ply"}};
+    for (const auto& [path, flag] : clouds) {
+        if (path.empty()) continue;
+        t = Clock::now();
+        outputs.push_back({path.string(),
+                           cloud_analysis::format_cloud(
+                               r.cloud, in.palette, cloud_analysis::cloud_format_from_path(path)),
+                           flag, cloud_sync(a)});
+        timings.push_back({std::string("format ") + flag, ms_since(t)});
+    }
+    t = Clock::now();
+    if (!a.disparity_png.empty()) {
+        outputs.push_back({a.disparity_png.string(),
+                           cloud_analysis::encode_disparity_preview_png(
+                               r.disparity, a.options.disparity.min_disparity +
+                                                a.options.disparity.num_disparities),
+                           "--disparity-png"});
+    }
+    if (!a.disparity_kitti.empty()) {
+        outputs.push_back({a.disparity_kitti.string(),
+                           cloud_analysis::encode_kitti_disparity_png(r.disparity),
+                           "--disparity-kitti"});
+    }
+    if (!a.disparity_png.empty() || !a.disparity_kitti.empty()) {
+        timings.push_back({"encode disparity", ms_since(t)});
+    }
+    if (!a.semantic_out.empty()) {
+        t = Clock::now();
+        outputs.push_back(
+            {a.semantic_out.string(), encode_semantic_png(r, in.palette), "--semantic-out"});
+        timings.push_back({"encode semantic", ms_since(t)});
+    }
+    return outputs;
+}
+
+/// Writes every output, all or nothing (each write's time into `timings`).
+void write_all(const std::vector<PendingOutput>& outputs,
+               std::vector<cloud_analysis::StageTiming>& timings) {
+    std::vector<std::filesystem::path> written;
+    try {
+        for (const auto& out : outputs) {
+            const auto t = Clock::now();
+            write_output(out);
+            if (out.path != "-") written.emplace_back(out.path);
+            timings.push_back({"write " + out.label, ms_since(t)});
+        }
+    } catch (...) {
+        // All or nothing: take back the files this run already wrote.
+        std::error_code ignored;
+        for (const auto& path : written) std::filesystem::remove(path, ignored);
+        throw;
+    }
+}
+
+}  // namespace
+
+RunReport analyse_loaded_and_write(const LoadedRun& run, const AnalyseArgs& a,
+                                   cloud_analysis::DisparityMatcher& matcher) {
+    const cloud_analysis::LoadedInputs& in = run.inputs;
+    std::vector<cloud_analysis::StageTiming> timings;
+    if (a.warnings && !in.calibration.note.empty()) {
+        std::cerr << kTool << ": warning: " << in.calibration.note << " (" << in.calibration.source
+                  << ")\n";
+    }
+    const bool any_cloud = !a.xyz.empty() || !a.pcd.empty() || !a.ply.empty();
+    cloud_analysis::AnalyseResult r = cloud_analysis::analyse(
+        in, options_for_outputs(a, run.extract, in.palette, any_cloud), matcher);
+    timings.insert(timings.end(), r.timings.begin(), r.timings.end());
+    report_analysis(run, r, a);
+    const std::vector<PendingOutput> outputs = format_outputs(run, r, a, timings);
+    // Every output exists in memory now: only writing is left.
+    write_all(outputs, timings);
+    return {timings, r.cloud_points};
+}
+
+RunReport analyse_and_write(const AnalyseArgs& a, cloud_analysis::DisparityMatcher& matcher) {
+    const auto start = std::chrono::steady_clock::now();
+    const LoadedRun run = load_run(a);
+    const double load_ms =
+        std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - start).count();
+    RunReport report = analyse_loaded_and_write(run, a, matcher);
+    report.timings.insert(report.timings.begin(), {"load", load_ms});
+    return report;
+}
+
+RunReport analyse_and_write(const AnalyseArgs& a) {
+    cloud_analysis::DisparityMatcher matcher(a.options.disparity);
+    return analyse_and_write(a, matcher);
+}
+
+int run_analyse(const AnalyseArgs& a) {
+    const RunReport report = analyse_and_write(a);
+    if (a.timings) {
+        double total = 0.0;
+        for (const auto& s : report.timings) {
+            std::fprintf(stderr, "%s: timing: %-22s %9.1f ms\n", kTool, s.stage.c_str(), s.ms);
+            total += s.ms;
+        }
+        std::fprintf(stderr, "%s: timing: %-22s %9.1f ms (%zu points)\n", kTool, "total", total,
+                     report.points);
+    }
+    return 0;
+}
+
+}  // namespace cloud_analysis::app

@@ -1,0 +1,85 @@
+#include "report.hpp"
+
+#include <cstdio>
+#include <fstream>
+#include <stdexcept>
+
+#include <nlohmann/json.hpp>
+
+#include "cloud_analysis/pipeline/batch_report.hpp"
+#include "output.hpp"
+
+namespace cloud_analysis::app {
+
+CLI::App* add_report_command(CLI::App& app, ReportArgs& a) {
+    CLI::App* cmd = app.add_subcommand(
+        "report",
+        "merge the reports of a sharded batch (batch --shard I/N --report) into one: frames "
+        "done, skipped, failed with reasons, fps, CPU time, memory");
+    cmd->add_option("reports", a.inputs, "shard report files")->required();
+    cmd->add_option("--shards", a.shards, "shards of the run (default: as the reports say)")
+        ->check(CLI::Range(1, 1000000));
+    cmd->add_option("-o,--output", a.output, "merged report ('-' = stdout)")->capture_default_str();
+    cmd->footer(
+        "Exit 1 when a shard's report is missing or a frame failed (the report is "
+        "still written), 2 on usage errors.");
+    return cmd;
+}
+
+int run_report(const ReportArgs& a) {
+    std::vector<nlohmann::json> reports;
+    for (const auto& path : a.inputs) {
+        std::ifstream in(path);
+        if (!in)
+            throw std::runtime_error("cannot read report: no such file (" + path.string() + ")");
+        try {
+            reports.push_back(nlohmann::json::parse(in));
+        } catch (const nlohmann::json::exception& e) {
+            throw std::runtime_error("cannot read report: " + std::string(e.what()) + " (" +
+                                     path.string() + ")");
+        }
+    }
+    int shards = a.shards;
+    if (shards == 0 && !reports.empty() && reports.front().contains("shard")) {
+        shards = reports.front()["shard"].value("count", 0);
+    }
+    nlohmann::json merged;
+    try {
+        merged = merge_batch_reports(reports, shards);
+    } catch (const std::invalid_argument& e) {
+        throw std::runtime_error(std::string("cannot merge reports: ") + e.what());
+    }
+    const std::string output_dir = std::filesystem::path(a.output).parent_path().string();
+    if (a.output != "-" && !output_dir.empty() && !std::filesystem::is_directory(output_dir)) {
+        throw std::runtime_error("cannot write output: no such folder (" + output_dir + ", -o)");
+    }
+    write_output({a.output, merged.dump(1) + "\n", "-o"});
+    for (const auto& index : merged["missing_shards"]) {
+        std::fprintf(stderr, "%s: error: shard %d/%d: no report\n", kTool, index.get<int>(),
+                     shards);
+    }
+    for (const auto& f : merged["failures"]) {
+        std::fprintf(stderr, "%s: error: frame %s: %s\n", kTool, f.value("frame", "?").c_str(),
+                     f.value("error", "?").c_str());
+    }
+    std::fprintf(stderr,
+                 "%s: report: %zu shards of %d, %zu frames: %zu done, %zu skipped (done "
+                 "before), %zu failed; %.2f fps over %.1f s, %.0f ms CPU per frame, peak RSS "
+                 "%.0f MB\n",
+                 kTool, merged["shards_reported"].get<std::size_t>(), shards,
+                 merged["frames"].get<std::size_t>(), merged["done"].get<std::size_t>(),
+                 merged["skipped"].get<std::size_t>(), merged["failed"].get<std::size_t>(),
+                 merged["fps"].get<double>(), merged["wall_seconds"].get<double>(),
+                 merged["cpu_ms_per_frame"].get<double>(), merged["peak_rss_mb"].get<double>());
+    if (merged.contains("evaluation")) {
+        const auto& e = merged["evaluation"];
+        std::fprintf(stderr,
+                     "%s: report: disparity over %zu frames with ground truth: D1-all %.2f %%, "
+                     "EPE %.2f px, density %.1f %%\n",
+                     kTool, e["frames"].get<std::size_t>(), 100.0 * e["d1_all"].get<double>(),
+                     e["epe_px"].get<double>(), 100.0 * e["density"].get<double>());
+    }
+    return merged["missing_shards"].empty() && merged["failed"].get<std::size_t>() == 0 ? 0 : 1;
+}
+
+}  // namespace cloud_analysis::app

@@ -1,0 +1,75 @@
+#pragma once
+
+/// Many frames of a KITTI-layout folder analysed in one process on three threads: while the
+/// current frame is matched, the next one is decoded and the previous one's entities are
+/// extracted and its files written. The matcher, the calibrations and the palette are kept
+/// across frames. See docs/performance.md.
+
+#include <cstddef>
+#include <filesystem>
+#include <functional>
+#include <string>
+#include <vector>
+
+#include <nlohmann/json.hpp>
+
+#include "cloud_analysis/entities/entity_document.hpp"
+#include "cloud_analysis/entities/extract.hpp"
+#include "cloud_analysis/pipeline/batch_report.hpp"
+
+namespace cloud_analysis {
+
+/// Settings of run_batch.
+struct BatchOptions {
+    std::filesystem::path kitti_root;        ///< KITTI layout folder (image_2/, image_3/, ...)
+    std::vector<std::string> frames;         ///< frame ids, analysed in this order
+    std::filesystem::path out_dir;           ///< <frame>.json (+ clouds) per frame; must exist
+    std::vector<std::string> cloud_formats;  ///< also <frame>.<fmt> for each of xyz, pcd, ply
+    bool disparity_kitti = false;            ///< also <frame>_disparity.png (KITTI 16-bit)
+    bool fsync_clouds = false;               ///< clouds fsync'ed too (entity files always are)
+    /// Score each frame's disparity against <kitti_root>/disp_occ_0/<frame>.png when present.
+    bool evaluate = false;
+    ExtractOptions extract;  ///< entity extraction (class config read)
+    RunSettings run;         ///< analysis settings, as the source block says
+};
+
+/// What a batch measured.
+struct BatchReport {
+    std::size_t frames = 0;  ///< frames asked for
+    std::size_t failed = 0;  ///< frames that failed (nothing of them written)
+    /// One {"frame", "error"} object per failed frame, in the order they failed.
+    nlohmann::json failures = nlohmann::json::array();
+    double seconds = 0.0;           ///< wall time of the frames, seconds
+    double fps = 0.0;               ///< frames / seconds (0 without frames)
+    double cpu_seconds = 0.0;       ///< process CPU time (all threads) of the frames, seconds
+    double cpu_ms_per_frame = 0.0;  ///< cpu_seconds per frame, ms (0 without frames)
+    unsigned cores = 1;             ///< hardware threads of the machine
+    double cores_busy = 0.0;        ///< CPU time over wall time times cores, [0, 1]
+    /// Per frame: frame, load_ms, wait_load_ms, per-stage <stage>_ms, points, analyse_ms,
+    /// rss_mb, wait_finish_ms, finish_ms, and error when it failed.
+    nlohmann::json per_frame = nlohmann::json::array();
+    /// With BatchOptions::evaluate: the scores of the frames that had ground truth (per frame:
+    /// d1_all and epe_px in per_frame, or evaluation_error when the truth could not be used).
+    DisparityTally evaluation;
+};
+
+/// Called on the calling thread as the batch goes: failed(frame, reason) for each frame that
+/// fails (the batch goes on), not_scored(frame, reason) for each frame whose ground truth could not
+/// be used (with BatchOptions::evaluate), progress(done, total, failed, seconds) after each frame.
+struct BatchObserver {
+    std::function<void(const std::string& frame, const std::string& reason)> failed;
+    std::function<void(const std::string& frame, const std::string& reason)> not_scored;
+    std::function<void(std::size_t done, std::size_t total, std::size_t failed, double seconds)>
+        progress;
+};
+
+/// Analyses every frame of options.frames and writes its files into options.out_dir, each
+/// frame all or nothing and its entity file last (so a killed batch leaves each frame whole or
+/// without its entity file). Throws before the first frame when a folder is missing or the palette
+/// cannot be read; a frame that fails later is reported to the observer and skipped.
+BatchReport run_batch(const BatchOptions& options, const BatchObserver& observer);
+
+/// Peak resident set of this process so far, MB.
+double peak_rss_mb();
+
+}  // namespace cloud_analysis

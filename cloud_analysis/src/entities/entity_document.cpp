@@ -1,0 +1,47 @@
+#include "cloud_analysis/entities/entity_document.hpp"
+
+#include <nlohmann/json.hpp>
+
+#include "cloud_analysis/geometry/scene_geometry.hpp"
+
+namespace cloud_analysis {
+
+scene_schema::EntityDocument entity_document(const LoadedInputs& in, const AnalyseResult& r,
+                                             const ExtractOptions& extract,
+                                             const RunSettings& run) {
+    scene_schema::EntityDocument doc =
+        r.points.xyz_m.empty() ? extract_entities(r.cloud, in.palette, r.camera, extract)
+                               : extract_entities(r.points, in.palette, extract);
+    doc.frame.id = in.paths.frame_id;
+    if (r.geometry) {
+        // Classes from geometry are guesses the labelled path does not make: less confidence.
+        for (auto& e : doc.entities) e.confidence *= geometry::kConfidenceScale;
+        const auto& g = r.geometry->ground;
+        doc.extra["stereo_ground"] = {{"found", g.found},
+                                      {"camera_height_m", g.camera_height_m},
+                                      {"pitch_deg", g.pitch_deg},
+                                      {"roll_deg", g.roll_deg},
+                                      {"horizon_v_px", g.horizon_v_px},
+                                      {"problem", g.problem}};
+    }
+    scene_schema::CameraIntrinsics cam;
+    cam.width_px = r.camera.width_px;
+    cam.height_px = r.camera.height_px;
+    cam.fx_px = r.camera.fx_px;
+    cam.fy_px = r.camera.fy_px;
+    cam.cx_px = r.camera.cx_px;
+    cam.cy_px = r.camera.cy_px;
+    cam.baseline_m = r.camera.baseline_m;
+    doc.frame.camera = cam;
+    nlohmann::json source = describe_run(in, run.analyse, run.tool_version);
+    source["extract"] = {{"method", extract.method}, {"class_config", run.class_config}};
+    doc.source = source;
+    return doc;
+}
+
+std::string entity_json(const LoadedInputs& in, const AnalyseResult& r,
+                        const ExtractOptions& extract, const RunSettings& run) {
+    return scene_schema::dump_checked(entity_document(in, r, extract, run));
+}
+
+}  // namespace cloud_analysis

@@ -1,0 +1,306 @@
+#include "cloud_analysis/pipeline/batch.hpp"
+
+#include <sys/resource.h>
+
+#include <algorithm>
+#include <chrono>
+#include <exception>
+#include <fstream>
+#include <future>
+#include <map>
+#include <optional>
+#include <stdexcept>
+#include <thread>
+#include <utility>
+
+#include <scene_schema/entities.hpp>
+
+#include "cloud_analysis/cloud/cloud_io.hpp"
+#include "cloud_analysis/io/io.hpp"
+#include "cloud_analysis/stereo/calibration.hpp"
+#include "cloud_analysis/stereo/disparity.hpp"
+
+namespace cloud_analysis {
+namespace {
+
+using Clock = std::chrono::steady_clock;
+
+double ms_between(Clock::time_point a, Clock::time_point b) {
+    return std::chrono::duration<double, std::milli>(b - a).count();
+}
+
+/// CPU time of this process so far (all threads, user + system), seconds.
+double cpu_seconds() {
+    rusage usage{};
+    getrusage(RUSAGE_SELF, &usage);
+    const auto seconds = [](const timeval& t) {
+        return static_cast<double>(t.tv_sec) + static_cast<double>(t.tv_usec) / 1e6;
+    };
+    return seconds(usage.ru_utime) + seconds(usage.ru_stime);
+}
+
+/// Current resident set, MB (VmRSS of /proc/self/status; 0 when unavailable).
+double current_rss_mb() {
+    std::ifstream status("/proc/self/status");
+    std::string key;
+    while (status >> key) {
+        if (key == "VmRSS:") {
+            double kib = 0.0;
+            status >> kib;
+            return kib / 1024.0;
+        }
+        status.ignore(4096, '\n');
+    }
+    return 0.0;
+}
+
+/// One frame read from disk, or why it could not be.
+struct LoadedFrame {
+    std::string frame;
+    std::optional<LoadedInputs> inputs;
+    std::string error;
+    double ms = 0.0;
+};
+
+/// One analysed frame handed to the finishing thread: entity extraction, formatting, writing.
+struct FinishJob {
+    LoadedInputs in;
+    AnalyseResult result;
+    std::filesystem::path stem;          ///< out-dir/<frame>
+    std::filesystem::path gt_disparity;  ///< scored against when set (BatchOptions::evaluate)
+};
+
+/// What finishing a frame gave: an error text ("" when none) and its milliseconds.
+struct Finished {
+    std::string error;
+    double ms = 0.0;
+    std::optional<DisparityScore> score;  ///< with ground truth
+    std::string evaluation_error;         ///< why the ground truth could not be used
+};
+
+/// One output file of a frame, formatted in memory before anything is written.
+struct FrameOutput {
+    std::filesystem::path path;
+    std::string bytes;
+    stereoscene::support::FileSync sync = stereoscene::support::FileSync::kDurable;
+};
+
+/// Extracts the entities, formats every output and writes them, all or nothing, the entity
+/// file last.
+Finished finish_frame(const FinishJob& job, const BatchOptions& options) {
+    const auto start = Clock::now();
+    std::vector<std::filesystem::path> written;
+    Finished done;
+    try {
+        // The entity file goes last: it marks the frame complete (a writer killed before it
+        // leaves a frame that a resumed batch redoes).
+        std::vector<FrameOutput> outputs;
+        if (options.disparity_kitti) {
+            outputs.push_back({job.stem.string() + "_disparity.png",
+                               encode_kitti_disparity_png(job.result.disparity)});
+        }
+        for (const auto& fmt : options.cloud_formats) {
+            const std::filesystem::path path = job.stem.string() + "." + fmt;
+            outputs.push_back(
+                {path, format_cloud(job.result.cloud, job.in.palette, cloud_format_from_path(path)),
+                 options.fsync_clouds ? stereoscene::support::FileSync::kDurable
+                                      : stereoscene::support::FileSync::kAtomicOnly});
+        }
+        outputs.push_back({job.stem.string() + ".json",
+                           entity_json(job.in, job.result, options.extract, options.run)});
+        for (const auto& out : outputs) {
+            stereoscene::support::write_file_atomic(out.path, out.bytes, out.sync);
+            written.push_back(out.path);
+        }
+    } catch (const std::exception& e) {
+        std::error_code ignored;
+        for (const auto& path : written) std::filesystem::remove(path, ignored);
+        done.error = e.what();
+    }
+    if (done.error.empty() && !job.gt_disparity.empty()) {
+        try {
+            done.score =
+                score_disparity(job.result.disparity, read_kitti_disparity(job.gt_disparity));
+        } catch (const std::exception& e) {
+            done.evaluation_error = e.what();
+        }
+    }
+    done.ms = ms_between(start, Clock::now());
+    return done;
+}
+
+/// Decodes the frames of a KITTI-layout folder, each calibration file read once.
+class FrameLoader {
+  public:
+    FrameLoader(const BatchOptions& options, const AnalyseOptions& analyse, const Palette& palette)
+        : options_(options), analyse_(analyse), palette_(palette) {}
+
+    LoadedFrame operator()(std::size_t i) {
+        LoadedFrame f;
+        f.frame = options_.frames[i];
+        const auto start = Clock::now();
+        try {
+            const InputPaths paths = kitti_layout(options_.kitti_root, f.frame);
+            auto it = calibrations_.find(paths.calibration);
+            if (it == calibrations_.end()) {
+                it = calibrations_
+                         .emplace(paths.calibration,
+                                  load_calibration(paths.calibration, analyse_.calibration))
+                         .first;
+            }
+            f.inputs = load_inputs(paths, analyse_, it->second, palette_);
+        } catch (const std::exception& e) {
+            f.error = e.what();
+        }
+        f.ms = ms_between(start, Clock::now());
+        return f;
+    }
+
+  private:
+    const BatchOptions& options_;
+    const AnalyseOptions& analyse_;
+    const Palette& palette_;
+    std::map<std::filesystem::path, Calibration> calibrations_;  // used by one thread at a time
+};
+
+/// Matches a loaded frame (its stage timings and point count into `record`): the job that
+/// finishes it, or nothing when it failed (reported to `fail` and recorded).
+template <typename Fail>
+std::optional<FinishJob> match(LoadedFrame& frame, const AnalyseOptions& analysis,
+                               DisparityMatcher& matcher, const BatchOptions& options,
+                               nlohmann::json& record, Fail&& fail) {
+    if (!frame.inputs) {
+        fail(frame.frame, frame.error);
+        record["error"] = frame.error;
+        return std::nullopt;
+    }
+    try {
+        AnalyseResult r = analyse(*frame.inputs, analysis, matcher);
+        for (const auto& s : r.timings) record[s.stage + "_ms"] = s.ms;
+        record["points"] = r.cloud_points;
+        const auto gt = options.kitti_root / "disp_occ_0" / (frame.frame + ".png");
+        const bool scored = options.evaluate && std::filesystem::exists(gt);
+        return FinishJob{std::move(*frame.inputs), std::move(r), options.out_dir / frame.frame,
+                         scored ? gt : std::filesystem::path()};
+    } catch (const std::exception& e) {
+        fail(frame.frame, e.what());
+        record["error"] = e.what();
+        return std::nullopt;
+    }
+}
+
+/// Fills the report's totals from the wall-clock start and the CPU time at the start.
+void summarize(BatchReport& report, Clock::time_point start, double cpu_start) {
+    const auto n = static_cast<double>(report.frames);
+    report.seconds = ms_between(start, Clock::now()) / 1000.0;
+    report.fps = report.seconds > 0.0 ? n / report.seconds : 0.0;
+    // CPU time per frame does not depend on what else runs on the machine; the busy share
+    // (CPU time over wall time times cores) says whether the overlap keeps every core working.
+    report.cpu_seconds = cpu_seconds() - cpu_start;
+    report.cpu_ms_per_frame = report.frames > 0 ? 1000.0 * report.cpu_seconds / n : 0.0;
+    report.cores = std::max(1u, std::thread::hardware_concurrency());
+    report.cores_busy = report.cpu_ms_per_frame * report.fps / (1000.0 * report.cores);
+}
+
+}  // namespace
+
+double peak_rss_mb() {
+    rusage usage{};
+    getrusage(RUSAGE_SELF, &usage);
+    return static_cast<double>(usage.ru_maxrss) / 1024.0;  // ru_maxrss is in KiB on Linux
+}
+
+BatchReport run_batch(const BatchOptions& options, const BatchObserver& observer) {
+    if (!std::filesystem::is_directory(options.out_dir)) {
+        throw std::runtime_error("cannot write output: no such folder (" +
+                                 options.out_dir.string() + ")");
+    }
+    if (!std::filesystem::is_directory(options.kitti_root)) {
+        throw std::runtime_error("cannot read frames: no such folder (" +
+                                 options.kitti_root.string() + ")");
+    }
+    const Palette palette = [&] {
+        try {
+            return load_palette(options.run.analyse.palette);
+        } catch (const std::exception& e) {
+            throw std::runtime_error(std::string("cannot read palette: ") + e.what());
+        }
+    }();
+    // Without clouds the entities are extracted from points reprojected by class directly.
+    AnalyseOptions analysis = options.run.analyse;
+    if (options.cloud_formats.empty()) {
+        analysis.class_points_only = class_selection(palette, options.extract);
+    }
+    DisparityMatcher matcher(analysis.disparity);
+    FrameLoader load(options, analysis, palette);
+
+    BatchReport report;
+    const std::size_t n = options.frames.size();
+    report.frames = n;
+    const auto fail = [&](const std::string& frame, const std::string& what) {
+        ++report.failed;
+        report.failures.push_back({{"frame", frame}, {"error", what}});
+        if (observer.failed) observer.failed(frame, what);
+    };
+    auto& per_frame = report.per_frame;
+    std::future<LoadedFrame> next;
+    if (n > 0) next = std::async(std::launch::async, std::ref(load), 0);
+    std::future<Finished> finishing;
+    std::string finishing_frame;
+    std::size_t finishing_record = 0;
+    const auto collect = [&] {
+        if (!finishing.valid()) return;
+        const Finished done = finishing.get();
+        per_frame[finishing_record]["finish_ms"] = done.ms;
+        if (done.score) {
+            report.evaluation.add(*done.score);
+            per_frame[finishing_record]["d1_all"] = done.score->d1_all;
+            per_frame[finishing_record]["epe_px"] = done.score->epe_px;
+        }
+        if (!done.evaluation_error.empty()) {
+            per_frame[finishing_record]["evaluation_error"] = done.evaluation_error;
+            if (observer.not_scored) observer.not_scored(finishing_frame, done.evaluation_error);
+        }
+        if (!done.error.empty()) {
+            fail(finishing_frame, done.error);
+            per_frame[finishing_record]["error"] = done.error;
+        }
+    };
+    const auto start = Clock::now();
+    const double cpu_start = cpu_seconds();
+    for (std::size_t i = 0; i < n; ++i) {
+        // The waits show whether the overlap works: with the loader and the finishing thread
+        // keeping up, the main thread never waits for them and the frame period is the
+        // matching stage's, whatever else runs on the machine.
+        const auto wait_start = Clock::now();
+        LoadedFrame frame = next.get();
+        if (i + 1 < n) next = std::async(std::launch::async, std::ref(load), i + 1);
+        const auto t0 = Clock::now();
+        nlohmann::json record = {{"frame", frame.frame},
+                                 {"load_ms", frame.ms},
+                                 {"wait_load_ms", ms_between(wait_start, t0)}};
+        std::optional<FinishJob> job = match(frame, analysis, matcher, options, record, fail);
+        record["analyse_ms"] = ms_between(t0, Clock::now());
+        record["rss_mb"] = current_rss_mb();
+        per_frame.push_back(record);
+        // One frame finishing at a time: frame n-1 must be done before frame n is handed over.
+        const auto collect_start = Clock::now();
+        collect();
+        per_frame.back()["wait_finish_ms"] = ms_between(collect_start, Clock::now());
+        if (job) {
+            finishing_frame = frame.frame;
+            finishing_record = per_frame.size() - 1;
+            finishing = std::async(std::launch::async, [&options, j = std::move(*job)] {
+                return finish_frame(j, options);
+            });
+        }
+        if (observer.progress) {
+            observer.progress(i + 1, n, report.failed, ms_between(start, Clock::now()) / 1000.0);
+        }
+    }
+    collect();
+    summarize(report, start, cpu_start);
+    return report;
+}
+
+}  // namespace cloud_analysis
