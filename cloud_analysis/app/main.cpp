@@ -9,6 +9,7 @@
 #include <vector>
 
 #include <CLI/CLI.hpp>
+#include <stereoscene/support/error_line.hpp>
 #include <stereoscene/support/process.hpp>
 
 #include "commands/analyse.hpp"
@@ -95,7 +96,7 @@ int main(int argc, char** argv) {
         std::cerr << kTool << ": error: usage: " << e.what() << " (see --help)\n";
         return 2;
     } catch (const std::exception& e) {
-        std::cerr << kTool << ": error: " << e.what() << "\n";
+        std::cerr << stereoscene::support::error_line(kTool, e.what()) << "\n";
         return 1;
     }
 }

@@ -83,6 +83,25 @@ TEST_CASE("an error line names the tool, then the file or flag, then the reason"
     CHECK(support::error_line("t", "a\nb", "c\r\nd") == "t: error: a b: c  d");
 }
 
+TEST_CASE("a library error text becomes file or flag first, then what failed", "[support]") {
+    CHECK(support::error_line("cloud-analysis", "cannot read image: no such file (/data/l.png)") ==
+          "cloud-analysis: error: /data/l.png: cannot read image: no such file");
+    CHECK(
+        support::error_line("cloud-analysis", "cannot write output: no such folder (out, --ply)") ==
+        "cloud-analysis: error: out, --ply: cannot write output: no such folder");
+    // Parentheses inside the file name stay with it; a group inside the text is not a place.
+    CHECK(support::split_where("bad value (x) in (a (1).txt)").where == "a (1).txt");
+    CHECK(support::split_where("bad value (x) in (a (1).txt)").reason == "bad value (x) in");
+    CHECK(support::split_where("no place here").where.empty());
+    CHECK(support::split_where("unbalanced)").where.empty());
+    CHECK(support::split_where("(only a group)").where.empty());
+    CHECK(support::error_line("t", "two\nlines (f)\n") == "t: error: f: two lines");
+    CHECK(support::error_line_of("t", "frame 7", "cannot read image: no such file (7.png)") ==
+          "t: error: frame 7: 7.png: cannot read image: no such file");
+    CHECK(support::error_line_of("t", "frame 7", "out of memory") ==
+          "t: error: frame 7: out of memory");
+}
+
 TEST_CASE("the executable's folder is the one holding this test", "[support]") {
     const fs::path dir = support::executable_dir();
     REQUIRE_FALSE(dir.empty());

@@ -15,6 +15,7 @@
 #include "cloud_analysis/pipeline/resume.hpp"
 #include "cloud_analysis/support/progress.hpp"
 #include "output.hpp"
+#include "stereoscene/support/error_line.hpp"
 
 namespace cloud_analysis::app {
 namespace {
@@ -198,8 +199,8 @@ int run_batch(const BatchArgs& a) {
     bool bar_open = false;  // a bar is drawn without its newline: an error line starts one
     cloud_analysis::BatchObserver observer;
     observer.failed = [&bar_open](const std::string& frame, const std::string& what) {
-        std::fprintf(stderr, "%s%s: error: frame %s: %s\n", bar_open ? "\n" : "", kTool,
-                     frame.c_str(), what.c_str());
+        std::fprintf(stderr, "%s%s\n", bar_open ? "\n" : "",
+                     stereoscene::support::error_line_of(kTool, "frame " + frame, what).c_str());
         bar_open = false;
     };
     observer.not_scored = [&bar_open](const std::string& frame, const std::string& what) {

@@ -8,6 +8,7 @@
 
 #include "cloud_analysis/pipeline/batch_report.hpp"
 #include "output.hpp"
+#include "stereoscene/support/error_line.hpp"
 
 namespace cloud_analysis::app {
 
@@ -59,8 +60,9 @@ int run_report(const ReportArgs& a) {
                      shards);
     }
     for (const auto& f : merged["failures"]) {
-        std::fprintf(stderr, "%s: error: frame %s: %s\n", kTool, f.value("frame", "?").c_str(),
-                     f.value("error", "?").c_str());
+        const std::string line = stereoscene::support::error_line_of(
+            kTool, "frame " + f.value("frame", "?"), f.value("error", "?"));
+        std::fprintf(stderr, "%s\n", line.c_str());
     }
     std::fprintf(stderr,
                  "%s: report: %zu shards of %d, %zu frames: %zu done, %zu skipped (done "
