@@ -121,6 +121,12 @@ void add_disparity_flags(CLI::App& cmd, AnalyseArgs& a) {
     cmd.add_option("--wls-sigma", d.wls_sigma_colour, "WLS edge sensitivity")
         ->capture_default_str()
         ->group(sg);
+}
+
+/// The choice of matcher and the settings of the project's own SGM.
+void add_matcher_flags(CLI::App& cmd, AnalyseArgs& a) {
+    auto& d = a.options.disparity;
+    const std::string sg = "Disparity (cv::StereoSGBM)";
     cmd.add_option("--matcher", d.matcher,
                    "sgbm (cv::StereoSGBM) or sgm (the project's census SGM: grey, 3 paths, "
                    "AVX2; uses the range, uniqueness, disp12, speckle and downscale flags)")
@@ -169,6 +175,7 @@ void add_cloud_flags(CLI::App& cmd, AnalyseArgs& a) {
 void add_settings_flags(CLI::App& cmd, AnalyseArgs& a) {
     add_input_settings_flags(cmd, a);
     add_disparity_flags(cmd, a);
+    add_matcher_flags(cmd, a);
     add_cloud_flags(cmd, a);
 }
 

@@ -189,6 +189,33 @@ std::optional<FinishJob> match(LoadedFrame& frame, const AnalyseOptions& analysi
     }
 }
 
+/// Counts a failed frame in the report and tells the observer.
+void record_failure(BatchReport& report, const BatchObserver& observer, const std::string& frame,
+                    const std::string& what) {
+    ++report.failed;
+    report.failures.push_back({{"frame", frame}, {"error", what}});
+    if (observer.failed) observer.failed(frame, what);
+}
+
+/// Records what finishing `frame` gave in its per-frame `record` and the report's totals.
+void record_finished(const Finished& done, const std::string& frame, nlohmann::json& record,
+                     BatchReport& report, const BatchObserver& observer) {
+    record["finish_ms"] = done.ms;
+    if (done.score) {
+        report.evaluation.add(*done.score);
+        record["d1_all"] = done.score->d1_all;
+        record["epe_px"] = done.score->epe_px;
+    }
+    if (!done.evaluation_error.empty()) {
+        record["evaluation_error"] = done.evaluation_error;
+        if (observer.not_scored) observer.not_scored(frame, done.evaluation_error);
+    }
+    if (!done.error.empty()) {
+        record_failure(report, observer, frame, done.error);
+        record["error"] = done.error;
+    }
+}
+
 /// Fills the report's totals from the wall-clock start and the CPU time at the start.
 void summarize(BatchReport& report, Clock::time_point start, double cpu_start) {
     const auto n = static_cast<double>(report.frames);
@@ -238,9 +265,7 @@ BatchReport run_batch(const BatchOptions& options, const BatchObserver& observer
     const std::size_t n = options.frames.size();
     report.frames = n;
     const auto fail = [&](const std::string& frame, const std::string& what) {
-        ++report.failed;
-        report.failures.push_back({{"frame", frame}, {"error", what}});
-        if (observer.failed) observer.failed(frame, what);
+        record_failure(report, observer, frame, what);
     };
     auto& per_frame = report.per_frame;
     std::future<LoadedFrame> next;
@@ -250,21 +275,8 @@ BatchReport run_batch(const BatchOptions& options, const BatchObserver& observer
     std::size_t finishing_record = 0;
     const auto collect = [&] {
         if (!finishing.valid()) return;
-        const Finished done = finishing.get();
-        per_frame[finishing_record]["finish_ms"] = done.ms;
-        if (done.score) {
-            report.evaluation.add(*done.score);
-            per_frame[finishing_record]["d1_all"] = done.score->d1_all;
-            per_frame[finishing_record]["epe_px"] = done.score->epe_px;
-        }
-        if (!done.evaluation_error.empty()) {
-            per_frame[finishing_record]["evaluation_error"] = done.evaluation_error;
-            if (observer.not_scored) observer.not_scored(finishing_frame, done.evaluation_error);
-        }
-        if (!done.error.empty()) {
-            fail(finishing_frame, done.error);
-            per_frame[finishing_record]["error"] = done.error;
-        }
+        record_finished(finishing.get(), finishing_frame, per_frame[finishing_record], report,
+                        observer);
     };
     const auto start = Clock::now();
     const double cpu_start = cpu_seconds();

@@ -133,32 +133,11 @@ double shade(const std::vector<Box>& boxes, const Hit& hit, unsigned seed) {
     return std::clamp(base + 150.0 * (n - 0.5), 0.0, 255.0);
 }
 
-}  // namespace
-
-void SyntheticOptions::validate() const {
-    if (width_px < 64) throw std::invalid_argument("width_px: must be >= 64");
-    if (height_px < 32) throw std::invalid_argument("height_px: must be >= 32");
-    if (!(fx_px > 0.0)) throw std::invalid_argument("fx_px: must be > 0");
-    if (!(baseline_m > 0.0)) throw std::invalid_argument("baseline_m: must be > 0");
-    if (!(camera_height_m > 0.0)) throw std::invalid_argument("camera_height_m: must be > 0");
-    if (supersampling < 1 || supersampling > 4) {
-        throw std::invalid_argument("supersampling: must be 1..4");
-    }
-}
-
-SyntheticScene make_synthetic_scene(const SyntheticOptions& o) {
-    o.validate();
-    SyntheticScene s;
-    StereoCamera& cam = s.camera;
-    cam.width_px = o.width_px;
-    cam.height_px = o.height_px;
-    cam.fx_px = cam.fy_px = o.fx_px;
-    cam.cx_px = cam.cx_right_px = 0.5 * o.width_px;
-    cam.cy_px = 0.46 * o.height_px;  // KITTI's horizon sits a little above the centre
-    cam.baseline_m = o.baseline_m;
-    const double ground_y = o.camera_height_m;
-    const std::vector<Box> boxes = scene_boxes(ground_y);
-
+/// The left and right grey views (supersampled), and from the left view's centre rays the
+/// semantic image and the ground-truth disparity.
+void render_views(SyntheticScene& s, const std::vector<Box>& boxes, double ground_y,
+                  const SyntheticOptions& o) {
+    const StereoCamera& cam = s.camera;
     const std::size_t n = static_cast<std::size_t>(o.width_px) * o.height_px;
     s.left = ImageU8{o.width_px, o.height_px, 1, std::vector<std::uint8_t>(n)};
     s.right = s.left;
@@ -202,8 +181,12 @@ SyntheticScene make_synthetic_scene(const SyntheticOptions& o) {
             }
         }
     }
+}
 
-    scene_schema::EntityDocument& doc = s.truth;
+/// The truth of the scene: every box, and the visible road and sidewalks as flat entities.
+scene_schema::EntityDocument truth_document(const StereoCamera& cam, const std::vector<Box>& boxes,
+                                            double ground_y, const SyntheticOptions& o) {
+    scene_schema::EntityDocument doc;
     doc.frame.id = "synthetic-street";
     scene_schema::CameraIntrinsics intr;
     intr.width_px = cam.width_px;
@@ -241,7 +224,37 @@ SyntheticScene make_synthetic_scene(const SyntheticOptions& o) {
     add("road", 7, 0.0, ground_y, mid, -kPi / 2, 8.0, 0.05, len);
     add("sidewalk", 8, -8.0, ground_y, mid, -kPi / 2, 8.0, 0.05, len);
     add("sidewalk", 8, 8.0, ground_y, mid, -kPi / 2, 8.0, 0.05, len);
-    scene_schema::check(doc);
+    return doc;
+}
+
+}  // namespace
+
+void SyntheticOptions::validate() const {
+    if (width_px < 64) throw std::invalid_argument("width_px: must be >= 64");
+    if (height_px < 32) throw std::invalid_argument("height_px: must be >= 32");
+    if (!(fx_px > 0.0)) throw std::invalid_argument("fx_px: must be > 0");
+    if (!(baseline_m > 0.0)) throw std::invalid_argument("baseline_m: must be > 0");
+    if (!(camera_height_m > 0.0)) throw std::invalid_argument("camera_height_m: must be > 0");
+    if (supersampling < 1 || supersampling > 4) {
+        throw std::invalid_argument("supersampling: must be 1..4");
+    }
+}
+
+SyntheticScene make_synthetic_scene(const SyntheticOptions& o) {
+    o.validate();
+    SyntheticScene s;
+    StereoCamera& cam = s.camera;
+    cam.width_px = o.width_px;
+    cam.height_px = o.height_px;
+    cam.fx_px = cam.fy_px = o.fx_px;
+    cam.cx_px = cam.cx_right_px = 0.5 * o.width_px;
+    cam.cy_px = 0.46 * o.height_px;  // KITTI's horizon sits a little above the centre
+    cam.baseline_m = o.baseline_m;
+    const double ground_y = o.camera_height_m;
+    const std::vector<Box> boxes = scene_boxes(ground_y);
+    render_views(s, boxes, ground_y, o);
+    s.truth = truth_document(cam, boxes, ground_y, o);
+    scene_schema::check(s.truth);
     return s;
 }
 
