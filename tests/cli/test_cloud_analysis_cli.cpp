@@ -11,6 +11,7 @@
 #include <sstream>
 #include <string>
 #include <tuple>
+#include <vector>
 
 #include <nlohmann/json.hpp>
 #include <scene_schema/entities.hpp>
@@ -590,4 +591,53 @@ TEST_CASE("a calibration whose baseline puts the road 10 m down warns, writes, a
     const auto doc = nlohmann::json::parse(slurp(out));
     CHECK(doc["stereo_ground"]["found"] == false);
     for (const auto& e : doc["entities"]) CHECK(e["class"] != "car");
+}
+
+TEST_CASE("export-kitti writes camera 0 locations and evaluate --labels reads them back",
+          "[cli][kitti_labels]") {
+    const auto dir = scratch("export_kitti_frame");
+    // A KITTI object calibration: camera 2 sits (44.85728 - 609.5593 * 0.002745884) / 721.5377
+    // = 0.05985 m right of camera 0.
+    std::ofstream(dir / "calib.txt")
+        << "P0: 721.5377 0 609.5593 0 0 721.5377 172.854 0 0 0 1 0\n"
+           "P1: 721.5377 0 609.5593 -387.5744 0 721.5377 172.854 0 0 0 1 0\n"
+           "P2: 721.5377 0 609.5593 44.85728 0 721.5377 172.854 0.2163791 0 0 1 0.002745884\n"
+           "P3: 721.5377 0 609.5593 -339.5242 0 721.5377 172.854 2.199936 0 0 1 0.002729905\n";
+    const fs::path truth = kSample / "truth.json";
+    const Run own = run(tool() + " export-kitti " + quote(truth.string()) + " -o -", dir);
+    REQUIRE(own.code == 0);
+    CHECK(own.err.find("give --calib") != std::string::npos);  // the truth file does not say
+    const fs::path labels = dir / "label_2.txt";
+    const Run moved = run(tool() + " export-kitti " + quote(truth.string()) + " --calib " +
+                              quote((dir / "calib.txt").string()) + " -o " + quote(labels.string()),
+                          dir);
+    REQUIRE(moved.code == 0);
+    CHECK(moved.err.empty());
+    // Every x moved by -0.05985 m (two decimals in the file), y and z by less than 5 mm.
+    std::istringstream a(own.out), b(slurp(labels));
+    std::string la, lb;
+    int lines = 0;
+    while (std::getline(a, la) && std::getline(b, lb)) {
+        std::istringstream fa(la), fb(lb);
+        std::vector<double> va, vb;
+        std::string type;
+        fa >> type;
+        fb >> type;
+        for (double v; fa >> v;) va.push_back(v);
+        for (double v; fb >> v;) vb.push_back(v);
+        REQUIRE(va.size() == vb.size());
+        CHECK(vb[10] - va[10] == Approx(-0.05985).margin(0.0051));
+        CHECK(std::abs(vb[11] - va[11]) <= 0.0051);
+        CHECK(std::abs(vb[12] - va[12]) <= 0.0051);
+        ++lines;
+    }
+    CHECK(lines >= 3);
+    // Read back with the same calibration, the labels are the truth again.
+    const Run back =
+        run(tool() + " evaluate --entities " + quote(truth.string()) + " --labels " +
+                quote(labels.string()) + " --calib " + quote((dir / "calib.txt").string()) +
+                " --bar-range 50 --require-recall 1.0 --max-spurious 0"
+                " --max-median-centre-error 0.01",
+            dir);
+    CHECK(back.code == 0);
 }

@@ -252,7 +252,9 @@ CLI::App* add_evaluate_command(CLI::App& app, EvaluateArgs& args) {
     sub->add_option("--frame", args.frame, "Frame id within --kitti-root, e.g. 000000_10");
     sub->add_option("--gt-disparity", args.gt_disparity, "Ground-truth disparity PNG (overrides)");
     sub->add_option("--instance", args.instance, "Ground-truth instance PNG (overrides)");
-    sub->add_option("--calib", args.calib, "Calibration file (overrides)");
+    sub->add_option("--calib", args.calib,
+                    "Calibration file (overrides; with --labels: where the entities' camera sits "
+                    "in the labels' camera 0, t of P2)");
     sub->add_option("--json", args.json, "Also write the scores as JSON ('-' = stdout)");
     add_car_flags(sub, args);
     add_entity_flags(sub, args);
@@ -265,13 +267,26 @@ CLI::App* add_evaluate_command(CLI::App& app, EvaluateArgs& args) {
 
 namespace {
 
+/// Where the entities' camera sits in the labels' camera 0: from --calib, else from what the
+/// entity file records (a warning when neither says).
+LabelFrame labels_frame(const EvaluateArgs& args, const scene_schema::EntityDocument& estimate) {
+    if (!args.calib.empty()) return label_frame_of(load_calibration(args.calib));
+    if (const auto frame = label_frame_of(estimate)) return *frame;
+    std::cerr << "cloud-analysis: warning: " << args.entities.string()
+              << ": the file does not say where its camera sits in KITTI's camera 0: the labels "
+                 "are compared in their own frame (give --calib)\n";
+    return {};
+}
+
 /// The entity file, its reference and the references' visibility, read.
 EntityComparison read_comparison(const EvaluateArgs& args, const ResolvedPaths& paths) {
     EntityComparison c;
     c.entities_file = args.entities.string();
-    c.estimate = scene_schema::read_file(args.entities).entities;
+    const scene_schema::EntityDocument estimate = scene_schema::read_file(args.entities);
+    c.estimate = estimate.entities;
     if (!args.labels.empty()) {
-        c.reference = entities_from_kitti_labels(load_kitti_labels(args.labels));
+        c.reference = entities_from_kitti_labels(load_kitti_labels(args.labels),
+                                                 labels_frame(args, estimate));
         c.reference_file = args.labels.string();
     } else {
         c.reference = scene_schema::read_file(args.reference).entities;

@@ -106,8 +106,25 @@ std::optional<std::string> kitti_type_of_class(std::string_view class_name) {
     return std::nullopt;
 }
 
-std::vector<scene_schema::Entity> entities_from_kitti_labels(
-    const std::vector<KittiLabel>& labels) {
+LabelFrame label_frame_of(const Calibration& calibration) {
+    const Eigen::Vector3d& t = calibration.reference_offset_m;
+    return {t.x(), t.y(), t.z()};
+}
+
+std::optional<LabelFrame> label_frame_of(const scene_schema::EntityDocument& document) {
+    if (!document.source || !document.source->is_object()) return std::nullopt;
+    const auto calibration = document.source->find("calibration");
+    if (calibration == document.source->end() || !calibration->is_object()) return std::nullopt;
+    const auto t = calibration->find("reference_offset_m");
+    if (t == calibration->end() || !t->is_array() || t->size() != 3) return std::nullopt;
+    for (const auto& v : *t) {
+        if (!v.is_number() || !std::isfinite(v.get<double>())) return std::nullopt;
+    }
+    return LabelFrame{(*t)[0].get<double>(), (*t)[1].get<double>(), (*t)[2].get<double>()};
+}
+
+std::vector<scene_schema::Entity> entities_from_kitti_labels(const std::vector<KittiLabel>& labels,
+                                                             const LabelFrame& frame) {
     std::vector<scene_schema::Entity> out;
     for (std::size_t i = 0; i < labels.size(); ++i) {
         const KittiLabel& l = labels[i];
@@ -117,9 +134,9 @@ std::vector<scene_schema::Entity> entities_from_kitti_labels(
         e.id = cls->first + "-" + std::to_string(i + 1);
         e.class_name = cls->first;
         e.class_id = cls->second;
-        e.x = l.x;
-        e.y = l.y - 0.5 * l.h;
-        e.z = l.z;
+        e.x = l.x + frame.tx_m;
+        e.y = l.y - 0.5 * l.h + frame.ty_m;
+        e.z = l.z + frame.tz_m;
         e.theta = l.rotation_y;
         e.W = l.w;
         e.H = l.h;
@@ -132,17 +149,18 @@ std::vector<scene_schema::Entity> entities_from_kitti_labels(
 }
 
 KittiLabel kitti_label_from_entity(const scene_schema::Entity& entity,
-                                   const scene_schema::CameraIntrinsics* camera) {
+                                   const scene_schema::CameraIntrinsics* camera,
+                                   const LabelFrame& frame) {
     KittiLabel l;
     l.type = kitti_type_of_class(entity.class_name).value_or("DontCare");
     l.h = entity.H;
     l.w = entity.W;
     l.l = entity.L;
-    l.x = entity.x;
-    l.y = entity.y + 0.5 * entity.H;
-    l.z = entity.z;
+    l.x = entity.x - frame.tx_m;
+    l.y = entity.y + 0.5 * entity.H - frame.ty_m;
+    l.z = entity.z - frame.tz_m;
     l.rotation_y = entity.theta;
-    l.alpha = wrap_pi(entity.theta - std::atan2(entity.x, entity.z));
+    l.alpha = wrap_pi(entity.theta - std::atan2(l.x, l.z));
     l.score = entity.confidence;
     if (camera == nullptr || camera->fx_px <= 0.0) return l;
 

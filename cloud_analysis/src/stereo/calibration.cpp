@@ -131,6 +131,14 @@ StereoCamera from_projections(const Eigen::Matrix<double, 3, 4>& P_left,
     return cam;
 }
 
+/// t of P = K [I | t]: K^-1 P[:, 3].
+Eigen::Vector3d projection_offset(const Eigen::Matrix<double, 3, 4>& P) {
+    const double tz = P(2, 3);
+    const double ty = (P(1, 3) - P(1, 2) * tz) / P(1, 1);
+    const double tx = (P(0, 3) - P(0, 1) * ty - P(0, 2) * tz) / P(0, 0);
+    return {tx, ty, tz};
+}
+
 Calibration kitti_raw(const Fields& f, const std::string& origin, const CalibrationOptions& o) {
     const std::string l = "0" + std::to_string(o.left_camera);
     const std::string r = "0" + std::to_string(o.right_camera);
@@ -161,6 +169,7 @@ Calibration kitti_raw(const Fields& f, const std::string& origin, const Calibrat
                      " m derived from R_" + l + "/T_" + l + "/R_" + r + "/T_" + r;
     }
     calib.camera = from_projections(P_l, P_r, "P_rect_" + l, "P_rect_" + r, origin);
+    calib.reference_offset_m = projection_offset(P_l);
     if (f.count("S_rect_" + l)) {
         const auto& s = need(f, "S_rect_" + l, 2, origin);
         calib.camera.width_px = static_cast<int>(std::lround(s[0]));
@@ -191,8 +200,9 @@ Calibration kitti_object(const Fields& f, const std::string& origin, const Calib
     const std::string r = "P" + std::to_string(o.right_camera);
     Calibration calib;
     calib.format = "kitti_object";
-    calib.camera = from_projections(matrix34(need(f, l, 12, origin)),
-                                    matrix34(need(f, r, 12, origin)), l, r, origin);
+    const auto P_l = matrix34(need(f, l, 12, origin));
+    calib.camera = from_projections(P_l, matrix34(need(f, r, 12, origin)), l, r, origin);
+    calib.reference_offset_m = projection_offset(P_l);
     return calib;
 }
 

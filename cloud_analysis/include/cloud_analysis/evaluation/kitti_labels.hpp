@@ -13,7 +13,27 @@
 
 #include <scene_schema/entities.hpp>
 
+#include "cloud_analysis/stereo/calibration.hpp"
+
 namespace cloud_analysis {
+
+/// Where the entities' camera sits in KITTI's label frame. label_2 locations are in rectified
+/// camera 0; our entities are in the rectified left camera of the pair (camera 2 on KITTI), whose
+/// projection is P2 = K [I | t]: a point X0 of the label frame is X0 + t in the left camera.
+/// t = K^-1 P2[:, 3] comes from the calibration (Calibration::reference_offset_m); on KITTI it is
+/// about (0.06, 0, 0) m. Zero when the entities' camera is the label frame.
+struct LabelFrame {
+    double tx_m = 0.0;  ///< t, metres
+    double ty_m = 0.0;
+    double tz_m = 0.0;
+};
+
+/// The label frame of a calibration (its reference_offset_m).
+LabelFrame label_frame_of(const Calibration& calibration);
+
+/// The label frame an entity file records (source.calibration.reference_offset_m, written by
+/// cloud-analysis), or nothing when the file does not say.
+std::optional<LabelFrame> label_frame_of(const scene_schema::EntityDocument& document);
 
 /// One label_2 line.
 struct KittiLabel {
@@ -50,15 +70,19 @@ std::optional<std::pair<std::string, int>> class_of_kitti_type(std::string_view 
 std::optional<std::string> kitti_type_of_class(std::string_view class_name);
 
 /// Entities of the labels that map to a class (ids "<class>-<line>", centre y = y - h / 2,
-/// method "kitti_label_2", confidence = score or 1).
-std::vector<scene_schema::Entity> entities_from_kitti_labels(const std::vector<KittiLabel>& labels);
+/// method "kitti_label_2", confidence = score or 1), moved from the label frame into the
+/// entities' camera (x + t).
+std::vector<scene_schema::Entity> entities_from_kitti_labels(const std::vector<KittiLabel>& labels,
+                                                             const LabelFrame& frame = {});
 
-/// Label of an entity: y bottom = y + H / 2, alpha = theta - atan2(x, z) wrapped to
-/// [-pi, pi], score = confidence. With a camera, the 2D box is the bounding box of the eight
-/// projected corners clipped to the image (-1s when the box is not in front of the camera
-/// or off the image); without one, -1s.
+/// Label of an entity: the location moved into the label frame (x - t), y bottom = y + H / 2,
+/// alpha = theta - atan2(x, z) of the label frame's x and z wrapped to [-pi, pi], score =
+/// confidence. With the entities' camera, the 2D box is the bounding box of the eight projected
+/// corners clipped to the image (-1s when the box is not in front of the camera or off the
+/// image): the same as KITTI's projection with P2 of the label's location. Without one, -1s.
 KittiLabel kitti_label_from_entity(const scene_schema::Entity& entity,
-                                   const scene_schema::CameraIntrinsics* camera);
+                                   const scene_schema::CameraIntrinsics* camera,
+                                   const LabelFrame& frame = {});
 
 /// label_2 text of labels (16 columns when a label has a score), 2 decimals like KITTI's.
 std::string format_kitti_labels(const std::vector<KittiLabel>& labels);

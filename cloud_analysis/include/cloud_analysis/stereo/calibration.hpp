@@ -37,11 +37,15 @@ struct RawCamera {
 
 /// A calibration file, read.
 struct Calibration {
-    std::string format;                 ///< "kitti_raw", "kitti_object", "yaml" or "json"
-    std::string source;                 ///< file it came from
-    std::string note;                   ///< how a missing value was derived (empty when none was)
-    StereoCamera camera;                ///< rectified rig; width/height 0 when the file has no size
-    std::optional<RawCamera> raw_left;  ///< present when the file can rectify raw input
+    std::string format;   ///< "kitti_raw", "kitti_object", "yaml" or "json"
+    std::string source;   ///< file it came from
+    std::string note;     ///< how a missing value was derived (empty when none was)
+    StereoCamera camera;  ///< rectified rig; width/height 0 when the file has no size
+    /// t of the left camera's projection P = K [I | t] (KITTI formats): a point X0 of the
+    /// rectified reference camera 0, the frame of KITTI's labels, is X0 + t in the left camera.
+    /// Zero for the project's YAML/JSON (the left camera is the reference).
+    Eigen::Vector3d reference_offset_m = Eigen::Vector3d::Zero();
+    std::optional<RawCamera> raw_left;   ///< present when the file can rectify raw input
     std::optional<RawCamera> raw_right;  ///< idem
 };
 
