@@ -93,6 +93,11 @@ render_cli_test("a class without a model is drawn as a box with one warning" ARG
     -o ${_render_out}/unmodelled/out.png CODE 0
     STDERR "^scene-render: warning: no model for class 'train'[^\n]*\n$"
     OUTPUT ${_render_out}/unmodelled/out.png OUTPUT_EXISTS 1)
+render_cli_test("a class the palette does not know is a magenta box and the warning says so" ARGS
+    ${PROJECT_SOURCE_DIR}/tests/scene_viewer/data/street_unknown_class.json --size 160x90
+    -o ${_render_out}/unknown_class/out.png CODE 0
+    STDERR "^scene-render: warning: no model for class 'hovercraft', drawn as a box in magenta [^\n]*\n$"
+    OUTPUT ${_render_out}/unknown_class/out.png OUTPUT_EXISTS 1)
 if(STEREOSCENE_VIEWER_THREE)
     render_cli_test("html writes the viewer folder of the street sample" ARGS html ${_street}
         --out ${_render_out}/html --cloud ${PROJECT_SOURCE_DIR}/tests/scene_viewer/data/tiny_cloud.ply

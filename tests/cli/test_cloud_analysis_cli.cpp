@@ -641,3 +641,45 @@ TEST_CASE("export-kitti writes camera 0 locations and evaluate --labels reads th
             dir);
     CHECK(back.code == 0);
 }
+
+TEST_CASE("the sky left out of the clouds (--drop-sky) is not left out of the entities", "[cli]") {
+    const auto dir = scratch("drop_sky");
+    const std::string street = tool() + street_pair() + " --semantic " +
+                               quote((kStreet / "semantic_rgb" / "000000.png").string());
+    const Run all = run(street + " --xyz " + quote((dir / "all.xyz").string()) + " -o " +
+                            quote((dir / "all.json").string()),
+                        dir);
+    REQUIRE(all.code == 0);
+    const Run dropped = run(street + " --drop-sky --xyz " + quote((dir / "no_sky.xyz").string()) +
+                                " -o " + quote((dir / "no_sky.json").string()),
+                            dir);
+    REQUIRE(dropped.code == 0);
+    // Class 23 is the Cityscapes sky: the column after R G B.
+    const auto sky_points = [](const fs::path& xyz) {
+        std::ifstream in(xyz);
+        std::string line;
+        std::size_t n = 0, sky = 0;
+        std::getline(in, line);  // header
+        while (std::getline(in, line)) {
+            std::istringstream f(line);
+            double x, y, z, r, g, b;
+            int cls;
+            f >> x >> y >> z >> r >> g >> b >> cls;
+            ++n;
+            sky += cls == 23;
+        }
+        return std::make_pair(n, sky);
+    };
+    const auto [n_all, sky_all] = sky_points(dir / "all.xyz");
+    const auto [n_kept, sky_kept] = sky_points(dir / "no_sky.xyz");
+    CHECK(sky_all > 0);
+    CHECK(sky_kept == 0);
+    CHECK(n_kept == n_all - sky_all);
+    CHECK(slurp(dir / "all.json") == slurp(dir / "no_sky.json"));
+    const Run bad =
+        run(street + " --drop-classes skyy --xyz " + quote((dir / "bad.xyz").string()), dir);
+    CHECK(bad.code == 2);
+    CHECK(bad.err.find("--drop-classes") != std::string::npos);
+    CHECK(bad.err.find("skyy") != std::string::npos);
+    CHECK_FALSE(fs::exists(dir / "bad.xyz"));
+}

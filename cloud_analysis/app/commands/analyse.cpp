@@ -143,12 +143,18 @@ std::vector<PendingOutput> format_outputs(const LoadedRun& run,
     }
     const std::vector<std::pair<std::filesystem::path, const char*>> clouds = {
         {a.xyz, "--xyz"}, {a.pcd, "--pcd"}, {a.ply, "--ply"}};
+    std::optional<cloud_analysis::LabeledCloud> kept;  // the cloud files' points, when not all
+    if (!a.drop_classes.empty()) {
+        kept = cloud_analysis::without_classes(
+            r.cloud, cloud_analysis::class_indices(in.palette, a.drop_classes));
+    }
+    const cloud_analysis::LabeledCloud& cloud = kept ? *kept : r.cloud;
     for (const auto& [path, flag] : clouds) {
         if (path.empty()) continue;
         t = Clock::now();
         outputs.push_back({path.string(),
                            cloud_analysis::format_cloud(
-                               r.cloud, in.palette, cloud_analysis::cloud_format_from_path(path)),
+                               cloud, in.palette, cloud_analysis::cloud_format_from_path(path)),
                            flag, cloud_sync(a)});
         timings.push_back({std::string("format ") + flag, ms_since(t)});
     }

@@ -2,6 +2,8 @@
 
 #include <stdexcept>
 
+#include "cloud_analysis/cloud/cloud_io.hpp"
+#include "cloud_analysis/cloud/semantic.hpp"
 #include "cloud_analysis/entities/class_config.hpp"
 #include "cloud_analysis/io/io.hpp"
 #include "cloud_analysis/stereo/disparity.hpp"
@@ -158,6 +160,15 @@ void add_cloud_flags(CLI::App& cmd, AnalyseArgs& a) {
     cmd.add_flag("!--drop-void", a.options.reproject.keep_void,
                  "drop points whose semantic colour is not in the palette")
         ->group(cl);
+    cmd.add_option("--drop-classes", a.drop_classes,
+                   "classes left out of the cloud files (e.g. sky vegetation; void = points "
+                   "without a class); entities are not affected")
+        ->delimiter(',')
+        ->group(cl);
+    cmd.add_flag("--drop-sky", a.drop_sky,
+                 "leave the sky out of the cloud files (its points at 40-70 m stand as a wall "
+                 "in cloud viewers); the same as --drop-classes sky")
+        ->group(cl);
     cmd.add_option("--method", a.method,
                    "entity extractor: instances, or the thesis's centroid, average, variance")
         ->check(CLI::IsMember({"instances", "centroid", "average", "variance"}))
@@ -234,6 +245,15 @@ void resolve_settings(AnalyseArgs& a, const CLI::App& cmd) {
         a.options.validate();
     } catch (const std::invalid_argument& e) {
         throw CLI::ValidationError("analyse", e.what());
+    }
+    if (a.drop_sky) a.drop_classes.push_back("sky");
+    if (!a.drop_classes.empty()) {
+        try {
+            cloud_analysis::class_indices(cloud_analysis::load_palette(a.options.palette),
+                                          a.drop_classes);
+        } catch (const std::invalid_argument& e) {
+            throw CLI::ValidationError("--drop-classes", e.what());
+        }
     }
 }
 

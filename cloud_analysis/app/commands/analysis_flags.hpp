@@ -6,6 +6,7 @@
 
 #include <filesystem>
 #include <string>
+#include <vector>
 
 #include <CLI/CLI.hpp>
 #include <scene_schema/entities.hpp>
@@ -29,6 +30,9 @@ struct AnalyseArgs {
     std::string entities;
     std::filesystem::path xyz, pcd, ply, disparity_png, disparity_kitti, gt_disparity;
     std::filesystem::path semantic_out;  ///< --semantic-out: the classes used, as a PNG
+    std::vector<std::string>
+        drop_classes;       ///< --drop-classes (+ sky with --drop-sky): not in clouds
+    bool drop_sky = false;  ///< --drop-sky
     bool timings = false;
     bool fsync_clouds = false;  ///< --fsync-clouds: the clouds are durable too
     bool warnings = true;       ///< print the inputs' warnings (bench: on its first run only)

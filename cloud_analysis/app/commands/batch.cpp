@@ -84,6 +84,7 @@ cloud_analysis::BatchOptions batch_options(const BatchArgs& a, std::vector<std::
     options.frames = std::move(frames);
     options.out_dir = a.out_dir;
     options.cloud_formats = a.cloud_formats;
+    options.cloud_drop_classes = a.settings.drop_classes;
     options.disparity_kitti = a.disparity_kitti;
     options.fsync_clouds = a.settings.fsync_clouds;
     options.evaluate = a.evaluate;

@@ -1,5 +1,6 @@
 #include "cloud_analysis/cloud/cloud_io.hpp"
 
+#include <algorithm>
 #include <charconv>
 #include <cmath>
 #include <cstring>
@@ -240,6 +241,42 @@ std::string format_ply(const LabeledCloud& cloud, const Palette& palette) {
         p = put_raw(p, c[1]);
         p = put_raw(p, c[2]);
         p = put_raw(p, class_id(palette, cloud.class_index[i]));
+    }
+    return out;
+}
+
+std::vector<std::uint16_t> class_indices(const Palette& palette,
+                                         const std::vector<std::string>& names) {
+    std::vector<std::uint16_t> out;
+    for (const auto& name : names) {
+        if (name == "void") {
+            out.push_back(kVoidClass);
+            continue;
+        }
+        const auto it = std::find_if(palette.classes.begin(), palette.classes.end(),
+                                     [&](const ClassInfo& c) { return c.name == name; });
+        if (it == palette.classes.end()) {
+            throw std::invalid_argument("no class '" + name + "' in palette '" + palette.name +
+                                        "'");
+        }
+        out.push_back(static_cast<std::uint16_t>(it - palette.classes.begin()));
+    }
+    return out;
+}
+
+LabeledCloud without_classes(const LabeledCloud& cloud, const std::vector<std::uint16_t>& dropped) {
+    if (dropped.empty()) return cloud;
+    LabeledCloud out;
+    out.width_px = cloud.width_px;
+    out.height_px = cloud.height_px;
+    for (std::size_t i = 0; i < cloud.size(); ++i) {
+        if (std::find(dropped.begin(), dropped.end(), cloud.class_index[i]) != dropped.end()) {
+            continue;
+        }
+        out.xyz_m.push_back(cloud.xyz_m[i]);
+        out.colour.push_back(cloud.colour[i]);
+        out.class_index.push_back(cloud.class_index[i]);
+        if (i < cloud.pixel.size()) out.pixel.push_back(cloud.pixel[i]);
     }
     return out;
 }

@@ -99,12 +99,18 @@ Finished finish_frame(const FinishJob& job, const BatchOptions& options) {
             outputs.push_back({job.stem.string() + "_disparity.png",
                                encode_kitti_disparity_png(job.result.disparity)});
         }
+        std::optional<LabeledCloud> kept;  // the cloud files' points, when not all
+        if (!options.cloud_drop_classes.empty()) {
+            kept = without_classes(job.result.cloud,
+                                   class_indices(job.in.palette, options.cloud_drop_classes));
+        }
+        const LabeledCloud& cloud = kept ? *kept : job.result.cloud;
         for (const auto& fmt : options.cloud_formats) {
             const std::filesystem::path path = job.stem.string() + "." + fmt;
-            outputs.push_back(
-                {path, format_cloud(job.result.cloud, job.in.palette, cloud_format_from_path(path)),
-                 options.fsync_clouds ? stereoscene::support::FileSync::kDurable
-                                      : stereoscene::support::FileSync::kAtomicOnly});
+            outputs.push_back({path,
+                               format_cloud(cloud, job.in.palette, cloud_format_from_path(path)),
+                               options.fsync_clouds ? stereoscene::support::FileSync::kDurable
+                                                    : stereoscene::support::FileSync::kAtomicOnly});
         }
         outputs.push_back({job.stem.string() + ".json",
                            entity_json(job.in, job.result, options.extract, options.run)});

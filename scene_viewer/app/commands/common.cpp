@@ -9,6 +9,7 @@
 #include <stdexcept>
 
 #include "scene_viewer/render/image.hpp"
+#include "scene_viewer/render/palette.hpp"
 #include "scene_viewer/render/render_setup.hpp"
 
 namespace scene_render {
@@ -190,8 +191,11 @@ void warn_boxes(const SceneRenderer& renderer, const ClassTable& table) {
     static std::set<std::string> warned;
     for (const std::string& name : classes_missing_models(renderer, table)) {
         if (warned.insert(name).second) {
-            std::cerr << kTool << ": warning: no model for class '" << name
-                      << "', drawn as a box in its class colour\n";
+            std::cerr << kTool << ": warning: no model for class '" << name << "', drawn as a box "
+                      << (cityscapes_by_name(name)
+                              ? "in its class colour"
+                              : "in magenta (a class the palette does not know)")
+                      << "\n";
         }
     }
 }

@@ -104,6 +104,22 @@ TEST_CASE("PCL reads our binary PLY back with colours and scalar_class", "[cloud
     CHECK(int{rgb[1].b} == 128);
 }
 
+TEST_CASE("the cloud files can leave classes out", "[cloud_io]") {
+    const Palette city = load_palette("cityscapes");
+    const LabeledCloud all = three_points(city);
+    const LabeledCloud no_road = without_classes(all, class_indices(city, {"road"}));
+    REQUIRE(no_road.size() == 2);
+    CHECK(no_road.class_index[0] == find_class(city, "car"));
+    CHECK(no_road.class_index[1] == kVoidClass);
+    CHECK(no_road.pixel == std::vector<std::uint32_t>{1, 3});
+    CHECK(no_road.colour[1] == Rgb{0, 0, 0});
+    const LabeledCloud only_road = without_classes(all, class_indices(city, {"car", "void"}));
+    REQUIRE(only_road.size() == 1);
+    CHECK(only_road.xyz_m[0].z() == 7.5f);
+    CHECK(without_classes(all, {}).size() == 3);
+    CHECK_THROWS_WITH(class_indices(city, {"skyy"}), "no class 'skyy' in palette 'cityscapes'");
+}
+
 TEST_CASE("cloud formats follow the file extension", "[cloud_io]") {
     CHECK(cloud_format_from_path("a/b.xyz") == CloudFormat::kXyz);
     CHECK(cloud_format_from_path("b.pcd") == CloudFormat::kPcd);

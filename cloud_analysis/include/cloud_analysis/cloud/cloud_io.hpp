@@ -10,6 +10,7 @@
 #include <filesystem>
 #include <string>
 #include <string_view>
+#include <vector>
 
 #include "cloud_analysis/cloud/types.hpp"
 
@@ -29,6 +30,15 @@ inline constexpr std::string_view kXyzHeader = "//X Y Z R G B Class Luma\n";
 
 /// Class id written for void points.
 inline constexpr int kVoidClassId = 0;
+
+/// Palette indices of class names (e.g. "sky"); "void" names the points without a class.
+/// Throws std::invalid_argument "no class '<name>' in palette '<palette>'".
+std::vector<std::uint16_t> class_indices(const Palette& palette,
+                                         const std::vector<std::string>& names);
+
+/// The cloud without the points of the classes `dropped` (palette indices or kVoidClass), e.g.
+/// the sky, whose points at 40-70 m stand as a wall in every cloud viewer.
+LabeledCloud without_classes(const LabeledCloud& cloud, const std::vector<std::uint16_t>& dropped);
 
 /// Whole-file bytes of the cloud in the format.
 std::string format_xyz(const LabeledCloud& cloud, const Palette& palette);

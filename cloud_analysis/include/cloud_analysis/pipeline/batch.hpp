@@ -21,12 +21,13 @@ namespace cloud_analysis {
 
 /// Settings of run_batch.
 struct BatchOptions {
-    std::filesystem::path kitti_root;        ///< KITTI layout folder (image_2/, image_3/, ...)
-    std::vector<std::string> frames;         ///< frame ids, analysed in this order
-    std::filesystem::path out_dir;           ///< <frame>.json (+ clouds) per frame; must exist
-    std::vector<std::string> cloud_formats;  ///< also <frame>.<fmt> for each of xyz, pcd, ply
-    bool disparity_kitti = false;            ///< also <frame>_disparity.png (KITTI 16-bit)
-    bool fsync_clouds = false;               ///< clouds fsync'ed too (entity files always are)
+    std::filesystem::path kitti_root;             ///< KITTI layout folder (image_2/, image_3/, ...)
+    std::vector<std::string> frames;              ///< frame ids, analysed in this order
+    std::filesystem::path out_dir;                ///< <frame>.json (+ clouds) per frame; must exist
+    std::vector<std::string> cloud_formats;       ///< also <frame>.<fmt> for each of xyz, pcd, ply
+    std::vector<std::string> cloud_drop_classes;  ///< classes left out of the clouds ("sky")
+    bool disparity_kitti = false;                 ///< also <frame>_disparity.png (KITTI 16-bit)
+    bool fsync_clouds = false;                    ///< clouds fsync'ed too (entity files always are)
     /// Score each frame's disparity against <kitti_root>/disp_occ_0/<frame>.png when present.
     bool evaluate = false;
     ExtractOptions extract;  ///< entity extraction (class config read)
