@@ -1,7 +1,7 @@
 #!/usr/bin/env bash
 # Installs the Debian (bookworm) packages that the build, the tests and the real-client checks
 # need, then the browser viewer's pinned npm packages (scripts/npm/package-lock.json: three.js,
-# esbuild, playwright-core, pngjs, ajv-cli) into scripts/npm/node_modules (not committed).
+# esbuild, playwright-core, pngjs, ajv-cli, gltf-validator) into scripts/npm/node_modules (not committed).
 # Idempotent: when everything is present it changes nothing and only says so.
 # Works as root or through sudo. Set INSTALL_DEPS_DRY_RUN=1 to only list what is missing.
 set -euo pipefail

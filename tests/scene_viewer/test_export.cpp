@@ -1,11 +1,15 @@
 #include <catch2/catch.hpp>
 
+#include <cstdint>
+#include <cstring>
 #include <filesystem>
+#include <fstream>
 #include <string>
 
 #include <unistd.h>
 
 #include <glm/gtc/matrix_transform.hpp>
+#include <nlohmann/json.hpp>
 #include <scene_viewer/assets/gltf_loader.hpp>
 #include <scene_viewer/assets/scene_export.hpp>
 
@@ -90,6 +94,54 @@ TEST_CASE("an exported textured model keeps its texture pixels", "[export]") {
     REQUIRE(back.primitives.size() == 1);
     CHECK(back.primitives[0].texture == 0);
     CHECK(back.primitives[0].texcoords == textured.primitives[0].texcoords);
+    fs::remove_all(dir);
+}
+
+/// The JSON chunk of a .glb file (12-byte header, then a JSON chunk: length, "JSON", text).
+nlohmann::json glb_json(const fs::path& path) {
+    std::ifstream in(path, std::ios::binary);
+    std::string bytes((std::istreambuf_iterator<char>(in)), {});
+    REQUIRE(bytes.size() > 20);
+    REQUIRE(bytes.compare(0, 4, "glTF") == 0);
+    std::uint32_t length = 0;
+    std::memcpy(&length, bytes.data() + 12, 4);
+    REQUIRE(bytes.compare(16, 4, "JSON") == 0);
+    return nlohmann::json::parse(bytes.substr(20, length));
+}
+
+TEST_CASE("an exported third-party material keeps its sides, sampler and PBR factors", "[export]") {
+    const Model kit = load_model(kGltfDir / "textured_material.gltf");
+    REQUIRE(kit.primitives.size() == 1);
+    CHECK(kit.primitives[0].material.double_sided);
+    CHECK(kit.primitives[0].sampler.mag_filter == 9728);
+    const fs::path dir = temp_folder("material");
+    scene_viewer::export_scene_glb({{&kit, glm::mat4(1.0f), "kit"}}, dir / "kit.glb");
+    // Read by hand, not by our loader: what any viewer sees in the file.
+    const nlohmann::json doc = glb_json(dir / "kit.glb");
+    REQUIRE(doc["materials"].size() == 1);
+    const auto& m = doc["materials"][0];
+    CHECK(m["name"] == "kit");
+    CHECK(m["doubleSided"] == true);
+    CHECK(m["alphaMode"] == "MASK");
+    CHECK(m["alphaCutoff"].get<double>() == Approx(0.4));
+    CHECK(m["emissiveFactor"][0].get<double>() == Approx(0.25));
+    CHECK(m["pbrMetallicRoughness"]["metallicFactor"].get<double>() == Approx(0.5));
+    CHECK(m["pbrMetallicRoughness"]["roughnessFactor"].get<double>() == Approx(0.3));
+    const int texture = m["pbrMetallicRoughness"]["baseColorTexture"]["index"];
+    const int sampler = doc["textures"][texture]["sampler"];
+    const auto& s = doc["samplers"][sampler];
+    CHECK(s["magFilter"] == 9728);  // NEAREST
+    CHECK(s["minFilter"] == 9728);
+    CHECK(s["wrapS"] == 33071);  // CLAMP_TO_EDGE
+    CHECK(s["wrapT"] == 33071);
+    // And our own models keep their matte look, single-sided.
+    const Model box = scene_viewer::make_box_model(glm::vec4(1.0f, 0.0f, 0.0f, 1.0f));
+    scene_viewer::export_scene_glb({{&box, glm::mat4(1.0f), "box"}}, dir / "box.glb");
+    const nlohmann::json box_doc = glb_json(dir / "box.glb");
+    const auto& own = box_doc["materials"][0];
+    CHECK(own.value("doubleSided", false) == false);
+    CHECK(own["pbrMetallicRoughness"]["roughnessFactor"].get<double>() == Approx(0.8));
+    CHECK(own["pbrMetallicRoughness"]["metallicFactor"].get<double>() == Approx(0.0));
     fs::remove_all(dir);
 }
 

@@ -17,7 +17,10 @@ void add_render_options(CLI::App& app, RenderArgs& a) {
     app.add_option("input", a.input, "entity file (JSON, schema 1.x)");
     app.add_option("-o,--output", a.output, "output PNG, '-' for stdout");
     app.add_option("--glb,--export-glb", a.glb,
-                   "also export the assembled scene as one binary glTF (.glb)");
+                   "also export the scene's entities as one binary glTF (.glb); the same "
+                   "whatever --view");
+    app.add_flag("--glb-ego", a.glb_ego,
+                 "--glb: add the ego car (as the chase and bev views draw it, under the camera)");
     app.add_option("--background", a.background,
                    "camera view: lay the render over this image (e.g. the left image)");
     app.add_option("--opacity", a.opacity, "--background: opacity of the render, 0..1")
@@ -37,11 +40,21 @@ std::optional<ImageRgba8> read_background(const RenderArgs& a, RenderOptions& op
     }
 }
 
-std::vector<unsigned char> scene_glb(SceneRenderer& renderer, const std::string& glb) {
+/// The .glb of the document's entities (and the ego car on request), independent of the view:
+/// the scene is assembled for the export with the chase view's helpers, without grid or cloud.
+std::vector<unsigned char> scene_glb(SceneRenderer& renderer,
+                                     const scene_schema::EntityDocument& document,
+                                     const RenderOptions& options, const RenderArgs& a) {
+    RenderOptions exported = options;
+    exported.view = ViewSpec{};
+    exported.view.kind = ViewKind::chase;
+    exported.ego = a.glb_ego;
+    exported.grid = false;
     try {
+        renderer.load(document, nullptr, exported);
         return export_scene_glb_bytes(renderer.placed_models());
     } catch (const std::exception& e) {
-        throw Failure{"cannot export the scene", e.what(), glb};
+        throw Failure{"cannot export the scene", e.what(), a.glb};
     }
 }
 
@@ -66,12 +79,13 @@ int run_render(const RenderArgs& a) {
     const auto cloud = read_cloud(a.view);
     const auto classes = read_classes(a.view.boxes, a.view.classes);
 
+    if (a.glb_ego && a.glb.empty()) usage("needs --glb", "--glb-ego");
     auto gpu = start_gpu(classes);
-    gpu->renderer.load(document, cloud ? &*cloud : nullptr, options);
-    if (classes) warn_boxes(gpu->renderer, *classes);
     // Everything is built in memory before the first file is written.
     std::vector<unsigned char> glb_bytes;
-    if (!a.glb.empty()) glb_bytes = scene_glb(gpu->renderer, a.glb);
+    if (!a.glb.empty()) glb_bytes = scene_glb(gpu->renderer, document, options, a);
+    gpu->renderer.load(document, cloud ? &*cloud : nullptr, options);
+    if (classes) warn_boxes(gpu->renderer, *classes);
     if (!a.output.empty()) {
         ImageRgba8 image = gpu->renderer.render_frame();
         if (background) composite_background(image, *background, a.opacity, options.shading);

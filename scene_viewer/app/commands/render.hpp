@@ -12,6 +12,7 @@ struct RenderArgs {
     std::string input;       ///< entity file
     std::string output;      ///< PNG path, "-" for stdout; empty: none
     std::string glb;         ///< .glb path of the assembled scene; empty: none
+    bool glb_ego = false;    ///< --glb-ego: the ego car in the .glb too
     std::string background;  ///< camera view: image the render is laid over; empty: none
     float opacity = 0.6f;    ///< --background: opacity of the render, 0..1
     ViewArgs view;           ///< view, size, shading and model flags

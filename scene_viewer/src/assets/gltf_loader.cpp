@@ -168,6 +168,15 @@ class Converter {
             gltf_.materials[static_cast<std::size_t>(material_index)];
         out.material_name = material.name;
         const tinygltf::PbrMetallicRoughness& pbr = material.pbrMetallicRoughness;
+        out.material.metallic = static_cast<float>(pbr.metallicFactor);
+        out.material.roughness = static_cast<float>(pbr.roughnessFactor);
+        out.material.double_sided = material.doubleSided;
+        out.material.alpha_mode = material.alphaMode.empty() ? "OPAQUE" : material.alphaMode;
+        out.material.alpha_cutoff = static_cast<float>(material.alphaCutoff);
+        if (material.emissiveFactor.size() == 3) {
+            out.material.emissive = glm::vec3(
+                material.emissiveFactor[0], material.emissiveFactor[1], material.emissiveFactor[2]);
+        }
         if (pbr.baseColorFactor.size() == 4) {
             out.base_colour = glm::vec4(pbr.baseColorFactor[0], pbr.baseColorFactor[1],
                                         pbr.baseColorFactor[2], pbr.baseColorFactor[3]);
@@ -177,7 +186,8 @@ class Converter {
         if (static_cast<std::size_t>(texture) >= gltf_.textures.size()) {
             throw LoadError(what + ": texture " + std::to_string(texture) + " does not exist");
         }
-        const int source = gltf_.textures[static_cast<std::size_t>(texture)].source;
+        const tinygltf::Texture& gltf_texture = gltf_.textures[static_cast<std::size_t>(texture)];
+        const int source = gltf_texture.source;
         if (source < 0 || static_cast<std::size_t>(source) >= gltf_.images.size()) {
             throw LoadError(what + ": texture " + std::to_string(texture) + " has no image");
         }
@@ -203,6 +213,12 @@ class Converter {
             out_.textures.push_back(std::move(decoded));
         }
         out.texture = slot;
+        if (gltf_texture.sampler >= 0 &&
+            static_cast<std::size_t>(gltf_texture.sampler) < gltf_.samplers.size()) {
+            const tinygltf::Sampler& s =
+                gltf_.samplers[static_cast<std::size_t>(gltf_texture.sampler)];
+            out.sampler = TextureSampler{s.magFilter, s.minFilter, s.wrapS, s.wrapT};
+        }
         if (out.texcoords.empty()) {
             out_.warnings.push_back(what + ": textured material without TEXCOORD_0");
             out.texcoords.assign(out.positions.size(), glm::vec2(0.0f));

@@ -94,22 +94,73 @@ class Builder {
         return static_cast<int>(gltf_.accessors.size()) - 1;
     }
 
-    int texture_for(const Model& model, int texture) {
+    /// The glTF image of a model's texture, embedded once as PNG.
+    int image_for(const Model& model, int texture) {
         const auto key = std::make_pair(&model, texture);
-        const auto found = textures_.find(key);
-        if (found != textures_.end()) return found->second;
+        const auto found = images_.find(key);
+        if (found != images_.end()) return found->second;
         const std::vector<unsigned char> png =
             encode_png(model.textures.at(static_cast<std::size_t>(texture)), 6);
         tinygltf::Image image;
         image.bufferView = add_view(png.data(), png.size(), 0);
         image.mimeType = "image/png";
         gltf_.images.push_back(std::move(image));
+        const int index = static_cast<int>(gltf_.images.size()) - 1;
+        images_.emplace(key, index);
+        return index;
+    }
+
+    int sampler_for(const TextureSampler& s) {
+        const auto found = samplers_.find(s);
+        if (found != samplers_.end()) return found->second;
+        tinygltf::Sampler sampler;
+        sampler.magFilter = s.mag_filter;
+        sampler.minFilter = s.min_filter;
+        sampler.wrapS = s.wrap_s;
+        sampler.wrapT = s.wrap_t;
+        gltf_.samplers.push_back(sampler);
+        const int index = static_cast<int>(gltf_.samplers.size()) - 1;
+        samplers_.emplace(s, index);
+        return index;
+    }
+
+    /// The glTF texture of a model's texture with a sampler.
+    int texture_for(const Model& model, int texture, const TextureSampler& sampler) {
+        const int image = image_for(model, texture);
+        const auto key = std::make_pair(image, sampler);
+        const auto found = textures_.find(key);
+        if (found != textures_.end()) return found->second;
         tinygltf::Texture tex;
-        tex.source = static_cast<int>(gltf_.images.size()) - 1;
+        tex.source = image;
+        tex.sampler = sampler_for(sampler);
         gltf_.textures.push_back(tex);
         const int index = static_cast<int>(gltf_.textures.size()) - 1;
         textures_.emplace(key, index);
         return index;
+    }
+
+    /// The glTF material of a primitive: its base colour and texture, and the properties the
+    /// model's file gave (MaterialProperties).
+    tinygltf::Material material_of(const Model& model, const MeshPrimitive& p, bool textured) {
+        tinygltf::Material material;
+        material.name = p.material_name;
+        material.pbrMetallicRoughness.baseColorFactor = {p.base_colour.r, p.base_colour.g,
+                                                         p.base_colour.b, p.base_colour.a};
+        material.pbrMetallicRoughness.metallicFactor = p.material.metallic;
+        material.pbrMetallicRoughness.roughnessFactor = p.material.roughness;
+        material.doubleSided = p.material.double_sided;
+        material.alphaMode = p.material.alpha_mode;
+        if (material.alphaMode == "OPAQUE" && p.base_colour.a < 1.0f) material.alphaMode = "BLEND";
+        if (material.alphaMode == "MASK") material.alphaCutoff = p.material.alpha_cutoff;
+        if (p.material.emissive != glm::vec3(0.0f)) {
+            material.emissiveFactor = {p.material.emissive.r, p.material.emissive.g,
+                                       p.material.emissive.b};
+        }
+        if (textured) {
+            material.pbrMetallicRoughness.baseColorTexture.index =
+                texture_for(model, p.texture, p.sampler);
+        }
+        return material;
     }
 
     tinygltf::Primitive primitive(const Model& model, const MeshPrimitive& p) {
@@ -144,25 +195,19 @@ class Builder {
         }
         out.indices = add_accessor(p.indices, TINYGLTF_TYPE_SCALAR,
                                    TINYGLTF_COMPONENT_TYPE_UNSIGNED_INT, kElementArrayBuffer);
-        tinygltf::Material material;
-        material.name = p.material_name;
-        material.pbrMetallicRoughness.baseColorFactor = {p.base_colour.r, p.base_colour.g,
-                                                         p.base_colour.b, p.base_colour.a};
-        material.pbrMetallicRoughness.metallicFactor = 0.0;
-        material.pbrMetallicRoughness.roughnessFactor = 0.8;
-        if (p.base_colour.a < 1.0f) material.alphaMode = "BLEND";
-        if (p.texture >= 0 && static_cast<std::size_t>(p.texture) < model.textures.size() &&
-            p.texcoords.size() == positions.size()) {
-            material.pbrMetallicRoughness.baseColorTexture.index = texture_for(model, p.texture);
-        }
-        gltf_.materials.push_back(std::move(material));
+        const bool textured = p.texture >= 0 &&
+                              static_cast<std::size_t>(p.texture) < model.textures.size() &&
+                              p.texcoords.size() == positions.size();
+        gltf_.materials.push_back(material_of(model, p, textured));
         out.material = static_cast<int>(gltf_.materials.size()) - 1;
         return out;
     }
 
     tinygltf::Model gltf_;
     std::map<const Model*, int> meshes_;
-    std::map<std::pair<const Model*, int>, int> textures_;
+    std::map<std::pair<const Model*, int>, int> images_;
+    std::map<std::pair<int, TextureSampler>, int> textures_;
+    std::map<TextureSampler, int> samplers_;
 };
 
 }  // namespace

@@ -5,6 +5,7 @@
 
 #include <cstdint>
 #include <string>
+#include <tuple>
 #include <vector>
 
 #include <glm/glm.hpp>
@@ -18,6 +19,31 @@ struct ImageRgba8 {
     std::vector<std::uint8_t> pixels;  ///< width * height * 4 bytes, rows top to bottom
 };
 
+/// What a glTF material says beyond the base colour. The renderer draws the base colour; the
+/// .glb export writes these back so other viewers show third-party models as their authors
+/// made them. The defaults are the project's own models' (matte, not metallic).
+struct MaterialProperties {
+    float metallic = 0.0f;              ///< metallicFactor
+    float roughness = 0.8f;             ///< roughnessFactor
+    bool double_sided = false;          ///< doubleSided: no back-face culling
+    std::string alpha_mode = "OPAQUE";  ///< OPAQUE, MASK or BLEND
+    float alpha_cutoff = 0.5f;          ///< MASK: alpha below this is discarded
+    glm::vec3 emissive{0.0f};           ///< emissiveFactor
+};
+
+/// The sampler of a base colour texture (glTF sampler: GL filter and wrap enums; -1 = unset,
+/// the viewer chooses).
+struct TextureSampler {
+    int mag_filter = -1;
+    int min_filter = -1;
+    int wrap_s = 10497;  ///< GL_REPEAT
+    int wrap_t = 10497;
+    bool operator<(const TextureSampler& o) const {
+        return std::tie(mag_filter, min_filter, wrap_s, wrap_t) <
+               std::tie(o.mag_filter, o.min_filter, o.wrap_s, o.wrap_t);
+    }
+};
+
 /// One drawable primitive: triangles with one material, in the model's own frame.
 struct MeshPrimitive {
     std::vector<glm::vec3> positions;
@@ -28,6 +54,8 @@ struct MeshPrimitive {
     int texture = -1;                    ///< index into Model::textures, or -1
     glm::mat4 node_transform{1.0f};      ///< node hierarchy flattened into the model frame
     std::string material_name;           ///< glTF material name (may be empty), kept for export
+    MaterialProperties material;         ///< the rest of the material, kept for export
+    TextureSampler sampler;              ///< the base colour texture's sampler, kept for export
 };
 
 /// A whole model: every primitive of every node of the default scene, flattened.

@@ -205,6 +205,25 @@ def textured_transform():
     write_json("textured_transform.gltf", doc)
 
 
+def textured_material():
+    """textured_material.gltf: textured.gltf as a third-party kit writes it: a double-sided,
+    alpha-masked, half-metallic material with roughness 0.3 and an emissive tint, and a
+    NEAREST / CLAMP_TO_EDGE sampler (pixel-art textures). The .glb export keeps them."""
+    textured()
+    doc = json.loads((HERE / "textured.gltf").read_text())
+    doc["samplers"] = [{"magFilter": 9728, "minFilter": 9728, "wrapS": 33071, "wrapT": 33071}]
+    doc["textures"][0]["sampler"] = 0
+    material = doc["materials"][0]
+    material["name"] = "kit"
+    material["doubleSided"] = True
+    material["alphaMode"] = "MASK"
+    material["alphaCutoff"] = 0.4
+    material["emissiveFactor"] = [0.25, 0.0, 0.0]
+    material["pbrMetallicRoughness"]["metallicFactor"] = 0.5
+    material["pbrMetallicRoughness"]["roughnessFactor"] = 0.3
+    write_json("textured_material.gltf", doc)
+
+
 def lines_and_triangles():
     """lines_and_triangles.gltf: a LINES primitive (skipped with a warning) and a triangle."""
     d = Doc()
@@ -236,5 +255,6 @@ if __name__ == "__main__":
     two_primitives()
     textured()
     textured_transform()
+    textured_material()
     lines_and_triangles()
     escapes()
