@@ -683,3 +683,37 @@ TEST_CASE("the sky left out of the clouds (--drop-sky) is not left out of the en
     CHECK(bad.err.find("skyy") != std::string::npos);
     CHECK_FALSE(fs::exists(dir / "bad.xyz"));
 }
+
+TEST_CASE("batch creates its output folder and reports the frames that warned", "[cli][batch]") {
+    const auto dir = scratch("batch_warnings");
+    const fs::path root = sample_as_kitti(dir);
+    // A second frame without a semantic image, and classes from labels only: analysed, every
+    // point void, and it says so (with the default --semantics auto it would take the
+    // stereo-only path).
+    for (const char* sub : {"image_2", "image_3", "calib"}) {
+        const std::string ext = std::string(sub) == "calib" ? ".txt" : ".png";
+        fs::copy_file(root / sub / ("street_10" + ext), root / sub / ("bare_10" + ext));
+    }
+    const fs::path out = dir / "new" / "out";  // neither folder exists yet
+    const Run r = run(tool() + " batch --kitti-root " + quote(root.string()) +
+                          " --frames street_10 bare_10 --semantics labels --out-dir " +
+                          quote(out.string()) + " --report " + quote((dir / "r.json").string()),
+                      dir);
+    REQUIRE(r.code == 0);
+    CHECK(fs::exists(out / "street_10.json"));
+    CHECK(fs::exists(out / "bare_10.json"));
+    CHECK(r.err.find("1 of 2 frames warned, first frame bare_10: no semantic image") !=
+          std::string::npos);
+    const auto report = nlohmann::json::parse(slurp(dir / "r.json"));
+    CHECK(report["frames_with_warnings"] == 1);
+    CHECK_FALSE(report["per_frame"][0].contains("warnings"));
+    REQUIRE(report["per_frame"][1].contains("warnings"));
+    CHECK(report["per_frame"][1]["warnings"][0] == "no semantic image: every point is void");
+    // A refused batch creates nothing.
+    const fs::path never = dir / "never";
+    const Run refused = run(tool() + " batch --kitti-root " + quote((dir / "nope").string()) +
+                                " --frames a --out-dir " + quote(never.string()),
+                            dir);
+    CHECK(refused.code == 1);
+    CHECK_FALSE(fs::exists(never));
+}

@@ -92,16 +92,10 @@ double ms_since(Clock::time_point t) {
 /// to stderr.
 void report_analysis(const LoadedRun& run, const cloud_analysis::AnalyseResult& r,
                      const AnalyseArgs& a) {
-    const cloud_analysis::LoadedInputs& in = run.inputs;
-    if (a.warnings && r.geometry) {
-        for (const auto& w : r.geometry->warnings) std::cerr << kTool << ": warning: " << w << "\n";
-    }
-    if (a.warnings && r.semantics == "none") {
-        std::cerr << kTool << ": warning: no semantic image: every point is void\n";
-    } else if (a.warnings && r.semantics == "labels" && r.classes.void_pixels > 0) {
-        std::cerr << kTool << ": warning: " << r.classes.void_pixels
-                  << " semantic pixels have colours not in palette '" << in.palette.name
-                  << "' and count as void (" << a.paths.semantic.string() << ")\n";
+    if (a.warnings) {
+        for (const auto& w : cloud_analysis::analysis_warnings(run.inputs, r)) {
+            std::cerr << kTool << ": warning: " << w << "\n";
+        }
     }
     if (run.gt_disparity) {
         const auto s = cloud_analysis::score_disparity(r.disparity, *run.gt_disparity);

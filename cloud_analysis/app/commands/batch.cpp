@@ -36,10 +36,12 @@ std::vector<std::string> read_frame_list(const std::filesystem::path& path) {
     return frames;
 }
 
+/// Checks the input folder and the report's folder, then creates --out-dir when it is missing
+/// (with its parents), last, so that a refused run leaves nothing behind.
 void check_batch_folders(const BatchArgs& a) {
-    if (!std::filesystem::is_directory(a.out_dir)) {
-        throw std::runtime_error("cannot write output: no such folder (" + a.out_dir.string() +
-                                 ", --out-dir)");
+    if (!std::filesystem::is_directory(a.kitti_root)) {
+        throw std::runtime_error("cannot read frames: no such folder (" + a.kitti_root.string() +
+                                 ", --kitti-root)");
     }
     if (!a.report.empty() && a.report != "-") {
         const std::filesystem::path folder = a.report.parent_path();
@@ -48,10 +50,29 @@ void check_batch_folders(const BatchArgs& a) {
                                      ", --report)");
         }
     }
-    if (!std::filesystem::is_directory(a.kitti_root)) {
-        throw std::runtime_error("cannot read frames: no such folder (" + a.kitti_root.string() +
-                                 ", --kitti-root)");
+    std::error_code ec;
+    if (std::filesystem::is_directory(a.out_dir, ec)) return;
+    if (std::filesystem::exists(a.out_dir, ec)) {
+        throw std::runtime_error("cannot write output: not a folder (" + a.out_dir.string() +
+                                 ", --out-dir)");
     }
+    std::filesystem::create_directories(a.out_dir, ec);
+    if (ec) {
+        throw std::runtime_error("cannot write output: cannot create the folder: " + ec.message() +
+                                 " (" + a.out_dir.string() + ", --out-dir)");
+    }
+}
+
+/// Frames whose analysis warned (per_frame records with "warnings").
+std::vector<std::pair<std::string, std::string>> warned_frames(const nlohmann::json& per_frame) {
+    std::vector<std::pair<std::string, std::string>> out;
+    for (const auto& record : per_frame) {
+        if (record.contains("warnings") && !record["warnings"].empty()) {
+            out.emplace_back(record["frame"].get<std::string>(),
+                             record["warnings"][0].get<std::string>());
+        }
+    }
+    return out;
 }
 
 /// The frames of the share still to do: all of them, or with --resume those whose outputs are
@@ -113,6 +134,7 @@ nlohmann::json report_json(const BatchArgs& a, const cloud_analysis::BatchReport
                              {"cores", r.cores},
                              {"cores_busy", r.cores_busy},
                              {"preset", a.settings.preset},
+                             {"frames_with_warnings", warned_frames(r.per_frame).size()},
                              {"per_frame", r.per_frame}};
     if (r.evaluation.frames > 0) report["evaluation"] = r.evaluation.to_json();
     return report;
@@ -223,6 +245,13 @@ int run_batch(const BatchArgs& a) {
                      "%.0f ms CPU per frame, cores %.0f %% busy\n",
                      bar_open ? "\n" : "", label.c_str(), r.frames, r.seconds, r.fps, r.failed,
                      cloud_analysis::peak_rss_mb(), r.cpu_ms_per_frame, 100.0 * r.cores_busy);
+    }
+    const auto warned = warned_frames(r.per_frame);
+    if (!a.quiet && !warned.empty()) {
+        std::fprintf(
+            stderr, "%s: warning: %zu of %zu frames warned, first frame %s: %s%s\n", label.c_str(),
+            warned.size(), r.frames, warned[0].first.c_str(), warned[0].second.c_str(),
+            a.report.empty() ? " (every warning in --report)" : " (every warning in the report)");
     }
     if (!a.report.empty()) {
         write_output(

@@ -183,6 +183,12 @@ std::optional<FinishJob> match(LoadedFrame& frame, const AnalyseOptions& analysi
     try {
         AnalyseResult r = analyse(*frame.inputs, analysis, matcher);
         for (const auto& s : r.timings) record[s.stage + "_ms"] = s.ms;
+        std::vector<std::string> warnings = analysis_warnings(*frame.inputs, r);
+        const Calibration& calibration = frame.inputs->calibration;
+        if (!calibration.note.empty()) {
+            warnings.insert(warnings.begin(), calibration.note + " (" + calibration.source + ")");
+        }
+        if (!warnings.empty()) record["warnings"] = warnings;
         record["points"] = r.cloud_points;
         const auto gt = options.kitti_root / "disp_occ_0" / (frame.frame + ".png");
         const bool scored = options.evaluate && std::filesystem::exists(gt);

@@ -200,6 +200,21 @@ AnalyseResult analyse(const LoadedInputs& in, const AnalyseOptions& options,
     return r;
 }
 
+std::vector<std::string> analysis_warnings(const LoadedInputs& in, const AnalyseResult& r) {
+    std::vector<std::string> out;
+    if (r.geometry) {
+        for (const auto& w : r.geometry->warnings) out.push_back(w);
+    }
+    if (r.semantics == "none") {
+        out.push_back("no semantic image: every point is void");
+    } else if (r.semantics == "labels" && r.classes.void_pixels > 0) {
+        out.push_back(std::to_string(r.classes.void_pixels) +
+                      " semantic pixels have colours not in palette '" + in.palette.name +
+                      "' and count as void (" + in.paths.semantic.string() + ")");
+    }
+    return out;
+}
+
 std::string semantics_path(const LoadedInputs& in, const AnalyseOptions& o) {
     if (o.semantics == "geometry") return "geometry";
     if (!in.semantic.empty()) return "labels";

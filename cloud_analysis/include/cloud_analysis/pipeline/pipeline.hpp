@@ -106,6 +106,12 @@ AnalyseResult analyse(const LoadedInputs& inputs, const AnalyseOptions& options,
 /// ("labels" asked for without a semantic image).
 std::string semantics_path(const LoadedInputs& inputs, const AnalyseOptions& options);
 
+/// What the user should know about an analysed frame, one line each: the stereo-only path's
+/// warnings, no semantic image (every point void), semantic colours not in the palette (the
+/// calibration's own note is Calibration::note). The single run prints them; a batch records
+/// them per frame.
+std::vector<std::string> analysis_warnings(const LoadedInputs& inputs, const AnalyseResult& result);
+
 /// The `source` block of the entity file: tool, version, inputs, calibration, parameters.
 nlohmann::json describe_run(const LoadedInputs& inputs, const AnalyseOptions& options,
                             const std::string& tool_version);
