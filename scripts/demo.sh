@@ -74,6 +74,21 @@ note "comparison grid (BEV)" "$out/street-comparison.png"
     -o "$out/baseline-chase.png"
 note "baseline scene as glTF" "$out/baseline.glb"
 
+# The same street from the stereo pair alone (no semantic image): ground, obstacles and classes
+# from geometry (docs/stereo-only.md), scored against the truth like the labelled run.
+echo "== cloud-analysis: rendered street, stereo pair only" >&2
+"$analyse" --left "$r/street/image_2/000000.png" --right "$r/street/image_3/000000.png" \
+    --calib "$r/street/calib/calib_cam_to_cam.txt" --frame 000000 --semantics geometry \
+    -o "$out/street-stereo-only.json" --semantic-out "$out/street-stereo-only-classes.png"
+"$analyse" evaluate --entities "$out/street-stereo-only.json" \
+    --reference "$r/scenes/street.json" --json "$out/street-stereo-only-eval.json" >&2
+"$render" "$out/street-stereo-only.json" --view camera \
+    --background "$r/street/image_2/000000.png" -o "$out/street-stereo-only-camera.png"
+note "entities, stereo pair only" "$out/street-stereo-only.json"
+note "classes from geometry" "$out/street-stereo-only-classes.png"
+note "scores, stereo pair only" "$out/street-stereo-only-eval.json"
+note "stereo-only over the left image" "$out/street-stereo-only-camera.png"
+
 # 4. A real KITTI frame, when the shared data is beside the project (never bundled).
 kitti="$STEREOSCENE_ROOT/../shared/data/kitti15"
 if [ -d "$kitti/image_2" ]; then
