@@ -6,6 +6,7 @@
     'use strict';
 
     const data = window.SCENE_VIEWER_DATA;
+    const util = window.SceneViewerUtil;
     const params = new URLSearchParams(window.location.search);
     const statusBox = document.getElementById('status');
     const canvas = document.getElementById('view');
@@ -31,24 +32,13 @@
     window.viewer = api;
     if (params.get('ui') === '0') document.body.classList.add('no-ui');
 
-    /// True on a software WebGL (SwiftShader, llvmpipe), where multisampling halves the frame rate.
-    function softwareWebgl() {
-        const probe = document.createElement('canvas').getContext('webgl2');
-        if (!probe) return false;
-        const info = probe.getExtension('WEBGL_debug_renderer_info');
-        const name = info ? String(probe.getParameter(info.UNMASKED_RENDERER_WEBGL)) : '';
-        const lose = probe.getExtension('WEBGL_lose_context');
-        if (lose) lose.loseContext();
-        return /swiftshader|llvmpipe|softpipe/i.test(name);
-    }
-
     const show = {
         cloud: true, ego: true, grid: true, background: true, models: true, boxes: false,
     };
     const hiddenClasses = new Set();
     const hiddenLayers = new Set();
 
-    const renderer = new THREE.WebGLRenderer({ canvas, antialias: !softwareWebgl(), alpha: true });
+    const renderer = new THREE.WebGLRenderer({ canvas, antialias: !util.softwareWebgl(), alpha: true });
     renderer.setPixelRatio(window.devicePixelRatio || 1);
     const scene = new THREE.Scene();
     const perspective = new THREE.PerspectiveCamera(60, 1, data.views.camera.near,
@@ -74,19 +64,11 @@
         statusBox.classList.toggle('error', !!isError);
     }
 
-    function decodeBase64(text) {
-        if (Uint8Array.fromBase64) return Uint8Array.fromBase64(text).buffer;
-        const binary = atob(text);
-        const bytes = new Uint8Array(binary.length);
-        for (let i = 0; i < binary.length; ++i) bytes[i] = binary.charCodeAt(i);
-        return bytes.buffer;
-    }
-
     function parseGlb(name) {
         const blobs = window.SCENE_VIEWER_BLOBS || {};
         if (!(name in blobs)) return Promise.reject(new Error('missing data for ' + name));
         const loader = new THREE.GLTFLoader();
-        const bytes = decodeBase64(blobs[name]);
+        const bytes = util.decodeBase64(blobs[name]);
         delete blobs[name];  // the page keeps the geometry, not the text
         return new Promise((resolve, reject) => loader.parse(bytes, '', resolve, reject));
     }
@@ -389,10 +371,6 @@
         return null;
     }
 
-    function fmt(v, digits) {
-        return typeof v === 'number' ? v.toFixed(digits) : String(v);
-    }
-
     function showDetails(item) {
         if (highlight) {
             scene.remove(highlight);
@@ -404,20 +382,7 @@
             return;
         }
         const e = item.entity;
-        const rows = [
-            ['id', e.id],
-            ['class', e.class + ' (' + e.class_id + ')'],
-            ['x, y, z', [e.x, e.y, e.z].map((v) => fmt(v, 2)).join(', ') + ' m'],
-            ['heading', fmt(e.theta * 180 / Math.PI, 1) + '° (' + fmt(e.theta, 3) + ' rad)'],
-            ['W × H × L', [e.W, e.H, e.L].map((v) => fmt(v, 2)).join(' × ') + ' m'],
-            ['confidence', fmt(e.confidence, 2)],
-            ['points', e.point_count],
-        ];
-        if (e.method) rows.push(['method', e.method]);
-        for (const key of ['track_id', 'track']) if (e[key] !== undefined) rows.push(['track', e[key]]);
-        for (const key of ['speed_mps', 'speed']) {
-            if (e[key] !== undefined) rows.push(['speed', fmt(e[key], 2) + ' m/s']);
-        }
+        const rows = util.detailRows(e);
         if (data.layers.length > 1) rows.unshift(['file', data.layers[item.layer].label]);
         const table = document.createElement('table');
         for (const [k, v] of rows) {
@@ -456,24 +421,10 @@
 
     // --- the panel ---
     function checkbox(parent, text, checked, onChange, colour) {
-        const label = document.createElement('label');
-        const input = document.createElement('input');
-        input.type = 'checkbox';
-        input.checked = checked;
-        input.addEventListener('change', () => {
-            onChange(input.checked);
+        return util.checkbox(parent, text, checked, (v) => {
+            onChange(v);
             applyVisibility();
-        });
-        label.appendChild(input);
-        if (colour) {
-            const swatch = document.createElement('span');
-            swatch.className = 'swatch';
-            swatch.style.background = colour;
-            label.appendChild(swatch);
-        }
-        label.appendChild(document.createTextNode(text));
-        parent.appendChild(label);
-        return input;
+        }, colour);
     }
 
     function markViewButtons() {

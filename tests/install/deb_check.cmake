@@ -23,7 +23,8 @@ foreach(f ./usr/bin/cloud-analysis ./usr/bin/scene-render
         ./usr/share/stereoscene/assets/palettes/cityscapes.json
         ./usr/share/stereoscene/assets/models/car.glb
         ./usr/share/stereoscene/samples/synthetic/left.png
-        ./usr/share/stereoscene/web/viewer.js)
+        ./usr/share/stereoscene/web/viewer.js
+        ./usr/share/stereoscene/web/viewer_util.js)
     if(NOT contents MATCHES " ${f}\n")
         message(FATAL_ERROR "the package lacks ${f}:\n${contents}")
     endif()

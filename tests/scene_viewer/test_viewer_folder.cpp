@@ -152,8 +152,8 @@ TEST_CASE("the viewer folder carries the page, the data and the views of views.c
     options.title = "a<b";
     const auto files = viewer_files(scene, assets, options);
     for (const char* name :
-         {"index.html", "three.min.js", "viewer.js", "viewer.css", "scene.glb", "cloud.glb",
-          "data/scene-data.js", "data/scene-glb.js", "data/cloud-glb.js"}) {
+         {"index.html", "three.min.js", "viewer.js", "viewer_util.js", "viewer.css", "scene.glb",
+          "cloud.glb", "data/scene-data.js", "data/scene-glb.js", "data/cloud-glb.js"}) {
         INFO(name);
         CHECK(files.count(name) == 1);
     }

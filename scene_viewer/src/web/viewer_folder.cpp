@@ -189,6 +189,7 @@ ViewerAssets load_viewer_assets(const std::filesystem::path& dir) {
     a.three_js = read_text(dir / "three.min.js");
     a.viewer_js = read_text(dir / "viewer.js");
     a.viewer_css = read_text(dir / "viewer.css");
+    a.viewer_util_js = read_text(dir / "viewer_util.js");
     a.index_html = read_text(dir / "index.html");
     return a;
 }
@@ -242,6 +243,7 @@ std::map<std::string, std::string> viewer_files(const ViewerScene& scene,
     files["three.min.js"] = assets.three_js;
     files["viewer.js"] = assets.viewer_js;
     files["viewer.css"] = assets.viewer_css;
+    files["viewer_util.js"] = assets.viewer_util_js;
     files["scene.glb"].assign(scene.scene_glb.begin(), scene.scene_glb.end());
     files["data/scene-data.js"] = data_script(scene, options);
     files["data/scene-glb.js"] = blob_script("scene.glb", files["scene.glb"]);

@@ -41,12 +41,14 @@ struct ViewerOptions {
 };
 
 /// The viewer's static files: three.js (bundled with its orbit controls and glTF loader), the
-/// page's script, style sheet and HTML template (placeholders {{TITLE}} and {{DATA_SCRIPTS}}).
+/// page's script, style sheet and HTML template (placeholders {{TITLE}} and {{DATA_SCRIPTS}}),
+/// and the page's helpers (viewer_util.js, run before viewer.js).
 struct ViewerAssets {
     std::string three_js;
     std::string viewer_js;
     std::string viewer_css;
     std::string index_html;
+    std::string viewer_util_js;
 };
 
 /// Reads the viewer's static files from `dir`; throws std::runtime_error naming a missing file.
