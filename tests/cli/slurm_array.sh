@@ -25,13 +25,15 @@ no_jobs() { [ -z "$(squeue -h -o %i 2>/dev/null)" ]; }
 log_dump() { tail -n 5 "$work"/out/logs/*.log >&2 2>/dev/null || true; }
 trap 'code=$?; [ "$code" = 0 ] || log_dump' EXIT
 
-# A KITTI-layout root of 12 frames: the three rendered scenes, four times each (links).
+# A KITTI-layout root of 30 frames: the three rendered scenes, ten times each (links). Ten
+# frames a task leave time to kill task 1 after its first frame, however loaded the machine.
 shards=3
+frames=30
 root="$work/kitti"
 mkdir -p "$root"/{image_2,image_3,semantic_rgb,disp_occ_0,calib}
 scenes=(street parking-row thesis-one-car)
 : >"$work/list"
-for i in $(seq 0 11); do
+for i in $(seq 0 $((frames - 1))); do
     frame=$(printf '%06d' "$i")
     scene="$samples/rendered/${scenes[i % 3]}"
     for d in image_2 image_3 semantic_rgb disp_occ_0; do ln -s "$scene/$d/000000.png" "$root/$d/$frame.png"; done
@@ -62,10 +64,13 @@ wait_for 60 "the array and its merge job to end" no_jobs
 [ ! -f "$out/reports/shard-1-of-3.json" ] || fail "task 1 finished before it was killed"
 grep -q "shard 1/3: no report" "$out/logs/merge.log" || fail "the first merge did not miss shard 1"
 done_before=()
-for frame in 000001 000004 000007 000010; do
+task1_frames=0
+for i in $(seq 1 "$shards" $((frames - 1))); do
+    frame=$(printf '%06d' "$i")
+    task1_frames=$((task1_frames + 1))
     [ -f "$out/$frame.json" ] && done_before+=("$frame")
 done
-[ ${#done_before[@]} -lt 4 ] || fail "task 1 did every frame before it was killed"
+[ ${#done_before[@]} -lt "$task1_frames" ] || fail "task 1 did every frame before it was killed"
 declare -A stamp
 for frame in "${done_before[@]}"; do stamp[$frame]=$(stat -c '%i %.9Y' "$out/$frame.json"); done
 
@@ -78,7 +83,7 @@ wait_for 60 "the resubmitted task and the merge job to end" no_jobs
 
 step "resubmitted task and merge ended"
 # Every entity file byte-identical to the one-process run; nothing else left behind.
-for i in $(seq 0 11); do
+for i in $(seq 0 $((frames - 1))); do
     frame=$(printf '%06d' "$i")
     cmp -s "$work/plain/$frame.json" "$out/$frame.json" || fail "$frame.json differs or is missing"
 done
@@ -88,19 +93,19 @@ for frame in "${done_before[@]}"; do
     [ "$(stat -c '%i %.9Y' "$out/$frame.json")" = "${stamp[$frame]}" ] ||
         fail "--resume rewrote $frame.json, finished before the kill"
 done
-python3 - "$out/report.json" "${#done_before[@]}" <<'PY' || fail "merged report: see above"
+python3 - "$out/report.json" "${#done_before[@]}" "$frames" <<'PY' || fail "merged report: see above"
 import json, sys
 r = json.load(open(sys.argv[1]))
-skipped = int(sys.argv[2])
-want = {"shards": 3, "shards_reported": 3, "frames": 12, "failed": 0, "skipped": skipped,
-        "done": 12 - skipped, "missing_shards": []}
+skipped, frames = int(sys.argv[2]), int(sys.argv[3])
+want = {"shards": 3, "shards_reported": 3, "frames": frames, "failed": 0, "skipped": skipped,
+        "done": frames - skipped, "missing_shards": []}
 bad = {k: (r.get(k), v) for k, v in want.items() if r.get(k) != v}
 # Every frame the reporting runs analysed is scored against disp_occ_0 (not the resumed ones).
-if r.get("evaluation", {}).get("frames") != 12 - skipped or not 0 < r["evaluation"]["d1_all"] < 1:
+if r.get("evaluation", {}).get("frames") != frames - skipped or not 0 < r["evaluation"]["d1_all"] < 1:
     bad["evaluation"] = (r.get("evaluation"), "frames done, D1-all in (0, 1)")
 if bad or not r["fps"] > 0 or not r["cpu_seconds"] > 0:
     print("slurm_array: report fields (got, want):", bad, file=sys.stderr)
     sys.exit(1)
 PY
 grep -q "frames, .* fps" "$out/logs/shard-0.log" || fail "no progress line in task 0's log"
-echo "slurm_array: ok: 12 frames over 3 tasks, task 1 killed after ${#done_before[@]} frame(s) and resumed"
+echo "slurm_array: ok: $frames frames over 3 tasks, task 1 killed after ${#done_before[@]} frame(s) and resumed"
