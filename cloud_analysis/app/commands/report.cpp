@@ -73,6 +73,12 @@ int run_report(const ReportArgs& a) {
                  merged["skipped"].get<std::size_t>(), merged["failed"].get<std::size_t>(),
                  merged["fps"].get<double>(), merged["wall_seconds"].get<double>(),
                  merged["cpu_ms_per_frame"].get<double>(), merged["peak_rss_mb"].get<double>());
+    if (merged["frames_with_warnings"].get<std::size_t>() > 0) {
+        std::fprintf(
+            stderr,
+            "%s: report: %zu frames warned (their warnings are in the shard reports' per_frame)\n",
+            kTool, merged["frames_with_warnings"].get<std::size_t>());
+    }
     if (merged.contains("evaluation")) {
         const auto& e = merged["evaluation"];
         std::fprintf(stderr,

@@ -95,6 +95,18 @@ DisparityTally DisparityTally::from_json(const nlohmann::json& json) {
     return t;
 }
 
+/// One shard's line of the merged report's per_shard.
+nlohmann::json shard_summary(int index, const nlohmann::json& r) {
+    return {{"index", index},
+            {"frames", r["frames"]},
+            {"done", r["done"]},
+            {"skipped", r["skipped"]},
+            {"failed", r["failed"]},
+            {"seconds", r["seconds"]},
+            {"fps", number_or(r, "fps", 0.0)},
+            {"peak_rss_mb", r["peak_rss_mb"]}};
+}
+
 nlohmann::json merge_batch_reports(const std::vector<nlohmann::json>& reports, int shards) {
     if (shards < 1) throw std::invalid_argument("shards: must be >= 1");
     std::map<int, const nlohmann::json*> by_index;
@@ -104,7 +116,7 @@ nlohmann::json merge_batch_reports(const std::vector<nlohmann::json>& reports, i
             throw std::invalid_argument("shard " + std::to_string(index) + " reported twice");
         }
     }
-    std::size_t frames = 0, done = 0, skipped = 0, failed = 0;
+    std::size_t frames = 0, done = 0, skipped = 0, failed = 0, warned = 0;
     double task_seconds = 0.0, cpu_seconds = 0.0, peak_rss_mb = 0.0;
     double started = std::numeric_limits<double>::infinity();
     double ended = -std::numeric_limits<double>::infinity();
@@ -125,6 +137,7 @@ nlohmann::json merge_batch_reports(const std::vector<nlohmann::json>& reports, i
         done += r["done"].get<std::size_t>();
         skipped += r["skipped"].get<std::size_t>();
         failed += r["failed"].get<std::size_t>();
+        warned += static_cast<std::size_t>(number_or(r, "frames_with_warnings", 0.0));
         task_seconds += r["seconds"].get<double>();
         cpu_seconds += r["cpu_seconds"].get<double>();
         peak_rss_mb = std::max(peak_rss_mb, r["peak_rss_mb"].get<double>());
@@ -142,14 +155,7 @@ nlohmann::json merge_batch_reports(const std::vector<nlohmann::json>& reports, i
         }
         const std::string p = string_or(r, "preset", "");
         preset = preset.empty() || preset == p ? p : "mixed";
-        per_shard.push_back({{"index", index},
-                             {"frames", r["frames"]},
-                             {"done", r["done"]},
-                             {"skipped", r["skipped"]},
-                             {"failed", r["failed"]},
-                             {"seconds", r["seconds"]},
-                             {"fps", number_or(r, "fps", 0.0)},
-                             {"peak_rss_mb", r["peak_rss_mb"]}});
+        per_shard.push_back(shard_summary(index, r));
     }
     std::sort(failures.begin(), failures.end());
     nlohmann::json failure_list = nlohmann::json::array();
@@ -167,6 +173,7 @@ nlohmann::json merge_batch_reports(const std::vector<nlohmann::json>& reports, i
         {"skipped", skipped},
         {"failed", failed},
         {"failures", failure_list},
+        {"frames_with_warnings", warned},
         {"wall_seconds", wall},
         {"fps", per(static_cast<double>(done), wall)},
         {"task_seconds", task_seconds},

@@ -63,6 +63,16 @@ TEST_CASE("shard reports merge: counts add, the run spans first start to last en
     CHECK(merged["per_shard"][2]["skipped"] == 4);
 }
 
+TEST_CASE("frames that warned add up across shards; older reports count none", "[report]") {
+    json a = shard_report(0, 2, 5, 0, 0, 0.0, 1.0);
+    a["frames_with_warnings"] = 2;
+    const json b = shard_report(1, 2, 5, 0, 0, 0.0, 1.0);  // written before the field existed
+    CHECK(merge_batch_reports({a, b}, 2)["frames_with_warnings"] == 2);
+    json c = b;
+    c["frames_with_warnings"] = 3;
+    CHECK(merge_batch_reports({a, c}, 2)["frames_with_warnings"] == 5);
+}
+
 TEST_CASE("a missing shard is listed; a duplicate or foreign report is refused", "[report]") {
     const json merged = merge_batch_reports(
         {shard_report(0, 4, 5, 0, 0, 0.0, 1.0), shard_report(3, 4, 5, 0, 0, 0.0, 2.0)}, 4);
