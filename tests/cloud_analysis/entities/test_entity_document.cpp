@@ -4,23 +4,15 @@
 
 #include <scene_schema/entities.hpp>
 
+#include "../sample_inputs.hpp"
 #include "cloud_analysis/entities/class_config.hpp"
 #include "cloud_analysis/entities/entity_document.hpp"
 
 using namespace cloud_analysis;
 
 namespace {
-const std::filesystem::path kSample = std::filesystem::path(STEREOSCENE_SAMPLES_DIR) / "synthetic";
 
-InputPaths sample_paths() {
-    InputPaths p;
-    p.left = kSample / "left.png";
-    p.right = kSample / "right.png";
-    p.semantic = kSample / "semantic.png";
-    p.calibration = kSample / "calib.yaml";
-    p.frame_id = "synthetic-street";
-    return p;
-}
+InputPaths sample_paths() { return test_samples::synthetic_paths(); }
 
 ExtractOptions default_extract() {
     ExtractOptions extract;

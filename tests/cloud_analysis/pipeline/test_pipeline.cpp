@@ -3,23 +3,15 @@
 #include <filesystem>
 #include <fstream>
 
+#include "../sample_inputs.hpp"
 #include "cloud_analysis/pipeline/pipeline.hpp"
 
 using namespace cloud_analysis;
 
 namespace {
-const std::filesystem::path kSample = std::filesystem::path(STEREOSCENE_SAMPLES_DIR) / "synthetic";
 const std::filesystem::path kKitti = std::filesystem::path(STEREOSCENE_SHARED_DATA_DIR) / "kitti15";
 
-InputPaths sample_paths() {
-    InputPaths p;
-    p.left = kSample / "left.png";
-    p.right = kSample / "right.png";
-    p.semantic = kSample / "semantic.png";
-    p.calibration = kSample / "calib.yaml";
-    p.frame_id = "synthetic-street";
-    return p;
-}
+InputPaths sample_paths() { return test_samples::synthetic_paths(); }
 }  // namespace
 
 TEST_CASE("the KITTI layout finds images, semantics and the raw calibration", "[pipeline][kitti]") {
