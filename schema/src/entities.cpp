@@ -14,6 +14,7 @@
 #include <system_error>
 
 #include "stereoscene/support/atomic_file.hpp"
+#include "stereoscene/support/file_read.hpp"
 
 namespace scene_schema {
 
@@ -402,17 +403,9 @@ EntityDocument parse(std::string_view text) { return from_json(parse_json(text))
 std::string dump(const EntityDocument& document) { return to_json(document).dump(2) + "\n"; }
 
 EntityDocument read_file(const std::filesystem::path& path) {
-    std::ostringstream buffer;
-    if (path == "-") {
-        buffer << std::cin.rdbuf();
-        if (std::cin.bad()) throw FileError("-: cannot read standard input");
-    } else {
-        std::ifstream in(path, std::ios::binary);
-        if (!in) throw FileError(path.string() + ": cannot open: " + std::strerror(errno));
-        buffer << in.rdbuf();
-    }
+    const std::string text = stereoscene::support::read_text_input(path);
     try {
-        return parse(buffer.str());
+        return parse(text);
     } catch (const SchemaError& e) {
         const std::string where = e.pointer().empty() ? "" : e.pointer() + ": ";
         throw FileError(path.string() + ": " + where + e.rule());

@@ -128,6 +128,24 @@ class PathTrackingSax {
 
 }  // namespace
 
+std::string json_error_text(const nlohmann::json::exception& e) {
+    std::string what = e.what();
+    if (what.rfind("[json.exception.", 0) == 0) {
+        if (const auto pos = what.find("] "); pos != std::string::npos) what.erase(0, pos + 2);
+    }
+    return what;
+}
+
+std::uint64_t get_count(const nlohmann::json& value, const std::string& pointer,
+                        std::uint64_t max) {
+    if (!value.is_number_unsigned()) {
+        throw SchemaError(pointer, "must be a non-negative integer");
+    }
+    const std::uint64_t v = value.get<std::uint64_t>();
+    if (v > max) throw SchemaError(pointer, "must be at most " + std::to_string(max));
+    return v;
+}
+
 json parse_json(std::string_view text, std::size_t max_depth) {
     json root;
     PathTrackingSax sax(root, max_depth);

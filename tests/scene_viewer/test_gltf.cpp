@@ -194,9 +194,10 @@ TEST_CASE("a truncated .glb is refused and the error names the file", "[gltf]") 
 
 TEST_CASE("a missing file and a file that is not glTF are refused with the file name", "[gltf]") {
     CHECK_THAT(load_error(kGltfDir / "no_such_model.glb"),
-               Catch::Equals((kGltfDir / "no_such_model.glb").string() + ": file not found"));
+               Catch::StartsWith((kGltfDir / "no_such_model.glb").string() +
+                                 ": cannot open: No such file"));
     CHECK_THAT(load_error(kGltfDir / "checker.png"),
-               Catch::Equals((kGltfDir / "checker.png").string() + ": not valid glTF JSON"));
+               Catch::StartsWith((kGltfDir / "checker.png").string() + ": not valid glTF JSON: "));
 }
 
 TEST_CASE("a buffer shorter than its accessors is refused", "[gltf]") {
@@ -217,7 +218,7 @@ TEST_CASE("an accessor with an absurd element count is refused before allocating
         "nodes": [{"mesh": 0}], "scenes": [{"nodes": [0]}], "scene": 0})";
     const std::string error = load_error(dir / "huge.gltf");
     CHECK_THAT(error, Catch::StartsWith((dir / "huge.gltf").string() + ": "));
-    CHECK_THAT(error, Catch::Contains("100000000 elements"));
+    CHECK_THAT(error, Catch::Contains("100000000 vertices is more than the limit"));
     fs::remove_all(dir);
 }
 

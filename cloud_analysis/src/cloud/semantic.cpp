@@ -5,6 +5,9 @@
 
 #include <nlohmann/json.hpp>
 
+#include "scene_schema/entities.hpp"
+#include "scene_schema/json_text.hpp"
+
 #include "stereoscene/support/asset_dir.hpp"
 
 namespace cloud_analysis {
@@ -24,9 +27,9 @@ std::uint32_t pack(const Rgb& c) {
 Palette parse_palette(std::string_view json_text, const std::string& origin) {
     nlohmann::json doc;
     try {
-        doc = nlohmann::json::parse(json_text);
-    } catch (const nlohmann::json::parse_error& e) {
-        fail(origin, "", std::string("not JSON: ") + e.what());
+        doc = scene_schema::parse_json(json_text);
+    } catch (const scene_schema::SchemaError& e) {
+        fail(origin, e.pointer(), "not JSON: " + e.rule());
     }
     if (!doc.is_object()) fail(origin, "", "must be an object");
     Palette palette;
@@ -47,8 +50,9 @@ Palette parse_palette(std::string_view json_text, const std::string& origin) {
             fail(origin, at + "/name", "must be a non-empty string");
         }
         info.name = c["name"].get<std::string>();
-        if (!c.contains("id") || !c["id"].is_number_integer() || c["id"].get<long long>() < 0) {
-            fail(origin, at + "/id", "must be an integer >= 0");
+        if (!c.contains("id") || !c["id"].is_number_integer() || c["id"].get<long long>() < 0 ||
+            c["id"].get<long long>() > 65535) {
+            fail(origin, at + "/id", "must be an integer 0..65535");
         }
         info.id = c["id"].get<int>();
         if (c.contains("thing")) {
@@ -60,7 +64,7 @@ Palette parse_palette(std::string_view json_text, const std::string& origin) {
         }
         for (int k = 0; k < 3; ++k) {
             const auto& v = c["colour"][static_cast<std::size_t>(k)];
-            if (!v.is_number_integer() || v.get<int>() < 0 || v.get<int>() > 255) {
+            if (!v.is_number_integer() || v.get<long long>() < 0 || v.get<long long>() > 255) {
                 fail(origin, at + "/colour/" + std::to_string(k), "must be an integer 0..255");
             }
             info.colour[static_cast<std::size_t>(k)] = static_cast<std::uint8_t>(v.get<int>());

@@ -1,10 +1,14 @@
 #include "cloud_analysis/entities/class_config.hpp"
 
+#include <climits>
 #include <cmath>
 #include <set>
 #include <stdexcept>
 
 #include <nlohmann/json.hpp>
+
+#include "scene_schema/entities.hpp"
+#include "scene_schema/json_text.hpp"
 
 #include "cloud_analysis/cloud/semantic.hpp"
 #include "cloud_analysis/io/io.hpp"
@@ -40,8 +44,9 @@ void read_settings(const nlohmann::json& j, const std::string& pointer, ClassSet
     };
     auto integer = [&](const char* key, int& out) {
         if (!j.contains(key)) return;
-        if (!j[key].is_number_integer()) {
-            throw std::invalid_argument(pointer + "/" + key + ": must be an integer");
+        if (!j[key].is_number_integer() || j[key].get<long long>() < INT_MIN ||
+            j[key].get<long long>() > INT_MAX) {
+            throw std::invalid_argument(pointer + "/" + key + ": must be a 32-bit integer");
         }
         out = j[key].get<int>();
     };
@@ -133,9 +138,10 @@ ClassConfig parse_class_config(std::string_view text, std::string_view origin) {
     const std::string where(origin);
     nlohmann::json j;
     try {
-        j = nlohmann::json::parse(text);
-    } catch (const nlohmann::json::parse_error& e) {
-        throw std::runtime_error(where + ": not JSON: " + e.what());
+        j = scene_schema::parse_json(text);
+    } catch (const scene_schema::SchemaError& e) {
+        throw std::runtime_error(
+            where + ": not JSON: " + (e.pointer().empty() ? "" : e.pointer() + ": ") + e.rule());
     }
     try {
         if (!j.is_object()) throw std::invalid_argument(": must be an object");

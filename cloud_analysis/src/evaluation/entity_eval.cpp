@@ -11,6 +11,10 @@
 #include <nlohmann/json.hpp>
 #include <opencv2/imgcodecs.hpp>
 
+#include "scene_schema/entities.hpp"
+#include "scene_schema/json_text.hpp"
+#include "stereoscene/support/file_read.hpp"
+
 namespace cloud_analysis {
 namespace {
 
@@ -344,22 +348,28 @@ std::vector<std::optional<ReferenceVisibility>> load_reference_visibility(
         return std::runtime_error("cannot read visibility: " + what + " (" +
                                   visibility_json.string() + ")");
     };
-    std::ifstream in(visibility_json, std::ios::binary);
-    if (!in) throw fail("no such file");
+    std::string text;
+    try {
+        text = stereoscene::support::read_text_input(visibility_json);
+    } catch (const stereoscene::support::FileError& e) {
+        throw fail(e.reason());
+    }
     std::map<std::string, ReferenceVisibility> by_id;
     try {
-        const nlohmann::json doc = nlohmann::json::parse(in);
+        const nlohmann::json doc = scene_schema::parse_json(text);
         for (const auto& r : doc.at("entities")) {
             ReferenceVisibility v;
-            v.visible_px = r.at("visible_px").get<std::size_t>();
-            v.unoccluded_px = r.at("unoccluded_px").get<std::size_t>();
+            v.visible_px = scene_schema::get_count(r.at("visible_px"), "visible_px");
+            v.unoccluded_px = scene_schema::get_count(r.at("unoccluded_px"), "unoccluded_px");
             v.visible_fraction = v.unoccluded_px == 0 ? 0.0
                                                       : static_cast<double>(v.visible_px) /
                                                             static_cast<double>(v.unoccluded_px);
             by_id[r.at("id").get<std::string>()] = v;
         }
     } catch (const nlohmann::json::exception& e) {
-        throw fail(e.what());
+        throw fail(scene_schema::json_error_text(e));
+    } catch (const scene_schema::SchemaError& e) {
+        throw fail((e.pointer().empty() ? "" : e.pointer() + ": ") + e.rule());
     }
     std::vector<std::optional<ReferenceVisibility>> out(reference.size());
     for (std::size_t i = 0; i < reference.size(); ++i) {

@@ -1,5 +1,8 @@
 #include "cloud_analysis/evaluation/kitti_labels.hpp"
 
+#include "stereoscene/support/atomic_file.hpp"
+#include "stereoscene/support/file_read.hpp"
+
 #include <algorithm>
 #include <cmath>
 #include <cstdio>
@@ -74,12 +77,14 @@ std::vector<KittiLabel> parse_kitti_labels(std::string_view text, const std::str
 }
 
 std::vector<KittiLabel> load_kitti_labels(const std::filesystem::path& path) {
-    std::ifstream f(path, std::ios::binary);
-    if (!f)
-        throw std::runtime_error("cannot read KITTI labels: cannot open (" + path.string() + ")");
-    std::ostringstream text;
-    text << f.rdbuf();
-    return parse_kitti_labels(text.str(), path.string());
+    std::string text;
+    try {
+        text = stereoscene::support::read_text_input(path);
+    } catch (const stereoscene::support::FileError& e) {
+        throw std::runtime_error("cannot read KITTI labels: " + e.reason() + " (" + path.string() +
+                                 ")");
+    }
+    return parse_kitti_labels(text, path.string());
 }
 
 std::optional<std::pair<std::string, int>> class_of_kitti_type(std::string_view type) {

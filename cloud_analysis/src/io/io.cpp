@@ -2,6 +2,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <cstdint>
 #include <cstring>
 #include <fstream>
 #include <optional>
@@ -12,42 +13,75 @@
 #include <opencv2/imgcodecs.hpp>
 #include <opencv2/imgproc.hpp>
 
+#include "stereoscene/support/file_read.hpp"
+#include "stereoscene/support/limits.hpp"
+
 namespace cloud_analysis {
 namespace {
 
-cv::Mat read_raw(const std::filesystem::path& path, int flags) {
-    std::error_code ec;
-    if (!std::filesystem::is_regular_file(path, ec)) {
-        throw std::runtime_error("cannot read image: no such file (" + path.string() + ")");
+/// Width x height from a PNG's IHDR or a JPEG's first start-of-frame marker, read without
+/// decoding; empty for other formats or a header cut short.
+std::optional<std::uint64_t> header_pixels(const std::vector<unsigned char>& b) {
+    auto u16 = [&](std::size_t at) { return (std::uint64_t{b[at]} << 8) | b[at + 1]; };
+    auto u32 = [&](std::size_t at) { return (u16(at) << 16) | u16(at + 2); };
+    if (b.size() >= 24 && std::memcmp(b.data(), "\x89PNG\r\n\x1a\n", 8) == 0) {
+        return u32(16) * u32(20);
     }
+    if (b.size() < 4 || b[0] != 0xFF || b[1] != 0xD8) return std::nullopt;
+    std::size_t at = 2;
+    while (at + 9 < b.size() && b[at] == 0xFF) {
+        const unsigned marker = b[at + 1];
+        const bool sof =
+            marker >= 0xC0 && marker <= 0xCF && marker != 0xC4 && marker != 0xC8 && marker != 0xCC;
+        if (sof) return u16(at + 5) * u16(at + 7);
+        at += 2 + u16(at + 2);
+    }
+    return std::nullopt;
+}
+
+/// The bytes of an image file, through the bounded reader, refused when the header promises
+/// more pixels than the limit allows.
+std::vector<unsigned char> read_image_bytes(const std::filesystem::path& path) {
+    std::vector<unsigned char> bytes = stereoscene::support::read_binary_input(path);
+    if (const auto pixels = header_pixels(bytes)) {
+        stereoscene::support::check_limit(
+            path.string(), *pixels, stereoscene::support::limits().max_image_pixels, "pixels");
+    }
+    return bytes;
+}
+
+cv::Mat decode_raw(const std::vector<unsigned char>& bytes, const std::filesystem::path& path,
+                   int flags) {
     cv::Mat m;
     try {
-        m = cv::imread(path.string(), flags);
+        m = cv::imdecode(bytes, flags);
     } catch (const cv::Exception& e) {
-        throw std::runtime_error("cannot decode image: " + std::string(e.what()) + " (" +
-                                 path.string() + ")");
+        throw std::runtime_error("cannot decode image: " + e.msg + " (" + path.string() + ")");
     }
     if (m.empty()) {
         throw std::runtime_error("cannot decode image: unreadable or corrupt (" + path.string() +
                                  ")");
     }
+    stereoscene::support::check_limit(
+        path.string(), static_cast<std::uint64_t>(m.rows) * static_cast<std::uint64_t>(m.cols),
+        stereoscene::support::limits().max_image_pixels, "pixels");
     return m;
 }
 
-/// Whether a PNG file holds grey samples of at most 8 bits, from its IHDR chunk (PNG spec 11.2.2:
+cv::Mat read_raw(const std::filesystem::path& path, int flags) {
+    return decode_raw(read_image_bytes(path), path, flags);
+}
+
+/// Whether PNG bytes hold grey samples of at most 8 bits, from the IHDR chunk (PNG spec 11.2.2:
 /// bit depth at byte 24, colour type at byte 25; type 0 is greyscale without alpha). Empty when
-/// the file is not a PNG, is shorter than its header, or cannot be opened.
-std::optional<bool> png_is_grey8(const std::filesystem::path& path) {
-    std::ifstream in(path, std::ios::binary);
-    char header[26] = {};
-    if (!in.read(header, sizeof header)) return std::nullopt;
+/// the bytes are not a PNG or are shorter than its header.
+std::optional<bool> png_is_grey8(const std::vector<unsigned char>& bytes) {
     static constexpr char kSignature[] = "\x89PNG\r\n\x1a\n";
-    if (std::memcmp(header, kSignature, 8) != 0 || std::memcmp(header + 12, "IHDR", 4) != 0) {
+    if (bytes.size() < 26 || std::memcmp(bytes.data(), kSignature, 8) != 0 ||
+        std::memcmp(bytes.data() + 12, "IHDR", 4) != 0) {
         return std::nullopt;
     }
-    const int bit_depth = static_cast<unsigned char>(header[24]);
-    const int colour_type = static_cast<unsigned char>(header[25]);
-    return colour_type == 0 && bit_depth <= 8;
+    return bytes[25] == 0 && bytes[24] <= 8;
 }
 
 std::string encode(const cv::Mat& m) {
@@ -71,13 +105,14 @@ ImageU8 read_image(const std::filesystem::path& path, ImageMode mode) {
     const bool as_is = mode == ImageMode::kAsIs;
     // A PNG's header says whether it is grey: one decode instead of a colour decode followed by
     // an unchanged one (a KITTI colour frame decoded in 7 ms instead of 14).
-    const std::optional<bool> png_grey = as_is ? png_is_grey8(path) : std::nullopt;
+    const std::vector<unsigned char> bytes = read_image_bytes(path);
+    const std::optional<bool> png_grey = as_is ? png_is_grey8(bytes) : std::nullopt;
     int flags = mode == ImageMode::kGrey ? cv::IMREAD_GRAYSCALE : cv::IMREAD_COLOR;
     if (png_grey && *png_grey) flags = cv::IMREAD_UNCHANGED;
-    cv::Mat m = read_raw(path, flags);
+    cv::Mat m = decode_raw(bytes, path, flags);
     if (as_is && !png_grey && m.channels() == 3) {
         // IMREAD_COLOR turns grey files into 3 equal channels; keep them grey.
-        cv::Mat grey = read_raw(path, cv::IMREAD_UNCHANGED);
+        cv::Mat grey = decode_raw(bytes, path, cv::IMREAD_UNCHANGED);
         if (grey.channels() == 1 && grey.depth() == CV_8U) m = grey;
     }
     if (m.depth() != CV_8U) {
@@ -172,12 +207,7 @@ std::string encode_disparity_preview_png(const DisparityMap& disparity, double m
 }
 
 std::string read_text_file(const std::filesystem::path& path) {
-    std::ifstream in(path, std::ios::binary);
-    if (!in) throw std::runtime_error("cannot open file (" + path.string() + ")");
-    std::ostringstream buffer;
-    buffer << in.rdbuf();
-    if (in.bad()) throw std::runtime_error("cannot read file (" + path.string() + ")");
-    return buffer.str();
+    return stereoscene::support::read_text_input(path);
 }
 
 }  // namespace cloud_analysis

@@ -10,19 +10,15 @@
 #include <scene_schema/entities.hpp>
 
 #include "cloud_analysis/cloud/cloud_io.hpp"
+#include "stereoscene/support/file_read.hpp"
+#include "stereoscene/support/limits.hpp"
 
 namespace cloud_analysis {
 namespace {
 
 std::string read_all(const std::filesystem::path& path) {
-    std::ifstream in(path, std::ios::binary | std::ios::ate);
-    if (!in) throw std::runtime_error("cannot read");
-    std::string bytes(static_cast<std::size_t>(in.tellg()), '\0');
-    in.seekg(0);
-    if (!in.read(bytes.data(), static_cast<std::streamsize>(bytes.size()))) {
-        throw std::runtime_error("cannot read");
-    }
-    return bytes;
+    return stereoscene::support::read_file_bounded(path,
+                                                   stereoscene::support::limits().max_file_bytes);
 }
 
 /// The value after `key` at the start of a header line ("POINTS 123" -> 123); throws if absent.

@@ -10,6 +10,10 @@
 #include <opencv2/core.hpp>
 #include <opencv2/imgproc.hpp>
 
+#include "scene_schema/entities.hpp"
+#include "scene_schema/json_text.hpp"
+#include "stereoscene/support/atomic_file.hpp"
+
 namespace cloud_analysis {
 namespace {
 
@@ -59,9 +63,9 @@ Fields parse_lines(std::string_view text) {
 Fields parse_json(std::string_view text, const std::string& origin) {
     nlohmann::json doc;
     try {
-        doc = nlohmann::json::parse(text);
-    } catch (const nlohmann::json::parse_error& e) {
-        fail(origin, "JSON", e.what());
+        doc = scene_schema::parse_json(text);
+    } catch (const scene_schema::SchemaError& e) {
+        fail(origin, "JSON" + e.pointer(), e.rule());
     }
     if (!doc.is_object()) fail(origin, "JSON", "must be an object");
     Fields fields;
@@ -284,8 +288,8 @@ Calibration load_calibration(const std::filesystem::path& path, const Calibratio
     std::string text;
     try {
         text = read_text_file(path);
-    } catch (const std::runtime_error&) {
-        throw std::runtime_error("cannot read calibration: cannot open file (" + path.string() +
+    } catch (const stereoscene::support::FileError& e) {
+        throw std::runtime_error("cannot read calibration: " + e.reason() + " (" + path.string() +
                                  ")");
     }
     return parse_calibration(text, path.string(), options);

@@ -36,6 +36,14 @@ void DisparityOptions::validate() const {
     if (num_disparities <= 0 || num_disparities % 16 != 0) {
         bad("num_disparities", "must be a positive multiple of 16");
     }
+    // Bounds that keep every later sum ((min_disparity - 1) * 16, padding) far from int overflow;
+    // no camera needs more than a few hundred pixels of disparity.
+    if (num_disparities > kMaxDisparityRange) {
+        bad("num_disparities", "must be <= " + std::to_string(kMaxDisparityRange));
+    }
+    if (min_disparity < -kMaxDisparityRange || min_disparity > kMaxDisparityRange) {
+        bad("min_disparity", "must be within +-" + std::to_string(kMaxDisparityRange));
+    }
     if (block_size < 1 || block_size % 2 == 0 || block_size > 31) {
         bad("block_size", "must be odd, 1..31");
     }

@@ -11,6 +11,8 @@
 #include "scene_viewer/render/image.hpp"
 #include "scene_viewer/render/palette.hpp"
 #include "scene_viewer/render/render_setup.hpp"
+#include "stereoscene/support/atomic_file.hpp"
+#include "stereoscene/support/file_read.hpp"
 
 namespace scene_render {
 
@@ -110,16 +112,15 @@ std::pair<int, int> size_flag(const std::string& text, const std::string& flag) 
 }
 
 scene_schema::EntityDocument read_entities(const std::string& path) {
-    std::stringstream buffer;
-    if (path == "-") {  // standard input, as in `cloud-analysis ... -o - | scene-render - ...`
-        buffer << std::cin.rdbuf();
-    } else {
-        std::ifstream in(path, std::ios::binary);
-        if (!in) throw Failure{"cannot read entity file", std::strerror(errno), path};
-        buffer << in.rdbuf();
+    std::string text;
+    try {
+        // "-" is standard input, as in `cloud-analysis ... -o - | scene-render - ...`.
+        text = stereoscene::support::read_text_input(path);
+    } catch (const stereoscene::support::FileError& e) {
+        throw Failure{"cannot read entity file", e.reason(), path};
     }
     try {
-        return scene_schema::parse(buffer.str());
+        return scene_schema::parse(text);
     } catch (const scene_schema::SchemaError& e) {
         const std::string pointer = e.pointer().empty() ? "(document)" : e.pointer();
         throw Failure{"invalid entity file", pointer + ": " + e.rule(), path};

@@ -1,5 +1,8 @@
 #include "render.hpp"
 
+#include <cerrno>
+#include <cstdio>
+#include <cstring>
 #include <optional>
 #include <string_view>
 #include <vector>
@@ -8,6 +11,7 @@
 #include "scene_viewer/assets/scene_export.hpp"
 #include "scene_viewer/render/render_setup.hpp"
 #include "stereoscene/support/atomic_file.hpp"
+#include "stereoscene/support/output_transaction.hpp"
 
 namespace scene_render {
 
@@ -58,12 +62,20 @@ std::vector<unsigned char> scene_glb(SceneRenderer& renderer,
     }
 }
 
-void write_glb(const std::string& path, const std::vector<unsigned char>& bytes) {
+std::string_view as_text(const std::vector<unsigned char>& bytes) {
+    return std::string_view(reinterpret_cast<const char*>(bytes.data()), bytes.size());
+}
+
+/// Refuses unusable output paths (a directory, the same file twice) before any work.
+void declare_outputs(const RenderArgs& a, stereoscene::support::OutputTransaction& outputs) {
     try {
-        stereoscene::support::write_file_atomic(
-            path, std::string_view(reinterpret_cast<const char*>(bytes.data()), bytes.size()));
-    } catch (const std::exception& e) {
-        throw Failure{"cannot write the scene", e.what(), path};
+        if (!a.output.empty() && a.output != "-") outputs.declare(a.output, "--output");
+        if (!a.glb.empty()) {
+            if (a.glb == "-") usage("the .glb cannot go to standard output", "--glb");
+            outputs.declare(a.glb, "--glb");
+        }
+    } catch (const stereoscene::support::FileError& e) {
+        throw Failure{"unusable output path", e.reason(), e.path().string()};
     }
 }
 
@@ -75,6 +87,8 @@ int run_render(const RenderArgs& a) {
     const auto document = read_entities(a.input);
     RenderOptions options = render_options(a.view, document);
     if (!(a.opacity >= 0.0f && a.opacity <= 1.0f)) usage("must be in 0..1", "--opacity");
+    stereoscene::support::OutputTransaction outputs;
+    declare_outputs(a, outputs);
     const std::optional<ImageRgba8> background = read_background(a, options);
     const auto cloud = read_cloud(a.view);
     const auto classes = read_classes(a.view.boxes, a.view.classes);
@@ -86,12 +100,24 @@ int run_render(const RenderArgs& a) {
     if (!a.glb.empty()) glb_bytes = scene_glb(gpu->renderer, document, options, a);
     gpu->renderer.load(document, cloud ? &*cloud : nullptr, options);
     if (classes) warn_boxes(gpu->renderer, *classes);
+    std::vector<unsigned char> png;
     if (!a.output.empty()) {
         ImageRgba8 image = gpu->renderer.render_frame();
         if (background) composite_background(image, *background, a.opacity, options.shading);
-        write_png_output(a.output, image);
+        png = encode_png(image, 1);
     }
-    if (!a.glb.empty()) write_glb(a.glb, glb_bytes);
+    // Both files are staged, then committed together: all of them or none.
+    try {
+        if (!a.output.empty() && a.output != "-") outputs.stage(a.output, as_text(png));
+        if (!a.glb.empty()) outputs.stage(a.glb, as_text(glb_bytes));
+        outputs.commit();
+    } catch (const stereoscene::support::FileError& e) {
+        throw Failure{"cannot write output", e.reason(), e.path().string()};
+    }
+    if (a.output == "-" && (std::fwrite(png.data(), 1, png.size(), stdout) != png.size() ||
+                            std::fflush(stdout) != 0)) {
+        throw Failure{"cannot write image", std::strerror(errno), "-"};
+    }
     return 0;
 }
 

@@ -1,5 +1,8 @@
 #include "sensors.hpp"
 
+#include "stereoscene/support/atomic_file.hpp"
+#include "stereoscene/support/file_read.hpp"
+
 #include <cerrno>
 #include <cstring>
 #include <fstream>
@@ -55,13 +58,15 @@ namespace {
 StereoRig resolve_rig(const SensorsArgs& a, const scene_schema::EntityDocument& document) {
     StereoRig rig = rig_for(document, a.options.rig);
     if (!a.rig.empty()) {
-        std::ifstream in(a.rig, std::ios::binary);
-        if (!in) throw Failure{"cannot read rig", std::strerror(errno), a.rig};
-        std::stringstream text;
-        text << in.rdbuf();
+        std::string text;
+        try {
+            text = stereoscene::support::read_text_input(a.rig);
+        } catch (const stereoscene::support::FileError& e) {
+            throw Failure{"cannot read rig", e.reason(), a.rig};
+        }
         try {
             const double height = rig.camera_height_m;
-            rig = parse_kitti_calib(text.str());
+            rig = parse_kitti_calib(text);
             rig.camera_height_m = height;
         } catch (const std::invalid_argument& e) {
             throw Failure{"invalid rig", e.what(), a.rig};

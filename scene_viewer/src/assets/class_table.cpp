@@ -8,7 +8,11 @@
 
 #include <nlohmann/json.hpp>
 
+#include "scene_schema/entities.hpp"
+#include "scene_schema/json_text.hpp"
 #include "stereoscene/support/asset_dir.hpp"
+#include "stereoscene/support/atomic_file.hpp"
+#include "stereoscene/support/file_read.hpp"
 
 namespace scene_viewer {
 namespace {
@@ -82,10 +86,18 @@ RenderClass parse_class(const nlohmann::json& item, const std::string& pointer,
 }
 
 ClassTable parse_table(const fs::path& path) {
-    std::ifstream in(path);
-    if (!in) throw TableError("cannot open the class table");
-    const nlohmann::json doc = nlohmann::json::parse(in, nullptr, false);
-    if (doc.is_discarded()) throw TableError("not valid JSON");
+    std::string text;
+    try {
+        text = stereoscene::support::read_text_input(path);
+    } catch (const stereoscene::support::FileError& e) {
+        throw TableError(e.reason());
+    }
+    nlohmann::json doc;
+    try {
+        doc = scene_schema::parse_json(text);
+    } catch (const scene_schema::SchemaError& e) {
+        throw TableError((e.pointer().empty() ? "" : e.pointer() + ": ") + e.rule());
+    }
     if (!doc.is_object()) throw TableError("(document): must be an object");
     const auto format = doc.find("format");
     if (format == doc.end() || *format != "stereoscene-render-classes") {

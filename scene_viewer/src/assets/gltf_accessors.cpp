@@ -90,10 +90,20 @@ AccessorView view_accessor(const tinygltf::Model& gltf, int index, const std::st
         }
         view.stride = bv.byteStride;
     }
-    const std::uint64_t view_end = static_cast<std::uint64_t>(bv.byteOffset) + bv.byteLength;
-    const std::uint64_t last = static_cast<std::uint64_t>(bv.byteOffset) + accessor.byteOffset +
-                               static_cast<std::uint64_t>(view.stride) * (view.count - 1) + element;
-    if (view_end > buffer.size() || last > view_end) {
+    // Overflow-checked: every term comes from the file.
+    std::uint64_t view_end = 0;
+    std::uint64_t start = 0;
+    std::uint64_t span = 0;
+    std::uint64_t last = 0;
+    const bool wraps =
+        __builtin_add_overflow(std::uint64_t{bv.byteOffset}, std::uint64_t{bv.byteLength},
+                               &view_end) ||
+        __builtin_add_overflow(std::uint64_t{bv.byteOffset}, std::uint64_t{accessor.byteOffset},
+                               &start) ||
+        __builtin_mul_overflow(std::uint64_t{view.stride}, std::uint64_t{view.count - 1}, &span) ||
+        __builtin_add_overflow(start, span, &last) ||
+        __builtin_add_overflow(last, std::uint64_t{element}, &last);
+    if (wraps || view_end > buffer.size() || last > view_end) {
         throw LoadError(what + ": accessor " + std::to_string(index) +
                         " reads past the end of its buffer");
     }

@@ -1,4 +1,5 @@
 #include <algorithm>
+#include <climits>
 #include <cstdint>
 #include <cstring>
 #include <fstream>
@@ -11,6 +12,9 @@
 
 #include "gltf_internal.hpp"
 #include "scene_viewer/assets/image_io.hpp"
+#include "stereoscene/support/atomic_file.hpp"
+#include "stereoscene/support/file_read.hpp"
+#include "stereoscene/support/limits.hpp"
 
 namespace scene_viewer::gltf_detail {
 namespace {
@@ -18,15 +22,15 @@ namespace {
 namespace fs = std::filesystem;
 
 std::vector<unsigned char> read_bytes(const fs::path& path) {
-    std::error_code ec;
-    if (!fs::is_regular_file(path, ec)) {
-        throw LoadError(fs::exists(path, ec) ? "not a regular file" : "file not found");
+    try {
+        return stereoscene::support::read_binary_input(path);
+    } catch (const stereoscene::support::FileError& e) {
+        // FileError starts with the path, which load_model() adds again.
+        std::string reason = e.what();
+        const std::string prefix = path.string() + ": ";
+        if (reason.rfind(prefix, 0) == 0) reason.erase(0, prefix.size());
+        throw LoadError(reason);
     }
-    std::vector<unsigned char> bytes;
-    if (!read_file_bytes(path, bytes)) {
-        throw LoadError("cannot read the file");
-    }
-    return bytes;
 }
 
 std::uint32_t read_u32_le(const unsigned char* p) {
@@ -87,7 +91,7 @@ std::string percent_decode(const std::string& in) {
 
 /// Refuses a URI that could read outside the model's folder: any scheme but data:, absolute
 /// paths, and relative paths whose `..` segments climb above the folder.
-void check_uri(const std::string& uri, const std::string& pointer) {
+void check_one_uri(const std::string& uri, const std::string& pointer) {
     if (uri.rfind("data:", 0) == 0) {
         return;
     }
@@ -116,26 +120,6 @@ void check_uri(const std::string& uri, const std::string& pointer) {
             ++depth;
         }
         start = end + 1;
-    }
-}
-
-void check_uris(const std::string& json_text) {
-    const nlohmann::json doc = nlohmann::json::parse(json_text, nullptr, false);
-    if (doc.is_discarded() || !doc.is_object()) {
-        throw LoadError("not valid glTF JSON");
-    }
-    for (const char* key : {"buffers", "images"}) {
-        const auto it = doc.find(key);
-        if (it == doc.end() || !it->is_array()) {
-            continue;
-        }
-        for (std::size_t i = 0; i < it->size(); ++i) {
-            const nlohmann::json& item = (*it)[i];
-            if (item.is_object() && item.contains("uri") && item["uri"].is_string()) {
-                check_uri(item["uri"].get<std::string>(),
-                          "/" + std::string(key) + "/" + std::to_string(i) + "/uri");
-            }
-        }
     }
 }
 
@@ -183,8 +167,10 @@ bool guard_read(std::vector<unsigned char>* out, std::string* err, const std::st
         if (err != nullptr) *err += "refused: outside the model's folder";
         return false;
     }
-    if (!read_file_bytes(path, *out)) {
-        if (err != nullptr) *err += "cannot read " + path;
+    try {
+        *out = stereoscene::support::read_binary_input(path);
+    } catch (const std::exception& e) {
+        if (err != nullptr) *err += e.what();
         return false;
     }
     return true;
@@ -195,9 +181,44 @@ bool guard_write(std::string* err, const std::string&, const std::vector<unsigne
     return false;
 }
 
+/// What the image callback needs to check an image before decoding it.
+struct ImageContext {
+    const tinygltf::Model* model = nullptr;  ///< the document being read (its buffers are in)
+    std::uint64_t pixels = 0;                ///< pixels decoded so far, all images together
+};
+
+/// Whether an image held in a buffer view lies inside its buffer's bytes (tinygltf passes the
+/// view's start and length unchecked; precheck_gltf_json() checked the declared lengths).
+bool image_in_bounds(const ImageContext& context, const tinygltf::Image& image) {
+    if (image.bufferView < 0) return true;
+    const tinygltf::Model& model = *context.model;
+    if (static_cast<std::size_t>(image.bufferView) >= model.bufferViews.size()) return false;
+    const tinygltf::BufferView& view =
+        model.bufferViews[static_cast<std::size_t>(image.bufferView)];
+    if (view.buffer < 0 || static_cast<std::size_t>(view.buffer) >= model.buffers.size()) {
+        return false;
+    }
+    const std::size_t size = model.buffers[static_cast<std::size_t>(view.buffer)].data.size();
+    return view.byteOffset <= size && view.byteLength <= size - view.byteOffset &&
+           view.byteLength <= static_cast<std::size_t>(INT_MAX);
+}
+
 bool load_image(tinygltf::Image* image, const int index, std::string* err, std::string*, int, int,
-                const unsigned char* bytes, int size, void*) {
+                const unsigned char* bytes, int size, void* user) {
+    auto* context = static_cast<ImageContext*>(user);
+    if (!image_in_bounds(*context, *image)) {
+        if (err != nullptr) {
+            *err += "image " + std::to_string(index) + ": its buffer view runs past its buffer";
+        }
+        return false;
+    }
     try {
+        const stereoscene::support::Limits& limits = stereoscene::support::limits();
+        const std::uint64_t pixels = image_pixels(bytes, static_cast<std::size_t>(size));
+        // (image_pixels throws for an unreadable header; the catch below names the image.)
+        context->pixels += pixels;
+        stereoscene::support::check_limit("images of the model", context->pixels,
+                                          limits.max_image_pixels, "pixels");
         ImageRgba8 decoded = decode_image_memory(bytes, static_cast<std::size_t>(size),
                                                  "image " + std::to_string(index));
         image->width = decoded.width;
@@ -208,18 +229,35 @@ bool load_image(tinygltf::Image* image, const int index, std::string* err, std::
         image->image = std::move(decoded.pixels);
         return true;
     } catch (const std::exception& e) {
-        if (err != nullptr) *err += e.what();
+        if (err != nullptr) *err += "image " + std::to_string(index) + ": " + e.what();
         return false;
     }
 }
 
 }  // namespace
 
+void check_uris(const nlohmann::json& doc) {
+    for (const char* key : {"buffers", "images"}) {
+        const auto it = doc.find(key);
+        if (it == doc.end() || !it->is_array()) {
+            continue;
+        }
+        for (std::size_t i = 0; i < it->size(); ++i) {
+            const nlohmann::json& item = (*it)[i];
+            if (item.is_object() && item.contains("uri") && item["uri"].is_string()) {
+                check_one_uri(item["uri"].get<std::string>(),
+                              "/" + std::string(key) + "/" + std::to_string(i) + "/uri");
+            }
+        }
+    }
+}
+
 tinygltf::Model read_gltf(const fs::path& path) {
     const std::vector<unsigned char> bytes = read_bytes(path);
     const bool binary = is_glb(bytes);
-    check_uris(binary ? glb_json_chunk(bytes)
-                      : std::string(reinterpret_cast<const char*>(bytes.data()), bytes.size()));
+    precheck_gltf_json(
+        binary ? glb_json_chunk(bytes)
+               : std::string(reinterpret_cast<const char*>(bytes.data()), bytes.size()));
     if (bytes.size() > std::numeric_limits<unsigned int>::max()) {
         throw LoadError("file too large");
     }
@@ -231,8 +269,9 @@ tinygltf::Model read_gltf(const fs::path& path) {
     tinygltf::TinyGLTF loader;
     loader.SetFsCallbacks(tinygltf::FsCallbacks{&guard_file_exists, &guard_expand, &guard_read,
                                                 &guard_write, &guard});
-    loader.SetImageLoader(&load_image, nullptr);
     tinygltf::Model gltf;
+    ImageContext images{&gltf, 0};
+    loader.SetImageLoader(&load_image, &images);
     std::string err;
     std::string warn;
     const std::string base_dir = guard.root.string();

@@ -13,6 +13,7 @@
 
 #include <tiny_gltf.h>
 #include <glm/glm.hpp>
+#include <nlohmann/json.hpp>
 
 namespace scene_viewer::gltf_detail {
 
@@ -26,6 +27,17 @@ class LoadError : public std::runtime_error {
 /// folder are refused before parsing, file access is confined to that folder, images decode
 /// through image_io, and required extensions are refused. Throws LoadError.
 tinygltf::Model read_gltf(const std::filesystem::path& path);
+
+/// Checks a glTF document's JSON before tinygltf reads it: nesting within
+/// scene_schema::kMaxJsonDepth, the node count within the model limit, sizes and offsets
+/// non-negative integers up to 2^53 (so 64-bit sums cannot wrap), buffer views inside their
+/// buffers' declared lengths, indices that exist, and URIs (check_uris). Throws LoadError
+/// naming the JSON pointer.
+void precheck_gltf_json(const std::string& json_text);
+
+/// Refuses a buffer or image URI that could read outside the model's folder: any scheme but
+/// data:, absolute paths, and relative paths whose `..` segments climb above the folder.
+void check_uris(const nlohmann::json& doc);
 
 /// Where an accessor's elements live, checked against its buffer.
 struct AccessorView {

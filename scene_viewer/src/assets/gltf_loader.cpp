@@ -19,6 +19,7 @@
 #include <nlohmann/json.hpp>
 
 #include "scene_viewer/assets/image_io.hpp"
+#include "stereoscene/support/limits.hpp"
 
 #include "gltf_internal.hpp"
 
@@ -27,6 +28,10 @@ namespace {
 
 namespace fs = std::filesystem;
 using namespace gltf_detail;
+
+/// Indices a model may hold per vertex of the vertex limit (a closed triangle mesh has about
+/// six).
+constexpr std::uint64_t kIndicesPerVertex = 8;
 
 /// Converts tinygltf's document into our Model: walks the scene's node forest, bakes transforms.
 class Converter {
@@ -64,27 +69,44 @@ class Converter {
     }
 
   private:
-    void visit(int index, const glm::mat4& parent) {
-        if (index < 0 || static_cast<std::size_t>(index) >= gltf_.nodes.size()) {
-            throw LoadError("node " + std::to_string(index) + " does not exist");
-        }
-        if (visited_[static_cast<std::size_t>(index)]) {
-            throw LoadError("node " + std::to_string(index) +
-                            " is reached twice: the node hierarchy is not a forest");
-        }
-        visited_[static_cast<std::size_t>(index)] = true;
-        const tinygltf::Node& node = gltf_.nodes[static_cast<std::size_t>(index)];
-        const glm::mat4 world = parent * local_transform(node);
-        if (node.mesh >= 0) {
-            if (static_cast<std::size_t>(node.mesh) >= gltf_.meshes.size()) {
-                throw LoadError("node " + std::to_string(index) + ": mesh " +
-                                std::to_string(node.mesh) + " does not exist");
+    /// Walks one tree of the node forest depth first with an explicit stack, so a chain of
+    /// nodes as deep as the file likes cannot overflow the call stack.
+    void visit(int root, const glm::mat4& root_parent) {
+        std::vector<std::pair<int, glm::mat4>> stack{{root, root_parent}};
+        while (!stack.empty()) {
+            const auto [index, parent] = stack.back();
+            stack.pop_back();
+            if (index < 0 || static_cast<std::size_t>(index) >= gltf_.nodes.size()) {
+                throw LoadError("node " + std::to_string(index) + " does not exist");
             }
-            add_mesh(node.mesh, world);
+            if (visited_[static_cast<std::size_t>(index)]) {
+                throw LoadError("node " + std::to_string(index) +
+                                " is reached twice: the node hierarchy is not a forest");
+            }
+            visited_[static_cast<std::size_t>(index)] = true;
+            const tinygltf::Node& node = gltf_.nodes[static_cast<std::size_t>(index)];
+            const glm::mat4 world = parent * local_transform(node);
+            if (node.mesh >= 0) {
+                if (static_cast<std::size_t>(node.mesh) >= gltf_.meshes.size()) {
+                    throw LoadError("node " + std::to_string(index) + ": mesh " +
+                                    std::to_string(node.mesh) + " does not exist");
+                }
+                add_mesh(node.mesh, world);
+            }
+            // Reversed, so children are converted in their listed order.
+            for (auto child = node.children.rbegin(); child != node.children.rend(); ++child) {
+                stack.emplace_back(*child, world);
+            }
         }
-        for (int child : node.children) {
-            visit(child, world);
-        }
+    }
+
+    /// Counts an accessor's elements into the model's totals before it is read, so a model
+    /// whose primitives share one huge accessor is refused before anything is allocated.
+    void reserve_elements(int accessor, std::uint64_t& total, std::uint64_t limit,
+                          const char* unit) {
+        if (accessor < 0 || static_cast<std::size_t>(accessor) >= gltf_.accessors.size()) return;
+        total += gltf_.accessors[static_cast<std::size_t>(accessor)].count;
+        stereoscene::support::check_limit("the model's " + std::string(unit), total, limit, unit);
     }
 
     void add_mesh(int mesh_index, const glm::mat4& world) {
@@ -109,6 +131,13 @@ class Converter {
         if (position == prim.attributes.end()) {
             throw LoadError(what + ": no POSITION attribute");
         }
+        const std::uint64_t max_vertices = stereoscene::support::limits().max_model_vertices;
+        for (const auto& [name, accessor] : prim.attributes) {
+            if (name == "POSITION" || name == "NORMAL" || name == "TEXCOORD_0") {
+                reserve_elements(accessor, vertices_, max_vertices, "vertices");
+            }
+        }
+        reserve_elements(prim.indices, indices_, kIndicesPerVertex * max_vertices, "indices");
         out.positions = read_vectors<3>(gltf_, position->second, what + " POSITION");
         const std::size_t n = out.positions.size();
         const auto normal = prim.attributes.find("NORMAL");
@@ -233,6 +262,8 @@ class Converter {
     Model& out_;
     std::vector<int> texture_slot_;  ///< glTF image index -> Model::textures index
     std::vector<bool> visited_;
+    std::uint64_t vertices_ = 0;  ///< attribute elements counted so far, all primitives
+    std::uint64_t indices_ = 0;   ///< indices counted so far, all primitives
 };
 
 Model load_model_unchecked(const fs::path& path) {

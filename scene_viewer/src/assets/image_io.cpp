@@ -1,10 +1,12 @@
 #include "scene_viewer/assets/image_io.hpp"
 
 #include <climits>
-#include <fstream>
 #include <stdexcept>
 
 #include <stb/stb_image.h>
+
+#include "stereoscene/support/file_read.hpp"
+#include "stereoscene/support/limits.hpp"
 
 #include <zlib.h>
 
@@ -26,16 +28,6 @@ void put_chunk(std::vector<unsigned char>& out, const char* type, const unsigned
 }
 
 }  // namespace
-
-bool read_file_bytes(const std::filesystem::path& path, std::vector<unsigned char>& out) {
-    std::ifstream in(path, std::ios::binary | std::ios::ate);
-    if (!in) return false;
-    const std::streamoff size = in.tellg();
-    if (size < 0) return false;
-    out.resize(static_cast<std::size_t>(size));
-    in.seekg(0);
-    return size == 0 || static_cast<bool>(in.read(reinterpret_cast<char*>(out.data()), size));
-}
 
 std::vector<unsigned char> encode_png(const ImageRgba8& image, int zlib_level) {
     if (image.width <= 0 || image.height <= 0) {
@@ -99,6 +91,14 @@ ImageRgba8 decode_image_memory(const unsigned char* bytes, std::size_t size,
     if (size == 0 || size > static_cast<std::size_t>(INT_MAX)) {
         throw std::runtime_error(what + ": image data is empty or too large");
     }
+    std::uint64_t pixels = 0;
+    try {
+        pixels = image_pixels(bytes, size);
+    } catch (const std::runtime_error& e) {
+        throw std::runtime_error(what + ": " + e.what());
+    }
+    stereoscene::support::check_limit(what, pixels, stereoscene::support::limits().max_image_pixels,
+                                      "pixels");
     int width = 0;
     int height = 0;
     int channels = 0;
@@ -118,11 +118,21 @@ ImageRgba8 decode_image_memory(const unsigned char* bytes, std::size_t size,
     return image;
 }
 
-ImageRgba8 decode_image(const std::filesystem::path& path) {
-    std::vector<unsigned char> bytes;
-    if (!read_file_bytes(path, bytes)) {
-        throw std::runtime_error(path.string() + ": cannot read image");
+std::uint64_t image_pixels(const unsigned char* bytes, std::size_t size) {
+    int width = 0;
+    int height = 0;
+    int channels = 0;
+    if (size == 0 || size > static_cast<std::size_t>(INT_MAX) ||
+        stbi_info_from_memory(bytes, static_cast<int>(size), &width, &height, &channels) == 0) {
+        const char* reason = stbi_failure_reason();
+        throw std::runtime_error(std::string("cannot decode image: ") +
+                                 (reason != nullptr ? reason : "unknown format"));
     }
+    return static_cast<std::uint64_t>(width) * static_cast<std::uint64_t>(height);
+}
+
+ImageRgba8 decode_image(const std::filesystem::path& path) {
+    const std::vector<unsigned char> bytes = stereoscene::support::read_binary_input(path);
     return decode_image_memory(bytes.data(), bytes.size(), path.string());
 }
 

@@ -1,5 +1,8 @@
 #include "scene_viewer/render/point_cloud.hpp"
 
+#include "stereoscene/support/file_read.hpp"
+#include "stereoscene/support/limits.hpp"
+
 #include <algorithm>
 #include <cctype>
 #include <cmath>
@@ -104,25 +107,35 @@ Roles find_roles(const std::vector<std::string>& names) {
 }
 
 /// Appends one point from its column values.
+/// Values a point may carry in a PLY or PCD file (the widest PCL point types carry a few hundred).
+constexpr std::size_t kMaxFields = 4096;
+
+/// A value from the file clamped into [lo, hi] before the cast (a cast of an out-of-range
+/// double is undefined); NaN gives lo.
+template <class T>
+T clamp_cast(double v, double lo, double hi) {
+    return static_cast<T>(v >= lo ? (v <= hi ? v : hi) : lo);
+}
+
 void add_point(PointCloud& cloud, const Roles& roles, const double* v, bool packed_rgb_float) {
     cloud.positions_kitti.emplace_back(v[roles.x], v[roles.y], v[roles.z]);
     if (roles.r >= 0 && roles.g >= 0 && roles.b >= 0) {
-        cloud.colours.push_back({static_cast<std::uint8_t>(v[roles.r]),
-                                 static_cast<std::uint8_t>(v[roles.g]),
-                                 static_cast<std::uint8_t>(v[roles.b])});
+        cloud.colours.push_back({clamp_cast<std::uint8_t>(v[roles.r], 0, 255),
+                                 clamp_cast<std::uint8_t>(v[roles.g], 0, 255),
+                                 clamp_cast<std::uint8_t>(v[roles.b], 0, 255)});
     } else if (roles.rgb >= 0) {
         std::uint32_t packed = 0;
         if (packed_rgb_float) {
             const float f = static_cast<float>(v[roles.rgb]);
             std::memcpy(&packed, &f, 4);
         } else {
-            packed = static_cast<std::uint32_t>(v[roles.rgb]);
+            packed = clamp_cast<std::uint32_t>(v[roles.rgb], 0, 4294967295.0);
         }
         cloud.colours.push_back({static_cast<std::uint8_t>((packed >> 16) & 0xFF),
                                  static_cast<std::uint8_t>((packed >> 8) & 0xFF),
                                  static_cast<std::uint8_t>(packed & 0xFF)});
     }
-    if (roles.cls >= 0) cloud.class_ids.push_back(static_cast<int>(v[roles.cls]));
+    if (roles.cls >= 0) cloud.class_ids.push_back(clamp_cast<int>(v[roles.cls], -1, 65535));
 }
 
 bool ply_type(const std::string& t, Field& f) {
@@ -179,6 +192,7 @@ PointCloud read_ply(const std::filesystem::path& path, std::ifstream& in) {
             f.offset = stride;
             stride += f.bytes;
             fields.push_back(f);
+            if (fields.size() > kMaxFields) fail(path, "PLY header: more than 4096 properties");
         } else if (word == "end_header") {
             break;
         }
@@ -243,6 +257,21 @@ PointCloud read_pcd(const std::filesystem::path& path, std::ifstream& in) {
         counts.size() != names.size()) {
         fail(path, "PCD header: FIELDS, SIZE, TYPE and COUNT disagree");
     }
+    constexpr int kMaxCount = 1024;  // values per field (PCL's histograms use up to 308)
+    for (std::size_t i = 0; i < names.size(); ++i) {
+        const bool is_float = types[i] == "F";
+        const bool size_ok =
+            is_float ? (sizes[i] == 4 || sizes[i] == 8)
+                     : (sizes[i] == 1 || sizes[i] == 2 || sizes[i] == 4 || sizes[i] == 8);
+        if (!size_ok || (!is_float && types[i] != "I" && types[i] != "U")) {
+            fail(path, "PCD header: field '" + names[i] + "' has TYPE " + types[i] + " SIZE " +
+                           std::to_string(sizes[i]) + " (F 4/8, I or U 1/2/4/8)");
+        }
+        if (counts[i] < 1 || counts[i] > kMaxCount) {
+            fail(path, "PCD header: field '" + names[i] + "' COUNT must be 1.." +
+                           std::to_string(kMaxCount));
+        }
+    }
     std::vector<Field> fields;
     std::vector<std::string> scalar_names;
     int stride = 0;
@@ -256,6 +285,7 @@ PointCloud read_pcd(const std::filesystem::path& path, std::ifstream& in) {
             stride += f.bytes;
             fields.push_back(f);
             scalar_names.push_back(f.name);
+            if (fields.size() > kMaxFields) fail(path, "PCD header: more than 4096 values a point");
         }
     }
     const Roles roles = find_roles(scalar_names);
@@ -338,6 +368,7 @@ PointCloud read_xyz(const std::filesystem::path& path, std::ifstream& in) {
 }  // namespace
 
 PointCloud read_point_cloud(const std::filesystem::path& path) {
+    stereoscene::support::check_input_file(path, stereoscene::support::limits().max_file_bytes);
     std::ifstream in(path, std::ios::binary);
     if (!in) fail(path, std::string("cannot open: ") + std::strerror(errno));
     const std::string ext = lower(path.extension().string());

@@ -1,5 +1,6 @@
 #include <cmath>
 #include <cstdio>
+#include <filesystem>
 #include <map>
 #include <sstream>
 #include <stdexcept>
@@ -11,6 +12,7 @@
 #include "scene_viewer/assets/image_io.hpp"
 #include "scene_viewer/sensors/stereo_sensors.hpp"
 #include "stereoscene/support/atomic_file.hpp"
+#include "stereoscene/support/output_transaction.hpp"
 
 namespace scene_viewer {
 
@@ -146,14 +148,39 @@ std::map<std::string, std::string> kitti_layout_files(const StereoFrame& frame,
 
 void write_files(const std::filesystem::path& root,
                  const std::map<std::string, std::string>& files) {
-    for (const auto& [relative, bytes] : files) {
-        const std::filesystem::path path = root / relative;
-        std::error_code ec;
-        std::filesystem::create_directories(path.parent_path(), ec);
-        if (ec)
-            throw stereoscene::support::FileError(path.parent_path().string() + ": " +
-                                                  ec.message());
-        stereoscene::support::write_file_atomic(path, bytes);
+    namespace fs = std::filesystem;
+    std::vector<fs::path> created;  // folders this call made, outermost first
+    auto remove_created = [&] {
+        std::error_code ignored;
+        for (auto it = created.rbegin(); it != created.rend(); ++it) fs::remove(*it, ignored);
+    };
+    try {
+        stereoscene::support::OutputTransaction outputs;
+        for (const auto& [relative, bytes] : files) {
+            const fs::path rel(relative);
+            const fs::path normal = rel.lexically_normal();
+            if (rel.is_absolute() || normal.empty() || *normal.begin() == "..") {
+                throw stereoscene::support::FileError(root / rel, "leaves the output folder");
+            }
+            const fs::path path = root / rel;
+            std::vector<fs::path> missing;
+            for (fs::path p = path.parent_path(); !p.empty() && !fs::exists(p);
+                 p = p.parent_path()) {
+                missing.push_back(p);
+            }
+            for (auto it = missing.rbegin(); it != missing.rend(); ++it) {
+                std::error_code ec;
+                if (!fs::create_directory(*it, ec) && ec) {
+                    throw stereoscene::support::FileError(*it, ec.message());
+                }
+                created.push_back(*it);
+            }
+            outputs.stage(path, bytes);
+        }
+        outputs.commit();
+    } catch (...) {
+        remove_created();
+        throw;
     }
 }
 

@@ -2,12 +2,14 @@
 
 #include <algorithm>
 #include <cmath>
+#include <cstdint>
 
 #include "scene_viewer/render/colours.hpp"
 #include "scene_viewer/render/coordinates.hpp"
 #include "scene_viewer/render/palette.hpp"
 #include "scene_viewer/render/render_options.hpp"
 #include "scene_viewer/views/views.hpp"
+#include "stereoscene/support/limits.hpp"
 
 namespace scene_viewer {
 
@@ -21,30 +23,43 @@ constexpr double kMaxGroundPatchHeight = 0.1;
 constexpr float kDefaultCameraHeight = 1.65f;
 
 /// Grid lines every `step` metres over [x0, x1] x [z0, z1] at height y (KITTI); lines on
-/// multiples of 10 m are darker.
-MeshData grid_mesh(float x0, float x1, float z0, float z1, float y, int step) {
+/// multiples of 10 m (or of ten steps, for coarse steps) are darker. Counted in doubles, so a view
+/// of any size cannot overflow an int.
+MeshData grid_mesh(float x0, float x1, float z0, float z1, float y, double step) {
     MeshData m;
     m.topology = Topology::lines;
     const glm::vec4 minor(0.55f, 0.55f, 0.58f, 1.0f), major(0.25f, 0.25f, 0.28f, 1.0f);
-    auto first = [step](float v) { return static_cast<int>(std::floor(v / step)) * step; };
-    for (int x = first(x0); x <= static_cast<int>(std::ceil(x1)); x += step) {
-        const glm::vec4 c = x % 10 == 0 ? major : minor;
+    const double major_every = step > 10.0 ? step * 10.0 : 10.0;
+    auto lines = [&](double lo, double hi, auto&& add) {
+        const double first = std::floor(lo / step);
+        const double count = std::floor(std::ceil(hi) / step) - first + 1.0;
+        for (double i = 0.0; i < count; i += 1.0) {
+            const double v = (first + i) * step;
+            add(static_cast<float>(v), std::fmod(v, major_every) == 0.0 ? major : minor);
+        }
+    };
+    lines(static_cast<double>(x0), static_cast<double>(x1), [&](float x, const glm::vec4& c) {
         m.positions.insert(m.positions.end(), {{x, y, z0}, {x, y, z1}});
         m.colours.insert(m.colours.end(), {c, c});
-    }
-    for (int z = first(z0); z <= static_cast<int>(std::ceil(z1)); z += step) {
-        const glm::vec4 c = z % 10 == 0 ? major : minor;
+    });
+    lines(static_cast<double>(z0), static_cast<double>(z1), [&](float z, const glm::vec4& c) {
         m.positions.insert(m.positions.end(), {{x0, y, z}, {x1, y, z}});
         m.colours.insert(m.colours.end(), {c, c});
-    }
+    });
     return m;
 }
 
-/// Grid step in metres: 1 m while lines stay at least 6 px apart, else 5 m, else 10 m.
-int grid_step_m(float pixels_per_metre) {
-    if (pixels_per_metre >= 6.0f) return 1;
-    if (pixels_per_metre * 5.0f >= 6.0f) return 5;
-    return 10;
+/// Grid step in metres: 1 m while lines stay at least 6 px apart, else 5 m, else 10 m, then
+/// 50, 100, 500 ... m while the view would need more than `max_lines` lines in all across a
+/// `width_m` x `height_m` view.
+double grid_step_m(float pixels_per_metre, double width_m, double height_m,
+                   std::uint64_t max_lines) {
+    double step = pixels_per_metre >= 6.0f ? 1.0 : pixels_per_metre * 5.0f >= 6.0f ? 5.0 : 10.0;
+    const double budget = static_cast<double>(std::max<std::uint64_t>(max_lines, 4));
+    while ((width_m + height_m) / step + 4.0 > budget) {
+        step *= std::fmod(std::log10(step), 1.0) == 0.0 ? 5.0 : 2.0;
+    }
+    return step;
 }
 
 MeshData cloud_mesh(const PointCloud& cloud, Shading shading) {
@@ -183,7 +198,9 @@ void add_grid(World& world, const RenderOptions& options, const ViewSpec& spec,
         static_cast<float>(options.width_px) / static_cast<float>(options.height_px);
     const float hh = spec.bev_half_height_m, hw = hh * aspect;
     const glm::vec2 c = spec.bev_centre_xz;
-    const int step = grid_step_m(static_cast<float>(options.height_px) / (2.0f * hh));
+    const double step = grid_step_m(static_cast<float>(options.height_px) / (2.0f * hh),
+                                    2.0 * static_cast<double>(hw), 2.0 * static_cast<double>(hh),
+                                    stereoscene::support::limits().max_grid_lines);
     const std::uint32_t grid = models.put(
         "grid", grid_mesh(c.x - hw, c.x + hw, c.y - hh, c.y + hh, ground_top_y - 0.01f, step));
     const EntityId e = world.create();

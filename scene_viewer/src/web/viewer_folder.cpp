@@ -16,6 +16,7 @@
 #include "scene_viewer/render/scene_renderer.hpp"
 #include "scene_viewer/views/views.hpp"
 #include "stereoscene/support/asset_dir.hpp"
+#include "stereoscene/support/file_read.hpp"
 
 namespace scene_viewer {
 namespace {
@@ -31,11 +32,7 @@ std::string hex_colour(const Rgb8& c) {
 }
 
 std::string read_text(const std::filesystem::path& path) {
-    std::ifstream in(path, std::ios::binary);
-    if (!in) throw std::runtime_error(path.string() + ": " + std::strerror(errno));
-    std::ostringstream text;
-    text << in.rdbuf();
-    return text.str();
+    return stereoscene::support::read_text_input(path);
 }
 
 nlohmann::json vec3_json(const glm::vec3& v) { return nlohmann::json::array({v.x, v.y, v.z}); }

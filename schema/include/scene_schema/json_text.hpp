@@ -4,6 +4,8 @@
 /// outside JSON: entity files, palettes, class tables, rigs.
 
 #include <cstddef>
+#include <cstdint>
+#include <string>
 #include <string_view>
 
 #include <nlohmann/json.hpp>
@@ -21,5 +23,15 @@ inline constexpr std::size_t kMaxJsonDepth = 256;
 /// names the line and column of syntax errors. A leading UTF-8 byte order mark is skipped, as
 /// RFC 8259 section 8.1 allows.
 nlohmann::json parse_json(std::string_view text, std::size_t max_depth = kMaxJsonDepth);
+
+/// nlohmann's exception text without its "[json.exception.type_error.302] " prefix, for
+/// messages that name the file themselves.
+std::string json_error_text(const nlohmann::json::exception& e);
+
+/// The non-negative integer `value` holds, or SchemaError(pointer) when it is another type, a
+/// fraction, negative or above `max` (nlohmann's own get<std::size_t>() casts 1e30 or -1
+/// without a check).
+std::uint64_t get_count(const nlohmann::json& value, const std::string& pointer,
+                        std::uint64_t max = UINT64_MAX);
 
 }  // namespace scene_schema

@@ -13,6 +13,11 @@
 namespace stereoscene::support {
 
 void write_file_atomic(const std::filesystem::path& path, std::string_view bytes, FileSync sync) {
+    struct stat st {};
+    if (::lstat(path.c_str(), &st) == 0 && S_ISDIR(st.st_mode)) {
+        // renameat2's exchange below would swap the directory aside.
+        throw FileError(path.string() + ": is a directory, refused as an output");
+    }
     const std::filesystem::path dir = path.has_parent_path() ? path.parent_path() : ".";
     std::string temp = (dir / ("." + path.filename().string() + ".tmp-XXXXXX")).string();
     const int fd = ::mkstemp(temp.data());

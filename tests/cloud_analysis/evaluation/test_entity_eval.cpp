@@ -349,5 +349,5 @@ TEST_CASE("visibility records are matched to the reference's things by id", "[en
     std::filesystem::remove(path);
     CHECK_THROWS_WITH(
         cloud_analysis::load_reference_visibility(path, reference, EntityEvalOptions{}),
-        Catch::Contains("no such file"));
+        Catch::Contains("No such file"));
 }

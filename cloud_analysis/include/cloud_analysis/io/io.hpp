@@ -66,7 +66,8 @@ std::string encode_kitti_disparity_png(const DisparityMap& disparity);
 std::string encode_disparity_preview_png(const DisparityMap& disparity,
                                          double max_disparity_px = 0.0);
 
-/// Reads a whole file into memory; throws std::runtime_error naming the file.
+/// Reads a whole text file into memory through the bounded reader (regular files only, at most
+/// support::limits().max_text_bytes); throws support::FileError "<file>: <reason>".
 std::string read_text_file(const std::filesystem::path& path);
 
 }  // namespace cloud_analysis

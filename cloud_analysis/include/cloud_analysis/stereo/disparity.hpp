@@ -15,6 +15,9 @@
 
 namespace cloud_analysis {
 
+/// Largest disparity range and |min_disparity| an options struct accepts, px.
+inline constexpr int kMaxDisparityRange = 4096;
+
 /// Every cv::StereoSGBM parameter plus the post-filters. Defaults are tuned on KITTI 2015
 /// frames 000000_10 and 000001_10 (docs/evaluation.md, section Disparity).
 struct DisparityOptions {

@@ -5,6 +5,7 @@
 /// implementation is linked, not compiled in.
 
 #include <cstddef>
+#include <cstdint>
 #include <filesystem>
 #include <string>
 #include <vector>
@@ -12,10 +13,6 @@
 #include "scene_viewer/assets/model.hpp"
 
 namespace scene_viewer {
-
-/// Reads a whole file in one call, sized by seeking to its end; false when it cannot be opened
-/// or read (the caller names the file in its error).
-bool read_file_bytes(const std::filesystem::path& path, std::vector<unsigned char>& out);
 
 /// Encodes an RGBA8 image (rows top to bottom) as PNG bytes; zlib_level 0..9 (1 is fast).
 /// Throws std::invalid_argument for an empty or inconsistent image or a bad level.
@@ -28,11 +25,17 @@ std::vector<unsigned char> encode_png_samples(const unsigned char* rows, int wid
                                               int bit_depth, int colour_type, int bytes_per_pixel,
                                               int zlib_level);
 
-/// Decodes a PNG/JPEG/BMP/TGA file into RGBA8 (rows top to bottom); throws std::runtime_error
-/// "<file>: <reason>".
+/// Decodes a PNG/JPEG/BMP/TGA file into RGBA8 (rows top to bottom), read through the bounded
+/// reader and refused before decoding when its header promises more than
+/// support::limits().max_image_pixels; throws std::runtime_error "<file>: <reason>".
 ImageRgba8 decode_image(const std::filesystem::path& path);
 
-/// Decodes image bytes held in memory into RGBA8; `what` names the source in errors.
+/// Width x height promised by an image's header, read without decoding; throws
+/// std::runtime_error when the header cannot be read.
+std::uint64_t image_pixels(const unsigned char* bytes, std::size_t size);
+
+/// Decodes image bytes held in memory into RGBA8 (refused beyond the pixel limit before
+/// decoding); `what` names the source in errors.
 ImageRgba8 decode_image_memory(const unsigned char* bytes, std::size_t size,
                                const std::string& what);
 

@@ -147,8 +147,10 @@ std::string format_visibility_json(const StereoFrame& frame);
 std::map<std::string, std::string> kitti_layout_files(const StereoFrame& frame,
                                                       const std::string& frame_name);
 
-/// Writes every file of `files` under `root` atomically; files are written only after all were
-/// built, folders are created as needed.
+/// Writes every file of `files` under `root` as one support::OutputTransaction: all of them or
+/// none, earlier files restored on failure, folders created as needed and removed again when
+/// the write fails. A relative path that is absolute or climbs out of `root` is refused.
+/// Throws support::FileError.
 void write_files(const std::filesystem::path& root,
                  const std::map<std::string, std::string>& files);
 

@@ -4,6 +4,7 @@
 
 #include <filesystem>
 #include <stdexcept>
+#include <string>
 #include <string_view>
 
 namespace stereoscene::support {
@@ -12,6 +13,17 @@ namespace stereoscene::support {
 class FileError : public std::runtime_error {
   public:
     using std::runtime_error::runtime_error;
+    /// what() is "<path>: <reason>"; path() and reason() give the two parts.
+    FileError(const std::filesystem::path& path, const std::string& reason)
+        : std::runtime_error(path.string() + ": " + reason), path_(path), reason_(reason) {}
+    /// The file, when the error was built from its parts.
+    const std::filesystem::path& path() const { return path_; }
+    /// The reason without the path; what() when the error was built from one string.
+    std::string reason() const { return reason_.empty() ? what() : reason_; }
+
+  private:
+    std::filesystem::path path_;
+    std::string reason_;
 };
 
 /// Whether write_file_atomic waits for the disk.

@@ -1,0 +1,172 @@
+#!/usr/bin/env python3
+"""Runs every bad-input case of the corpus through cloud-analysis or scene-render and checks the
+promise for bad input: the expected exit code, exactly one line on stderr that starts with the
+tool's name and names the file or flag at fault, nothing left behind in the output folder
+(compared before and after, hidden temp files included, an earlier file unchanged), and time
+and peak memory under bounds.
+
+usage: run_corpus.py --cloud-analysis EXE --scene-render EXE --samples DIR --work DIR
+                     [--sanitize] [-k SUBSTRING]
+"""
+import argparse
+import hashlib
+import os
+import shutil
+import subprocess
+import sys
+import time
+
+HERE = os.path.dirname(os.path.abspath(__file__))
+CASES = os.path.join(HERE, "cases")
+
+# (name, tool, arguments, exit code, text the error line must contain). In arguments,
+# {c} is tests/corpus/cases, {g} the generated files, {s} the samples folder, {o} the output
+# folder (which holds keep.json, an earlier file no failure may touch).
+CA, SR = "cloud-analysis", "scene-render"
+STEREO = "--left {s}/synthetic/left.png --right {s}/synthetic/right.png"
+CALIB = "--calib {s}/synthetic/calib.yaml"
+SCENE = "{s}/synthetic/expected_entities.json"
+CASES_TABLE = [
+    # Files that are not files.
+    ("calibration is a FIFO", CA, f"{STEREO} --calib {{g}}/fifo -o {{o}}/e.json", 1, "fifo"),
+    ("left image is a FIFO", CA, f"--left {{g}}/fifo --right {{s}}/synthetic/right.png {CALIB} -o {{o}}/e.json", 1, "fifo"),
+    ("left image is /dev/zero", CA, f"--left /dev/zero --right {{s}}/synthetic/right.png {CALIB} -o {{o}}/e.json", 1, "/dev/zero"),
+    ("calibration is a directory", CA, f"{STEREO} --calib {{c}} -o {{o}}/e.json", 1, "cases"),
+    ("entity file is a FIFO", SR, "{g}/fifo --view bev -o {o}/r.png", 1, "fifo"),
+    ("entity file is /dev/zero", SR, "/dev/zero --view bev -o {o}/r.png", 1, "/dev/zero"),
+    ("background is a FIFO", SR, f"{SCENE} --view camera --background {{g}}/fifo -o {{o}}/r.png", 1, "background"),
+    ("rig is a FIFO", SR, f"sensors {SCENE} --rig {{g}}/fifo --out {{o}}/rig --frame 000000", 1, "fifo"),
+    ("cloud is a FIFO", SR, f"{SCENE} --view bev --cloud {{g}}/fifo -o {{o}}/r.png", 1, "fifo"),
+    ("class table is a FIFO", SR, f"{SCENE} --view bev --classes {{g}}/fifo -o {{o}}/r.png", 1, "fifo"),
+    ("evaluate: entity file is a FIFO", CA, f"evaluate --entities {{g}}/fifo --reference {SCENE}", 1, "fifo"),
+    # Sizes promised by headers.
+    ("left image promises 20000x20000", CA, f"--left {{g}}/huge.png --right {{s}}/synthetic/right.png {CALIB} -o {{o}}/e.json", 1, "huge.png"),
+    ("background promises 20000x20000", SR, f"{SCENE} --view camera --background {{g}}/huge.png -o {{o}}/r.png", 1, "background"),
+    # JSON nested 10^5 deep.
+    ("entity member nested 10^5 deep", SR, "{g}/deep_member.json --view bev -o {o}/r.png", 1, "deep_member.json"),
+    ("entity file nested 10^5 deep", SR, "{g}/deep_top.json --view bev -o {o}/r.png", 1, "deep_top.json"),
+    ("evaluate: entity file nested 10^5 deep", CA, f"evaluate --entities {{g}}/deep_member.json --reference {SCENE}", 1, "deep_member.json"),
+    ("calibration nested 10^5 deep", CA, f"{STEREO} --calib {{g}}/deep_calib.json -o {{o}}/e.json", 1, "deep_calib.json"),
+    ("palette nested 10^5 deep", CA, f"{STEREO} --semantic {{s}}/synthetic/semantic.png {CALIB} --palette {{g}}/deep_palette.json -o {{o}}/e.json", 1, "deep_palette.json"),
+    # glTF models from strangers.
+    ("glTF buffer view offset near 2^64", SR, f"{SCENE} --view bev --classes {{g}}/classes_wrap.json -o {{o}}/r.png", 1, "wrap.gltf"),
+    ("glTF image view past its buffer", SR, f"{SCENE} --view bev --classes {{g}}/classes_image_view.json -o {{o}}/r.png", 1, "image_view.gltf"),
+    ("glTF 64 primitives share a 3M-vertex accessor", SR, f"{SCENE} --view bev --classes {{g}}/classes_shared.json -o {{o}}/r.png", 1, "shared.gltf"),
+    ("glTF nested 10^5 deep", SR, f"{SCENE} --view bev --classes {{g}}/classes_deep.json -o {{o}}/r.png", 1, "deep.gltf"),
+    # Values that pass a type check but not a range.
+    ("class_id 1e30", SR, "{c}/class_id_1e30.json --view bev -o {o}/r.png", 1, "class_id"),
+    ("point_count 1e30", SR, "{c}/point_count_1e30.json --view bev -o {o}/r.png", 1, "point_count"),
+    ("entity at x = 1e30", SR, "{c}/x_1e30.json --view bev -o {o}/r.png", 1, "/x"),
+    ("--min-disparity 2^31-1", CA, f"{STEREO} {CALIB} --min-disparity 2147483647 -o {{o}}/e.json", 2, "min_disparity"),
+    ("--min-disparity -2^31", CA, f"{STEREO} {CALIB} --min-disparity -2147483648 -o {{o}}/e.json", 2, "min_disparity"),
+    ("PCD with a 1-byte float field", SR, f"{SCENE} --view bev --cloud {{c}}/float_size_1.pcd -o {{o}}/r.png", 1, "float_size_1.pcd"),
+    ("PCD with a huge COUNT", SR, f"{SCENE} --view bev --cloud {{c}}/huge_count.pcd -o {{o}}/r.png", 1, "huge_count.pcd"),
+    ("palette colour 2^40", CA, f"{STEREO} --semantic {{s}}/synthetic/semantic.png {CALIB} --palette {{c}}/palette_colour_2p40.json -o {{o}}/e.json", 1, "palette_colour_2p40.json"),
+    # Output paths.
+    ("render output is a directory", SR, f"{SCENE} --view bev -o {{o}}/dir", 1, "dir"),
+    ("render output and --glb are the same file", SR, f"{SCENE} --view bev -o {{o}}/same.png --glb {{o}}/same.png", 1, "same.png"),
+    ("render --glb is a directory after a good PNG", SR, f"{SCENE} --view bev -o {{o}}/r.png --glb {{o}}/dir", 1, "dir"),
+]
+
+
+def snapshot(folder):
+    """Every entry under folder (hidden ones too) with its type and content hash."""
+    out = {}
+    for root, dirs, files in os.walk(folder):
+        for name in dirs + files:
+            path = os.path.join(root, name)
+            rel = os.path.relpath(path, folder)
+            if os.path.isdir(path):
+                out[rel] = "dir"
+            else:
+                with open(path, "rb") as f:
+                    out[rel] = hashlib.sha256(f.read()).hexdigest()
+    return out
+
+
+def run_case(case, exes, dirs, bounds):
+    name, tool, args, code, names = case
+    out = os.path.join(dirs["work"], "out")
+    shutil.rmtree(out, ignore_errors=True)
+    os.makedirs(os.path.join(out, "dir"))
+    with open(os.path.join(out, "keep.json"), "w") as f:
+        f.write('{"earlier": "file"}\n')
+    with open(os.path.join(out, "dir", "inside"), "w") as f:
+        f.write("x")
+    before = snapshot(out)
+    argv = [exes[tool]] + args.format(c=CASES, g=dirs["gen"], s=dirs["samples"], o=out).split()
+    start = time.monotonic()
+    proc = subprocess.Popen(argv, stdin=subprocess.DEVNULL, stdout=subprocess.DEVNULL,
+                            stderr=subprocess.PIPE)
+    try:
+        _, err = proc.communicate(timeout=bounds["seconds"])
+    except subprocess.TimeoutExpired:
+        proc.kill()
+        proc.communicate()
+        return [f"still running after {bounds['seconds']} s (killed)"]
+    seconds = time.monotonic() - start
+    problems = []
+    lines = err.decode(errors="replace").splitlines()
+    if proc.returncode != code:
+        problems.append(f"exit {proc.returncode}, expected {code}")
+    errors = [l for l in lines if ": warning: " not in l]
+    if len(errors) != 1:
+        problems.append(f"{len(errors)} error lines, expected 1")
+    elif not errors[0].startswith(tool + ": ") or names not in errors[0]:
+        problems.append(f"error line does not start with '{tool}: ' and name '{names}'")
+    after = snapshot(out)
+    if after != before:
+        added = sorted(set(after) - set(before))
+        changed = sorted(k for k in before if after.get(k) != before[k])
+        problems.append(f"output folder changed: added {added}, changed or lost {changed}")
+    if seconds > bounds["seconds"]:
+        problems.append(f"took {seconds:.1f} s")
+    if problems:
+        problems.append("stderr: " + " | ".join(lines[:5]))
+    return problems
+
+
+def peak_rss_mib():
+    import resource
+    return resource.getrusage(resource.RUSAGE_CHILDREN).ru_maxrss / 1024.0
+
+
+def main():
+    p = argparse.ArgumentParser()
+    p.add_argument("--cloud-analysis", required=True)
+    p.add_argument("--scene-render", required=True)
+    p.add_argument("--samples", required=True)
+    p.add_argument("--work", required=True)
+    p.add_argument("--sanitize", action="store_true", help="looser time bound (ASan is slow)")
+    p.add_argument("-k", default="", help="run only cases whose name contains this")
+    a = p.parse_args()
+    exes = {CA: a.cloud_analysis, SR: a.scene_render}
+    shutil.rmtree(a.work, ignore_errors=True)
+    gen = os.path.join(a.work, "gen")
+    subprocess.run([sys.executable, os.path.join(HERE, "make_hostile.py"), gen], check=True)
+    dirs = {"work": a.work, "gen": gen, "samples": a.samples}
+    bounds = {"seconds": 60.0 if a.sanitize else 15.0, "mib": 1024.0}
+    failed = 0
+    ran = 0
+    for case in CASES_TABLE:
+        if a.k not in case[0]:
+            continue
+        ran += 1
+        problems = run_case(case, exes, dirs, bounds)
+        status = "ok  " if not problems else "FAIL"
+        print(f"{status} {case[0]}")
+        for problem in problems:
+            print(f"       {problem}")
+        failed += bool(problems)
+    # ru_maxrss of RUSAGE_CHILDREN is the largest peak of any one child.
+    rss = peak_rss_mib()
+    print(f"{ran} cases, {failed} failed, largest peak memory of a run {rss:.0f} MiB")
+    if not a.sanitize and rss > bounds["mib"]:
+        print(f"FAIL peak memory above {bounds['mib']:.0f} MiB")
+        failed += 1
+    shutil.rmtree(a.work, ignore_errors=True)
+    return 1 if failed else 0
+
+
+if __name__ == "__main__":
+    sys.exit(main())
