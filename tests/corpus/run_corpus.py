@@ -66,6 +66,17 @@ CASES_TABLE = [
     ("render output is a directory", SR, f"{SCENE} --view bev -o {{o}}/dir", 1, "dir"),
     ("render output and --glb are the same file", SR, f"{SCENE} --view bev -o {{o}}/same.png --glb {{o}}/same.png", 1, "same.png"),
     ("render --glb is a directory after a good PNG", SR, f"{SCENE} --view bev -o {{o}}/r.png --glb {{o}}/dir", 1, "dir"),
+    ("analyse -o is a directory", CA, f"{STEREO} {CALIB} -o {{o}}/dir", 1, "dir"),
+    ("analyse writes one file for two flags", CA, f"{STEREO} {CALIB} -o {{o}}/e.json --disparity-png {{o}}/same.png --disparity-kitti {{o}}/same.png", 1, "same.png"),
+    ("analyse keeps an earlier entity file when a later output is refused", CA, f"{STEREO} {CALIB} -o {{o}}/keep.json --disparity-png {{o}}/dir", 1, "dir"),
+    ("batch frame id climbs out of --out-dir", CA, "batch --kitti-root {c} --frames ../escape --out-dir {o}", 2, "--frames"),
+    ("batch frame id is an absolute path", CA, "batch --kitti-root {c} --frames /tmp/escape --out-dir {o}", 2, "--frames"),
+    ("batch list names a frame outside --out-dir", CA, "batch --kitti-root {c} --list {c}/list_dotdot.txt --out-dir {o}", 1, "list_dotdot.txt"),
+    ("batch list is a FIFO", CA, "batch --kitti-root {c} --list {g}/fifo --out-dir {o}", 1, "fifo"),
+    ("batch --report is a directory", CA, "batch --kitti-root {c} --frames x --out-dir {o} --report {o}/dir", 1, "--report"),
+    ("make-sample at 100000x100000", CA, "make-sample --width 100000 --height 100000 --out {o}/sample", 2, "--width"),
+    ("grid --columns -1", SR, f"grid --inputs {SCENE} --columns -1 -o {{o}}/g.png", 2, "--columns"),
+    ("sensors --size 16384x16384", SR, f"sensors {SCENE} --size 16384x16384 --out {{o}}/rig --frame 000000", 2, "--size"),
 ]
 
 

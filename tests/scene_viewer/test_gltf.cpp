@@ -7,6 +7,7 @@
 #include <unistd.h>
 
 #include <scene_viewer/assets/gltf_loader.hpp>
+#include <stereoscene/support/limits.hpp>
 
 namespace fs = std::filesystem;
 using scene_viewer::load_model;
@@ -236,4 +237,74 @@ TEST_CASE("computed normals are the area-weighted average of the adjacent faces"
     const glm::vec3 expected = glm::normalize(glm::vec3(0, -0.5f, 1));
     require_vec3(p.normals[0], expected);
     require_vec3(p.normals[1], expected);
+}
+
+namespace {
+
+/// A one-triangle glTF document (its buffer as a data: URI) with `extra` JSON members spliced
+/// into the top level, e.g. nodes, meshes and scenes.
+std::string triangle_gltf(const std::string& buffer_views, const std::string& extra) {
+    // 3 float VEC3 positions (0,0,0) (1,0,0) (0,1,0), base64.
+    const std::string data = "AAAAAAAAAAAAAAAAAACAPwAAAAAAAAAAAAAAAAAAgD8AAAAA";
+    return R"({"asset": {"version": "2.0"},
+        "buffers": [{"byteLength": 36, "uri": "data:application/octet-stream;base64,)" +
+           data + R"("}], "bufferViews": )" + buffer_views + R"(,
+        "accessors": [{"bufferView": 0, "componentType": 5126, "count": 3, "type": "VEC3"}],)" +
+           extra + "}";
+}
+
+}  // namespace
+
+TEST_CASE("buffer view offsets that would wrap 64-bit sums are refused before tinygltf", "[gltf]") {
+    const fs::path dir = temp_folder("wrap");
+    std::ofstream(dir / "wrap.gltf")
+        << triangle_gltf(R"([{"buffer": 0, "byteOffset": 18446744073709551600, "byteLength": 36}])",
+                         R"("meshes": [{"primitives": [{"attributes": {"POSITION": 0}}]}],
+           "nodes": [{"mesh": 0}], "scenes": [{"nodes": [0]}])");
+    CHECK_THAT(load_error(dir / "wrap.gltf"),
+               Catch::Contains("/bufferViews/0/byteOffset: 18446744073709551600 too large"));
+    std::ofstream(dir / "image.gltf") << triangle_gltf(
+        R"([{"buffer": 0, "byteLength": 36}, {"buffer": 0, "byteOffset": 30, "byteLength": 99}])",
+        R"("images": [{"bufferView": 1, "mimeType": "image/png"}],
+           "meshes": [{"primitives": [{"attributes": {"POSITION": 0}}]}],
+           "nodes": [{"mesh": 0}], "scenes": [{"nodes": [0]}])");
+    CHECK_THAT(load_error(dir / "image.gltf"),
+               Catch::Contains("/bufferViews/1: byteOffset + byteLength 129 runs past"));
+    fs::remove_all(dir);
+}
+
+TEST_CASE("a chain of 200,000 nodes loads without recursion", "[gltf]") {
+    const fs::path dir = temp_folder("chain");
+    std::string nodes = "[";
+    constexpr int kNodes = 200000;
+    for (int i = 0; i + 1 < kNodes; ++i)
+        nodes += R"({"children": [)" + std::to_string(i + 1) + "]},";
+    nodes += R"({"mesh": 0}])";
+    std::ofstream(dir / "chain.gltf")
+        << triangle_gltf(R"([{"buffer": 0, "byteLength": 36}])",
+                         R"("meshes": [{"primitives": [{"attributes": {"POSITION": 0}}]}],
+           "scenes": [{"nodes": [0]}], "nodes": )" +
+                             nodes);
+    const scene_viewer::Model model = scene_viewer::load_model(dir / "chain.gltf");
+    CHECK(scene_viewer::triangle_count(model) == 1);
+    fs::remove_all(dir);
+}
+
+TEST_CASE("primitives that share an accessor count against the model's vertex limit", "[gltf]") {
+    const fs::path dir = temp_folder("shared");
+    std::ofstream(dir / "shared.gltf")
+        << triangle_gltf(R"([{"buffer": 0, "byteLength": 36}])",
+                         R"("meshes": [{"primitives": [{"attributes": {"POSITION": 0}},
+                                      {"attributes": {"POSITION": 0}},
+                                      {"attributes": {"POSITION": 0}}]}],
+           "nodes": [{"mesh": 0}], "scenes": [{"nodes": [0]}])");
+    const stereoscene::support::Limits saved = stereoscene::support::limits();
+    stereoscene::support::Limits small = saved;
+    small.max_model_vertices = 8;  // two primitives of 3 fit, the third does not
+    stereoscene::support::set_limits(small);
+    const std::string error = load_error(dir / "shared.gltf");
+    stereoscene::support::set_limits(saved);
+    CHECK_THAT(error, Catch::Contains("9 vertices is more than the limit of 8"));
+    CHECK(scene_viewer::triangle_count(scene_viewer::load_model(dir / "shared.gltf")) == 3);
+    fs::remove_all(dir);
 }

@@ -6,6 +6,7 @@
 #include <optional>
 
 #include <scene_schema/entities.hpp>
+#include <stereoscene/support/output_transaction.hpp>
 
 #include "cloud_analysis/cloud/cloud_io.hpp"
 #include "cloud_analysis/entities/entity_document.hpp"
@@ -49,6 +50,9 @@ LoadedRun load_run(const AnalyseArgs& a) {
         {a.disparity_kitti.string(), "--disparity-kitti"},
         {a.semantic_out.string(), "--semantic-out"}};
     int to_stdout = 0;
+    // Declared on a transaction only to refuse a directory, a missing folder or one file named
+    // by two flags before any work; nothing is staged on it.
+    stereoscene::support::OutputTransaction check;
     for (const auto& [path, flag] : all_outputs) {
         if (path.empty()) continue;
         if (path == "-") {
@@ -57,10 +61,11 @@ LoadedRun load_run(const AnalyseArgs& a) {
             }
             continue;
         }
-        const std::filesystem::path folder = std::filesystem::path(path).parent_path();
-        if (!folder.empty() && !std::filesystem::is_directory(folder)) {
-            throw std::runtime_error("cannot write output: no such folder (" + folder.string() +
-                                     ", " + flag + ")");
+        try {
+            check.declare(path, flag);
+        } catch (const stereoscene::support::FileError& e) {
+            throw std::runtime_error("cannot write output: " + e.reason() + " (" + path + ", " +
+                                     flag + ")");
         }
     }
     LoadedRun run{{}, extract_options(a), std::nullopt};
@@ -177,22 +182,28 @@ std::vector<PendingOutput> format_outputs(const LoadedRun& run,
     return outputs;
 }
 
-/// Writes every output, all or nothing (each write's time into `timings`).
+/// Writes every output as one transaction, all or nothing: the files are staged beside their
+/// targets, standard output is written, then the files are committed; on any failure the
+/// earlier files are back in place (each write's time into `timings`).
 void write_all(const std::vector<PendingOutput>& outputs,
                std::vector<cloud_analysis::StageTiming>& timings) {
-    std::vector<std::filesystem::path> written;
+    stereoscene::support::OutputTransaction files;
+    const PendingOutput* to_stdout = nullptr;
     try {
         for (const auto& out : outputs) {
+            if (out.path == "-") {
+                to_stdout = &out;
+                continue;
+            }
             const auto t = Clock::now();
-            write_output(out);
-            if (out.path != "-") written.emplace_back(out.path);
+            files.stage(out.path, out.bytes, out.sync);
             timings.push_back({"write " + out.label, ms_since(t)});
         }
-    } catch (...) {
-        // All or nothing: take back the files this run already wrote.
-        std::error_code ignored;
-        for (const auto& path : written) std::filesystem::remove(path, ignored);
-        throw;
+        if (to_stdout != nullptr) write_output(*to_stdout);
+        files.commit();
+    } catch (const stereoscene::support::FileError& e) {
+        throw std::runtime_error("cannot write output: " + e.reason() + " (" + e.path().string() +
+                                 ")");
     }
 }
 

@@ -12,28 +12,26 @@
 #include <nlohmann/json.hpp>
 
 #include "cloud_analysis/pipeline/batch.hpp"
+#include "cloud_analysis/pipeline/frame_list.hpp"
 #include "cloud_analysis/pipeline/resume.hpp"
 #include "cloud_analysis/support/progress.hpp"
 #include "output.hpp"
 #include "stereoscene/support/error_line.hpp"
+#include "stereoscene/support/file_read.hpp"
+#include "stereoscene/support/output_transaction.hpp"
 
 namespace cloud_analysis::app {
 namespace {
 
 std::vector<std::string> read_frame_list(const std::filesystem::path& path) {
-    std::ifstream in(path);
-    if (!in)
-        throw std::runtime_error("cannot read frame list: no such file (" + path.string() +
+    std::string text;
+    try {
+        text = stereoscene::support::read_text_input(path);
+    } catch (const stereoscene::support::FileError& e) {
+        throw std::runtime_error("cannot read frame list: " + e.reason() + " (" + path.string() +
                                  ", --list)");
-    std::vector<std::string> frames;
-    std::string line;
-    while (std::getline(in, line)) {
-        const auto first = line.find_first_not_of(" \t\r");
-        if (first == std::string::npos || line[first] == '#') continue;
-        const auto last = line.find_last_not_of(" \t\r");
-        frames.push_back(line.substr(first, last - first + 1));
     }
-    return frames;
+    return parse_frame_list(text, path.string() + ", --list");
 }
 
 /// Checks the input folder and the report's folder, then creates --out-dir when it is missing
@@ -44,10 +42,11 @@ void check_batch_folders(const BatchArgs& a) {
                                  ", --kitti-root)");
     }
     if (!a.report.empty() && a.report != "-") {
-        const std::filesystem::path folder = a.report.parent_path();
-        if (!folder.empty() && !std::filesystem::is_directory(folder)) {
-            throw std::runtime_error("cannot write output: no such folder (" + folder.string() +
-                                     ", --report)");
+        try {
+            stereoscene::support::check_output_path(a.report);
+        } catch (const stereoscene::support::FileError& e) {
+            throw std::runtime_error("cannot write output: " + e.reason() + " (" +
+                                     a.report.string() + ", --report)");
         }
     }
     std::error_code ec;
@@ -185,6 +184,11 @@ CLI::App* add_batch_command(CLI::App& app, BatchArgs& a) {
 void resolve_batch(BatchArgs& a, const CLI::App& cmd) {
     if (!a.list.empty()) a.frames = read_frame_list(a.list);
     if (a.frames.empty()) throw CLI::RequiredError("--frames or --list (with frames)");
+    for (const std::string& frame : a.frames) {
+        if (const std::string problem = frame_id_problem(frame); !problem.empty()) {
+            throw CLI::ValidationError("--frames", "frame id '" + frame + "' " + problem);
+        }
+    }
     try {
         a.shard = a.shard_text.empty() ? shard_from_slurm(std::getenv("SLURM_ARRAY_TASK_ID"),
                                                           std::getenv("SLURM_ARRAY_TASK_COUNT"))

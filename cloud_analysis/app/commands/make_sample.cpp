@@ -1,8 +1,12 @@
 #include "make_sample.hpp"
 
+#include <filesystem>
+#include <stdexcept>
+#include <system_error>
 #include <vector>
 
 #include <scene_schema/entities.hpp>
+#include <stereoscene/support/output_transaction.hpp>
 
 #include "cloud_analysis/io/io.hpp"
 #include "output.hpp"
@@ -24,8 +28,19 @@ CLI::App* add_make_sample_command(CLI::App& app, SampleArgs& args) {
 }
 
 int run_make_sample(const SampleArgs& a) {
+    try {
+        a.options.validate();
+    } catch (const std::invalid_argument& e) {
+        throw CLI::ValidationError("--width/--height", e.what());
+    }
     const cloud_analysis::SyntheticScene s = cloud_analysis::make_synthetic_scene(a.options);
-    std::filesystem::create_directories(a.out);
+    // The folder is made only for the write below, and removed again if that fails.
+    std::error_code ec;
+    const bool made_folder = std::filesystem::create_directories(a.out, ec);
+    if (ec) {
+        throw std::runtime_error("cannot write output: " + ec.message() + " (" + a.out.string() +
+                                 ")");
+    }
     // Everything is encoded first, then written.
     const std::vector<PendingOutput> outputs = {
         {(a.out / "left.png").string(), cloud_analysis::encode_png(s.left), "left"},
@@ -37,7 +52,15 @@ int run_make_sample(const SampleArgs& a) {
          "calibration"},
         {(a.out / "truth.json").string(), scene_schema::dump(s.truth), "truth"},
     };
-    for (const auto& o : outputs) write_output(o);
+    try {
+        stereoscene::support::OutputTransaction files;
+        for (const auto& o : outputs) files.stage(o.path, o.bytes, o.sync);
+        files.commit();
+    } catch (const stereoscene::support::FileError& e) {
+        if (made_folder) std::filesystem::remove(a.out, ec);
+        throw std::runtime_error("cannot write output: " + e.reason() + " (" + e.path().string() +
+                                 ")");
+    }
     return 0;
 }
 

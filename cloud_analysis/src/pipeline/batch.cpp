@@ -14,6 +14,7 @@
 #include <utility>
 
 #include <scene_schema/entities.hpp>
+#include <stereoscene/support/output_transaction.hpp>
 
 #include "cloud_analysis/cloud/cloud_io.hpp"
 #include "cloud_analysis/io/io.hpp"
@@ -89,7 +90,6 @@ struct FrameOutput {
 /// file last.
 Finished finish_frame(const FinishJob& job, const BatchOptions& options) {
     const auto start = Clock::now();
-    std::vector<std::filesystem::path> written;
     Finished done;
     try {
         // The entity file goes last: it marks the frame complete (a writer killed before it
@@ -114,13 +114,12 @@ Finished finish_frame(const FinishJob& job, const BatchOptions& options) {
         }
         outputs.push_back({job.stem.string() + ".json",
                            entity_json(job.in, job.result, options.extract, options.run)});
-        for (const auto& out : outputs) {
-            stereoscene::support::write_file_atomic(out.path, out.bytes, out.sync);
-            written.push_back(out.path);
-        }
+        // One transaction: a frame's files are all written or none, and a failure restores
+        // what a frame of an earlier run left there.
+        stereoscene::support::OutputTransaction files;
+        for (const auto& out : outputs) files.stage(out.path, out.bytes, out.sync);
+        files.commit();
     } catch (const std::exception& e) {
-        std::error_code ignored;
-        for (const auto& path : written) std::filesystem::remove(path, ignored);
         done.error = e.what();
     }
     if (done.error.empty() && !job.gt_disparity.empty()) {

@@ -2,12 +2,15 @@
 
 #include <algorithm>
 #include <cmath>
+#include <cstdint>
 #include <limits>
 #include <map>
 #include <sstream>
 #include <stdexcept>
 
 #include <Eigen/Geometry>
+
+#include "stereoscene/support/limits.hpp"
 
 namespace cloud_analysis {
 namespace {
@@ -232,6 +235,13 @@ scene_schema::EntityDocument truth_document(const StereoCamera& cam, const std::
 void SyntheticOptions::validate() const {
     if (width_px < 64) throw std::invalid_argument("width_px: must be >= 64");
     if (height_px < 32) throw std::invalid_argument("height_px: must be >= 32");
+    const std::uint64_t pixels =
+        static_cast<std::uint64_t>(width_px) * static_cast<std::uint64_t>(height_px);
+    const std::uint64_t limit = stereoscene::support::limits().max_image_pixels;
+    if (pixels > limit) {
+        throw std::invalid_argument("width_px x height_px: " + std::to_string(pixels) +
+                                    " pixels is more than the limit of " + std::to_string(limit));
+    }
     if (!(fx_px > 0.0)) throw std::invalid_argument("fx_px: must be > 0");
     if (!(baseline_m > 0.0)) throw std::invalid_argument("baseline_m: must be > 0");
     if (!(camera_height_m > 0.0)) throw std::invalid_argument("camera_height_m: must be > 0");

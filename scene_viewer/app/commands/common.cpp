@@ -1,6 +1,7 @@
 #include "common.hpp"
 
 #include <cerrno>
+#include <cstdint>
 #include <cstring>
 #include <fstream>
 #include <iostream>
@@ -13,6 +14,7 @@
 #include "scene_viewer/render/render_setup.hpp"
 #include "stereoscene/support/atomic_file.hpp"
 #include "stereoscene/support/file_read.hpp"
+#include "stereoscene/support/limits.hpp"
 
 namespace scene_render {
 
@@ -104,11 +106,19 @@ void apply_pose(const ViewArgs& a, RenderOptions& o) {
 }  // namespace
 
 std::pair<int, int> size_flag(const std::string& text, const std::string& flag) {
+    std::pair<int, int> size;
     try {
-        return parse_image_size(text);
+        size = parse_image_size(text);
     } catch (const std::invalid_argument& e) {
         usage(e.what(), flag);
     }
+    const auto pixels = static_cast<std::uint64_t>(size.first) * size.second;
+    const std::uint64_t limit = stereoscene::support::limits().max_image_pixels;
+    if (pixels > limit) {
+        usage(std::to_string(pixels) + " pixels is more than the limit of " + std::to_string(limit),
+              flag);
+    }
+    return size;
 }
 
 scene_schema::EntityDocument read_entities(const std::string& path) {

@@ -1,9 +1,12 @@
 #include "grid.hpp"
 
+#include <algorithm>
 #include <filesystem>
 
 #include "scene_viewer/figure/grid_figure.hpp"
 #include "scene_viewer/render/render_setup.hpp"
+#include "stereoscene/support/atomic_file.hpp"
+#include "stereoscene/support/output_transaction.hpp"
 
 namespace scene_render {
 
@@ -20,6 +23,16 @@ CLI::App* add_grid_command(CLI::App& app, GridArgs& a) {
 }
 
 int run_grid(GridArgs a) {
+    if (a.columns < 0 || a.columns > static_cast<int>(std::max<std::size_t>(a.inputs.size(), 1))) {
+        usage("must be 0 (square-ish) to the number of inputs", "--columns");
+    }
+    if (a.output != "-") {
+        try {
+            stereoscene::support::check_output_path(a.output);
+        } catch (const stereoscene::support::FileError& e) {
+            throw Failure{"unusable output path", e.reason(), a.output};
+        }
+    }
     if (!a.labels.empty() && a.labels.size() != a.inputs.size()) {
         usage(std::to_string(a.labels.size()) + " labels for " + std::to_string(a.inputs.size()) +
                   " inputs",

@@ -7,6 +7,7 @@
 #include <system_error>
 
 #include <fcntl.h>
+#include <stdio.h>  // renameat2, RENAME_EXCHANGE (glibc >= 2.28)
 #include <sys/stat.h>
 #include <unistd.h>
 
@@ -57,7 +58,7 @@ void check_output_path(const fs::path& path) {
     const fs::path folder = folder_of(path);
     std::error_code ec;
     if (!fs::is_directory(folder, ec)) {
-        throw FileError(path, "folder " + folder.string() + " does not exist");
+        throw FileError(path, "no such folder " + folder.string());
     }
 }
 
@@ -118,13 +119,25 @@ void OutputTransaction::commit() {
             struct stat st {};
             if (::lstat(o.path.c_str(), &st) == 0) {
                 if (S_ISDIR(st.st_mode)) throw FileError(o.path, "is a directory, refused");
+                // Exchange: the new file takes the target's name and the earlier file takes
+                // the temp name, which keeps it until the commit has finished. Unlike a rename
+                // over a file, an exchange does not make ext4 write the file out at once
+                // (its replace-by-rename heuristic, about 1 ms per MB).
+                if (::renameat2(AT_FDCWD, o.temp.c_str(), AT_FDCWD, o.path.c_str(),
+                                RENAME_EXCHANGE) == 0) {
+                    o.backup = o.temp;
+                    o.temp.clear();
+                    o.replaced = true;
+                    continue;
+                }
+                // A file system without exchanges: keep the earlier file by a hard link.
                 o.backup = unique_beside(o.path, "old");
                 ::unlink(o.backup.c_str());
                 if (::link(o.path.c_str(), o.backup.c_str()) != 0) {
                     const int err = errno;
                     o.backup.clear();
-                    throw FileError(
-                        o.path, std::string("cannot keep the earlier file: ") + std::strerror(err));
+                    throw FileError(o.path, std::string("cannot keep the earlier file: ") +
+                                                std::strerror(err));
                 }
             }
             if (std::rename(o.temp.c_str(), o.path.c_str()) != 0) {

@@ -22,7 +22,9 @@ void check_output_path(const std::filesystem::path& path);
 /// stage() writes each one's bytes to a hidden temp file beside it; commit() moves them all
 /// into place. If staging or committing fails, or the transaction is destroyed without a
 /// commit, the temp files are removed and every target holds what it held before the run: a
-/// file that existed is restored from a hard-linked backup, never removed. Not thread-safe.
+/// file that existed is kept under a hidden name until the commit has finished (exchanged with
+/// the new file, or hard-linked where the file system cannot exchange) and put back, never
+/// removed. Not thread-safe.
 class OutputTransaction {
   public:
     OutputTransaction() = default;
@@ -52,7 +54,7 @@ class OutputTransaction {
         std::filesystem::path key;     ///< resolved path, to find a target named twice
         std::string what;              ///< the flag or role naming it
         std::filesystem::path temp;    ///< staged bytes; empty until stage()
-        std::filesystem::path backup;  ///< hard link to the earlier file while committing
+        std::filesystem::path backup;  ///< the earlier file while committing
         bool replaced = false;         ///< the staged file is in place
     };
     Output& find_or_declare(const std::filesystem::path& path);

@@ -1,0 +1,74 @@
+#!/usr/bin/env bash
+# Builds the libFuzzer harnesses (tests/fuzz, clang with ASan + UBSan, in build-fuzz/) and runs
+# each in turn, seeded from the samples, assets and the bad-input corpus. A crash is copied to
+# tests/corpus/fuzz/<harness>/ as a regression case; the totals go to build-fuzz/fuzz-totals.txt.
+# usage: scripts/fuzz.sh [seconds per harness (default 60)] [harness name...]
+# Runs at nice 19, one job at a time (the machine is shared).
+set -euo pipefail
+source "$(dirname "${BASH_SOURCE[0]}")/common.sh"
+
+seconds=${1:-60}
+shift || true
+root=$STEREOSCENE_ROOT
+build=$root/build-fuzz
+all=(fuzz_calibration fuzz_entities fuzz_palettes fuzz_gltf fuzz_point_clouds fuzz_kitti_labels
+     fuzz_frame_lists)
+harnesses=("${@:-${all[@]}}")
+
+command -v clang++ >/dev/null || {
+    echo "fuzz: clang++ is missing: apt-get install clang (Debian's clang has libFuzzer)" >&2
+    exit 1
+}
+"$root/scripts/install-deps.sh"
+[ -f "$build/CMakeCache.txt" ] || generator=(-G Ninja)
+CC=clang CXX=clang++ cmake -S "$root" -B "$build" "${generator[@]}" -DCMAKE_BUILD_TYPE=RelWithDebInfo \
+    -DSTEREOSCENE_FUZZ=ON -DCMAKE_C_COMPILER=clang -DCMAKE_CXX_COMPILER=clang++ >&2
+targets=()
+for h in "${harnesses[@]}"; do targets+=(--target "$h"); done
+nice -n 19 cmake --build "$build" --parallel 2 "${targets[@]}" >&2
+
+# Seeds: files of the kinds each harness reads, from the samples, the assets and the corpus.
+seeds() {
+    case $1 in
+        fuzz_calibration) find "$root/samples" "$root/tests" -name 'calib*' -type f ;;
+        fuzz_entities) find "$root/samples" "$root/tests/corpus/cases" -name '*.json' -type f | head -50 ;;
+        fuzz_palettes) find "$root/assets/palettes" "$root/assets/classes" "$root/assets/extractor" \
+            -name '*.json' -type f 2>/dev/null ;;
+        fuzz_gltf) find "$root/tests/scene_viewer/data/gltf" "$root/assets/models" \
+            \( -name '*.gltf' -o -name '*.glb' \) -type f -size -200k ;;
+        fuzz_point_clouds) find "$root/tests" "$root/samples" \
+            \( -name '*.ply' -o -name '*.pcd' -o -name '*.xyz' \) -type f -size -200k ;;
+        fuzz_kitti_labels) echo "$root/tests/fuzz/seeds/kitti_label.txt" ;;
+        fuzz_frame_lists) find "$root/tests/corpus/cases" -name 'list*.txt' -type f ;;
+    esac
+}
+
+totals=$build/fuzz-totals.txt
+: > "$totals"
+status=0
+for h in "${harnesses[@]}"; do
+    work=$build/fuzz-work/$h
+    crashes=$root/tests/corpus/fuzz/$h
+    mkdir -p "$work/corpus" "$work/artifacts"
+    seeds "$h" | while read -r f; do cp -n "$f" "$work/corpus/" 2>/dev/null || true; done
+    [ -d "$crashes" ] && cp -n "$crashes"/* "$work/corpus/" 2>/dev/null || true
+    log=$work/log.txt
+    echo "fuzz: $h for $seconds s" >&2
+    set +e
+    ASAN_OPTIONS=detect_leaks=0:allocator_may_return_null=1 \
+    UBSAN_OPTIONS=print_stacktrace=1:halt_on_error=1 \
+        nice -n 19 "$build/tests/fuzz/$h" -max_total_time="$seconds" -rss_limit_mb=2048 \
+        -timeout=10 -max_len=65536 -print_final_stats=1 -artifact_prefix="$work/artifacts/" \
+        "$work/corpus" > "$log" 2>&1
+    rc=$?
+    set -e
+    runs=$(grep -o 'stat::number_of_executed_units: *[0-9]*' "$log" | grep -o '[0-9]*$' || echo 0)
+    found=$(find "$work/artifacts" -type f | wc -l)
+    echo "$h executions=$runs seconds=$seconds findings=$found exit=$rc" | tee -a "$totals" >&2
+    if [ "$found" -gt 0 ]; then
+        mkdir -p "$crashes"
+        cp "$work/artifacts"/* "$crashes/"
+        status=1
+    fi
+done
+exit $status
