@@ -4,6 +4,7 @@
 
 #include <cerrno>
 #include <cmath>
+#include <cstdint>
 #include <cstring>
 #include <fstream>
 #include <iostream>
@@ -15,6 +16,7 @@
 
 #include "stereoscene/support/atomic_file.hpp"
 #include "stereoscene/support/file_read.hpp"
+#include "stereoscene/support/limits.hpp"
 
 namespace scene_schema {
 
@@ -242,6 +244,12 @@ class Checker {
         if (!entities) return;
         if (!entities->is_array()) {
             fail("/entities", "must be an array");
+            return;
+        }
+        if (const std::uint64_t limit = stereoscene::support::limits().max_entities;
+            entities->size() > limit) {
+            fail("/entities", std::to_string(entities->size()) +
+                                  " entities is more than the limit of " + std::to_string(limit));
             return;
         }
         std::map<std::string, std::size_t> first_index;

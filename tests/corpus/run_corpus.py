@@ -41,6 +41,7 @@ CASES_TABLE = [
     ("evaluate: entity file is a FIFO", CA, f"evaluate --entities {{g}}/fifo --reference {SCENE}", 1, "fifo"),
     # Sizes promised by headers.
     ("left image promises 20000x20000", CA, f"--left {{g}}/huge.png --right {{s}}/synthetic/right.png {CALIB} -o {{o}}/e.json", 1, "huge.png"),
+    ("left image is a truncated PNG", CA, f"--left {{c}}/truncated.png --right {{s}}/synthetic/right.png {CALIB} -o {{o}}/e.json", 1, "truncated.png"),
     ("background promises 20000x20000", SR, f"{SCENE} --view camera --background {{g}}/huge.png -o {{o}}/r.png", 1, "background"),
     # JSON nested 10^5 deep.
     ("entity member nested 10^5 deep", SR, "{g}/deep_member.json --view bev -o {o}/r.png", 1, "deep_member.json"),

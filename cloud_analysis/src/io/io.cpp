@@ -1,6 +1,7 @@
 #include "cloud_analysis/io/io.hpp"
 
 #include <algorithm>
+#include <array>
 #include <cmath>
 #include <cstdint>
 #include <cstring>
@@ -39,10 +40,58 @@ std::optional<std::uint64_t> header_pixels(const std::vector<unsigned char>& b) 
     return std::nullopt;
 }
 
+/// CRC-32 of PNG chunks (ISO 3309, the polynomial of PNG spec section 5.5).
+std::uint32_t png_crc(const unsigned char* p, std::size_t n) {
+    static const auto table = [] {
+        std::array<std::uint32_t, 256> t{};
+        for (std::uint32_t i = 0; i < 256; ++i) {
+            std::uint32_t c = i;
+            for (int k = 0; k < 8; ++k) c = (c & 1u) ? 0xEDB88320u ^ (c >> 1) : c >> 1;
+            t[i] = c;
+        }
+        return t;
+    }();
+    std::uint32_t c = 0xFFFFFFFFu;
+    for (std::size_t i = 0; i < n; ++i) c = table[(c ^ p[i]) & 0xFFu] ^ (c >> 8);
+    return c ^ 0xFFFFFFFFu;
+}
+
+/// Walks a PNG's chunks (PNG spec section 5.3): each inside the file with its CRC right, IHDR
+/// first, IEND last. A truncated or corrupted file is named here in one line instead of by
+/// libpng's own "libpng error" line on stderr before the decoder gives up.
+void check_png_chunks(const std::vector<unsigned char>& b, const std::filesystem::path& path) {
+    auto fail = [&](const std::string& why) {
+        throw std::runtime_error("cannot decode image: " + why + " (" + path.string() + ")");
+    };
+    auto u32 = [&](std::size_t at) {
+        return (std::uint32_t{b[at]} << 24) | (std::uint32_t{b[at + 1]} << 16) |
+               (std::uint32_t{b[at + 2]} << 8) | std::uint32_t{b[at + 3]};
+    };
+    std::size_t at = 8;
+    bool first = true;
+    for (;;) {
+        if (b.size() - at < 12) fail("truncated PNG (no IEND chunk)");
+        const std::uint32_t length = u32(at);
+        if (length > b.size() - at - 12) fail("truncated PNG (a chunk runs past the end)");
+        const unsigned char* type = b.data() + at + 4;
+        if (png_crc(type, 4 + std::size_t{length}) != u32(at + 8 + length)) {
+            fail("corrupt PNG (chunk " + std::string(reinterpret_cast<const char*>(type), 4) +
+                 " fails its CRC)");
+        }
+        if (first && std::memcmp(type, "IHDR", 4) != 0) fail("corrupt PNG (IHDR is not first)");
+        first = false;
+        at += 12 + std::size_t{length};
+        if (std::memcmp(type, "IEND", 4) == 0) return;
+    }
+}
+
 /// The bytes of an image file, through the bounded reader, refused when the header promises
 /// more pixels than the limit allows.
 std::vector<unsigned char> read_image_bytes(const std::filesystem::path& path) {
     std::vector<unsigned char> bytes = stereoscene::support::read_binary_input(path);
+    if (bytes.size() >= 8 && std::memcmp(bytes.data(), "\x89PNG\r\n\x1a\n", 8) == 0) {
+        check_png_chunks(bytes, path);
+    }
     if (const auto pixels = header_pixels(bytes)) {
         stereoscene::support::check_limit(
             path.string(), *pixels, stereoscene::support::limits().max_image_pixels, "pixels");
