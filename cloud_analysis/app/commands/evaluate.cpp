@@ -70,7 +70,10 @@ ResolvedPaths resolve_entity_mode(const EvaluateArgs& args, ResolvedPaths p) {
     for (const auto& f : inputs) {
         std::error_code ec;
         if (f != "-" && !fs::is_regular_file(f, ec)) {
-            throw std::runtime_error("cannot evaluate: no such file (" + f.string() + ")");
+            throw std::runtime_error(
+                "cannot evaluate: " +
+                std::string(fs::exists(f, ec) ? "not a regular file" : "no such file") + " (" +
+                f.string() + ")");
         }
     }
     return p;
@@ -105,7 +108,10 @@ ResolvedPaths resolve_kitti_mode(const EvaluateArgs& args, ResolvedPaths p) {
     for (const auto& f : inputs) {
         std::error_code ec;
         if (f != "-" && !fs::is_regular_file(f, ec)) {
-            throw std::runtime_error("cannot evaluate: no such file (" + f.string() + ")");
+            throw std::runtime_error(
+                "cannot evaluate: " +
+                std::string(fs::exists(f, ec) ? "not a regular file" : "no such file") + " (" +
+                f.string() + ")");
         }
     }
     return p;

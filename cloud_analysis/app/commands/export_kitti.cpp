@@ -34,7 +34,10 @@ int run_export_kitti(const ExportKittiArgs& args) {
     for (const auto& f : {args.entities, args.calib}) {
         std::error_code ec;
         if (!f.empty() && f != "-" && !fs::is_regular_file(f, ec)) {
-            throw std::runtime_error("cannot export: no such file (" + f.string() + ")");
+            throw std::runtime_error(
+                "cannot export: " +
+                std::string(fs::exists(f, ec) ? "not a regular file" : "no such file") + " (" +
+                f.string() + ")");
         }
     }
     if (args.output != "-") {
