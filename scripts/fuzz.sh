@@ -32,7 +32,7 @@ seeds() {
     case $1 in
         fuzz_calibration) find "$root/samples" "$root/tests" -name 'calib*' -type f ;;
         fuzz_entities) find "$root/samples" "$root/tests/corpus/cases" -name '*.json' -type f | head -50 ;;
-        fuzz_palettes) find "$root/assets/palettes" "$root/assets/classes" "$root/assets/extractor" \
+        fuzz_palettes) find "$root/assets/palettes" "$root/assets/classes" \
             -name '*.json' -type f 2>/dev/null ;;
         fuzz_gltf) find "$root/tests/scene_viewer/data/gltf" "$root/assets/models" \
             \( -name '*.gltf' -o -name '*.glb' \) -type f -size -200k ;;
@@ -50,7 +50,7 @@ for h in "${harnesses[@]}"; do
     work=$build/fuzz-work/$h
     crashes=$root/tests/corpus/fuzz/$h
     mkdir -p "$work/corpus" "$work/artifacts"
-    seeds "$h" | while read -r f; do cp -n "$f" "$work/corpus/" 2>/dev/null || true; done
+    { seeds "$h" 2>/dev/null || true; } | while read -r f; do cp -n "$f" "$work/corpus/" 2>/dev/null || true; done
     [ -d "$crashes" ] && cp -n "$crashes"/* "$work/corpus/" 2>/dev/null || true
     log=$work/log.txt
     echo "fuzz: $h for $seconds s" >&2

@@ -57,6 +57,9 @@ std::vector<KittiLabel> parse_kitti_labels(std::string_view text, const std::str
         KittiLabel l;
         l.type = cols[0];
         l.truncated = v[1];
+        // KITTI: 0 fully visible .. 3 unknown; -1 for DontCare. Checked before the cast, which
+        // is undefined for a value outside int.
+        if (!(v[2] >= -1.0 && v[2] <= 3.0)) fail("column 3 (occluded) must be -1..3");
         l.occluded = static_cast<int>(v[2]);
         l.alpha = v[3];
         for (int i = 0; i < 4; ++i) l.bbox[i] = v[4 + i];
