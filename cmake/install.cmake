@@ -9,6 +9,7 @@ set(STEREOSCENE_INSTALL_DATADIR ${CMAKE_INSTALL_DATADIR}/stereoscene)
 install(TARGETS cloud-analysis scene-render RUNTIME DESTINATION ${CMAKE_INSTALL_BINDIR})
 install(DIRECTORY ${PROJECT_SOURCE_DIR}/assets/ DESTINATION ${STEREOSCENE_INSTALL_DATADIR}/assets)
 install(FILES ${PROJECT_SOURCE_DIR}/schema/entities.schema.json
+    ${PROJECT_SOURCE_DIR}/schema/sequence.schema.json
     DESTINATION ${STEREOSCENE_INSTALL_DATADIR}/schema)
 # The browser viewer's files as the build gathered them (three.js only where npm installed it).
 install(DIRECTORY ${PROJECT_BINARY_DIR}/scene_viewer/web/ DESTINATION ${STEREOSCENE_INSTALL_DATADIR}/web)

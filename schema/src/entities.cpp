@@ -2,6 +2,8 @@
 
 #include "scene_schema/json_text.hpp"
 
+#include "checker.hpp"
+
 #include <cerrno>
 #include <cmath>
 #include <cstdint>
@@ -31,135 +33,9 @@ std::string ValidationIssue::message() const { return pointer + ": " + rule; }
 
 namespace {
 
-/// Collects issues while walking a document; `at` builds child pointers.
-class Checker {
+/// The entity file's rules over the shared checks.
+class Checker : public detail::CheckerBase {
   public:
-    std::vector<ValidationIssue> issues;
-
-    void fail(const std::string& pointer, const std::string& rule) {
-        issues.push_back({pointer, rule});
-    }
-
-    static std::string at(const std::string& parent, const std::string& key) {
-        // RFC 6901 escaping: "~" -> "~0", "/" -> "~1".
-        std::string escaped;
-        for (char c : key) {
-            if (c == '~') {
-                escaped += "~0";
-            } else if (c == '/') {
-                escaped += "~1";
-            } else {
-                escaped += c;
-            }
-        }
-        return parent + "/" + escaped;
-    }
-    static std::string at(const std::string& parent, std::size_t index) {
-        return parent + "/" + std::to_string(index);
-    }
-
-    /// Returns the member when present, else records "is required" and returns nullptr.
-    const json* required(const json& object, const std::string& pointer, const char* key) {
-        auto it = object.find(key);
-        if (it == object.end()) {
-            fail(at(pointer, key), "is required");
-            return nullptr;
-        }
-        return &*it;
-    }
-
-    bool string(const json& value, const std::string& pointer, bool non_empty = true) {
-        if (!value.is_string()) {
-            fail(pointer, "must be a string");
-            return false;
-        }
-        if (non_empty && value.get_ref<const std::string&>().empty()) {
-            fail(pointer, "must not be empty");
-            return false;
-        }
-        return true;
-    }
-
-    bool number(const json& value, const std::string& pointer) {
-        if (!value.is_number()) {
-            fail(pointer, "must be a number");
-            return false;
-        }
-        return true;
-    }
-
-    /// A number within [lo, hi]: the schema's "minimum"/"maximum", which also refuse the
-    /// infinities a lenient JSON reader makes of 1e400.
-    bool bounded(const json& value, const std::string& pointer, double lo, double hi) {
-        if (!number(value, pointer)) return false;
-        const double v = value.get<double>();
-        if (!(v >= lo && v <= hi)) {
-            fail(pointer, "must be between " + text(lo) + " and " + text(hi));
-            return false;
-        }
-        return true;
-    }
-
-    static std::string text(double v) {
-        char buffer[32];
-        std::snprintf(buffer, sizeof buffer, "%.17g", v);
-        return buffer;
-    }
-
-    /// JSON Schema's "integer": any number with a zero fractional part.
-    bool integer(const json& value, const std::string& pointer) {
-        if (value.is_number_integer()) return true;
-        if (value.is_number_float()) {
-            const double v = value.get<double>();
-            if (std::isfinite(v) && std::floor(v) == v) return true;
-        }
-        fail(pointer, "must be an integer");
-        return false;
-    }
-
-    bool object(const json& value, const std::string& pointer) {
-        if (!value.is_object()) {
-            fail(pointer, "must be an object");
-            return false;
-        }
-        return true;
-    }
-
-    void positive(const json& value, const std::string& pointer, double hi) {
-        if (!number(value, pointer)) return;
-        if (!(value.get<double>() > 0.0)) {
-            fail(pointer, "must be > 0");
-        } else {
-            bounded(value, pointer, 0.0, hi);
-        }
-    }
-
-    void integer_in(const json& value, const std::string& pointer, double lo, double hi) {
-        if (!integer(value, pointer)) return;
-        if (lo == 0.0 && value.get<double>() < 0.0) {
-            fail(pointer, "must be >= 0");
-        } else if (lo == 1.0 && value.get<double>() < 1.0) {
-            fail(pointer, "must be >= 1");
-        } else {
-            bounded(value, pointer, lo, hi);
-        }
-    }
-
-    void schema_version(const json& value, const std::string& pointer) {
-        if (!string(value, pointer)) return;
-        static const std::regex semver(R"(^(0|[1-9][0-9]*)\.(0|[1-9][0-9]*)\.(0|[1-9][0-9]*)$)");
-        std::smatch match;
-        const auto& text = value.get_ref<const std::string&>();
-        if (!std::regex_match(text, match, semver)) {
-            fail(pointer, "must be a semantic version MAJOR.MINOR.PATCH");
-            return;
-        }
-        if (match[1].str() != std::to_string(kSchemaMajor)) {
-            fail(pointer, "unsupported major version " + match[1].str() + " (this reader reads " +
-                              std::to_string(kSchemaMajor) + ".x.y)");
-        }
-    }
-
     void camera(const json& value, const std::string& pointer) {
         if (!object(value, pointer)) return;
         for (const char* key : {"width", "height"}) {
@@ -197,6 +73,23 @@ class Checker {
             }
         }
         if (auto it = value.find("camera"); it != value.end()) camera(*it, at(pointer, "camera"));
+        if (auto it = value.find("timestamp"); it != value.end()) {
+            const auto p = at(pointer, "timestamp");
+            if (number(*it, p) && it->get<double>() < 0.0) {
+                fail(p, "must be >= 0");
+            } else {
+                bounded(*it, p, 0.0, kMaxTimestamp_s);
+            }
+        }
+    }
+
+    void velocity(const json& value, const std::string& pointer) {
+        if (!object(value, pointer)) return;
+        for (const char* key : {"vx", "vz"}) {
+            if (const json* v = required(value, pointer, key)) {
+                bounded(*v, at(pointer, key), -kMaxSpeed_mps, kMaxSpeed_mps);
+            }
+        }
     }
 
     void entity(const json& value, const std::string& pointer) {
@@ -231,6 +124,12 @@ class Checker {
             }
         }
         if (auto it = value.find("method"); it != value.end()) string(*it, at(pointer, "method"));
+        if (auto it = value.find("track_id"); it != value.end()) {
+            integer_in(*it, at(pointer, "track_id"), 0.0, kMaxTrackId);
+        }
+        if (auto it = value.find("velocity"); it != value.end()) {
+            velocity(*it, at(pointer, "velocity"));
+        }
     }
 
     void document(const json& value) {
@@ -313,7 +212,8 @@ EntityDocument from_json(const json& j) {
         c.baseline_m = it->value("baseline_m", 0.0);
         doc.frame.camera = c;
     }
-    doc.frame.extra = without(f, {"id", "convention", "camera"});
+    if (auto it = f.find("timestamp"); it != f.end()) doc.frame.timestamp_s = it->get<double>();
+    doc.frame.extra = without(f, {"id", "convention", "camera", "timestamp"});
     if (auto it = j.find("source"); it != j.end()) doc.source = *it;
     for (const json& e : j.at("entities")) {
         Entity entity;
@@ -330,8 +230,14 @@ EntityDocument from_json(const json& j) {
         entity.point_count = static_cast<std::int64_t>(e.at("point_count").get<double>());
         entity.confidence = e.at("confidence").get<double>();
         if (auto m = e.find("method"); m != e.end()) entity.method = m->get<std::string>();
+        if (auto t = e.find("track_id"); t != e.end()) {
+            entity.track_id = static_cast<std::int64_t>(t->get<double>());
+        }
+        if (auto v = e.find("velocity"); v != e.end()) {
+            entity.velocity = Velocity{v->at("vx").get<double>(), v->at("vz").get<double>()};
+        }
         entity.extra = without(e, {"id", "class", "class_id", "x", "y", "z", "theta", "W", "H", "L",
-                                   "point_count", "confidence", "method"});
+                                   "point_count", "confidence", "method", "track_id", "velocity"});
         doc.entities.push_back(std::move(entity));
     }
     doc.extra = without(j, {"schema_version", "frame", "source", "entities"});
@@ -354,6 +260,7 @@ json to_json(const EntityDocument& doc) {
                        {"cy", c.cy_px},
                        {"baseline_m", c.baseline_m}};
     }
+    if (doc.frame.timestamp_s) f["timestamp"] = *doc.frame.timestamp_s;
     merge_extra(f, doc.frame.extra);
     j["frame"] = std::move(f);
     if (doc.source) j["source"] = *doc.source;
@@ -372,6 +279,8 @@ json to_json(const EntityDocument& doc) {
                   {"point_count", e.point_count},
                   {"confidence", e.confidence}};
         if (e.method) o["method"] = *e.method;
+        if (e.track_id) o["track_id"] = *e.track_id;
+        if (e.velocity) o["velocity"] = {{"vx", e.velocity->vx_mps}, {"vz", e.velocity->vz_mps}};
         merge_extra(o, e.extra);
         entities.push_back(std::move(o));
     }
@@ -386,7 +295,9 @@ namespace {
 void check(const EntityDocument& document, const json& j) {
     for (std::size_t i = 0; i < document.entities.size(); ++i) {
         const Entity& e = document.entities[i];
-        for (double v : {e.x, e.y, e.z, e.theta, e.W, e.H, e.L, e.confidence}) {
+        const double vx = e.velocity ? e.velocity->vx_mps : 0.0;
+        const double vz = e.velocity ? e.velocity->vz_mps : 0.0;
+        for (double v : {e.x, e.y, e.z, e.theta, e.W, e.H, e.L, e.confidence, vx, vz}) {
             if (!std::isfinite(v)) {
                 throw SchemaError("/entities/" + std::to_string(i), "has a non-finite number");
             }

@@ -119,8 +119,10 @@ def main(argv):
     schema = json.loads(schema_path.read_text())
 
     good = sorted(pathlib.Path(data_dir, "good").glob("*.json"))
-    # Entity files only: scene-render sensors' visibility/ records are another format.
-    good += sorted(p for p in samples_dir.rglob("*.json") if p.parent.name != "visibility")
+    # Entity files only: scene-render sensors' visibility/ records and sequence indexes
+    # (sequence.json, checked against sequence.schema.json below) are other formats.
+    good += sorted(p for p in samples_dir.rglob("*.json")
+                   if p.parent.name != "visibility" and p.name != "sequence.json")
     expected = json.loads(pathlib.Path(data_dir, "broken_expected.json").read_text())
     broken = sorted(pathlib.Path(data_dir, "broken").glob("*.json"))
 
@@ -150,6 +152,17 @@ def main(argv):
         elif want.get("pointer") not in got:
             failures.append(f"{path.name}: expected an error at {want.get('pointer')!r}, "
                             f"got {sorted(got)}")
+
+    sequence_schema = schema_path.with_name("sequence.schema.json")
+    indexes = sorted(samples_dir.rglob("sequence.json"))
+    if indexes:
+        sequence = json.loads(sequence_schema.read_text())
+        results = (ajv_results(ajv, sequence_schema, indexes) if ajv
+                   else python_results(sequence, indexes))
+        for path in indexes:
+            if results[path] is not None:
+                failures.append(f"{path}: expected a valid sequence index, got: {results[path]}")
+    good += indexes
 
     for failure in failures:
         print("FAIL " + failure)

@@ -18,7 +18,7 @@
 namespace scene_schema {
 
 /// Major.minor.patch of the format this library writes; files with another major are refused.
-inline constexpr const char* kSchemaVersion = "1.0.0";
+inline constexpr const char* kSchemaVersion = "1.1.0";
 inline constexpr int kSchemaMajor = 1;
 
 /// The only coordinate convention of version 1: KITTI's rectified left camera.
@@ -33,6 +33,9 @@ inline constexpr double kMaxClassId = 2147483647.0;           ///< class_id fits
 inline constexpr double kMaxPointCount = 9007199254740991.0;  ///< 2^53 - 1: exact in a double
 inline constexpr double kMaxImageSide_px = 1e6;               ///< camera width and height
 inline constexpr double kMaxPixelValue_px = 1e9;              ///< |fx|, |fy|, |cx|, |cy|
+inline constexpr double kMaxSpeed_mps = 1e3;                  ///< |vx|, |vz| (1.1)
+inline constexpr double kMaxTimestamp_s = 1e11;               ///< frame.timestamp (1.1)
+inline constexpr double kMaxTrackId = 2147483647.0;           ///< track_id fits an int (1.1)
 
 /// A validation or read failure, located by a JSON pointer into the document.
 class SchemaError : public std::runtime_error {
@@ -64,24 +67,34 @@ struct Frame {
     std::string id;                                   ///< image pair or scene id
     std::string convention = kConventionKittiCamera;  ///< coordinate convention
     std::optional<CameraIntrinsics> camera;           ///< intrinsics, when known
+    std::optional<double> timestamp_s;  ///< capture time in seconds, >= 0 (1.1; a sequence's clock)
     nlohmann::json extra = nlohmann::json::object();  ///< unknown members, kept verbatim
+};
+
+/// Ground-plane velocity of an entity in the frame's camera coordinates (1.1): metres per
+/// second along x (right) and z (forward), relative to the camera that saw the frame.
+struct Velocity {
+    double vx_mps = 0.0;  ///< along +x (right), m/s
+    double vz_mps = 0.0;  ///< along +z (forward), m/s
 };
 
 /// One object or stuff extent: an upright box in the camera frame.
 struct Entity {
-    std::string id;                     ///< unique within the file
-    std::string class_name;             ///< e.g. "car", "road"
-    int class_id = 0;                   ///< numeric class id of the palette in use
-    double x = 0.0;                     ///< box centre, metres, right
-    double y = 0.0;                     ///< box centre, metres, down
-    double z = 0.0;                     ///< box centre, metres, forward
-    double theta = 0.0;                 ///< yaw about +y in radians (KITTI rotation_y)
-    double W = 1.0;                     ///< width across the heading, metres, > 0
-    double H = 1.0;                     ///< height along y, metres, > 0
-    double L = 1.0;                     ///< length along the heading, metres, > 0
-    std::int64_t point_count = 0;       ///< cloud points that support the entity, >= 0
-    double confidence = 1.0;            ///< 0..1
-    std::optional<std::string> method;  ///< extractor that made it
+    std::string id;                        ///< unique within the file
+    std::string class_name;                ///< e.g. "car", "road"
+    int class_id = 0;                      ///< numeric class id of the palette in use
+    double x = 0.0;                        ///< box centre, metres, right
+    double y = 0.0;                        ///< box centre, metres, down
+    double z = 0.0;                        ///< box centre, metres, forward
+    double theta = 0.0;                    ///< yaw about +y in radians (KITTI rotation_y)
+    double W = 1.0;                        ///< width across the heading, metres, > 0
+    double H = 1.0;                        ///< height along y, metres, > 0
+    double L = 1.0;                        ///< length along the heading, metres, > 0
+    std::int64_t point_count = 0;          ///< cloud points that support the entity, >= 0
+    double confidence = 1.0;               ///< 0..1
+    std::optional<std::string> method;     ///< extractor that made it
+    std::optional<std::int64_t> track_id;  ///< the same object across a sequence's frames (1.1)
+    std::optional<Velocity> velocity;      ///< tracked ground-plane velocity (1.1)
     nlohmann::json extra = nlohmann::json::object();  ///< unknown members, kept verbatim
 };
 
