@@ -16,11 +16,13 @@
 #include "commands/batch.hpp"
 #include "commands/bench.hpp"
 #include "commands/evaluate.hpp"
+#include "commands/evaluate_tracks.hpp"
 #include "commands/export_kitti.hpp"
 #include "commands/make_sample.hpp"
 #include "commands/output.hpp"
 #include "commands/report.hpp"
 #include "commands/score_semantics.hpp"
+#include "commands/track.hpp"
 
 namespace {
 
@@ -29,7 +31,7 @@ using cloud_analysis::app::kTool;
 bool is_subcommand(const std::string& arg) {
     return arg == "analyse" || arg == "evaluate" || arg == "export-kitti" || arg == "make-sample" ||
            arg == "batch" || arg == "bench" || arg == "report" || arg == "score-semantics" ||
-           arg == "help";
+           arg == "track" || arg == "evaluate-tracks" || arg == "help";
 }
 
 }  // namespace
@@ -50,7 +52,8 @@ int main(int argc, char** argv) {
         "cloud-analysis: rectified stereo pair + calibration + semantic image -> "
         "disparity, labelled metric point cloud and entity file.\n"
         "Commands: analyse (default), evaluate, export-kitti, make-sample, batch, report, bench, "
-        "score-semantics. Exit codes: 0 ok, 1 failure, 2 usage, 3 (evaluate) a bar was missed."};
+        "score-semantics, track, evaluate-tracks. Exit codes: 0 ok, 1 failure, 2 usage, 3 "
+        "(evaluate) a bar was missed."};
     app.set_version_flag("--version", std::string(kTool) + " " + STEREOSCENE_VERSION);
     app.require_subcommand(0, 1);
     app_::AnalyseArgs analyse_args;
@@ -69,6 +72,10 @@ int main(int argc, char** argv) {
     CLI::App* sample = app_::add_make_sample_command(app, sample_args);
     app_::ScoreSemanticsArgs score_args;
     CLI::App* score = app_::add_score_semantics_command(app, score_args);
+    app_::TrackArgs track_args;
+    CLI::App* track = app_::add_track_command(app, track_args);
+    app_::EvaluateTracksArgs evaluate_tracks_args;
+    CLI::App* evaluate_tracks = app_::add_evaluate_tracks_command(app, evaluate_tracks_args);
 
     try {
         app.parse(args);
@@ -89,6 +96,8 @@ int main(int argc, char** argv) {
         if (*evaluate) return app_::run_evaluate(evaluate_args);
         if (*export_kitti) return app_::run_export_kitti(export_args);
         if (*score) return app_::run_score_semantics(score_args);
+        if (*track) return app_::run_track(track_args);
+        if (*evaluate_tracks) return app_::run_evaluate_tracks(evaluate_tracks_args);
         std::cout << app.help();
         return 0;
     } catch (const CLI::ParseError& e) {

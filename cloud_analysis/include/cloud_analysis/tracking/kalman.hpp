@@ -1,0 +1,50 @@
+#pragma once
+
+/// A constant-velocity Kalman filter in the ground plane (x right, z forward; metres and
+/// m/s): state (x, z, vx, vz), measurement (x, z). Process noise is white acceleration
+/// (Bar-Shalom, Li & Kirubarajan 2001, "discrete white noise acceleration" model), as in
+/// AB3DMOT (Weng et al. 2020) restricted to the ground plane.
+
+#include <Eigen/Core>
+
+namespace cloud_analysis::tracking {
+
+/// Noise of the filter.
+struct KalmanOptions {
+    double acceleration_sigma_mps2 = 1.5;  ///< process noise: std of the acceleration, m/s^2
+    double position_sigma_m = 0.25;        ///< measurement noise near the camera: std of x, z, m
+    /// Stereo depth error grows with the square of the range (z^2 sigma_d / (f B)): the
+    /// measurement's std is max(position_sigma_m, this * range^2), metres per square metre.
+    double range_sigma_per_m2 = 0.0007;
+    double initial_speed_sigma_mps = 10.0;  ///< std of the unknown velocity at birth, m/s
+    /// Throws std::invalid_argument naming the bad field.
+    void validate() const;
+};
+
+/// One object's state and covariance.
+class GroundKalman {
+  public:
+    /// A track born at (x, z) with unknown velocity.
+    GroundKalman(double x_m, double z_m, const KalmanOptions& options);
+    /// Moves the state dt seconds ahead (dt >= 0).
+    void predict(double dt_s);
+    /// Corrects with a measured position (its noise from its range).
+    void update(double x_m, double z_m);
+    /// Squared Mahalanobis distance of a measurement from the predicted one.
+    double mahalanobis2(double x_m, double z_m) const;
+    /// Measurement noise (std, metres) of a position at this bird's-eye range.
+    double measurement_sigma_m(double range_m) const;
+
+    double x_m() const { return state_(0); }
+    double z_m() const { return state_(1); }
+    double vx_mps() const { return state_(2); }
+    double vz_mps() const { return state_(3); }
+    const Eigen::Matrix4d& covariance() const { return covariance_; }
+
+  private:
+    Eigen::Vector4d state_;
+    Eigen::Matrix4d covariance_;
+    KalmanOptions options_;
+};
+
+}  // namespace cloud_analysis::tracking

@@ -1,0 +1,105 @@
+#pragma once
+
+/// Multi-object tracking over a drive's entity documents: one constant-velocity Kalman filter
+/// per object in the ground plane, Hungarian assignment on bird's-eye centre distance gated
+/// per class, birth after N hits and death after M misses (AB3DMOT, Weng et al. 2020, with
+/// distance instead of 3D IoU), smoothed size and heading.
+
+#include <cstdint>
+#include <map>
+#include <optional>
+#include <string>
+#include <vector>
+
+#include "cloud_analysis/tracking/kalman.hpp"
+#include "scene_schema/entities.hpp"
+
+namespace cloud_analysis::tracking {
+
+/// How objects are followed from frame to frame.
+struct TrackerOptions {
+    /// Classes that get tracks; other entities (road, building...) pass through untouched.
+    std::vector<std::string> classes{"car",   "truck",   "bus",       "person",
+                                     "rider", "bicycle", "motorcycle"};
+    /// Gate per class: a detection farther than this from a track's predicted centre (bird's
+    /// eye, metres) is not that track's. Classes not listed use default_gate_m.
+    std::map<std::string, double> gate_m{
+        {"car", 2.5}, {"truck", 3.0}, {"bus", 3.0}, {"person", 1.2}, {"rider", 1.5}};
+    double default_gate_m = 2.0;  ///< gate of classes without their own, metres
+    int min_hits = 3;             ///< a track is confirmed (reported) after this many hits
+    int max_misses = 10;  ///< a confirmed track dies after this many frames in a row without a hit
+    double max_gap_s = 1.0;     ///< a longer gap between frames restarts the tracker, s
+    double heading_gain = 0.3;  ///< weight of a new heading in the smoothed one, 0..1
+    double height_gain = 0.3;   ///< weight of a new box centre height (y), 0..1
+    /// Above this speed the heading follows the velocity's direction (resolving the box's
+    /// 180 degree ambiguity); below it the box's heading is kept, aligned modulo pi, m/s.
+    double heading_from_motion_mps = 2.0;
+    /// After confirmation the size is held; it is re-estimated (mean of the measurements since)
+    /// only when that mean leaves it by more than this in W, H or L, metres.
+    double size_relock_m = 0.4;
+    KalmanOptions kalman;  ///< motion model noise
+    /// Throws std::invalid_argument naming the bad field.
+    void validate() const;
+};
+
+/// What one frame gave the tracker.
+struct TrackerFrameStats {
+    int detections = 0;      ///< entities of tracked classes
+    int matched = 0;         ///< of those, associated with an existing track
+    int born = 0;            ///< new tracks
+    int died = 0;            ///< tracks removed after too many misses
+    int reported = 0;        ///< entities written with a track_id
+    bool restarted = false;  ///< the tracker dropped every track first (gap or time going back)
+};
+
+/// One followed object.
+struct Track {
+    std::int64_t id = 0;               ///< the track_id written
+    std::string class_name;            ///< class of its first detection
+    GroundKalman motion;               ///< position and velocity in the ground plane
+    double y_m = 0.0;                  ///< smoothed box centre height (camera y), metres
+    double theta_rad = 0.0;            ///< smoothed heading
+    double W = 1.0, H = 1.0, L = 1.0;  ///< held (or running mean) size, metres
+    double sum_W = 0.0, sum_H = 0.0, sum_L = 0.0;  ///< sizes measured since the last lock
+    int size_samples = 0;                          ///< measurements in the sums
+    bool size_locked = false;                      ///< the size is held (after confirmation)
+    int hits = 0;                                  ///< frames with a detection
+    int misses = 0;                                ///< consecutive frames without one
+    bool confirmed = false;  ///< reached min_hits (or was born in the first frames)
+};
+
+/// The tracker's state across frames. Feed frames in capture order.
+class Tracker {
+  public:
+    explicit Tracker(TrackerOptions options = {});
+
+    /// Tracks one frame taken at `timestamp_s`: returns the document with `track_id`,
+    /// `velocity` and smoothed position, size and heading on the entities of confirmed tracks
+    /// matched in this frame; other entities are kept as they came. A timestamp not after the
+    /// previous one, or more than max_gap_s after it, restarts the tracker (new ids, never
+    /// reused); `stats` (optional) says what happened.
+    scene_schema::EntityDocument update(const scene_schema::EntityDocument& frame,
+                                        double timestamp_s, TrackerFrameStats* stats = nullptr);
+
+    /// Drops every track (the next ids still count up).
+    void reset();
+
+    /// Live tracks (confirmed or not).
+    const std::vector<Track>& tracks() const { return tracks_; }
+
+  private:
+    void predict(double dt_s);
+    void associate(const scene_schema::EntityDocument& frame, std::vector<int>& track_of);
+    TrackerOptions options_;
+    std::vector<Track> tracks_;
+    std::optional<double> last_time_s_;
+    std::int64_t next_id_ = 0;
+    int frames_since_start_ = 0;
+};
+
+/// Tracks a whole drive (frames in order, one timestamp each).
+std::vector<scene_schema::EntityDocument> track_sequence(
+    const std::vector<scene_schema::EntityDocument>& frames, const std::vector<double>& times_s,
+    const TrackerOptions& options);
+
+}  // namespace cloud_analysis::tracking

@@ -1,0 +1,243 @@
+#include "cloud_analysis/tracking/tracker.hpp"
+
+#include <algorithm>
+#include <cmath>
+#include <stdexcept>
+
+#include "cloud_analysis/tracking/assignment.hpp"
+
+namespace cloud_analysis::tracking {
+
+namespace {
+
+constexpr double kPi = 3.14159265358979323846;
+
+/// Angle in (-pi, pi].
+double wrap(double a) {
+    a = std::fmod(a + kPi, 2.0 * kPi);
+    if (a <= 0.0) a += 2.0 * kPi;
+    return a - kPi;
+}
+
+/// a or a + pi, whichever is nearer to `reference` (a box's heading is only known modulo pi).
+double align_modulo_pi(double a, double reference) {
+    const double d = wrap(a - reference);
+    return std::abs(d) > kPi / 2.0 ? wrap(a + kPi) : wrap(a);
+}
+
+bool in(const std::vector<std::string>& list, const std::string& name) {
+    return std::find(list.begin(), list.end(), name) != list.end();
+}
+
+void require(bool ok, const char* field, const char* rule) {
+    if (!ok) throw std::invalid_argument(std::string(field) + " " + rule);
+}
+
+}  // namespace
+
+void TrackerOptions::validate() const {
+    require(std::isfinite(default_gate_m) && default_gate_m > 0.0, "default_gate_m", "must be > 0");
+    for (const auto& [name, gate] : gate_m) {
+        if (!(std::isfinite(gate) && gate > 0.0)) {
+            throw std::invalid_argument("gate_m[" + name + "] must be > 0");
+        }
+    }
+    require(min_hits >= 1, "min_hits", "must be >= 1");
+    require(max_misses >= 1, "max_misses", "must be >= 1");
+    require(std::isfinite(max_gap_s) && max_gap_s > 0.0, "max_gap_s", "must be > 0");
+    require(heading_gain > 0.0 && heading_gain <= 1.0, "heading_gain", "must be in (0, 1]");
+    require(height_gain > 0.0 && height_gain <= 1.0, "height_gain", "must be in (0, 1]");
+    require(std::isfinite(heading_from_motion_mps) && heading_from_motion_mps >= 0.0,
+            "heading_from_motion_mps", "must be >= 0");
+    require(std::isfinite(size_relock_m) && size_relock_m >= 0.0, "size_relock_m", "must be >= 0");
+    kalman.validate();
+}
+
+Tracker::Tracker(TrackerOptions options) : options_(std::move(options)) { options_.validate(); }
+
+void Tracker::reset() {
+    tracks_.clear();
+    last_time_s_.reset();
+    frames_since_start_ = 0;
+}
+
+void Tracker::predict(double dt_s) {
+    for (Track& t : tracks_) t.motion.predict(dt_s);
+}
+
+void Tracker::associate(const scene_schema::EntityDocument& frame, std::vector<int>& track_of) {
+    std::vector<int> detections;
+    for (std::size_t i = 0; i < frame.entities.size(); ++i) {
+        if (in(options_.classes, frame.entities[i].class_name)) {
+            detections.push_back(static_cast<int>(i));
+        }
+    }
+    CostMatrix costs;
+    costs.rows = static_cast<int>(tracks_.size());
+    costs.cols = static_cast<int>(detections.size());
+    costs.cost.resize(static_cast<std::size_t>(costs.rows) * costs.cols);
+    // Cost: bird's-eye centre distance over the class's gate, so one gate of 1 serves all.
+    for (int r = 0; r < costs.rows; ++r) {
+        const Track& t = tracks_[r];
+        const auto gate = options_.gate_m.find(t.class_name);
+        const double gate_m =
+            gate == options_.gate_m.end() ? options_.default_gate_m : gate->second;
+        for (int c = 0; c < costs.cols; ++c) {
+            const auto& e = frame.entities[detections[c]];
+            const double d = std::hypot(e.x - t.motion.x_m(), e.z - t.motion.z_m());
+            costs.cost[static_cast<std::size_t>(r) * costs.cols + c] =
+                e.class_name == t.class_name ? d / gate_m : 2.0;
+        }
+    }
+    track_of.assign(frame.entities.size(), -2);  // -2: not a tracked class
+    for (int d : detections) track_of[d] = -1;   // -1: not matched yet
+    for (const Match& m : assign(costs, 1.0)) track_of[detections[m.col]] = m.row;
+}
+
+namespace {
+
+/// Folds a measured box into a matched track's height, heading and size.
+void absorb(Track& t, const scene_schema::Entity& e, const TrackerOptions& o) {
+    t.y_m += o.height_gain * (e.y - t.y_m);
+    double target = align_modulo_pi(e.theta, t.theta_rad);
+    const double speed = std::hypot(t.motion.vx_mps(), t.motion.vz_mps());
+    if (speed > o.heading_from_motion_mps) {
+        // Moving: the box's axis, turned to point where the object goes.
+        const double motion = std::atan2(-t.motion.vz_mps(), t.motion.vx_mps());
+        target = align_modulo_pi(target, motion);
+        // A track born facing backwards turns round at once, not through a half turn.
+        if (std::abs(wrap(t.theta_rad - motion)) > kPi / 2.0) t.theta_rad = wrap(t.theta_rad + kPi);
+    }
+    t.theta_rad = wrap(t.theta_rad + o.heading_gain * wrap(target - t.theta_rad));
+    t.sum_W += e.W;
+    t.sum_H += e.H;
+    t.sum_L += e.L;
+    ++t.size_samples;
+    const double n = t.size_samples;
+    const double W = t.sum_W / n, H = t.sum_H / n, L = t.sum_L / n;
+    if (!t.size_locked) {
+        t.W = W;
+        t.H = H;
+        t.L = L;
+    } else if (std::max({std::abs(W - t.W), std::abs(H - t.H), std::abs(L - t.L)}) >
+               o.size_relock_m) {
+        t.W = W;
+        t.H = H;
+        t.L = L;
+        t.sum_W = t.sum_H = t.sum_L = 0.0;
+        t.size_samples = 0;
+    }
+}
+
+Track born(const scene_schema::Entity& e, std::int64_t id, const TrackerOptions& o) {
+    Track t{id, e.class_name, GroundKalman(e.x, e.z, o.kalman)};
+    t.y_m = e.y;
+    t.theta_rad = wrap(e.theta);
+    t.W = t.sum_W = e.W;
+    t.H = t.sum_H = e.H;
+    t.L = t.sum_L = e.L;
+    t.size_samples = 1;
+    t.hits = 1;
+    return t;
+}
+
+void report(const Track& t, scene_schema::Entity& e) {
+    e.track_id = t.id;
+    e.velocity = scene_schema::Velocity{t.motion.vx_mps(), t.motion.vz_mps()};
+    e.x = t.motion.x_m();
+    e.z = t.motion.z_m();
+    e.y = t.y_m;
+    e.theta = t.theta_rad;
+    e.W = t.W;
+    e.H = t.H;
+    e.L = t.L;
+}
+
+}  // namespace
+
+scene_schema::EntityDocument Tracker::update(const scene_schema::EntityDocument& frame,
+                                             double timestamp_s, TrackerFrameStats* stats) {
+    if (!std::isfinite(timestamp_s)) throw std::invalid_argument("timestamp is not finite");
+    TrackerFrameStats s;
+    double dt = 0.0;
+    if (last_time_s_) {
+        dt = timestamp_s - *last_time_s_;
+        if (!(dt > 0.0) || dt > options_.max_gap_s) {
+            reset();
+            s.restarted = true;
+            dt = 0.0;
+        }
+    }
+    last_time_s_ = timestamp_s;
+    ++frames_since_start_;
+    predict(dt);
+
+    std::vector<int> track_of;
+    associate(frame, track_of);
+    std::vector<char> hit(tracks_.size(), 0);
+    scene_schema::EntityDocument out = frame;
+    out.frame.timestamp_s = timestamp_s;
+    for (std::size_t i = 0; i < frame.entities.size(); ++i) {
+        if (track_of[i] == -2) continue;
+        ++s.detections;
+        const auto& e = frame.entities[i];
+        if (track_of[i] >= 0) {
+            Track& t = tracks_[track_of[i]];
+            t.motion.update(e.x, e.z);
+            absorb(t, e, options_);
+            ++t.hits;
+            t.misses = 0;
+            hit[track_of[i]] = 1;
+            ++s.matched;
+        } else {
+            track_of[i] = static_cast<int>(tracks_.size());
+            tracks_.push_back(born(e, next_id_++, options_));
+            hit.push_back(1);
+            ++s.born;
+        }
+        Track& t = tracks_[track_of[i]];
+        if (!t.confirmed &&
+            (t.hits >= options_.min_hits || frames_since_start_ <= options_.min_hits)) {
+            t.confirmed = true;
+            t.size_locked = true;
+            t.sum_W = t.sum_H = t.sum_L = 0.0;
+            t.size_samples = 0;
+        }
+        if (t.confirmed) {
+            report(t, out.entities[i]);
+            ++s.reported;
+        }
+    }
+    // Misses; tentative tracks die at their first, confirmed ones after max_misses.
+    std::vector<Track> alive;
+    alive.reserve(tracks_.size());
+    for (std::size_t k = 0; k < tracks_.size(); ++k) {
+        Track& t = tracks_[k];
+        if (!hit[k]) ++t.misses;
+        const bool dead = t.misses > 0 && (!t.confirmed || t.misses >= options_.max_misses);
+        if (dead) {
+            ++s.died;
+        } else {
+            alive.push_back(std::move(t));
+        }
+    }
+    tracks_ = std::move(alive);
+    if (stats) *stats = s;
+    return out;
+}
+
+std::vector<scene_schema::EntityDocument> track_sequence(
+    const std::vector<scene_schema::EntityDocument>& frames, const std::vector<double>& times_s,
+    const TrackerOptions& options) {
+    if (frames.size() != times_s.size()) {
+        throw std::invalid_argument("track_sequence: one timestamp per frame is needed");
+    }
+    Tracker tracker(options);
+    std::vector<scene_schema::EntityDocument> out;
+    out.reserve(frames.size());
+    for (std::size_t i = 0; i < frames.size(); ++i)
+        out.push_back(tracker.update(frames[i], times_s[i]));
+    return out;
+}
+
+}  // namespace cloud_analysis::tracking

@@ -1,0 +1,228 @@
+#include <catch2/catch.hpp>
+
+#include <algorithm>
+#include <cmath>
+#include <map>
+#include <numeric>
+#include <random>
+#include <set>
+
+#include "cloud_analysis/tracking/assignment.hpp"
+#include "cloud_analysis/tracking/kalman.hpp"
+#include "cloud_analysis/tracking/tracker.hpp"
+
+using namespace cloud_analysis::tracking;
+using scene_schema::Entity;
+using scene_schema::EntityDocument;
+
+namespace {
+
+constexpr double kPi = 3.14159265358979323846;
+
+/// The cheapest total over every partial matching of admissible pairs that keeps as many
+/// admissible pairs as possible (brute force over column permutations).
+std::pair<int, double> brute_force(const CostMatrix& m, double gate) {
+    std::vector<int> cols(std::max(m.rows, m.cols));
+    std::iota(cols.begin(), cols.end(), 0);
+    int best_count = -1;
+    double best_cost = 0.0;
+    do {
+        int count = 0;
+        double cost = 0.0;
+        for (int r = 0; r < m.rows; ++r) {
+            if (cols[r] < m.cols && m.at(r, cols[r]) <= gate) {
+                ++count;
+                cost += m.at(r, cols[r]);
+            }
+        }
+        if (count > best_count || (count == best_count && cost < best_cost - 1e-12)) {
+            best_count = count;
+            best_cost = cost;
+        }
+    } while (std::next_permutation(cols.begin(), cols.end()));
+    return {best_count, best_cost};
+}
+
+Entity car(double x, double z, double theta, double L = 4.2) {
+    Entity e;
+    e.id = "car";
+    e.class_name = "car";
+    e.class_id = 26;
+    e.x = x;
+    e.y = 0.9;
+    e.z = z;
+    e.theta = theta;
+    e.W = 1.8;
+    e.H = 1.5;
+    e.L = L;
+    return e;
+}
+
+EntityDocument frame_of(std::vector<Entity> entities) {
+    EntityDocument doc;
+    doc.frame.id = "f";
+    for (std::size_t i = 0; i < entities.size(); ++i) entities[i].id += "-" + std::to_string(i);
+    doc.entities = std::move(entities);
+    return doc;
+}
+
+}  // namespace
+
+TEST_CASE("assignment matches the brute-force optimum on random gated matrices", "[tracking]") {
+    std::mt19937 rng(7);
+    std::uniform_real_distribution<double> cost(0.0, 2.0);
+    for (int trial = 0; trial < 300; ++trial) {
+        CostMatrix m;
+        m.rows = 1 + trial % 5;
+        m.cols = 1 + (trial / 5) % 6;
+        for (int i = 0; i < m.rows * m.cols; ++i) m.cost.push_back(cost(rng));
+        const auto matches = assign(m, 1.0);
+        std::set<int> rows, cols;
+        double total = 0.0;
+        for (const Match& match : matches) {
+            CHECK(m.at(match.row, match.col) <= 1.0);
+            rows.insert(match.row);
+            cols.insert(match.col);
+            total += m.at(match.row, match.col);
+        }
+        CHECK(rows.size() == matches.size());
+        CHECK(cols.size() == matches.size());
+        const auto [count, best] = brute_force(m, 1.0);
+        INFO("trial " << trial);
+        CHECK(static_cast<int>(matches.size()) == count);
+        CHECK(total == Approx(best).margin(1e-9));
+    }
+}
+
+TEST_CASE("assignment refuses a malformed matrix and handles empty sides", "[tracking]") {
+    CHECK(assign(CostMatrix{0, 3, {}}, 1.0).empty());
+    CHECK_THROWS_AS(assign(CostMatrix{2, 2, {1.0}}, 1.0), std::invalid_argument);
+    CHECK_THROWS_AS(assign(CostMatrix{1, 1, {std::nan("")}}, 1.0), std::invalid_argument);
+}
+
+TEST_CASE("the Kalman filter recovers a constant velocity from noisy positions", "[tracking]") {
+    std::mt19937 rng(3);
+    std::normal_distribution<double> noise(0.0, 0.3);
+    GroundKalman k(5.0, 20.0, KalmanOptions{});
+    for (int i = 1; i <= 40; ++i) {
+        const double t = 0.1 * i;
+        k.predict(0.1);
+        k.update(5.0 - 6.0 * t + noise(rng), 20.0 + 1.5 * t + noise(rng));
+    }
+    CHECK(k.vx_mps() == Approx(-6.0).margin(0.5));
+    CHECK(k.vz_mps() == Approx(1.5).margin(0.5));
+    CHECK(k.mahalanobis2(k.x_m(), k.z_m()) == Approx(0.0).margin(1e-12));
+    CHECK_THROWS_AS(k.predict(-0.1), std::invalid_argument);
+}
+
+TEST_CASE("a crossing car and a parked car keep their ids, velocity and one size", "[tracking]") {
+    std::mt19937 rng(11);
+    std::normal_distribution<double> noise(0.0, 0.15);
+    std::normal_distribution<double> size_noise(0.0, 0.1);
+    std::bernoulli_distribution flip(0.3);
+    Tracker tracker;
+    std::map<std::string, std::set<std::int64_t>> ids;
+    std::vector<double> parked_L;
+    std::vector<double> moving_vx;
+    double last_theta = 0.0;
+    for (int i = 0; i < 40; ++i) {
+        const double t = 0.1 * i;
+        // The moving car crosses left to right at 8 m/s, 2 m in front of the parked one; its
+        // box heading comes flipped by pi in 30 % of the frames.
+        const double theta = flip(rng) ? kPi : 0.0;
+        auto moving = car(-16.0 + 8.0 * t + noise(rng), 18.0 + noise(rng), theta);
+        auto parked = car(2.0 + noise(rng), 22.0 + noise(rng), -kPi / 2 + (flip(rng) ? kPi : 0.0),
+                          4.2 + size_noise(rng));
+        const auto out = tracker.update(frame_of({moving, parked}), t);
+        REQUIRE(out.entities.size() == 2);
+        for (const auto& e : out.entities) {
+            REQUIRE(e.track_id);
+            REQUIRE(e.velocity);
+        }
+        ids["moving"].insert(*out.entities[0].track_id);
+        ids["parked"].insert(*out.entities[1].track_id);
+        if (i >= 3) parked_L.push_back(out.entities[1].L);
+        if (i >= 10) moving_vx.push_back(out.entities[0].velocity->vx_mps);
+        // Once its motion is known (a born-backwards track turns round once, early on), the
+        // heading changes smoothly: no flip from a box measured the other way round.
+        if (i > 3)
+            CHECK(std::abs(std::remainder(out.entities[0].theta - last_theta, 2 * kPi)) < 0.3);
+        last_theta = out.entities[0].theta;
+        if (i >= 10) CHECK(std::cos(out.entities[0].theta) > 0.9);  // along +x, where it drives
+    }
+    CHECK(ids["moving"].size() == 1);
+    CHECK(ids["parked"].size() == 1);
+    CHECK(*ids["moving"].begin() != *ids["parked"].begin());
+    const auto [lo, hi] = std::minmax_element(parked_L.begin(), parked_L.end());
+    CHECK(*hi - *lo < 0.05);
+    for (double vx : moving_vx) CHECK(vx == Approx(8.0).margin(1.0));
+}
+
+TEST_CASE("a track is reported after min_hits and dies after max_misses", "[tracking]") {
+    TrackerOptions options;
+    options.min_hits = 3;
+    options.max_misses = 2;
+    Tracker tracker(options);
+    auto report = [&](int i, bool present) {
+        std::vector<Entity> seen{car(0.0, 10.0, 0.0)};
+        if (present) seen.push_back(car(5.0, 30.0, 0.0));
+        const auto out = tracker.update(frame_of(seen), 0.1 * i);
+        return present ? out.entities[1].track_id : std::optional<std::int64_t>{};
+    };
+    for (int i = 0; i < 5; ++i) report(i, false);  // past the start-up frames
+    CHECK_FALSE(report(5, true));
+    CHECK_FALSE(report(6, true));
+    const auto id = report(7, true);
+    REQUIRE(id);
+    report(8, false);  // one miss: the track survives
+    CHECK(report(9, true) == id);
+    report(10, false);
+    report(11, false);  // two misses: it dies
+    CHECK_FALSE(report(12, true));
+    CHECK(tracker.tracks().size() == 2);
+}
+
+TEST_CASE("time going back or a long gap restarts the tracker with new ids", "[tracking]") {
+    Tracker tracker;
+    TrackerFrameStats stats;
+    const auto first = tracker.update(frame_of({car(0.0, 10.0, 0.0)}), 1.0, &stats);
+    CHECK_FALSE(stats.restarted);
+    CHECK(tracker.update(frame_of({car(0.0, 10.0, 0.0)}), 1.1, &stats).entities[0].track_id ==
+          first.entities[0].track_id);
+    const auto back = tracker.update(frame_of({car(0.0, 10.0, 0.0)}), 0.5, &stats);
+    CHECK(stats.restarted);
+    CHECK(back.entities[0].track_id != first.entities[0].track_id);
+    const auto gap = tracker.update(frame_of({car(0.0, 10.0, 0.0)}), 5.0, &stats);
+    CHECK(stats.restarted);
+    CHECK(gap.entities[0].track_id != back.entities[0].track_id);
+    CHECK(gap.entities[0].velocity->vx_mps == 0.0);
+}
+
+TEST_CASE("untracked classes pass through and classes never share a track", "[tracking]") {
+    Tracker tracker;
+    Entity road = car(0.0, 20.0, 0.0, 40.0);
+    road.class_name = "road";
+    road.class_id = 7;
+    Entity person = car(0.5, 10.0, 0.0);
+    person.class_name = "person";
+    const auto a = tracker.update(frame_of({road, car(0.0, 10.0, 0.0)}), 0.0);
+    const auto b = tracker.update(frame_of({road, person}), 0.1);
+    CHECK_FALSE(a.entities[0].track_id);
+    CHECK(a.entities[0].L == 40.0);
+    REQUIRE(b.entities[1].track_id);
+    CHECK(*b.entities[1].track_id != *a.entities[1].track_id);
+}
+
+TEST_CASE("tracker options name the bad field", "[tracking]") {
+    TrackerOptions o;
+    o.min_hits = 0;
+    CHECK_THROWS_WITH(o.validate(), "min_hits must be >= 1");
+    o = TrackerOptions{};
+    o.gate_m["car"] = -1.0;
+    CHECK_THROWS_WITH(o.validate(), "gate_m[car] must be > 0");
+    o = TrackerOptions{};
+    o.kalman.position_sigma_m = 0.0;
+    CHECK_THROWS_WITH(o.validate(), "position_sigma_m must be > 0");
+    CHECK_THROWS_AS(track_sequence({EntityDocument{}}, {}, TrackerOptions{}),
+                    std::invalid_argument);
+}
