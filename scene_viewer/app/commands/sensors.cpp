@@ -47,6 +47,10 @@ CLI::App* add_sensors_command(CLI::App& app, SensorsArgs& a) {
         ->capture_default_str();
     s->add_flag("--no-ground", a.no_ground, "no terrain underlay under the road level");
     s->add_flag("--boxes", a.boxes, "draw every entity as a box (no glTF models)");
+    s->add_option("--frames", a.frames,
+                  "render a drive of N frames named 0000000000.. (entities move by their "
+                  "velocity), with truth/<frame>.json and truth/sequence.json");
+    s->add_option("--fps", a.drive.fps, "frame rate of a drive, Hz")->capture_default_str();
     s->add_option("--classes", a.classes,
                   "class table (default: assets/classes/render_classes.json)");
     return s;
@@ -80,6 +84,34 @@ StereoRig resolve_rig(const SensorsArgs& a, const scene_schema::EntityDocument& 
     return rig;
 }
 
+/// Renders and writes a drive frame by frame: a failure leaves every earlier frame complete.
+int run_drive(SensorsArgs& a, const scene_schema::EntityDocument& scene, Gpu& gpu) {
+    const auto index = drive_index(scene.frame.id, a.drive);
+    for (const auto& f : index.frames) {
+        const std::string name = drive_frame_name(static_cast<int>(f.index));
+        const auto truth = scene_at(scene, *f.timestamp_s, name);
+        std::map<std::string, std::string> files;
+        try {
+            files = kitti_layout_files(render_stereo_frame(gpu.renderer, truth, a.options), name);
+            files["truth/" + f.file] = scene_schema::dump_checked(truth);
+        } catch (const std::exception& e) {
+            throw Failure{"cannot render the sensors", "frame " + name + ": " + e.what(), a.input};
+        }
+        try {
+            write_files(a.out, files);
+        } catch (const std::exception& e) {
+            throw Failure{"cannot write the sensor files", e.what(), a.out};
+        }
+    }
+    try {
+        scene_schema::write_sequence_file(index,
+                                          std::filesystem::path(a.out) / "truth" / "sequence.json");
+    } catch (const std::exception& e) {
+        throw Failure{"cannot write the sensor files", e.what(), a.out};
+    }
+    return 0;
+}
+
 }  // namespace
 
 int run_sensors(SensorsArgs a) {
@@ -96,8 +128,17 @@ int run_sensors(SensorsArgs a) {
     } catch (const std::invalid_argument& e) {
         usage(e.what(), "--frame");
     }
+    if (a.frames) {
+        a.drive.frames = *a.frames;
+        try {
+            a.drive.validate();
+        } catch (const std::invalid_argument& e) {
+            usage(e.what(), "sensors");
+        }
+    }
     const auto classes = read_classes(a.boxes, a.classes);
     auto gpu = start_gpu(classes);
+    if (a.frames) return run_drive(a, document, *gpu);
     std::map<std::string, std::string> files;
     try {
         files =

@@ -6,6 +6,7 @@
 #include <string>
 
 #include "common.hpp"
+#include "scene_viewer/sensors/drive.hpp"
 #include "scene_viewer/sensors/stereo_sensors.hpp"
 
 namespace scene_render {
@@ -21,6 +22,8 @@ struct SensorsArgs {
     bool boxes = false;                   ///< boxes instead of glTF models
     std::string classes;                  ///< class table; empty: the bundled one
     scene_viewer::SensorOptions options;  ///< noise, blur, gain, vignetting, MSAA, seed
+    std::optional<int> frames;            ///< a drive of this many frames; none: one frame
+    scene_viewer::DriveOptions drive;     ///< frame rate of a drive
 };
 
 CLI::App* add_sensors_command(CLI::App& app, SensorsArgs& args);
