@@ -89,6 +89,30 @@ note "classes from geometry" "$out/street-stereo-only-classes.png"
 note "scores, stereo pair only" "$out/street-stereo-only-eval.json"
 note "stereo-only over the left image" "$out/street-stereo-only-camera.png"
 
+# 3b. A drive: the short sample drive rendered with its truth (half size, 10 frames, to keep the
+#     demo fast), analysed, tracked, scored, then played to a video and a BEV strip with trails.
+echo "== drive: scene-render sensors --frames, batch, track, evaluate-tracks, play" >&2
+drive="$out/drive"
+rm -rf "$drive"
+"$render" sensors "$samples/drives/scenes/crossing.json" --out "$drive/sensors" --frames 10 \
+    --fps 10 --size 621x188
+ls "$drive/sensors/image_2" | sed 's/\.png$//' > "$drive/frames.txt"
+mkdir -p "$drive/analysed"
+"$analyse" batch --kitti-root "$drive/sensors" --list "$drive/frames.txt" \
+    --out-dir "$drive/analysed" --quiet
+"$analyse" track "$drive/analysed" --out-dir "$drive/tracked" --fps 10
+"$analyse" evaluate-tracks --tracks "$drive/tracked" --truth "$drive/sensors/truth" \
+    --visibility "$drive/sensors/visibility" --min-visible-fraction 0.25 > "$drive/tracking.txt"
+note "drive: tracking scores" "$drive/tracking.txt"
+video=()
+command -v ffmpeg >/dev/null && video=(--video "$drive/drive-camera.mp4")
+"$render" play "$drive/tracked" --out-dir "$drive/camera" --view camera --size 621x188 \
+    --backgrounds "$drive/sensors/image_2" "${video[@]}"
+[ ${#video[@]} -gt 0 ] && note "drive: camera view over the left images (MP4)" "$drive/drive-camera.mp4"
+"$render" play "$drive/tracked" --out-dir "$drive/bev" --view bev --size 320x320 --trail 10 \
+    --strip "$drive/drive-bev-strip.png" --strip-frames 4
+note "drive: BEV strip with track trails" "$drive/drive-bev-strip.png"
+
 # 4. A real KITTI frame, when the shared data is beside the project (never bundled).
 kitti="$STEREOSCENE_ROOT/../shared/data/kitti15"
 if [ -d "$kitti/image_2" ]; then

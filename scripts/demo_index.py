@@ -67,6 +67,8 @@ def main():
         title = f"<h3>{html.escape(label)}: <a href=\"{href}\">{name}</a></h3>"
         if path.endswith(".png"):
             parts.append(f"<figure>{title}<a href=\"{href}\"><img src=\"{href}\" alt=\"\"></a></figure>")
+        elif path.endswith(".mp4"):
+            parts.append(f"<figure>{title}<video src=\"{href}\" controls loop></video></figure>")
         elif path.endswith(".json"):
             parts.append(f"<details>{title and f'<summary>{title}</summary>'}{json_table(path)}</details>")
         else:

@@ -22,6 +22,8 @@ packages=(
     python3-matplotlib
     # the browser viewer: node runs npm and esbuild; the browser tests drive Debian's chromium
     nodejs chromium
+    # scene-render play encodes drives to MP4 with it (found at run time)
+    ffmpeg
     # a throw-away single-node Slurm for the cluster test (scripts/slurm/local-cluster.sh)
     slurm-wlm munge iproute2
 )

@@ -10,6 +10,7 @@
 #include "commands/grid.hpp"
 #include "commands/html_command.hpp"
 #include "commands/info.hpp"
+#include "commands/play.hpp"
 #include "commands/render.hpp"
 #include "commands/sensors.hpp"
 #include "stereoscene/support/error_line.hpp"
@@ -35,6 +36,8 @@ int run(int argc, char** argv) {
     CLI::App* bench = add_bench_command(app, bench_args);
     SensorsArgs sensors_args;
     CLI::App* sensors = add_sensors_command(app, sensors_args);
+    PlayArgs play_args;
+    CLI::App* play = add_play_command(app, play_args);
     html_command::Options html_options;
     CLI::App* html = html_command::add(app, html_options);
 
@@ -50,6 +53,7 @@ int run(int argc, char** argv) {
     if (*bench) return run_bench(bench_args);
     if (*sensors) return run_sensors(sensors_args);
     if (*grid) return run_grid(grid_args);
+    if (*play) return run_play(play_args);
     return run_render(render);
 }
 

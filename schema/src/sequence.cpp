@@ -147,11 +147,12 @@ SequenceIndex read_sequence_file(const std::filesystem::path& path) {
     }
 }
 
-void write_sequence_file(const SequenceIndex& index, const std::filesystem::path& path) {
+void write_sequence_file(const SequenceIndex& index, const std::filesystem::path& path,
+                         stereoscene::support::FileSync sync) {
     const json j = to_json(index);
     auto issues = validate_sequence(j);
     if (!issues.empty()) throw SchemaError(issues.front().pointer, issues.front().rule);
-    stereoscene::support::write_file_atomic(path, j.dump(2) + "\n");
+    stereoscene::support::write_file_atomic(path, j.dump(2) + "\n", sync);
 }
 
 std::filesystem::path frame_file(const std::filesystem::path& index_path,

@@ -115,12 +115,14 @@ void absorb(Track& t, const scene_schema::Entity& e, const TrackerOptions& o) {
     ++t.size_samples;
     const double n = t.size_samples;
     const double W = t.sum_W / n, H = t.sum_H / n, L = t.sum_L / n;
+    if (t.size_locked) ++t.hits_since_lock;
     if (!t.size_locked) {
         t.W = W;
         t.H = H;
         t.L = L;
-    } else if (std::max({std::abs(W - t.W), std::abs(H - t.H), std::abs(L - t.L)}) >
-               o.size_relock_m) {
+    } else if (t.hits_since_lock <= o.size_settle_hits &&
+               std::max({std::abs(W - t.W), std::abs(H - t.H), std::abs(L - t.L)}) >
+                   o.size_relock_m) {
         t.W = W;
         t.H = H;
         t.L = L;
@@ -141,9 +143,15 @@ Track born(const scene_schema::Entity& e, std::int64_t id, const TrackerOptions&
     return t;
 }
 
-void report(const Track& t, scene_schema::Entity& e) {
+void report(const Track& t, const TrackerOptions& o, scene_schema::Entity& e) {
     e.track_id = t.id;
-    e.velocity = scene_schema::Velocity{t.motion.vx_mps(), t.motion.vz_mps()};
+    const auto& P = t.motion.covariance();
+    const double v2 = o.max_velocity_sigma_mps * o.max_velocity_sigma_mps;
+    if (P(2, 2) <= v2 && P(3, 3) <= v2) {
+        e.velocity = scene_schema::Velocity{t.motion.vx_mps(), t.motion.vz_mps()};
+    } else {
+        e.velocity.reset();
+    }
     e.x = t.motion.x_m();
     e.z = t.motion.z_m();
     e.y = t.y_m;
@@ -204,7 +212,7 @@ scene_schema::EntityDocument Tracker::update(const scene_schema::EntityDocument&
             t.size_samples = 0;
         }
         if (t.confirmed) {
-            report(t, out.entities[i]);
+            report(t, options_, out.entities[i]);
             ++s.reported;
         }
     }

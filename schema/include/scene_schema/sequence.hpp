@@ -47,8 +47,11 @@ nlohmann::json to_json(const SequenceIndex& index);
 /// Reads and validates an index file; throws FileError "<path>: <pointer>: <rule>".
 SequenceIndex read_sequence_file(const std::filesystem::path& path);
 
-/// Validates, then writes atomically (canonical text: sorted keys, 2-space indent).
-void write_sequence_file(const SequenceIndex& index, const std::filesystem::path& path);
+/// Validates, then writes atomically (canonical text: sorted keys, 2-space indent); kAtomicOnly
+/// skips the fsync (for an index rewritten after every frame).
+void write_sequence_file(
+    const SequenceIndex& index, const std::filesystem::path& path,
+    stereoscene::support::FileSync sync = stereoscene::support::FileSync::kDurable);
 
 /// The entity file of `frame`, resolved against the index file's folder.
 std::filesystem::path frame_file(const std::filesystem::path& index_path,

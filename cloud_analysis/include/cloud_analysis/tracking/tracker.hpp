@@ -34,9 +34,14 @@ struct TrackerOptions {
     /// Above this speed the heading follows the velocity's direction (resolving the box's
     /// 180 degree ambiguity); below it the box's heading is kept, aligned modulo pi, m/s.
     double heading_from_motion_mps = 2.0;
-    /// After confirmation the size is held; it is re-estimated (mean of the measurements since)
-    /// only when that mean leaves it by more than this in W, H or L, metres.
+    /// After confirmation the size is held; during the next size_settle_hits hits it is
+    /// re-estimated (mean of the measurements since) when that mean leaves it by more than
+    /// this in W, H or L (a car first seen truncated), metres; afterwards it is fixed.
     double size_relock_m = 0.4;
+    int size_settle_hits = 10;  ///< hits after confirmation during which the size may change
+    /// The velocity is written only once the filter knows it this well (std of vx and vz,
+    /// m/s); before, the entity has no `velocity` (unknown, not 0).
+    double max_velocity_sigma_mps = 1.0;
     KalmanOptions kalman;  ///< motion model noise
     /// Throws std::invalid_argument naming the bad field.
     void validate() const;
@@ -63,6 +68,7 @@ struct Track {
     double sum_W = 0.0, sum_H = 0.0, sum_L = 0.0;  ///< sizes measured since the last lock
     int size_samples = 0;                          ///< measurements in the sums
     bool size_locked = false;                      ///< the size is held (after confirmation)
+    int hits_since_lock = 0;                       ///< hits since the size was first held
     int hits = 0;                                  ///< frames with a detection
     int misses = 0;                                ///< consecutive frames without one
     bool confirmed = false;  ///< reached min_hits (or was born in the first frames)
