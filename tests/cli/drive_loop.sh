@@ -18,7 +18,7 @@ mkdir "$d/analysed"
 "$analyse" track "$d/analysed" --out-dir "$d/tracked" --fps 10 2> "$d/track.err"
 grep -q "track: $frames of $frames frames" "$d/track.err"
 grep -q '"track_id"' "$d/tracked/0000000003.json"
-grep -q '"velocity"' "$d/tracked/0000000003.json"
+grep -q '"velocity"' "$d/tracked/0000000007.json"
 "$analyse" evaluate-tracks --tracks "$d/tracked" --truth "$d/drive/truth" \
     --visibility "$d/drive/visibility" --min-visible-fraction 0.25 "$@" | tee "$d/eval.txt"
 grep -q "^car      all" "$d/eval.txt"

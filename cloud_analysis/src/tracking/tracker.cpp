@@ -50,6 +50,9 @@ void TrackerOptions::validate() const {
     require(std::isfinite(heading_from_motion_mps) && heading_from_motion_mps >= 0.0,
             "heading_from_motion_mps", "must be >= 0");
     require(std::isfinite(size_relock_m) && size_relock_m >= 0.0, "size_relock_m", "must be >= 0");
+    require(size_settle_hits >= 0, "size_settle_hits", "must be >= 0");
+    require(std::isfinite(max_velocity_sigma_mps) && max_velocity_sigma_mps > 0.0,
+            "max_velocity_sigma_mps", "must be > 0");
     kalman.validate();
 }
 
