@@ -16,6 +16,7 @@
 #include "cloud_analysis/io/io.hpp"
 #include "cloud_analysis/stereo/calibration.hpp"
 #include "cloud_analysis/stereo/disparity.hpp"
+#include "output.hpp"
 
 namespace cloud_analysis::app {
 namespace {
@@ -67,15 +68,7 @@ ResolvedPaths resolve_entity_mode(const EvaluateArgs& args, ResolvedPaths p) {
         inputs.push_back(args.disparity);
         inputs.push_back(p.gt_disparity);
     }
-    for (const auto& f : inputs) {
-        std::error_code ec;
-        if (f != "-" && !fs::is_regular_file(f, ec)) {
-            throw std::runtime_error(
-                "cannot evaluate: " +
-                std::string(fs::exists(f, ec) ? "not a regular file" : "no such file") + " (" +
-                f.string() + ")");
-        }
-    }
+    require_input_files(inputs, "evaluate");
     return p;
 }
 
@@ -105,15 +98,7 @@ ResolvedPaths resolve_kitti_mode(const EvaluateArgs& args, ResolvedPaths p) {
         inputs.push_back(p.instance);
         inputs.push_back(p.calib);
     }
-    for (const auto& f : inputs) {
-        std::error_code ec;
-        if (f != "-" && !fs::is_regular_file(f, ec)) {
-            throw std::runtime_error(
-                "cannot evaluate: " +
-                std::string(fs::exists(f, ec) ? "not a regular file" : "no such file") + " (" +
-                f.string() + ")");
-        }
-    }
+    require_input_files(inputs, "evaluate");
     return p;
 }
 

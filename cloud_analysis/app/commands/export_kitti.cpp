@@ -31,15 +31,7 @@ CLI::App* add_export_kitti_command(CLI::App& app, ExportKittiArgs& args) {
 }
 
 int run_export_kitti(const ExportKittiArgs& args) {
-    for (const auto& f : {args.entities, args.calib}) {
-        std::error_code ec;
-        if (!f.empty() && f != "-" && !fs::is_regular_file(f, ec)) {
-            throw std::runtime_error(
-                "cannot export: " +
-                std::string(fs::exists(f, ec) ? "not a regular file" : "no such file") + " (" +
-                f.string() + ")");
-        }
-    }
+    require_input_files({args.entities, args.calib}, "export");
     if (args.output != "-") {
         const fs::path folder = fs::path(args.output).parent_path();
         if (!folder.empty() && !fs::is_directory(folder)) {

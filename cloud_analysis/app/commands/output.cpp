@@ -8,6 +8,20 @@
 
 namespace cloud_analysis::app {
 
+void require_input_files(const std::vector<std::filesystem::path>& inputs,
+                         std::string_view action) {
+    for (const auto& f : inputs) {
+        if (f.empty() || f == "-") continue;
+        std::error_code ec;
+        if (!std::filesystem::is_regular_file(f, ec)) {
+            throw std::runtime_error(
+                "cannot " + std::string(action) + ": " +
+                (std::filesystem::exists(f, ec) ? "not a regular file" : "no such file") + " (" +
+                f.string() + ")");
+        }
+    }
+}
+
 void write_output(const PendingOutput& out) {
     if (out.path == "-") {
         // SIGPIPE is ignored (main): a reader that went away is an error line, not a signal.
