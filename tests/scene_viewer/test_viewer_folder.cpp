@@ -147,7 +147,8 @@ TEST_CASE("the viewer folder carries the page, the data and the views of views.c
     scene.scene_glb = {'g', 'l', 'T', 'F'};
     const PointCloud cloud = two_class_cloud();
     scene.cloud = &cloud;
-    ViewerAssets assets{"three", "viewer", "css", "<title>{{TITLE}}</title>{{DATA_SCRIPTS}}"};
+    ViewerAssets assets{"three", "viewer", "css", "<title>{{TITLE}}</title>{{DATA_SCRIPTS}}",
+                        "util"};
     ViewerOptions options;
     options.title = "a<b";
     const auto files = viewer_files(scene, assets, options);

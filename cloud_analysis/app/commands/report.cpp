@@ -55,11 +55,12 @@ int run_report(const ReportArgs& a) {
         throw std::runtime_error("cannot write output: no such folder (" + output_dir + ", -o)");
     }
     write_output({a.output, merged.dump(1) + "\n", "-o"});
-    for (const auto& index : merged["missing_shards"]) {
+    const nlohmann::json& m = merged;  // read only from here on
+    for (const auto& index : m["missing_shards"]) {
         std::fprintf(stderr, "%s: error: shard %d/%d: no report\n", kTool, index.get<int>(),
                      shards);
     }
-    for (const auto& f : merged["failures"]) {
+    for (const auto& f : m["failures"]) {
         const std::string line = stereoscene::support::error_line_of(
             kTool, "frame " + f.value("frame", "?"), f.value("error", "?"));
         std::fprintf(stderr, "%s\n", line.c_str());
@@ -68,26 +69,26 @@ int run_report(const ReportArgs& a) {
                  "%s: report: %zu shards of %d, %zu frames: %zu done, %zu skipped (done "
                  "before), %zu failed; %.2f fps over %.1f s, %.0f ms CPU per frame, peak RSS "
                  "%.0f MB\n",
-                 kTool, merged["shards_reported"].get<std::size_t>(), shards,
-                 merged["frames"].get<std::size_t>(), merged["done"].get<std::size_t>(),
-                 merged["skipped"].get<std::size_t>(), merged["failed"].get<std::size_t>(),
-                 merged["fps"].get<double>(), merged["wall_seconds"].get<double>(),
-                 merged["cpu_ms_per_frame"].get<double>(), merged["peak_rss_mb"].get<double>());
-    if (merged["frames_with_warnings"].get<std::size_t>() > 0) {
+                 kTool, m["shards_reported"].get<std::size_t>(), shards,
+                 m["frames"].get<std::size_t>(), m["done"].get<std::size_t>(),
+                 m["skipped"].get<std::size_t>(), m["failed"].get<std::size_t>(),
+                 m["fps"].get<double>(), m["wall_seconds"].get<double>(),
+                 m["cpu_ms_per_frame"].get<double>(), m["peak_rss_mb"].get<double>());
+    if (m["frames_with_warnings"].get<std::size_t>() > 0) {
         std::fprintf(
             stderr,
             "%s: report: %zu frames warned (their warnings are in the shard reports' per_frame)\n",
-            kTool, merged["frames_with_warnings"].get<std::size_t>());
+            kTool, m["frames_with_warnings"].get<std::size_t>());
     }
     if (merged.contains("evaluation")) {
-        const auto& e = merged["evaluation"];
+        const auto& e = m["evaluation"];
         std::fprintf(stderr,
                      "%s: report: disparity over %zu frames with ground truth: D1-all %.2f %%, "
                      "EPE %.2f px, density %.1f %%\n",
                      kTool, e["frames"].get<std::size_t>(), 100.0 * e["d1_all"].get<double>(),
                      e["epe_px"].get<double>(), 100.0 * e["density"].get<double>());
     }
-    return merged["missing_shards"].empty() && merged["failed"].get<std::size_t>() == 0 ? 0 : 1;
+    return m["missing_shards"].empty() && m["failed"].get<std::size_t>() == 0 ? 0 : 1;
 }
 
 }  // namespace cloud_analysis::app
