@@ -40,7 +40,10 @@ ca="$build_dir/cloud_analysis/cloud-analysis"
 if [ "$render" = 1 ]; then
     for scene in "$samples"/scenes/*.json; do
         name=$(basename "$scene" .json)
-        "$build_dir/scene_viewer/scene-render" sensors "$scene" --out "$out_dir/rendered/$name" >&2
+        extra=()
+        [ -f "${scene%.json}.sensors" ] && read -r -a extra <"${scene%.json}.sensors"
+        "$build_dir/scene_viewer/scene-render" sensors "$scene" --out "$out_dir/rendered/$name" \
+            "${extra[@]}" >&2
         cp "$scene" "$out_dir/rendered/$name/scene.json"
     done
     samples="$out_dir/rendered"

@@ -380,3 +380,50 @@ TEST_CASE("Where nothing is drawn the colour images show the sky gradient", "[se
     // The car is drawn (textured body), not sky.
     CHECK(rgb(f.left, 185, 92) != rgb(f.left, 5, 92));
 }
+
+TEST_CASE("Label bleed moves thing borders by at most N px, both ways, the same for a seed",
+          "[sensors]") {
+    // A 40 x 30 px car (instance 26 << 8 | 1) in a 96 x 64 road image.
+    const int w = 96, h = 64;
+    ImageU16 instance{w, h, std::vector<std::uint16_t>(w * h, 7 << 8)};
+    ImageRgb8 semantic{w, h, std::vector<std::uint8_t>(w * h * 3, 0)};
+    const auto inside = [](int x, int y) { return x >= 28 && x < 68 && y >= 17 && y < 47; };
+    for (int y = 0; y < h; ++y) {
+        for (int x = 0; x < w; ++x) {
+            const std::size_t i = static_cast<std::size_t>(y) * w + x;
+            if (inside(x, y)) instance.values[i] = 26 << 8 | 1;
+            const std::uint8_t colour[3] = {128, 64, 128};
+            const std::uint8_t car[3] = {0, 0, 142};
+            for (int c = 0; c < 3; ++c)
+                semantic.pixels[i * 3 + c] = inside(x, y) ? car[c] : colour[c];
+        }
+    }
+    const int bleed = 3;
+    const ImageRgb8 out = apply_label_bleed(semantic, instance, bleed, 7);
+    int grown = 0, shrunk = 0, far_changed = 0;
+    for (int y = 0; y < h; ++y) {
+        for (int x = 0; x < w; ++x) {
+            const std::size_t i = static_cast<std::size_t>(y) * w + x;
+            if (out.pixels[i * 3 + 2] == semantic.pixels[i * 3 + 2]) continue;
+            // Chessboard distance to the car's border.
+            const int dx = std::max({28 - x, x - 67, 0}), dy = std::max({17 - y, y - 46, 0});
+            const int outside = std::max(dx, dy);
+            const int in = std::min({x - 27, 68 - x, y - 16, 47 - y});
+            if (inside(x, y)) {
+                ++shrunk;
+                if (in > bleed) ++far_changed;
+            } else {
+                ++grown;
+                if (outside > bleed) ++far_changed;
+            }
+        }
+    }
+    CHECK(grown > 0);
+    CHECK(shrunk > 0);
+    CHECK(far_changed == 0);
+    CHECK(apply_label_bleed(semantic, instance, bleed, 7).pixels == out.pixels);
+    CHECK(apply_label_bleed(semantic, instance, bleed, 8).pixels != out.pixels);
+    CHECK(apply_label_bleed(semantic, instance, 0, 7).pixels == semantic.pixels);
+    instance.width = 10;
+    CHECK_THROWS_AS(apply_label_bleed(semantic, instance, bleed, 7), std::invalid_argument);
+}

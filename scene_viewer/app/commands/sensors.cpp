@@ -45,6 +45,10 @@ CLI::App* add_sensors_command(CLI::App& app, SensorsArgs& a) {
     s->add_flag("--vignetting", o.sensor.vignetting, "darken the corners of both images");
     s->add_option("--msaa", o.msaa_samples, "colour images: multisample count, 0 = off")
         ->capture_default_str();
+    s->add_option("--label-bleed", o.label_bleed_px,
+                  "semantic image: thing borders grown or shrunk by up to N px (seeded by "
+                  "--seed, like hand-drawn labels; the instance image stays exact)")
+        ->capture_default_str();
     s->add_flag("--no-ground", a.no_ground, "no terrain underlay under the road level");
     s->add_flag("--boxes", a.boxes, "draw every entity as a box (no glTF models)");
     s->add_option("--frames", a.frames,

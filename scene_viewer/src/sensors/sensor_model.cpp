@@ -110,4 +110,80 @@ ImageRgb8 apply_sensor_model(const ImageRgb8& image, int camera,
     return out;
 }
 
+namespace {
+
+/// A thing pixel of the instance image (labelIds 24-33 have instances).
+bool is_thing(std::uint16_t instance) {
+    const int label = instance >> 8;
+    return label >= 24 && label <= 33;
+}
+
+/// The bleed offset field: seeded values in [-1, 1] on a grid of `cell` px, bilinear between.
+std::vector<float> offset_field(int w, int h, int cell, std::uint64_t seed) {
+    const int gw = w / cell + 2, gh = h / cell + 2;
+    const std::uint64_t stream = splitmix64(seed ^ 0x6c61626c65ULL);
+    std::vector<float> grid(static_cast<std::size_t>(gw) * gh);
+    for (std::size_t i = 0; i < grid.size(); ++i)
+        grid[i] = static_cast<float>(2.0 * unit_open(splitmix64(stream ^ splitmix64(i))) - 1.0);
+    std::vector<float> field(static_cast<std::size_t>(w) * h);
+    for (int y = 0; y < h; ++y) {
+        const int gy = y / cell;
+        const float fy = static_cast<float>(y % cell) / cell;
+        for (int x = 0; x < w; ++x) {
+            const int gx = x / cell;
+            const float fx = static_cast<float>(x % cell) / cell;
+            const auto g = [&](int i, int j) { return grid[static_cast<std::size_t>(j) * gw + i]; };
+            const float top = g(gx, gy) + fx * (g(gx + 1, gy) - g(gx, gy));
+            const float bottom = g(gx, gy + 1) + fx * (g(gx + 1, gy + 1) - g(gx, gy + 1));
+            field[static_cast<std::size_t>(y) * w + x] = top + fy * (bottom - top);
+        }
+    }
+    return field;
+}
+
+}  // namespace
+
+ImageRgb8 apply_label_bleed(const ImageRgb8& semantic, const ImageU16& instance, int max_px,
+                            std::uint64_t seed) {
+    const int w = semantic.width, h = semantic.height;
+    const std::size_t count = static_cast<std::size_t>(w) * h;
+    if (semantic.pixels.size() != count * 3 || instance.width != w || instance.height != h ||
+        instance.values.size() != count)
+        throw std::invalid_argument("label bleed: semantic and instance images differ in size");
+    if (max_px <= 0) return semantic;
+    constexpr int kCellPx = 16;
+    const std::vector<float> field = offset_field(w, h, kCellPx, seed);
+    ImageRgb8 out = semantic;
+    for (int y = 0; y < h; ++y) {
+        for (int x = 0; x < w; ++x) {
+            const std::size_t p = static_cast<std::size_t>(y) * w + x;
+            const int offset = static_cast<int>(std::lround(field[p] * max_px));
+            const std::uint16_t self = instance.values[p];
+            if (offset == 0 || (offset > 0) == is_thing(self)) continue;
+            // The nearest pixel (chessboard rings) that grows into p or that p shrinks to.
+            const auto donor = [&](std::uint16_t v) {
+                return offset > 0 ? is_thing(v) : v != self;
+            };
+            bool found = false;
+            for (int d = 1; d <= std::abs(offset) && !found; ++d) {
+                for (int dy = -d; dy <= d && !found; ++dy) {
+                    const int yy = y + dy;
+                    if (yy < 0 || yy >= h) continue;
+                    const int step = (dy == -d || dy == d) ? 1 : 2 * d;
+                    for (int dx = -d; dx <= d && !found; dx += step) {
+                        const int xx = x + dx;
+                        if (xx < 0 || xx >= w) continue;
+                        const std::size_t q = static_cast<std::size_t>(yy) * w + xx;
+                        if (!donor(instance.values[q])) continue;
+                        for (int c = 0; c < 3; ++c)
+                            out.pixels[p * 3 + c] = semantic.pixels[q * 3 + c];
+                        found = true;
+                    }
+                }
+            }
+        }
+    }
+    return out;
+}
+
 }  // namespace scene_viewer

@@ -117,6 +117,8 @@ void SensorOptions::validate() const {
     if (!(underlay_size_m > 0.0)) throw std::invalid_argument("underlay_size_m must be > 0");
     if (!(near_m > 0.0f)) throw std::invalid_argument("near_m must be > 0");
     if (!(far_m > near_m)) throw std::invalid_argument("far_m must be > near_m");
+    if (label_bleed_px < 0 || label_bleed_px > 16)
+        throw std::invalid_argument("label_bleed_px must be in 0..16 pixels");
 }
 
 std::vector<float> disparity_from_window_depth(const std::vector<float>& window_depth, double fx_px,
@@ -269,6 +271,10 @@ StereoFrame render_stereo_frame(SceneRenderer& renderer,
     o.shading = Shading::instance;
     const ImageRgba8 instance = renderer.render(scene, nullptr, o);
     fill_ground_truth(frame, semantic, instance, window_depth, options);
+    if (options.label_bleed_px > 0) {
+        frame.semantic = apply_label_bleed(frame.semantic, frame.instance, options.label_bleed_px,
+                                           options.sensor.seed);
+    }
     add_visibility(frame, renderer, document, scene, o);
     return frame;
 }

@@ -74,6 +74,8 @@ struct SensorOptions {
     double underlay_size_m = 300;  ///< side of the underlay square, metres
     float near_m = 0.3f;           ///< near plane, metres (depth precision)
     float far_m = 1000.0f;         ///< far plane, metres
+    int label_bleed_px = 0;        ///< semantic image: thing borders moved out or in by up to
+                                   ///< this many pixels (seeded, apply_label_bleed), 0..16
     /// Throws std::invalid_argument naming the bad field.
     void validate() const;
 };
@@ -120,6 +122,15 @@ std::vector<float> disparity_from_window_depth(const std::vector<float>& window_
 /// Applies the sensor model to one camera's image: blur, gain, vignetting, Gaussian noise.
 /// `camera` (0 left, 1 right) picks the noise stream and the gain.
 ImageRgb8 apply_sensor_model(const ImageRgb8& image, int camera, const SensorModelOptions& options);
+
+/// The semantic image with label bleed at the borders of things (instance labelIds 24-33), as
+/// hand-drawn polygon labels have (KITTI's semantic and instance images): a seeded field of
+/// offsets in -max_px..max_px, smooth over 16 px cells, grows a thing into the pixels around it
+/// (offset > 0: a pixel outside every thing takes the colour of the nearest thing pixel within
+/// the offset) or shrinks it (offset < 0: a thing pixel takes the colour of the nearest pixel of
+/// anything else within the offset). The instance image is the truth and is not changed.
+ImageRgb8 apply_label_bleed(const ImageRgb8& semantic, const ImageU16& instance, int max_px,
+                            std::uint64_t seed);
 
 /// KITTI calib_cam_to_cam.txt text for the rig: cameras 02 (left) and 03 (right), S_rect,
 /// R_rect identity, P_rect with -fx * B in P_rect_03[0, 3] (KITTI devkit readme).

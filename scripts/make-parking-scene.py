@@ -1,0 +1,182 @@
+#!/usr/bin/env python3
+"""Writes a hard parking street as an entity file for `scene-render sensors`, from a seed.
+
+A 12 m street, the camera 1.65 m above its centre line, both sides parked bumper to bumper
+with 0.3-1.0 m gaps from about 4 m to 40 m ahead (grazing angles at 30-35 m), a mix of
+lengths (3.6 m small cars, sedans, estates, SUVs, 5.2 m vans: all class car; one truck, one
+bus), a van 15-20 m ahead on the right seen from behind-left, a street tree standing in each
+parked row and poles at the kerb between cars, sidewalks and buildings behind. The same seed
+gives the same file byte for byte. Render it with label bleed in the semantic image:
+
+    scripts/make-parking-scene.py --seed 1 -o parking.json
+    scene-render sensors parking.json --out out --label-bleed 3 --seed 1
+
+Every car carries its size family in `subclass` (car, van); the truck and the bus are their
+own classes. docs/evaluation.md "Hard parking streets" describes how they are scored.
+"""
+import argparse
+import json
+import math
+import random
+import sys
+
+ROAD_TOP_Y = 1.60  # the road's top surface in the camera frame (y down), metres
+ROW_X = 4.9  # parked cars' centre line from the street's centre, metres
+KERB_X = 6.0  # kerb: edge of the road, metres
+
+# Size families (length, width, height in metres) and how often each appears in a row.
+FAMILIES = [
+    ("small", "car", 3.6, 1.65, 1.45, 2),
+    ("sedan", "car", 4.5, 1.80, 1.45, 4),
+    ("estate", "car", 4.8, 1.82, 1.50, 2),
+    ("suv", "car", 4.7, 1.90, 1.72, 2),
+    ("van", "van", 5.2, 2.00, 2.00, 1),
+]
+VAN = FAMILIES[4]
+TRUCK = ("truck", "truck", 7.5, 2.40, 3.20)
+BUS = ("bus", "bus", 11.0, 2.55, 3.20)
+CLASS_IDS = {"car": 26, "truck": 27, "bus": 28, "vegetation": 21, "pole": 17, "road": 7,
+             "sidewalk": 8, "building": 11}
+
+
+def stuff(eid, cls, x, y, z, L, W, H, theta=-math.pi / 2):
+    return {"id": eid, "class": cls, "class_id": CLASS_IDS[cls], "x": x, "y": y, "z": z,
+            "L": L, "W": W, "H": H, "theta": theta, "confidence": 1.0, "method": "hand",
+            "point_count": 0}
+
+
+def pick_family(rng):
+    weights = [f[5] for f in FAMILIES]
+    return rng.choices(FAMILIES, weights=weights)[0]
+
+
+def row(rng, side, z_start, z_end, specials):
+    """One parked row: a list of (kind, family, z_centre). specials: {index: family or kind}.
+
+    Vehicles follow each other from z_start with gaps of 0.3-1.0 m; a 'tree' slot is 1.6 m of
+    kerb with a tree, a 'pole' stands in the gap before the vehicle that follows it."""
+    items = []
+    z = z_start
+    i = 0
+    while z < z_end:
+        spec = specials.get(i)
+        if spec == "tree":
+            items.append(("tree", None, z + 0.8))
+            z += 1.6 + rng.uniform(0.3, 0.6)
+            i += 1
+            continue
+        fam = spec if isinstance(spec, tuple) else pick_family(rng)
+        length = fam[2]
+        items.append(("vehicle", fam, z + length / 2))
+        gap = rng.uniform(0.3, 1.0)
+        if rng.random() < 0.2:
+            items.append(("pole", None, z + length + gap / 2))
+        z += length + gap
+        i += 1
+    return items
+
+
+def place_van(rng, items, z_lo, z_hi):
+    """Makes the vehicle whose centre is nearest a random z in [z_lo, z_hi] a van, shifting the
+    vehicles behind it to keep their gaps."""
+    target = rng.uniform(z_lo, z_hi)
+    vehicles = [k for k, it in enumerate(items) if it[0] == "vehicle" and it[1][1] != "truck"
+                and it[1][1] != "bus"]
+    k = min(vehicles, key=lambda k: abs(items[k][2] - target))
+    kind, fam, zc = items[k]
+    grow = VAN[2] - fam[2]
+    items[k] = (kind, VAN, zc + grow / 2)
+    for j in range(k + 1, len(items)):
+        items[j] = (items[j][0], items[j][1], items[j][2] + grow)
+
+
+def build_scene(seed):
+    rng = random.Random(seed)
+    ents = [
+        stuff("road-1", "road", 0.0, 1.625, 30.0, 80.0, 12.0, 0.05),
+        stuff("sidewalk-1", "sidewalk", -7.5, 1.575, 30.0, 80.0, 3.0, 0.15),
+        stuff("sidewalk-2", "sidewalk", 7.5, 1.575, 30.0, 80.0, 3.0, 0.15),
+        stuff("building-1", "building", -14.0, -3.5, 20.0, 30.0, 10.0, 10.0),
+        stuff("building-2", "building", -14.0, -4.5, 50.0, 28.0, 10.0, 12.0),
+        stuff("building-3", "building", 14.0, -4.0, 18.0, 26.0, 10.0, 11.0),
+        stuff("building-4", "building", 14.0, -5.5, 46.0, 28.0, 10.0, 14.0),
+    ]
+    things = []
+    occluders = []
+    # Right row: parked along the traffic (heading +z, seen from behind-left); the van
+    # 15-20 m ahead, the truck after 24 m. Left row: facing the camera; the bus last.
+    right = row(rng, +1, rng.uniform(2.5, 4.5), 38.0,
+                {rng.randint(1, 2): "tree"})
+    place_van(rng, right, 15.0, 20.0)
+    for k, it in enumerate(right):
+        if it[0] == "vehicle" and it[2] > 25.0 and it[1][1] != "van":
+            grow = TRUCK[2] - it[1][2]
+            right[k] = ("vehicle", TRUCK, it[2] + grow / 2)
+            right = right[:k + 1]
+            break
+    left = row(rng, -1, rng.uniform(3.0, 5.0), 30.0, {rng.randint(3, 4): "tree"})
+    last_end = max(it[2] + (it[1][2] / 2 if it[1] else 0.8) for it in left)
+    bus_gap = rng.uniform(0.5, 1.0)
+    left.append(("vehicle", BUS, last_end + bus_gap + BUS[2] / 2))
+    for side, items, heading in ((+1, right, -math.pi / 2), (-1, left, math.pi / 2)):
+        for kind, fam, zc in items:
+            if kind == "tree":
+                occluders.append(("vegetation", side * (ROW_X - 0.2), -1.2, zc, 2.6, 2.6, 5.6))
+            elif kind == "pole":
+                occluders.append(("pole", side * (KERB_X - 0.35), -0.4, zc, 0.25, 0.25, 4.0))
+            else:
+                name, cls, L, W, H = fam[0], fam[1], fam[2], fam[3], fam[4]
+                things.append({
+                    "class": "car" if cls in ("car", "van") else cls,
+                    "subclass": cls, "family": name,
+                    "x": round(side * (KERB_X - 0.2 - W / 2 + rng.uniform(-0.1, 0.15)), 3),
+                    "y": round(ROAD_TOP_Y - H / 2, 3), "z": round(zc, 3),
+                    "L": L, "W": W, "H": H,
+                    "theta": round(heading + rng.uniform(-0.04, 0.04), 4)})
+    counts = {}
+    for t in sorted(things, key=lambda t: (t["class"], t["z"], t["x"])):
+        cls = t["class"]
+        counts[cls] = counts.get(cls, 0) + 1
+        e = stuff(f"{cls}-{counts[cls]}", cls, t["x"], t["y"], t["z"], t["L"], t["W"], t["H"],
+                  t["theta"])
+        if cls == "car":
+            e["subclass"] = t["subclass"]
+        ents.append(e)
+    for cls, x, y, z, L, W, H in sorted(occluders, key=lambda o: (o[0], o[3])):
+        counts[cls] = counts.get(cls, 0) + 1
+        ents.append(stuff(f"{cls}-{counts[cls]}", cls, round(x, 3), y, round(z, 3), L, W, H,
+                          0.0))
+    return {
+        "schema_version": "1.0.0",
+        "frame": {"id": f"parking-street-{seed}", "convention": "kitti_camera",
+                  "camera": {"width": 1242, "height": 375, "fx": 721.5377, "fy": 721.5377,
+                             "cx": 609.5593, "cy": 172.854, "baseline_m": 0.54}},
+        "source": {"tool": "scripts/make-parking-scene.py",
+                   "description": f"Parking street, seed {seed}: both sides parked bumper to "
+                                  "bumper (gaps 0.3-1.0 m) 3-40 m ahead, small cars to vans, "
+                                  "a truck on the right and a bus on the left, a van 15-20 m "
+                                  "ahead on the right seen from behind-left, street trees and "
+                                  "poles between the cars. Camera 1.65 m above the road."},
+        "entities": ents,
+    }
+
+
+def main():
+    p = argparse.ArgumentParser(description=__doc__.split("\n")[0])
+    p.add_argument("--seed", type=int, required=True, help="seed of the street (>= 0)")
+    p.add_argument("-o", "--out", default="-", help="output entity file ('-' = stdout)")
+    a = p.parse_args()
+    if a.seed < 0:
+        p.error("--seed must be >= 0")
+    text = json.dumps(build_scene(a.seed), indent=2, sort_keys=True) + "\n"
+    if a.out == "-":
+        sys.stdout.write(text)
+    else:
+        with open(a.out + ".tmp", "w") as f:
+            f.write(text)
+        import os
+        os.replace(a.out + ".tmp", a.out)
+
+
+if __name__ == "__main__":
+    main()
