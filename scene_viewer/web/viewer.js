@@ -56,8 +56,10 @@
     let grid = null;
     let highlight = null;
     let pinned = null;
+    let drive = null;  // the drive controller (viewer_drive.js) when the page shows a drive
 
     const classById = new Map(data.classes.map((c) => [c.id, c]));
+    const hasImage = !!data.background_image || !!(data.drive && data.drive.frames.some((f) => f.image));
 
     function setStatus(text, isError) {
         statusBox.textContent = text;
@@ -157,18 +159,29 @@
         object.scale.set(e.W, e.H, e.L);
     }
 
+    const boxMaterials = data.layers.map((layer) => {
+        const colour = new THREE.Color(layer.colour);
+        return {
+            edges: new THREE.LineBasicMaterial({ color: colour }),
+            faces: new THREE.MeshBasicMaterial({
+                color: colour, transparent: true, opacity: 0.15, depthWrite: false,
+            }),
+        };
+    });
+
+    /// The entity's box in its file's colour: edges and translucent faces.
+    function boxOf(layer, e) {
+        const group = new THREE.Group();
+        group.add(new THREE.LineSegments(unitEdges, boxMaterials[layer].edges));
+        group.add(new THREE.Mesh(unitBox, boxMaterials[layer].faces));
+        placeBox(group, e);
+        return group;
+    }
+
     function addBoxes() {
         data.layers.forEach((layer, index) => {
-            const colour = new THREE.Color(layer.colour);
-            const edges = new THREE.LineBasicMaterial({ color: colour });
-            const faces = new THREE.MeshBasicMaterial({
-                color: colour, transparent: true, opacity: 0.15, depthWrite: false,
-            });
             for (const e of layer.entities) {
-                const group = new THREE.Group();
-                group.add(new THREE.LineSegments(unitEdges, edges));
-                group.add(new THREE.Mesh(unitBox, faces));
-                placeBox(group, e);
+                const group = boxOf(index, e);
                 scene.add(group);
                 entityObjects.push({ layer: index, entity: e, object: group, kind: 'box' });
             }
@@ -205,25 +218,8 @@
         return -(top === null ? 1.65 : top);
     }
 
-    /// The BEV framing of views.cpp's bev_view_fitting over every file's footprints.
     function bevFit(aspect) {
-        let minX = -2, maxX = 2, minZ = -4, maxZ = 4;
-        for (const layer of data.layers) {
-            for (const e of layer.entities) {
-                const r = 0.5 * Math.hypot(e.W, e.L);
-                minX = Math.min(minX, e.x - r);
-                maxX = Math.max(maxX, e.x + r);
-                minZ = Math.min(minZ, e.z - r);
-                maxZ = Math.max(maxZ, e.z + r);
-            }
-        }
-        const halfH = 0.5 * (maxZ - minZ);
-        const halfW = 0.5 * (maxX - minX);
-        return {
-            centre: [0.5 * (minX + maxX), 0.5 * (minZ + maxZ)],
-            halfHeight: data.views.bev.margin * Math.max(halfH, halfW / aspect),
-            halfWidth: halfW, halfDepth: halfH,
-        };
+        return util.bevFit(data, aspect);
     }
 
     function addGrid() {
@@ -345,7 +341,7 @@
         for (const o of egoObjects) o.visible = show.ego && api.view !== 'camera';
         for (const c of cloudObjects) c.object.visible = show.cloud && !hiddenClasses.has(c.className);
         if (grid) grid.visible = show.grid && api.view === 'bev';
-        const withImage = !!data.background_image && show.background && api.view === 'camera';
+        const withImage = hasImage && show.background && api.view === 'camera';
         backgroundImg.hidden = !withImage;
         canvas.style.opacity = withImage ? '0.6' : '1';
         renderer.setClearColor(new THREE.Color(data.background_colour), withImage ? 0 : 1);
@@ -451,7 +447,10 @@
         }
         if (egoObjects.length) checkbox(toggles, 'ego car', show.ego, (v) => { show.ego = v; });
         checkbox(toggles, 'grid (BEV)', show.grid, (v) => { show.grid = v; });
-        if (data.background_image) {
+        if (drive && data.drive.trail_frames > 0) {
+            checkbox(toggles, 'track trails', true, (v) => drive.setTrails(v));
+        }
+        if (hasImage) {
             checkbox(toggles, 'left image (camera)', show.background,
                      (v) => { show.background = v; });
         }
@@ -471,7 +470,8 @@
             }, c.colour);
         }
         const downloads = document.getElementById('downloads');
-        const files = [data.scene_file, data.cloud && data.cloud.file, data.background_image];
+        const files = [data.scene_file, data.drive && data.drive.models_file, data.cloud && data.cloud.file,
+                       data.background_image];
         for (const f of files.filter(Boolean)) {
             const a = document.createElement('a');
             a.href = f;
@@ -524,28 +524,28 @@
         return { x: (v.x + 1) * 0.5 * w, y: (1 - v.y) * 0.5 * h };
     };
     api.setView = setView;
-    /// Orbits for `ms` milliseconds and reports the frame rate seen by requestAnimationFrame.
-    api.orbitBenchmark = function (ms) {
-        return new Promise((resolve) => {
-            controls.autoRotate = true;
-            controls.autoRotateSpeed = 30;
-            const times = [];
-            function tick(t) {
-                times.push(t);
-                if (t - times[0] < ms) {
-                    requestAnimationFrame(tick);
-                    return;
-                }
-                controls.autoRotate = false;
-                const span = times[times.length - 1] - times[0];
-                let worst = 0;
-                for (let i = 1; i < times.length; ++i) worst = Math.max(worst, times[i] - times[i - 1]);
-                resolve({ frames: times.length - 1, fps: (times.length - 1) * 1000 / span,
-                          worst_ms: worst });
-            }
-            requestAnimationFrame(tick);
+    api.orbitBenchmark = (ms) => util.orbitBenchmark(controls, ms);
+
+    /// A drive: the class models as templates, then its first frame (frames load lazily).
+    async function startDrive() {
+        drive = window.SceneViewerDrive.create({
+            scene, data, gltf: await parseGlb(data.drive.models_file), placeBox, toLambert,
+            paintFirst, entityObjects, egoObjects,
+            makeBox: (e) => boxOf(0, e),
+            setImage: (src) => { backgroundImg.src = src; },
+            markDirty: () => { dirty = true; },
+            onFrameShown: () => {
+                // The kept entity follows its track (or id) into the new frame.
+                const key = pinned && (pinned.entity.track_id ?? pinned.entity.id);
+                pinned = key === null ? null : entityObjects.find((i) => i.kind === 'model' &&
+                    (i.entity.track_id ?? i.entity.id) === key) || null;
+                showDetails(pinned);
+                applyVisibility();
+            },
         });
-    };
+        api.drive = drive;
+        await drive.show(0);
+    }
 
     async function start() {
         if (!data) throw new Error('data/scene-data.js did not load');
@@ -553,9 +553,12 @@
         renderer.setClearColor(new THREE.Color(data.background_colour), 1);
         if (data.background_image) backgroundImg.src = data.background_image;
         addLights();
-        const sceneGltf = await parseGlb(data.scene_file);
-        addSceneModels(sceneGltf);
-        addBoxes();
+        if (data.drive) {
+            await startDrive();
+        } else {
+            addSceneModels(await parseGlb(data.scene_file));
+            addBoxes();
+        }
         mark('scene');
         addGrid();
         buildPanel();

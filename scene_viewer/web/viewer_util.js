@@ -1,6 +1,6 @@
 // Helpers of the scene viewer page (viewer.js) that need none of its state: the WebGL probe,
-// base64 decoding, the details pane's rows and the panel's checkboxes. A classic script: it
-// sets window.SceneViewerUtil before viewer.js runs.
+// base64 decoding, the details pane's rows, the panel's checkboxes, the BEV framing and the
+// orbit benchmark. A classic script: it sets window.SceneViewerUtil before viewer.js runs.
 (function () {
     'use strict';
 
@@ -41,6 +41,11 @@
         ];
         if (e.method) rows.push(['method', e.method]);
         for (const key of ['track_id', 'track']) if (e[key] !== undefined) rows.push(['track', e[key]]);
+        if (e.velocity) {
+            const { vx, vz } = e.velocity;
+            rows.push(['velocity', fmt(vx, 2) + ', ' + fmt(vz, 2) + ' m/s (speed ' +
+                       fmt(Math.hypot(vx, vz), 2) + ' m/s)']);
+        }
         for (const key of ['speed_mps', 'speed']) {
             if (e[key] !== undefined) rows.push(['speed', fmt(e[key], 2) + ' m/s']);
         }
@@ -69,5 +74,54 @@
         return input;
     }
 
-    window.SceneViewerUtil = { softwareWebgl, decodeBase64, fmt, detailRows, checkbox };
+    /// The BEV framing of views.cpp's bev_view_fitting over every file's footprints (a drive:
+    /// over every frame's, from the data's extent).
+    function bevFit(data, aspect) {
+        let minX = -2, maxX = 2, minZ = -4, maxZ = 4;
+        if (data.drive) [minX, maxX, minZ, maxZ] = data.drive.extent;
+        for (const layer of data.drive ? [] : data.layers) {
+            for (const e of layer.entities) {
+                const r = 0.5 * Math.hypot(e.W, e.L);
+                minX = Math.min(minX, e.x - r);
+                maxX = Math.max(maxX, e.x + r);
+                minZ = Math.min(minZ, e.z - r);
+                maxZ = Math.max(maxZ, e.z + r);
+            }
+        }
+        const halfH = 0.5 * (maxZ - minZ);
+        const halfW = 0.5 * (maxX - minX);
+        return {
+            centre: [0.5 * (minX + maxX), 0.5 * (minZ + maxZ)],
+            halfHeight: data.views.bev.margin * Math.max(halfH, halfW / aspect),
+            halfWidth: halfW, halfDepth: halfH,
+        };
+    }
+
+    /// Orbits `controls` for `ms` milliseconds and reports the frame rate seen by
+    /// requestAnimationFrame.
+    function orbitBenchmark(controls, ms) {
+        return new Promise((resolve) => {
+            controls.autoRotate = true;
+            controls.autoRotateSpeed = 30;
+            const times = [];
+            function tick(t) {
+                times.push(t);
+                if (t - times[0] < ms) {
+                    requestAnimationFrame(tick);
+                    return;
+                }
+                controls.autoRotate = false;
+                const span = times[times.length - 1] - times[0];
+                let worst = 0;
+                for (let i = 1; i < times.length; ++i) worst = Math.max(worst, times[i] - times[i - 1]);
+                resolve({ frames: times.length - 1, fps: (times.length - 1) * 1000 / span,
+                          worst_ms: worst });
+            }
+            requestAnimationFrame(tick);
+        });
+    }
+
+    window.SceneViewerUtil = {
+        softwareWebgl, decodeBase64, fmt, detailRows, checkbox, bevFit, orbitBenchmark,
+    };
 })();

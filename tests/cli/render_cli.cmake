@@ -104,7 +104,7 @@ if(STEREOSCENE_VIEWER_THREE)
         CODE 0 OUTPUT ${_render_out}/html/index.html OUTPUT_EXISTS 1 MAGIC 3c21646f6374797065)
 endif()
 render_cli_test("html with a missing entity file exits 1 and writes no folder" ARGS html
-    ${_render_out}/none.json --out ${_render_out}/html_none CODE 1 STDERR "invalid entity file"
+    ${_render_out}/none.json --out ${_render_out}/html_none CODE 1 STDERR "cannot read entity file"
     OUTPUT ${_render_out}/html_none/index.html OUTPUT_EXISTS 0)
 render_cli_test("html with a label count that differs exits 2" ARGS html ${_street} ${_street}
     --labels A --out ${_render_out}/html_labels CODE 2 STDERR "--labels"

@@ -4,6 +4,7 @@
 #include <cstdint>
 #include <cstring>
 #include <filesystem>
+#include <set>
 #include <string>
 
 #include <nlohmann/json.hpp>
@@ -148,13 +149,13 @@ TEST_CASE("the viewer folder carries the page, the data and the views of views.c
     const PointCloud cloud = two_class_cloud();
     scene.cloud = &cloud;
     ViewerAssets assets{"three", "viewer", "css", "<title>{{TITLE}}</title>{{DATA_SCRIPTS}}",
-                        "util"};
+                        "util",  "drive"};
     ViewerOptions options;
     options.title = "a<b";
     const auto files = viewer_files(scene, assets, options);
-    for (const char* name :
-         {"index.html", "three.min.js", "viewer.js", "viewer_util.js", "viewer.css", "scene.glb",
-          "cloud.glb", "data/scene-data.js", "data/scene-glb.js", "data/cloud-glb.js"}) {
+    for (const char* name : {"index.html", "three.min.js", "viewer.js", "viewer_util.js",
+                             "viewer_drive.js", "viewer.css", "scene.glb", "cloud.glb",
+                             "data/scene-data.js", "data/scene-glb.js", "data/cloud-glb.js"}) {
         INFO(name);
         CHECK(files.count(name) == 1);
     }
@@ -189,4 +190,126 @@ TEST_CASE("a viewer without entity files or with a bad point size is refused", "
     ViewerOptions options;
     options.point_size_px = 0.0f;
     CHECK_THROWS_AS(viewer_files(scene, assets, options), std::invalid_argument);
+}
+
+namespace {
+
+/// A two-frame drive: a car (track 3) moving 1 m forward, a road patch, a left image per frame.
+ViewerDrive two_frame_drive() {
+    ViewerDrive drive;
+    drive.id = "drive";
+    drive.fps = 5.0;
+    drive.trail_frames = 4;
+    for (int i = 0; i < 2; ++i) {
+        ViewerDriveFrame f;
+        f.index = 10 + 2 * i;  // a missing frame between them
+        f.name = "f" + std::to_string(i);
+        f.document = one_car();
+        f.document.entities[0].track_id = 3;
+        f.document.entities[0].z += i;
+        scene_schema::Entity road;
+        road.id = "road-1";
+        road.class_name = "road";
+        road.class_id = 7;
+        road.y = 1.6;
+        road.W = 8.0;
+        road.H = 0.2;
+        road.L = 30.0;
+        f.document.entities.push_back(road);
+        f.background_bytes = std::string("\x89PNG\r\n\x1a\n", 8) + "pixels";
+        drive.frames.push_back(std::move(f));
+    }
+    drive.frames[1].timestamp_s = 2.5;
+    drive.models_glb = {'g', 'l', 'T', 'F'};
+    return drive;
+}
+
+}  // namespace
+
+TEST_CASE("a drive's frames are scripts of their own, with trails and extent in the data",
+          "[web]") {
+    const ViewerDrive drive = two_frame_drive();
+    ViewerScene scene;
+    scene.layers.push_back({"drive", drive.frames[0].document});
+    scene.scene_glb = {'g', 'l', 'T', 'F'};
+    scene.drive = &drive;
+    ViewerAssets assets{"three", "viewer", "css", "{{DATA_SCRIPTS}}", "util", "drive"};
+    const auto files = viewer_files(scene, assets, ViewerOptions{});
+    for (const char* name : {"frames/000000.js", "frames/000001.js", "frames/000000.png",
+                             "frames/000001.png", "models.glb", "data/models-glb.js"}) {
+        INFO(name);
+        CHECK(files.count(name) == 1);
+    }
+    CHECK(files.at("index.html").find("data/models-glb.js") != std::string::npos);
+    CHECK(files.at("data/models-glb.js").find("\"models.glb\"] = \"Z2xURg==\";") !=
+          std::string::npos);
+    const std::string& frame = files.at("frames/000001.js");
+    const std::string call = "window.SceneViewerFrames.add(";
+    REQUIRE(frame.rfind(call, 0) == 0);
+    const auto payload =
+        nlohmann::json::parse(frame.substr(call.size(), frame.size() - call.size() - 3));
+    CHECK(payload.at("position") == 1);
+    CHECK(payload.at("entities").size() == 2);
+    CHECK(payload.at("entities")[0].at("track_id") == 3);
+
+    const std::string& script = files.at("data/scene-data.js");
+    const auto data = nlohmann::json::parse(
+        script.substr(script.find('{'), script.rfind('}') - script.find('{') + 1));
+    const auto& d = data.at("drive");
+    CHECK(d.at("fps") == 5.0);
+    CHECK(d.at("trail_frames") == 4);
+    REQUIRE(d.at("frames").size() == 2);
+    CHECK(d.at("frames")[0].at("time") == Approx(2.0));  // index 10 at 5 Hz, no timestamp
+    CHECK(d.at("frames")[1].at("time") == Approx(2.5));  // the timestamp wins
+    CHECK(d.at("frames")[1].at("image") == "frames/000001.png");
+    CHECK(d.at("frames")[1].at("script") == "frames/000001.js");
+    // One track, its ground contact per frame: the box bottom y + H / 2.
+    REQUIRE(d.at("tracks").size() == 1);
+    const auto& points = d.at("tracks")[0].at("points");
+    REQUIRE(points.size() == 2);
+    const auto& car = drive.frames[1].document.entities[0];
+    CHECK(points[1][0] == 1);
+    CHECK(points[1][1] == Approx(car.x));
+    CHECK(points[1][2] == Approx(car.y + 0.5 * car.H));
+    CHECK(points[1][3] == Approx(car.z));
+    // The extent holds every footprint of every frame (the road's 30 m length included).
+    CHECK(d.at("extent")[3].get<double>() >= 15.0);
+    // The classes of every frame reach the page.
+    std::set<std::string> names;
+    for (const auto& c : data.at("classes")) names.insert(c.at("name").get<std::string>());
+    CHECK(names == std::set<std::string>{"car", "road"});
+}
+
+TEST_CASE("class templates leave ground out and place the unit box without rotation", "[web]") {
+    const auto doc = class_template_document({{"car", 26}, {"road", 7}, {"person", 24}});
+    REQUIRE(doc.entities.size() == 2);
+    for (const auto& e : doc.entities) {
+        CHECK(e.id == kClassTemplatePrefix + e.class_name);
+        CHECK(e.W == 1.0);
+        CHECK(e.H == 1.0);
+        CHECK(e.L == 1.0);
+        // The page places an entity with rotation pi/2 - theta about +y, as box_world_matrix
+        // does: a template's placement is the identity, its node matrix the model's fit alone.
+        const glm::mat4 m = box_world_matrix({0.0f, 0.0f, 0.0f}, e.theta, {1.0f, 1.0f, 1.0f});
+        for (int c = 0; c < 4; ++c) {
+            for (int r = 0; r < 4; ++r) CHECK(m[c][r] == Approx(c == r ? 1.0 : 0.0).margin(1e-6));
+        }
+    }
+}
+
+TEST_CASE("a drive beside a cloud, or an image that is not PNG or JPEG, is refused", "[web]") {
+    ViewerDrive drive = two_frame_drive();
+    ViewerScene scene;
+    scene.layers.push_back({"drive", drive.frames[0].document});
+    scene.drive = &drive;
+    const PointCloud cloud = two_class_cloud();
+    scene.cloud = &cloud;
+    const ViewerAssets assets;
+    CHECK_THROWS_AS(viewer_files(scene, assets, ViewerOptions{}), std::invalid_argument);
+    scene.cloud = nullptr;
+    drive.frames[1].background_bytes = "GIF89a";
+    CHECK_THROWS_WITH(viewer_files(scene, assets, ViewerOptions{}),
+                      Catch::Contains("frame f1") && Catch::Contains("neither PNG nor JPEG"));
+    drive.frames.clear();
+    CHECK_THROWS_AS(viewer_files(scene, assets, ViewerOptions{}), std::invalid_argument);
 }

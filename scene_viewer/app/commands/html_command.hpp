@@ -13,7 +13,8 @@ namespace scene_render::html_command {
 
 /// Flags of `scene-render html`.
 struct Options {
-    std::vector<std::string> inputs;  ///< entity files; the first is the scene, more are compared
+    std::vector<std::string> inputs;  ///< entity files (the first is the scene, more are
+                                      ///< compared), or one drive (sequence index or folder)
     std::vector<std::string> labels;  ///< one label per input (default: file stems)
     std::string out_dir;              ///< output folder, created as needed
     std::string cloud;                ///< point cloud (.ply, .pcd, .xyz), or ""
@@ -24,6 +25,9 @@ struct Options {
     std::string title;                ///< page title, "" = the first file's stem
     float point_size_px = 2.0f;       ///< cloud point size, pixels
     int moving_points = 30000;        ///< cloud points drawn while the view moves, 0 = all
+    std::string backgrounds;          ///< a drive's left images (folder, <frame>.png), or ""
+    int trail = 20;                   ///< a drive's track trails, frames, 0 = none
+    double fps = 0.0;                 ///< a drive's frame rate, 0 = the index's (else 10)
     std::string web_dir;              ///< viewer's static files, "" = the build's
 };
 

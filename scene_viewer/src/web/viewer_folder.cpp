@@ -85,6 +85,15 @@ nlohmann::json classes_json(const ViewerScene& scene) {
                                      {"ground", is_ground_class(e.class_id, e.class_name)}};
         }
     }
+    if (scene.drive != nullptr) {
+        for (const auto& [name, id] : drive_classes(*scene.drive)) {
+            if (classes.count(name)) continue;
+            classes[name] = {{"name", name},
+                             {"id", id},
+                             {"colour", hex_colour(class_colour(id, name))},
+                             {"ground", is_ground_class(id, name)}};
+        }
+    }
     if (scene.cloud != nullptr) {
         for (int id : std::set<int>(scene.cloud->class_ids.begin(), scene.cloud->class_ids.end())) {
             const auto entry = cityscapes_by_id(id);
@@ -130,7 +139,8 @@ std::string data_script(const ViewerScene& scene, const ViewerOptions& options) 
         {"scene_file", "scene.glb"},
         {"cloud", cloud},
         {"point_size", options.point_size_px},
-        {"moving_points", options.moving_points}};
+        {"moving_points", options.moving_points},
+        {"drive", scene.drive ? drive_json(*scene.drive) : nlohmann::json(nullptr)}};
     return "window.SCENE_VIEWER_DATA = " +
            data.dump(-1, ' ', false, nlohmann::json::error_handler_t::replace) + ";\n";
 }
@@ -187,6 +197,7 @@ ViewerAssets load_viewer_assets(const std::filesystem::path& dir) {
     a.viewer_js = read_text(dir / "viewer.js");
     a.viewer_css = read_text(dir / "viewer.css");
     a.viewer_util_js = read_text(dir / "viewer_util.js");
+    a.viewer_drive_js = read_text(dir / "viewer_drive.js");
     a.index_html = read_text(dir / "index.html");
     return a;
 }
@@ -234,6 +245,9 @@ std::map<std::string, std::string> viewer_files(const ViewerScene& scene,
                                                 const ViewerOptions& options) {
     options.validate();
     if (scene.layers.empty()) throw std::invalid_argument("viewer_files: no entity file");
+    if (scene.drive != nullptr && (scene.layers.size() > 1 || scene.cloud != nullptr))
+        throw std::invalid_argument(
+            "viewer_files: a drive is shown alone (no cloud, no compared file)");
     if (scene.background_name.find_first_of("/\\\"<>&") != std::string::npos)
         throw std::invalid_argument("viewer_files: bad background file name");
     std::map<std::string, std::string> files;
@@ -241,6 +255,7 @@ std::map<std::string, std::string> viewer_files(const ViewerScene& scene,
     files["viewer.js"] = assets.viewer_js;
     files["viewer.css"] = assets.viewer_css;
     files["viewer_util.js"] = assets.viewer_util_js;
+    files["viewer_drive.js"] = assets.viewer_drive_js;
     files["scene.glb"].assign(scene.scene_glb.begin(), scene.scene_glb.end());
     files["data/scene-data.js"] = data_script(scene, options);
     files["data/scene-glb.js"] = blob_script("scene.glb", files["scene.glb"]);
@@ -253,6 +268,10 @@ std::map<std::string, std::string> viewer_files(const ViewerScene& scene,
         files["data/cloud-glb.js"] = blob_script("cloud.glb", files["cloud.glb"]);
         // Deferred: the page draws the scene first and adds the cloud once this has run.
         scripts += "<script id=\"cloud-data\" src=\"data/cloud-glb.js\" defer></script>\n";
+    }
+    if (scene.drive != nullptr) {
+        add_drive_files(*scene.drive, files);
+        scripts += "<script src=\"data/models-glb.js\"></script>\n";
     }
     if (!scene.background_name.empty()) files[scene.background_name] = scene.background_bytes;
     std::string html = replace_all(assets.index_html, "{{TITLE}}", html_escape(options.title));

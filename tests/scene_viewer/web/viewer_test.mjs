@@ -11,6 +11,7 @@ import { spawnSync } from 'node:child_process';
 import fs from 'node:fs';
 import path from 'node:path';
 import { launch, loadModules, openViewer, readPng, serveFolder } from './browser.mjs';
+import { carBlue, checkReport, compareMasks, foreground } from './compare.mjs';
 
 const [mode, sceneRender, entitiesFile, outDir, nodeModules, chromium] = process.argv.slice(2);
 const { playwright, PNG } = loadModules(nodeModules);
@@ -27,72 +28,6 @@ function fail(message) {
 function run(args) {
     const r = spawnSync(sceneRender, args, { encoding: 'utf8' });
     if (r.status !== 0) fail('scene-render ' + args.join(' ') + ' exited ' + r.status + ': ' + r.stderr);
-}
-
-/// Pixels of the cars' blue body colour, whatever the shading.
-function carBlue(png) {
-    const mask = new Uint8Array(png.width * png.height);
-    for (let i = 0; i < mask.length; ++i) {
-        const r = png.data[4 * i], g = png.data[4 * i + 1], b = png.data[4 * i + 2];
-        mask[i] = b > 35 && b > 3 * Math.max(r, g) + 30 ? 1 : 0;
-    }
-    return mask;
-}
-
-/// Pixels that differ from the lit background (205, 215, 228) by more than `threshold`.
-function foreground(png, threshold) {
-    const mask = new Uint8Array(png.width * png.height);
-    for (let i = 0; i < mask.length; ++i) {
-        const d = Math.abs(png.data[4 * i] - 205) + Math.abs(png.data[4 * i + 1] - 215) +
-                  Math.abs(png.data[4 * i + 2] - 228);
-        mask[i] = d > threshold ? 1 : 0;
-    }
-    return mask;
-}
-
-/// The mask grown by r pixels (square neighbourhood, separable).
-function dilate(mask, w, h, r) {
-    const rows = new Uint8Array(mask.length);
-    for (let y = 0; y < h; ++y) {
-        for (let x = 0; x < w; ++x) {
-            let on = 0;
-            for (let dx = -r; dx <= r && !on; ++dx) {
-                const xx = x + dx;
-                if (xx >= 0 && xx < w && mask[y * w + xx]) on = 1;
-            }
-            rows[y * w + x] = on;
-        }
-    }
-    const out = new Uint8Array(mask.length);
-    for (let y = 0; y < h; ++y) {
-        for (let x = 0; x < w; ++x) {
-            let on = 0;
-            for (let dy = -r; dy <= r && !on; ++dy) {
-                const yy = y + dy;
-                if (yy >= 0 && yy < h && rows[yy * w + x]) on = 1;
-            }
-            out[y * w + x] = on;
-        }
-    }
-    return out;
-}
-
-/// Share of a's pixels farther than r pixels from every pixel of b.
-function outsideShare(a, b, w, h, r) {
-    const grown = dilate(b, w, h, r);
-    let count = 0, outside = 0;
-    for (let i = 0; i < a.length; ++i) {
-        if (!a[i]) continue;
-        ++count;
-        if (!grown[i]) ++outside;
-    }
-    return count ? outside / count : 0;
-}
-
-function checkReport(report) {
-    if (report.errors.length) fail('the page logged errors: ' + report.errors.join(' | '));
-    if (report.outside.length) fail('requests outside the folder: ' + report.outside.join(' '));
-    if (report.requests < 5) fail('only ' + report.requests + ' requests seen: listener broken?');
 }
 
 /// The test scene without ground and buildings: objects against the background, so the
@@ -136,27 +71,6 @@ async function cameraTest() {
                      street.reference);
     } finally {
         await context.close();
-    }
-}
-
-/// Fails unless two masks agree: IoU >= 0.85 and at most 2 % of either farther than 3 px
-/// from the other.
-function compareMasks(ma, mb, a, what, shot, reference) {
-    const count = (m) => m.reduce((s, v) => s + v, 0);
-    let both = 0, either = 0;
-    for (let i = 0; i < ma.length; ++i) {
-        both += ma[i] & mb[i];
-        either += ma[i] | mb[i];
-    }
-    const iou = both / either;
-    const viewerOut = outsideShare(ma, mb, a.width, a.height, 3);
-    const referenceOut = outsideShare(mb, ma, a.width, a.height, 3);
-    console.log(`${what} px: viewer ${count(ma)}, scene-render ${count(mb)}; IoU ${iou.toFixed(3)};` +
-                ` farther than 3 px: viewer ${(100 * viewerOut).toFixed(2)} %,` +
-                ` scene-render ${(100 * referenceOut).toFixed(2)} %`);
-    if (count(mb) < 2000) fail(`the reference render shows almost no ${what} pixels`);
-    if (viewerOut > 0.02 || referenceOut > 0.02 || iou < 0.85) {
-        fail(`the viewer and scene-render disagree on ${what} pixels (see ${shot} and ${reference})`);
     }
 }
 

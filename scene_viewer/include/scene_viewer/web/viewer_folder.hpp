@@ -12,6 +12,7 @@
 
 #include "scene_schema/entities.hpp"
 #include "scene_viewer/render/point_cloud.hpp"
+#include "scene_viewer/web/viewer_drive.hpp"
 
 namespace scene_viewer {
 
@@ -22,13 +23,15 @@ struct ViewerLayer {
 };
 
 /// What the page shows. The first layer is the scene (drawn with its models from scene_glb);
-/// further layers are compared with it (boxes in per-file colours).
+/// further layers are compared with it (boxes in per-file colours). With a drive, the first
+/// layer is the drive's first frame and the page shows the frames on a timeline.
 struct ViewerScene {
     std::vector<ViewerLayer> layers;       ///< at least one
     std::vector<unsigned char> scene_glb;  ///< export_scene_glb_bytes() of the first layer
     const PointCloud* cloud = nullptr;     ///< optional point cloud (KITTI frame), borrowed
     std::string background_name;           ///< file name of the left image in the folder, or ""
     std::string background_bytes;          ///< its bytes, copied as they are
+    const ViewerDrive* drive = nullptr;    ///< a drive (one layer, no cloud), borrowed, or null
 };
 
 /// Page settings.
@@ -42,13 +45,14 @@ struct ViewerOptions {
 
 /// The viewer's static files: three.js (bundled with its orbit controls and glTF loader), the
 /// page's script, style sheet and HTML template (placeholders {{TITLE}} and {{DATA_SCRIPTS}}),
-/// and the page's helpers (viewer_util.js, run before viewer.js).
+/// and the page's helpers (viewer_util.js and viewer_drive.js, run before viewer.js).
 struct ViewerAssets {
     std::string three_js;
     std::string viewer_js;
     std::string viewer_css;
     std::string index_html;
     std::string viewer_util_js;
+    std::string viewer_drive_js;
 };
 
 /// Reads the viewer's static files from `dir`; throws std::runtime_error naming a missing file.
@@ -70,8 +74,9 @@ std::string base64_encode(const unsigned char* data, std::size_t size);
 
 /// Every file of the viewer folder, relative path -> bytes: index.html, viewer.js, viewer.css,
 /// three.min.js, scene.glb, cloud.glb (with a cloud), the background image (with one) and
-/// data/*.js (page data and the .glb files as base64 for file:// pages). Throws
-/// std::invalid_argument for no layers or bad options.
+/// data/*.js (page data and the .glb files as base64 for file:// pages), and with a drive its
+/// files (add_drive_files). Throws std::invalid_argument for no layers, bad options, or a drive
+/// beside a cloud or compared files.
 std::map<std::string, std::string> viewer_files(const ViewerScene& scene,
                                                 const ViewerAssets& assets,
                                                 const ViewerOptions& options);
