@@ -15,6 +15,7 @@ analyse="$build/cloud_analysis/cloud-analysis"
 render="$build/scene_viewer/scene-render"
 samples="$STEREOSCENE_ROOT/samples"
 mkdir -p "$out"
+echo "Demo page (written when the demo ends): $out/index.html" >&2
 outputs=()
 listing=()
 note() {
@@ -104,6 +105,10 @@ mkdir -p "$drive/analysed"
 "$analyse" evaluate-tracks --tracks "$drive/tracked" --truth "$drive/sensors/truth" \
     --visibility "$drive/sensors/visibility" --min-visible-fraction 0.25 > "$drive/tracking.txt"
 note "drive: tracking scores" "$drive/tracking.txt"
+if "$render" html "$drive/tracked" --backgrounds "$drive/sensors/image_2" --title "sample drive" \
+    --out "$drive/viewer"; then
+    note "drive: interactive viewer (timeline)" "$drive/viewer/index.html"
+fi
 video=()
 command -v ffmpeg >/dev/null && video=(--video "$drive/drive-camera.mp4")
 "$render" play "$drive/tracked" --out-dir "$drive/camera" --view camera --size 621x188 \

@@ -67,6 +67,8 @@ def main():
         title = f"<h3>{html.escape(label)}: <a href=\"{href}\">{name}</a></h3>"
         if path.endswith(".png"):
             parts.append(f"<figure>{title}<a href=\"{href}\"><img src=\"{href}\" alt=\"\"></a></figure>")
+        elif path.endswith("index.html") and rel(path, out) != "viewer/index.html":
+            parts.append(f"<figure>{title}<iframe class=\"small\" src=\"{href}\" title=\"{html.escape(label)}\"></iframe></figure>")
         elif path.endswith(".mp4"):
             parts.append(f"<figure>{title}<video src=\"{href}\" controls loop></video></figure>")
         elif path.endswith(".json"):
@@ -79,6 +81,7 @@ def main():
 <style>
 body {{ font: 14px/1.4 system-ui, sans-serif; margin: 16px; }}
 iframe {{ width: 100%; height: 70vh; border: 1px solid #999; }}
+iframe.small {{ width: 960px; height: 420px; display: block; }}
 figure {{ display: inline-block; margin: 8px; vertical-align: top; }}
 figure img {{ max-width: 560px; border: 1px solid #ccc; }}
 h3 {{ font-size: 14px; margin: 4px 0; display: inline; }}

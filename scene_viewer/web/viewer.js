@@ -98,14 +98,33 @@
         scene.add(sun);
     }
 
-    /// Lambert materials (no specular): closer to scene-render's lighting and cheaper.
+    /// Lambert materials (no specular): closer to scene-render's lighting and cheaper. One per
+    /// source material, so copies of a model keep sharing theirs (and draw as instances).
+    const lambertOf = new Map();
     function toLambert(material) {
+        if (lambertOf.has(material.uuid)) return lambertOf.get(material.uuid);
         const m = new THREE.MeshLambertMaterial({
             color: material.color, map: material.map || null, side: material.side,
             transparent: material.transparent, opacity: material.opacity,
         });
         m.name = material.name;
+        lambertOf.set(material.uuid, m);
         return m;
+    }
+
+    /// Draws the entities' class models as instances (viewer_models.js): `entries` are
+    /// {entity, root} with root placed in the world frame; replaces the models drawn before.
+    let models = null;
+    function setModels(entries) {
+        if (models) scene.remove(models.group);
+        const items = entries.map(({ entity }) => {
+            const item = { layer: 0, entity, object: new THREE.Object3D(), kind: 'model' };
+            entityObjects.push(item);
+            return item;
+        });
+        models = window.SceneViewerModels.create(
+            entries.map(({ root }, i) => ({ item: items[i], root })));
+        scene.add(models.group);
     }
 
     // --- the scene: the first file's models, from scene.glb ---
@@ -124,17 +143,22 @@
             object.material = Array.isArray(object.material) ? lambert : lambert[0];
         });
         const groundClasses = new Set(data.classes.filter((c) => c.ground).map((c) => c.name));
-        for (const object of gltf.scene.children) {
+        const placed = [];
+        for (const object of [...gltf.scene.children]) {
             const name = object.userData.name !== undefined ? object.userData.name : object.name;
             const entity = byId.get(name) || byId.get(object.name);
-            if (entity && groundClasses.has(entity.class)) paintFirst(object);
-            if (entity) {
+            if (entity && !groundClasses.has(entity.class)) {
+                gltf.scene.remove(object);
+                placed.push({ entity, root: object });
+            } else if (entity) {
+                paintFirst(object);
                 entityObjects.push({ layer: 0, entity, object, kind: 'model' });
             } else if (name === 'ego') {
                 egoObjects.push(object);
             }
         }
         scene.add(gltf.scene);
+        setModels(placed);
     }
 
     /// Ground patches are painted first and write no depth, so whatever stands on them covers
@@ -338,6 +362,7 @@
             const wanted = item.kind === 'model' ? show.models : (show.boxes || (comparing && item.layer > 0));
             item.object.visible = on && wanted;
         }
+        if (models) models.sync();
         for (const o of egoObjects) o.visible = show.ego && api.view !== 'camera';
         for (const c of cloudObjects) c.object.visible = show.cloud && !hiddenClasses.has(c.className);
         if (grid) grid.visible = show.grid && api.view === 'bev';
@@ -357,7 +382,13 @@
                                       -((clientY - rect.top) / rect.height) * 2 + 1);
         raycaster.setFromCamera(ndc, camera);
         const targets = entityObjects.filter((i) => visible(i.object)).map((i) => i.object);
+        if (models) targets.push(...models.meshes.filter((m) => m.visible));
         for (const hit of raycaster.intersectObjects(targets, true)) {
+            if (hit.object.isInstancedMesh) {
+                const item = models.itemOf(hit);
+                if (item) return item;
+                continue;
+            }
             if (!hit.object.isMesh || !visible(hit.object)) continue;
             for (let o = hit.object; o; o = o.parent) {
                 const item = entityObjects.find((i) => i.object === o);
@@ -415,77 +446,24 @@
     });
     canvas.addEventListener('pointerleave', () => { if (!pinned) showDetails(null); });
 
-    // --- the panel ---
-    function checkbox(parent, text, checked, onChange, colour) {
-        return util.checkbox(parent, text, checked, (v) => {
-            onChange(v);
-            applyVisibility();
-        }, colour);
-    }
-
     function markViewButtons() {
-        for (const b of document.querySelectorAll('#views button')) {
-            b.classList.toggle('active', b.dataset.view === api.view);
-        }
+        window.SceneViewerPanel.markView(api.view);
     }
 
     function buildPanel() {
-        const views = document.getElementById('views');
-        for (const [name, text] of [['camera', 'camera'], ['chase', 'chase'], ['bev', 'BEV']]) {
-            const b = document.createElement('button');
-            b.textContent = text;
-            b.dataset.view = name;
-            b.addEventListener('click', () => setView(name));
-            views.appendChild(b);
-        }
-        const toggles = document.getElementById('toggles');
-        checkbox(toggles, 'models', show.models, (v) => { show.models = v; });
-        checkbox(toggles, 'boxes', show.boxes, (v) => { show.boxes = v; });
-        if (data.cloud) {
-            checkbox(toggles, 'point cloud (' + data.cloud.points.toLocaleString('en') + ')',
-                     show.cloud, (v) => { show.cloud = v; });
-        }
-        if (egoObjects.length) checkbox(toggles, 'ego car', show.ego, (v) => { show.ego = v; });
-        checkbox(toggles, 'grid (BEV)', show.grid, (v) => { show.grid = v; });
-        if (drive && data.drive.trail_frames > 0) {
-            checkbox(toggles, 'track trails', true, (v) => drive.setTrails(v));
-        }
-        if (hasImage) {
-            checkbox(toggles, 'left image (camera)', show.background,
-                     (v) => { show.background = v; });
-        }
-        if (data.layers.length > 1) {
-            document.getElementById('layers-section').hidden = false;
-            const layers = document.getElementById('layers');
-            data.layers.forEach((layer, i) => {
-                checkbox(layers, layer.label + ' (' + layer.entities.length + ')', true,
-                         (v) => { if (v) hiddenLayers.delete(i); else hiddenLayers.add(i); },
-                         layer.colour);
-            });
-        }
-        const classes = document.getElementById('classes');
-        for (const c of data.classes) {
-            checkbox(classes, c.name, true, (v) => {
-                if (v) hiddenClasses.delete(c.name); else hiddenClasses.add(c.name);
-            }, c.colour);
-        }
-        const downloads = document.getElementById('downloads');
-        const files = [data.scene_file, data.drive && data.drive.models_file, data.cloud && data.cloud.file,
-                       data.background_image];
-        for (const f of files.filter(Boolean)) {
-            const a = document.createElement('a');
-            a.href = f;
-            a.textContent = f;
-            a.download = f;
-            downloads.appendChild(a);
-        }
+        window.SceneViewerPanel.build({
+            data, show, hiddenClasses, hiddenLayers, hasEgo: egoObjects.length > 0, hasImage,
+            drive, setView, changed: applyVisibility,
+        });
     }
 
     // --- level of detail: a uniform sample of the cloud while the view moves ---
     /// Draws each class's first share of points (the export shuffled them) or all of them.
+    let cloudShare = 1;  // pace.points when the sample was drawn
     function setCloudDetail(sample) {
         const total = data.cloud ? data.cloud.points : 0;
-        const budget = data.moving_points;
+        cloudShare = pace.points;
+        const budget = Math.ceil(data.moving_points * cloudShare);
         coarse = sample && budget > 0 && total > budget;
         for (const c of cloudObjects) {
             const count = c.object.geometry.getAttribute('position').count;
@@ -501,18 +479,32 @@
         updateProjection();
     }
 
+    // --- level of detail: fewer pixels while the view moves, when moving frames come slowly ---
+    const fullRatio = window.devicePixelRatio || 1;
+    const pace = util.movingPace();
+
     function frame(now) {
         if (controls && controls.update()) {
             dirty = true;
             lastMotion = now;
         }
         const moving = now - lastMotion < 300;
-        if (moving !== coarse && data.cloud) setCloudDetail(moving);
+        if (data.cloud && (moving !== coarse || (moving && pace.points !== cloudShare))) {
+            setCloudDetail(moving);
+        }
+        const ratio = fullRatio * (moving ? pace.pixels : 1);
+        if (ratio !== renderer.getPixelRatio()) {
+            renderer.setPixelRatio(ratio);
+            resize();
+        }
         if (dirty) {
             renderer.render(scene, camera);
             dirty = false;
             ++api.frames;
-            if (!coarse && api.fullFrameMs === null) api.fullFrameMs = performance.now();
+            pace.drawn(moving, now);
+            if (!coarse && ratio === fullRatio && api.fullFrameMs === null) {
+                api.fullFrameMs = performance.now();
+            }
         }
         requestAnimationFrame(frame);
     }
@@ -525,12 +517,15 @@
     };
     api.setView = setView;
     api.orbitBenchmark = (ms) => util.orbitBenchmark(controls, ms);
+    /// The shares of the full pixel ratio and of the cloud's moving sample drawn while the view
+    /// moves (level of detail).
+    api.movingDetail = () => ({ pixels: pace.pixels, points: pace.points });
 
     /// A drive: the class models as templates, then its first frame (frames load lazily).
     async function startDrive() {
         drive = window.SceneViewerDrive.create({
             scene, data, gltf: await parseGlb(data.drive.models_file), placeBox, toLambert,
-            paintFirst, entityObjects, egoObjects,
+            paintFirst, entityObjects, egoObjects, setModels,
             makeBox: (e) => boxOf(0, e),
             setImage: (src) => { backgroundImg.src = src; },
             markDirty: () => { dirty = true; },

@@ -18,7 +18,8 @@
 
     /// The drive controller. `ctx`: scene, data, gltf (models.glb parsed), placeBox(object,
     /// entity), makeBox(entity), toLambert(material), paintFirst(object), entityObjects,
-    /// egoObjects, setImage(src), markDirty(), onFrameShown(position).
+    /// egoObjects, setModels([{entity, root}]) (draws them as instances and adds their items to
+    /// entityObjects), setImage(src), markDirty(), onFrameShown(position).
     function create(ctx) {
         const drive = ctx.data.drive;
         const frames = drive.frames;
@@ -49,34 +50,36 @@
             }
         }
         const classByName = new Map(ctx.data.classes.map((c) => [c.name, c]));
-        const patchMaterials = new Map();
+        const patchMaterials = new Map();  // class -> material, shared by patches and boxes
         const unitBox = new THREE.BoxGeometry(1, 1, 1);
+
+        function classMaterial(name) {
+            let material = patchMaterials.get(name);
+            if (!material) {
+                const c = classByName.get(name);
+                material = new THREE.MeshLambertMaterial({ color: c ? c.colour : '#808080' });
+                patchMaterials.set(name, material);
+            }
+            return material;
+        }
 
         /// A ground patch: the class colour on the box's bottom face, 0.1 m thick at most.
         function groundPatch(e) {
-            let material = patchMaterials.get(e.class);
-            if (!material) {
-                const c = classByName.get(e.class);
-                material = new THREE.MeshLambertMaterial({ color: c ? c.colour : '#808080' });
-                patchMaterials.set(e.class, material);
-            }
-            const mesh = new THREE.Mesh(unitBox, material);
+            const mesh = new THREE.Mesh(unitBox, classMaterial(e.class));
             const h = Math.min(e.H, 0.1);
             ctx.placeBox(mesh, Object.assign({}, e, { y: e.y + 0.5 * e.H - 0.5 * h, H: h }));
             ctx.paintFirst(mesh);
             return mesh;
         }
 
+        /// The class model (or a box in the class colour) placed for `e`, outside the scene.
         function modelOf(e) {
-            const c = classByName.get(e.class);
-            if (c && c.ground) return groundPatch(e);
             const template = templates.get(e.class);
             const group = new THREE.Group();
             if (template) {
                 group.add(template.clone());
             } else {
-                const colour = c ? c.colour : '#808080';
-                group.add(new THREE.Mesh(unitBox, new THREE.MeshLambertMaterial({ color: colour })));
+                group.add(new THREE.Mesh(unitBox, classMaterial(e.class)));
             }
             ctx.placeBox(group, e);
             return group;
@@ -150,14 +153,23 @@
             for (const o of shownObjects) ctx.scene.remove(o);
             shownObjects = [];
             ctx.entityObjects.length = 0;
+            const placed = [];
             for (const e of payload.entities) {
-                const model = modelOf(e);
+                const c = classByName.get(e.class);
                 const box = ctx.makeBox(e);
-                ctx.scene.add(model, box);
-                shownObjects.push(model, box);
-                ctx.entityObjects.push({ layer: 0, entity: e, object: model, kind: 'model' });
+                ctx.scene.add(box);
+                shownObjects.push(box);
                 ctx.entityObjects.push({ layer: 0, entity: e, object: box, kind: 'box' });
+                if (c && c.ground) {
+                    const patch = groundPatch(e);
+                    ctx.scene.add(patch);
+                    shownObjects.push(patch);
+                    ctx.entityObjects.push({ layer: 0, entity: e, object: patch, kind: 'model' });
+                } else {
+                    placed.push({ entity: e, root: modelOf(e) });
+                }
             }
+            ctx.setModels(placed);
             shown = position;
             updateTrails(position);
             if (frames[position].image) ctx.setImage(frames[position].image);

@@ -1,6 +1,7 @@
 // Helpers of the scene viewer page (viewer.js) that need none of its state: the WebGL probe,
-// base64 decoding, the details pane's rows, the panel's checkboxes, the BEV framing and the
-// orbit benchmark. A classic script: it sets window.SceneViewerUtil before viewer.js runs.
+// base64 decoding, the details pane's rows, the panel's checkboxes, the BEV framing, the orbit
+// benchmark and the pace of the moving level of detail. A classic script: it sets
+// window.SceneViewerUtil before viewer.js runs.
 (function () {
     'use strict';
 
@@ -121,7 +122,34 @@
         });
     }
 
+    /// Detail drawn while the view moves, lowered one level after every 10 moving frames whose
+    /// smoothed interval is over 34 ms (under 30 fps): `pixels` is the share of the full pixel
+    /// ratio, `points` of the cloud's moving sample. drawn(moving, now) after every frame.
+    const kMovingLevels = [[1, 1], [0.75, 1], [0.5, 1], [0.5, 0.5], [0.5, 0.25]];
+    function movingPace() {
+        let last = null, interval = 0, frames = 0, level = 0;
+        const pace = {
+            pixels: 1,
+            points: 1,
+            drawn(moving, now) {
+                if (!moving) {
+                    last = null;
+                    return;
+                }
+                if (last !== null) {
+                    interval = frames ? 0.8 * interval + 0.2 * (now - last) : now - last;
+                    if (++frames >= 10 && interval > 34 && level + 1 < kMovingLevels.length) {
+                        [pace.pixels, pace.points] = kMovingLevels[++level];
+                        frames = 0;
+                    }
+                }
+                last = now;
+            },
+        };
+        return pace;
+    }
+
     window.SceneViewerUtil = {
-        softwareWebgl, decodeBase64, fmt, detailRows, checkbox, bevFit, orbitBenchmark,
+        softwareWebgl, decodeBase64, fmt, detailRows, checkbox, bevFit, orbitBenchmark, movingPace,
     };
 })();

@@ -7,7 +7,8 @@ set(SCENE_VIEWER_WEB_DIR ${CMAKE_CURRENT_BINARY_DIR}/web)
 set(STEREOSCENE_NODE_MODULES ${PROJECT_SOURCE_DIR}/scripts/npm/node_modules CACHE INTERNAL
     "npm packages of the viewer and its browser tests")
 set(_web_outputs)
-foreach(file index.html viewer.js viewer_util.js viewer_drive.js viewer.css)
+foreach(file index.html viewer.css viewer_util.js viewer_models.js viewer_panel.js viewer_drive.js
+        viewer.js)
     add_custom_command(OUTPUT ${SCENE_VIEWER_WEB_DIR}/${file}
         COMMAND ${CMAKE_COMMAND} -E copy ${CMAKE_CURRENT_LIST_DIR}/${file}
             ${SCENE_VIEWER_WEB_DIR}/${file}

@@ -148,14 +148,15 @@ TEST_CASE("the viewer folder carries the page, the data and the views of views.c
     scene.scene_glb = {'g', 'l', 'T', 'F'};
     const PointCloud cloud = two_class_cloud();
     scene.cloud = &cloud;
-    ViewerAssets assets{"three", "viewer", "css", "<title>{{TITLE}}</title>{{DATA_SCRIPTS}}",
-                        "util",  "drive"};
+    ViewerAssets assets{"three", "<title>{{TITLE}}</title>{{DATA_SCRIPTS}}", "css", {}};
+    for (const char* name : kViewerScripts) assets.scripts[name] = "script";
     ViewerOptions options;
     options.title = "a<b";
     const auto files = viewer_files(scene, assets, options);
-    for (const char* name : {"index.html", "three.min.js", "viewer.js", "viewer_util.js",
-                             "viewer_drive.js", "viewer.css", "scene.glb", "cloud.glb",
-                             "data/scene-data.js", "data/scene-glb.js", "data/cloud-glb.js"}) {
+    for (const char* name :
+         {"index.html", "three.min.js", "viewer.js", "viewer_util.js", "viewer_models.js",
+          "viewer_panel.js", "viewer_drive.js", "viewer.css", "scene.glb", "cloud.glb",
+          "data/scene-data.js", "data/scene-glb.js", "data/cloud-glb.js"}) {
         INFO(name);
         CHECK(files.count(name) == 1);
     }
@@ -233,7 +234,7 @@ TEST_CASE("a drive's frames are scripts of their own, with trails and extent in 
     scene.layers.push_back({"drive", drive.frames[0].document});
     scene.scene_glb = {'g', 'l', 'T', 'F'};
     scene.drive = &drive;
-    ViewerAssets assets{"three", "viewer", "css", "{{DATA_SCRIPTS}}", "util", "drive"};
+    ViewerAssets assets{"three", "{{DATA_SCRIPTS}}", "css", {}};
     const auto files = viewer_files(scene, assets, ViewerOptions{});
     for (const char* name : {"frames/000000.js", "frames/000001.js", "frames/000000.png",
                              "frames/000001.png", "models.glb", "data/models-glb.js"}) {

@@ -194,10 +194,8 @@ void ViewerOptions::validate() const {
 ViewerAssets load_viewer_assets(const std::filesystem::path& dir) {
     ViewerAssets a;
     a.three_js = read_text(dir / "three.min.js");
-    a.viewer_js = read_text(dir / "viewer.js");
     a.viewer_css = read_text(dir / "viewer.css");
-    a.viewer_util_js = read_text(dir / "viewer_util.js");
-    a.viewer_drive_js = read_text(dir / "viewer_drive.js");
+    for (const char* name : kViewerScripts) a.scripts[name] = read_text(dir / name);
     a.index_html = read_text(dir / "index.html");
     return a;
 }
@@ -252,10 +250,8 @@ std::map<std::string, std::string> viewer_files(const ViewerScene& scene,
         throw std::invalid_argument("viewer_files: bad background file name");
     std::map<std::string, std::string> files;
     files["three.min.js"] = assets.three_js;
-    files["viewer.js"] = assets.viewer_js;
     files["viewer.css"] = assets.viewer_css;
-    files["viewer_util.js"] = assets.viewer_util_js;
-    files["viewer_drive.js"] = assets.viewer_drive_js;
+    for (const auto& [name, text] : assets.scripts) files[name] = text;
     files["scene.glb"].assign(scene.scene_glb.begin(), scene.scene_glb.end());
     files["data/scene-data.js"] = data_script(scene, options);
     files["data/scene-glb.js"] = blob_script("scene.glb", files["scene.glb"]);

@@ -43,16 +43,18 @@ struct ViewerOptions {
     void validate() const;
 };
 
+/// The page's own scripts, in the order index.html loads them (helpers first, viewer.js last).
+inline constexpr const char* kViewerScripts[] = {"viewer_util.js", "viewer_models.js",
+                                                 "viewer_panel.js", "viewer_drive.js", "viewer.js"};
+
 /// The viewer's static files: three.js (bundled with its orbit controls and glTF loader), the
-/// page's script, style sheet and HTML template (placeholders {{TITLE}} and {{DATA_SCRIPTS}}),
-/// and the page's helpers (viewer_util.js and viewer_drive.js, run before viewer.js).
+/// HTML template (placeholders {{TITLE}} and {{DATA_SCRIPTS}}), the style sheet and the page's
+/// scripts (kViewerScripts: file name -> text).
 struct ViewerAssets {
     std::string three_js;
-    std::string viewer_js;
-    std::string viewer_css;
     std::string index_html;
-    std::string viewer_util_js;
-    std::string viewer_drive_js;
+    std::string viewer_css;
+    std::map<std::string, std::string> scripts;
 };
 
 /// Reads the viewer's static files from `dir`; throws std::runtime_error naming a missing file.
