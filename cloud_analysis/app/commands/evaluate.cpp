@@ -9,6 +9,8 @@
 #include <nlohmann/json.hpp>
 #include <scene_schema/entities.hpp>
 
+#include "cloud_analysis/cloud/semantic.hpp"
+#include "cloud_analysis/evaluation/diagnosis.hpp"
 #include "cloud_analysis/evaluation/entity_eval.hpp"
 #include "cloud_analysis/evaluation/evaluate.hpp"
 #include "cloud_analysis/evaluation/kitti_labels.hpp"
@@ -321,8 +323,9 @@ void evaluate_car_entities(const EvaluateArgs& args, const ResolvedPaths& paths,
     options.min_gt_pixels = static_cast<std::size_t>(args.min_gt_pixels);
     const bool with_fallback = args.fallback_max_points >= 0;
     options.fallback_max_points = static_cast<std::size_t>(std::max(0, args.fallback_max_points));
+    const InstanceImage image = load_instance_image(paths.instance, load_palette("cityscapes"));
     report_cars(args.entities.string(), doc.entities, gt, options, gt_options,
-                with_fallback ? &calib.camera : nullptr, report);
+                with_fallback ? &calib.camera : nullptr, report, &image, &calib.camera);
     report_ground_plane(doc, report);
 }
 

@@ -5,6 +5,8 @@
 #include <cstdio>
 #include <sstream>
 
+#include "cloud_analysis/evaluation/diagnosis.hpp"
+
 namespace cloud_analysis {
 namespace {
 
@@ -174,6 +176,16 @@ void report_bars(const EntityEvaluation& ev, const EvalBars& bars, std::ostream&
                            {"missed", report.missed_bars}};
 }
 
+/// One table line per diagnosis ("  why <id>: <reason>") and their JSON.
+nlohmann::json diagnosis_lines(const std::vector<Diagnosis>& diagnoses, std::ostream& table) {
+    nlohmann::json rows = nlohmann::json::array();
+    for (const auto& d : diagnoses) {
+        table << "  why " << d.id << " (" << d.kind << "): " << d.reason << "\n";
+        rows.push_back({{"id", d.id}, {"kind", d.kind}, {"reason", d.reason}});
+    }
+    return rows;
+}
+
 /// One JSON row per GT car; a table row per GT car in range (or matched without points).
 nlohmann::json car_rows(const std::vector<scene_schema::Entity>& entities,
                         const std::vector<GtCar>& gt, const CarEvaluation& ev,
@@ -243,6 +255,8 @@ void report_entities(const EntityComparison& c, const EntityEvalOptions& options
     for (const auto e : ev.spurious) spurious.push_back(c.estimate[e].id);
     if (!ev.missed.empty()) table << "  missed:   " << missed.dump() << "\n";
     if (!ev.spurious.empty()) table << "  spurious: " << spurious.dump() << "\n";
+    const nlohmann::json why =
+        diagnosis_lines(diagnose_entities(c.reference, c.estimate, ev, c.visibility), table);
     const nlohmann::json not_scored = not_scored_json(c, ev);
     const ClassBinScore all = unfiltered.within(bars.class_name, bars.max_range_m);
     if (!ev.ignored.empty()) not_scored_lines(c, not_scored, all, bars, o.iou_threshold, table);
@@ -257,6 +271,7 @@ void report_entities(const EntityComparison& c, const EntityEvalOptions& options
                                {"matches", matches_json(c, ev)},
                                {"missed", missed},
                                {"spurious", spurious},
+                               {"diagnosis", why},
                                {"min_visible_pixels", c.min_visible_pixels},
                                {"min_visible_fraction", c.min_visible_fraction},
                                {"not_scored", not_scored},
@@ -274,7 +289,8 @@ void report_entities(const EntityComparison& c, const EntityEvalOptions& options
 void report_cars(const std::string& entities_file,
                  const std::vector<scene_schema::Entity>& entities, const std::vector<GtCar>& gt,
                  const CarMatchOptions& options, const GtCarOptions& gt_options,
-                 const StereoCamera* fallback_camera, EvaluationReport& report) {
+                 const StereoCamera* fallback_camera, EvaluationReport& report,
+                 const InstanceImage* image, const StereoCamera* camera) {
     const CarEvaluation ev = evaluate_cars(entities, gt, options, fallback_camera);
     const bool with_fallback = fallback_camera != nullptr;
     std::ostringstream table;
@@ -301,6 +317,8 @@ void report_cars(const std::string& entities_file,
     }
     table << "  mean centre distance " << fixed(ev.mean_centre_distance_m(), 2)
           << " m (entity centre to GT visible-point centroid, bird's-eye)\n";
+    const nlohmann::json why =
+        diagnosis_lines(diagnose_cars(entities, gt, ev, options, image, camera), table);
     report.json["cars"] = {
         {"entities_file", entities_file},
         {"max_range_m", options.max_range_m},
@@ -319,7 +337,8 @@ void report_cars(const std::string& entities_file,
         {"fallback_min_iou", options.fallback_min_iou},
         {"fallback_matched", ev.fallback_matched},
         {"mean_centre_distance_m", ev.mean_centre_distance_m()},
-        {"gt_cars", cars}};
+        {"gt_cars", cars},
+        {"diagnosis", why}};
     report.table += table.str();
 }
 

@@ -11,6 +11,7 @@
 #include <nlohmann/json.hpp>
 #include <scene_schema/entities.hpp>
 
+#include "cloud_analysis/evaluation/diagnosis.hpp"
 #include "cloud_analysis/evaluation/entity_eval.hpp"
 #include "cloud_analysis/evaluation/evaluate.hpp"
 #include "cloud_analysis/stereo/disparity.hpp"
@@ -42,17 +43,20 @@ struct EntityComparison {
 };
 
 /// Entity-to-entity scores (evaluate_entities, and once more with every reference scored):
-/// json["entities"], json["bars"] when bars.any(), the table, and the missed bars.
+/// json["entities"] (with the reasons of diagnose_entities in "diagnosis"), json["bars"] when
+/// bars.any(), the table, and the missed bars.
 void report_entities(const EntityComparison& comparison, const EntityEvalOptions& options,
                      const EvalBars& bars, EvaluationReport& report);
 
 /// Car entities of `entities_file` scored against the ground-truth cars (evaluate_cars; the 2D
 /// fallback when `fallback_camera` is given): json["cars"] and the table, one row per GT car
-/// in range or matched.
+/// in range or matched, then the reasons of diagnose_cars (with `image` and `camera`, what a
+/// phantom's image box shows).
 void report_cars(const std::string& entities_file,
                  const std::vector<scene_schema::Entity>& entities, const std::vector<GtCar>& gt,
                  const CarMatchOptions& options, const GtCarOptions& gt_options,
-                 const StereoCamera* fallback_camera, EvaluationReport& report);
+                 const StereoCamera* fallback_camera, EvaluationReport& report,
+                 const InstanceImage* image = nullptr, const StereoCamera* camera = nullptr);
 
 /// The ground plane an entity file reports (extra["ground_plane"]), when it has one:
 /// json["ground_plane"] and one line.
