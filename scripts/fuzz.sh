@@ -1,7 +1,7 @@
 #!/usr/bin/env bash
 # Builds the libFuzzer harnesses (tests/fuzz, clang with ASan + UBSan, in build-fuzz/) and runs
 # each in turn, seeded from the samples, assets and the bad-input corpus. A crash is copied to
-# tests/corpus/fuzz/<harness>/ as a regression case; the totals go to build-fuzz/fuzz-totals.txt.
+# tests/corpus/fuzz/<harness>/ as a regression case; the totals are appended to build-fuzz/fuzz-totals.txt.
 # usage: scripts/fuzz.sh [seconds per harness (default 60)] [harness name...]
 # Runs at nice 19, one job at a time (the machine is shared).
 set -euo pipefail
@@ -44,7 +44,7 @@ seeds() {
 }
 
 totals=$build/fuzz-totals.txt
-: > "$totals"
+echo "# $(date -u +%FT%TZ) scripts/fuzz.sh $seconds ${harnesses[*]}" >> "$totals"
 status=0
 for h in "${harnesses[@]}"; do
     work=$build/fuzz-work/$h

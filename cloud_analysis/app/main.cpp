@@ -5,11 +5,13 @@
 #include <algorithm>
 #include <csignal>
 #include <iostream>
+#include <new>
 #include <string>
 #include <vector>
 
 #include <CLI/CLI.hpp>
 #include <stereoscene/support/error_line.hpp>
+#include <stereoscene/support/limit_flags.hpp>
 #include <stereoscene/support/process.hpp>
 
 #include "commands/analyse.hpp"
@@ -46,6 +48,7 @@ int main(int argc, char** argv) {
         args.insert(args.begin(), "analyse");
     }
     if (!args.empty() && args[0] == "help") args = {"--help"};
+    const std::string command = args.empty() ? std::string() : args[0];
     std::reverse(args.begin(), args.end());  // CLI11 parses a reversed vector
 
     CLI::App app{
@@ -76,9 +79,14 @@ int main(int argc, char** argv) {
     CLI::App* track = app_::add_track_command(app, track_args);
     app_::EvaluateTracksArgs evaluate_tracks_args;
     CLI::App* evaluate_tracks = app_::add_evaluate_tracks_command(app, evaluate_tracks_args);
+    stereoscene::support::LimitFlags limit_flags;
+    for (CLI::App* command : app.get_subcommands([](CLI::App*) { return true; })) {
+        stereoscene::support::add_limit_flags(*command, limit_flags, false);
+    }
 
     try {
         app.parse(args);
+        stereoscene::support::apply_limit_flags(limit_flags);
         if (*sample) return app_::run_make_sample(sample_args);
         if (*analyse) {
             app_::resolve(analyse_args, *analyse);
@@ -104,6 +112,14 @@ int main(int argc, char** argv) {
         if (e.get_exit_code() == 0) return app.exit(e);  // --help, --version
         std::cerr << kTool << ": error: usage: " << e.what() << " (see --help)\n";
         return 2;
+    } catch (const std::bad_alloc&) {
+        // The readers name the file they were reading; this is what is left.
+        std::cerr << stereoscene::support::error_line(
+                         kTool, command,
+                         "out of memory (std::bad_alloc): the inputs need more memory than this "
+                         "machine gives")
+                  << "\n";
+        return 1;
     } catch (const std::exception& e) {
         std::cerr << stereoscene::support::error_line(kTool, e.what()) << "\n";
         return 1;

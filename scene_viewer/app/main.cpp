@@ -1,6 +1,7 @@
 // scene-render: renders entity files headless (see docs/cli.md). Parses the flags, runs one
 // command (each in app/commands/), and is the tool's only error boundary.
 #include <iostream>
+#include <new>
 #include <string>
 
 #include <CLI/CLI.hpp>
@@ -14,6 +15,7 @@
 #include "commands/render.hpp"
 #include "commands/sensors.hpp"
 #include "stereoscene/support/error_line.hpp"
+#include "stereoscene/support/limit_flags.hpp"
 #include "stereoscene/support/process.hpp"
 
 namespace {
@@ -40,6 +42,11 @@ int run(int argc, char** argv) {
     CLI::App* play = add_play_command(app, play_args);
     html_command::Options html_options;
     CLI::App* html = html_command::add(app, html_options);
+    stereoscene::support::LimitFlags limit_flags;
+    stereoscene::support::add_limit_flags(app, limit_flags, true);
+    for (CLI::App* command : app.get_subcommands([](CLI::App*) { return true; })) {
+        stereoscene::support::add_limit_flags(*command, limit_flags, true);
+    }
 
     try {
         app.parse(argc, argv);
@@ -47,6 +54,7 @@ int run(int argc, char** argv) {
         if (e.get_exit_code() == 0) return app.exit(e);  // --help, --version
         usage(e.what(), "see --help");
     }
+    stereoscene::support::apply_limit_flags(limit_flags);
 
     if (info) return run_info();
     if (*html) return html_command::run(html_options);
@@ -67,6 +75,13 @@ int main(int argc, char** argv) {
     } catch (const Failure& f) {
         std::cerr << error_line(kTool, f.where, f.what + ": " + f.detail) << "\n";
         return f.code;
+    } catch (const std::bad_alloc&) {
+        // The readers name the file they were reading; this is what is left.
+        std::cerr << error_line(kTool, argc > 1 ? argv[1] : "",
+                                "out of memory (std::bad_alloc): the inputs need more memory "
+                                "than this machine gives")
+                  << "\n";
+        return 1;
     } catch (const std::exception& e) {
         std::cerr << error_line(kTool, "", std::string("rendering failed: ") + e.what()) << "\n";
         return 1;

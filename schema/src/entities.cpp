@@ -11,6 +11,7 @@
 #include <fstream>
 #include <iostream>
 #include <map>
+#include <new>
 #include <random>
 #include <regex>
 #include <sstream>
@@ -148,7 +149,8 @@ class Checker : public detail::CheckerBase {
         if (const std::uint64_t limit = stereoscene::support::limits().max_entities;
             entities->size() > limit) {
             fail("/entities", std::to_string(entities->size()) +
-                                  " entities is more than the limit of " + std::to_string(limit));
+                                  " entities is more than the limit of " + std::to_string(limit) +
+                                  "; " + stereoscene::support::kEntitiesHint);
             return;
         }
         std::map<std::string, std::size_t> first_index;
@@ -328,6 +330,9 @@ EntityDocument read_file(const std::filesystem::path& path) {
     } catch (const SchemaError& e) {
         const std::string where = e.pointer().empty() ? "" : e.pointer() + ": ";
         throw FileError(path.string() + ": " + where + e.rule());
+    } catch (const std::bad_alloc&) {
+        throw FileError(path.string() + ": out of memory reading its " +
+                        std::to_string(text.size()) + " bytes of JSON");
     }
 }
 

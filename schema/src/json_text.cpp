@@ -94,30 +94,50 @@ class PathTrackingSax {
     void fail(std::string rule) {
         if (!rule_.empty()) return;
         rule_ = std::move(rule);
-        pointer_.clear();
+        std::vector<std::string> segments;
         for (std::size_t i = 0; i < levels_.size(); ++i) {
             const Level& level = levels_[i];
             if (level.is_array) {
-                pointer_ += '/';
                 // The innermost array is reading its next element; outer ones, their last.
                 const bool innermost = i + 1 == levels_.size();
-                pointer_ +=
-                    std::to_string(innermost || level.count == 0 ? level.count : level.count - 1);
+                segments.push_back(
+                    std::to_string(innermost || level.count == 0 ? level.count : level.count - 1));
                 continue;
             }
             if (!level.has_key) break;  // between members: the object itself
-            pointer_ += '/';
-            for (char c : level.key) {  // RFC 6901 escaping
+            std::string segment;
+            for (char c : level.key.substr(0, kMaxKeyChars)) {  // RFC 6901 escaping
                 if (c == '~') {
-                    pointer_ += "~0";
+                    segment += "~0";
                 } else if (c == '/') {
-                    pointer_ += "~1";
+                    segment += "~1";
                 } else {
-                    pointer_ += c;
+                    segment += c;
                 }
             }
+            if (level.key.size() > kMaxKeyChars) segment += "...";
+            segments.push_back(std::move(segment));
         }
+        pointer_ = short_pointer(segments);
     }
+
+    /// A pointer short enough for a one-line error: the first kHeadSegments segments, "...",
+    /// and the last one when there are more than kHeadSegments + 1.
+    static std::string short_pointer(const std::vector<std::string>& segments) {
+        std::string out;
+        for (std::size_t i = 0; i < segments.size(); ++i) {
+            if (segments.size() > kHeadSegments + 1 && i == kHeadSegments) {
+                out += "/...";
+                i = segments.size() - 1;
+            }
+            out += '/';
+            out += segments[i];
+        }
+        return out;
+    }
+
+    static constexpr std::size_t kMaxKeyChars = 40;  ///< of a member name in an error pointer
+    static constexpr std::size_t kHeadSegments = 6;  ///< leading segments an error pointer keeps
 
     nlohmann::detail::json_sax_dom_parser<json> dom_;
     std::size_t max_depth_;

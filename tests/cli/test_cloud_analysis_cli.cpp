@@ -136,7 +136,7 @@ TEST_CASE("an unknown flag or a missing required input is a usage error, exit 2"
     CHECK(no_left.code == 2);
     const Run bad_value = run(tool() + sample_inputs() + " --block-size 4", dir);
     CHECK(bad_value.code == 2);
-    CHECK(bad_value.err.find("block_size") != std::string::npos);
+    CHECK(bad_value.err.find("--block-size: must be odd") != std::string::npos);
 }
 
 TEST_CASE("a missing input file exits 1 naming it and leaves no output file", "[cli]") {

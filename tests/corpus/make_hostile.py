@@ -1,6 +1,6 @@
 #!/usr/bin/env python3
 """Writes the bad-input corpus's large or special files into a folder at test time (a FIFO, a
-PNG header promising 20000x20000, JSON nested 10^5 deep, glTF models with wrapping offsets,
+PNG header promising 20000x20000, a 16-bit PNG, a sparse 200 MB file, JSON nested 10^5 deep, glTF models with wrapping offsets,
 unchecked image views, 200k-node chains and shared huge accessors), so none is committed.
 
 usage: make_hostile.py OUT_DIR
@@ -19,6 +19,19 @@ def png_header_only(path, width, height):
                 struct.pack(">I", zlib.crc32(kind + data) & 0xFFFFFFFF))
     ihdr = struct.pack(">IIBBBBB", width, height, 8, 2, 0, 0, 0)
     body = chunk(b"IHDR", ihdr) + chunk(b"IDAT", zlib.compress(b"\0" * 64)) + chunk(b"IEND", b"")
+    with open(path, "wb") as f:
+        f.write(b"\x89PNG\r\n\x1a\n" + body)
+
+
+def png_grey16(path, width, height):
+    """A valid 16-bit greyscale PNG (a ramp), as a 12- or 16-bit camera writes."""
+    def chunk(kind, data):
+        return (struct.pack(">I", len(data)) + kind + data +
+                struct.pack(">I", zlib.crc32(kind + data) & 0xFFFFFFFF))
+    ihdr = struct.pack(">IIBBBBB", width, height, 16, 0, 0, 0, 0)
+    rows = b"".join(b"\0" + b"".join(struct.pack(">H", (x * 997) & 0xFFFF) for x in range(width))
+                    for _ in range(height))
+    body = chunk(b"IHDR", ihdr) + chunk(b"IDAT", zlib.compress(rows)) + chunk(b"IEND", b"")
     with open(path, "wb") as f:
         f.write(b"\x89PNG\r\n\x1a\n" + body)
 
@@ -99,6 +112,11 @@ def main():
     if not os.path.exists(fifo):
         os.mkfifo(fifo)
     png_header_only(f"{out}/huge.png", 20000, 20000)
+    png_grey16(f"{out}/left16.png", 64, 32)
+    # 200 MB of holes (no disk used): within the text limit, more than a run under a 100 MB
+    # data limit can allocate.
+    with open(f"{out}/sparse_200mb.json", "wb") as f:
+        f.truncate(200 << 20)
     deep = nested(100_000)
     with open(f"{out}/deep_member.json", "w") as f:
         f.write(entity_document(', "extra": ' + deep))

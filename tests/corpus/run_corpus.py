@@ -19,10 +19,12 @@ import time
 HERE = os.path.dirname(os.path.abspath(__file__))
 CASES = os.path.join(HERE, "cases")
 
-# (name, tool, arguments, exit code, text the error line must contain). In arguments,
+# (name, tool, arguments, exit code, text the error line must contain[, options]). Options:
+# data_mib runs the case under that RLIMIT_DATA (skipped under the sanitizers). In arguments,
 # {c} is tests/corpus/cases, {g} the generated files, {s} the samples folder, {o} the output
 # folder (which holds keep.json, an earlier file no failure may touch).
 CA, SR = "cloud-analysis", "scene-render"
+MAX_LINE = 400  # characters of an error line: a pointer or a path, not a dump
 STEREO = "--left {s}/synthetic/left.png --right {s}/synthetic/right.png"
 CALIB = "--calib {s}/synthetic/calib.yaml"
 SCENE = "{s}/synthetic/expected_entities.json"
@@ -42,7 +44,28 @@ CASES_TABLE = [
     # Sizes promised by headers.
     ("left image promises 20000x20000", CA, f"--left {{g}}/huge.png --right {{s}}/synthetic/right.png {CALIB} -o {{o}}/e.json", 1, "huge.png"),
     ("left image is a truncated PNG", CA, f"--left {{c}}/truncated.png --right {{s}}/synthetic/right.png {CALIB} -o {{o}}/e.json", 1, "truncated.png"),
-    ("background promises 20000x20000", SR, f"{SCENE} --view camera --background {{g}}/huge.png -o {{o}}/r.png", 1, "background"),
+    ("background promises 20000x20000", SR, f"{SCENE} --view camera --background {{g}}/huge.png -o {{o}}/r.png", 1, "too large"),
+    ("left image is 16-bit", CA, f"--left {{g}}/left16.png --right {{s}}/synthetic/right.png {CALIB} -o {{o}}/e.json", 1, "left16.png"),
+    ("semantic image is 16-bit", CA, f"{STEREO} {CALIB} --semantic {{g}}/left16.png -o {{o}}/e.json", 1, "left16.png"),
+    # Calibrations no rig has.
+    ("calibration fx 1e300", CA, f"{STEREO} --calib {{c}}/calib_fx_1e300.yaml -o {{o}}/e.json", 1, "calib_fx_1e300.yaml"),
+    ("calibration S_rect 1e30", CA, f"{STEREO} --calib {{c}}/calib_s_rect_1e30.txt -o {{o}}/e.json", 1, "calib_s_rect_1e30.txt"),
+    ("calibration width 1e30", CA, f"{STEREO} --calib {{c}}/calib_width_1e30.json -o {{o}}/e.json", 1, "calib_width_1e30.json"),
+    ("calibration baseline 0", CA, f"{STEREO} --calib {{c}}/calib_baseline_0.yaml -o {{o}}/e.json", 1, "calib_baseline_0.yaml"),
+    ("calibration baseline negative", CA, f"{STEREO} --calib {{c}}/calib_baseline_negative.yaml -o {{o}}/e.json", 1, "calib_baseline_negative.yaml"),
+    ("calibration fy NaN", CA, f"{STEREO} --calib {{c}}/calib_fy_nan.yaml -o {{o}}/e.json", 1, "calib_fy_nan.yaml"),
+    # Memory the system refuses (a 100 MB data limit; not under the sanitizers' shadow memory).
+    ("evaluate: entity file larger than the memory given", CA, f"evaluate --entities {{g}}/sparse_200mb.json --reference {SCENE}", 1, "sparse_200mb.json", {"data_mib": 100}),
+    ("render: entity file larger than the memory given", SR, "{g}/sparse_200mb.json --view bev -o {o}/r.png", 1, "sparse_200mb.json", {"data_mib": 100}),
+    # Limits raised or lowered by flags.
+    ("--max-pixels below the left image", CA, f"{STEREO} {CALIB} --max-pixels 1000 -o {{o}}/e.json", 1, "--max-pixels"),
+    ("--max-pixels 0", CA, f"{STEREO} {CALIB} --max-pixels 0 -o {{o}}/e.json", 2, "--max-pixels"),
+    ("--max-model-vertices below the car model", SR, f"{SCENE} --view bev --max-model-vertices 10 -o {{o}}/r.png", 1, "--max-model-vertices"),
+    ("--max-entities below the entity file", SR, f"{SCENE} --view bev --max-entities 1 -o {{o}}/r.png", 1, "--max-entities"),
+    ("--max-text-mib below a 200 MB entity file", CA, f"evaluate --entities {{g}}/sparse_200mb.json --reference {SCENE} --max-text-mib 100", 1, "--max-text-mib"),
+    ("render --max-pixels below --size", SR, f"{SCENE} --view bev --size 800x800 --max-pixels 1000 -o {{o}}/r.png", 2, "--size"),
+    # An entity file whose camera the renderer cannot draw: the file is at fault, not the flags.
+    ("entity file camera 10^6 x 10^6", SR, "{c}/camera_1e6.json --view camera -o {o}/r.png", 1, "camera_1e6.json"),
     # JSON nested 10^5 deep.
     ("entity member nested 10^5 deep", SR, "{g}/deep_member.json --view bev -o {o}/r.png", 1, "deep_member.json"),
     ("entity file nested 10^5 deep", SR, "{g}/deep_top.json --view bev -o {o}/r.png", 1, "deep_top.json"),
@@ -58,8 +81,8 @@ CASES_TABLE = [
     ("class_id 1e30", SR, "{c}/class_id_1e30.json --view bev -o {o}/r.png", 1, "class_id"),
     ("point_count 1e30", SR, "{c}/point_count_1e30.json --view bev -o {o}/r.png", 1, "point_count"),
     ("entity at x = 1e30", SR, "{c}/x_1e30.json --view bev -o {o}/r.png", 1, "/x"),
-    ("--min-disparity 2^31-1", CA, f"{STEREO} {CALIB} --min-disparity 2147483647 -o {{o}}/e.json", 2, "min_disparity"),
-    ("--min-disparity -2^31", CA, f"{STEREO} {CALIB} --min-disparity -2147483648 -o {{o}}/e.json", 2, "min_disparity"),
+    ("--min-disparity 2^31-1", CA, f"{STEREO} {CALIB} --min-disparity 2147483647 -o {{o}}/e.json", 2, "--min-disparity"),
+    ("--min-disparity -2^31", CA, f"{STEREO} {CALIB} --min-disparity -2147483648 -o {{o}}/e.json", 2, "--min-disparity"),
     ("PCD with a 1-byte float field", SR, f"{SCENE} --view bev --cloud {{c}}/float_size_1.pcd -o {{o}}/r.png", 1, "float_size_1.pcd"),
     ("PCD with a huge COUNT", SR, f"{SCENE} --view bev --cloud {{c}}/huge_count.pcd -o {{o}}/r.png", 1, "huge_count.pcd"),
     ("palette colour 2^40", CA, f"{STEREO} --semantic {{s}}/synthetic/semantic.png {CALIB} --palette {{c}}/palette_colour_2p40.json -o {{o}}/e.json", 1, "palette_colour_2p40.json"),
@@ -78,6 +101,8 @@ CASES_TABLE = [
     ("make-sample at 100000x100000", CA, "make-sample --width 100000 --height 100000 --out {o}/sample", 2, "--width"),
     ("grid --columns -1", SR, f"grid --inputs {SCENE} --columns -1 -o {{o}}/g.png", 2, "--columns"),
     ("sensors --size 16384x16384", SR, f"sensors {SCENE} --size 16384x16384 --out {{o}}/rig --frame 000000", 2, "--size"),
+    ("html --out is a file", SR, f"html {SCENE} --out {{o}}/keep.json", 1, "keep.json"),
+    ("html --out is inside a file", SR, f"html {SCENE} --out {{o}}/keep.json/viewer", 1, "keep.json"),
 ]
 
 
@@ -97,7 +122,13 @@ def snapshot(folder):
 
 
 def run_case(case, exes, dirs, bounds):
-    name, tool, args, code, names = case
+    name, tool, args, code, names = case[:5]
+    options = case[5] if len(case) > 5 else {}
+    limit = None
+    if "data_mib" in options:
+        import resource
+        data = options["data_mib"] << 20
+        limit = lambda: resource.setrlimit(resource.RLIMIT_DATA, (data, data))
     out = os.path.join(dirs["work"], "out")
     shutil.rmtree(out, ignore_errors=True)
     os.makedirs(os.path.join(out, "dir"))
@@ -109,7 +140,7 @@ def run_case(case, exes, dirs, bounds):
     argv = [exes[tool]] + args.format(c=CASES, g=dirs["gen"], s=dirs["samples"], o=out).split()
     start = time.monotonic()
     proc = subprocess.Popen(argv, stdin=subprocess.DEVNULL, stdout=subprocess.DEVNULL,
-                            stderr=subprocess.PIPE)
+                            stderr=subprocess.PIPE, preexec_fn=limit)
     try:
         _, err = proc.communicate(timeout=bounds["seconds"])
     except subprocess.TimeoutExpired:
@@ -126,6 +157,8 @@ def run_case(case, exes, dirs, bounds):
         problems.append(f"{len(errors)} error lines, expected 1")
     elif not errors[0].startswith(tool + ": ") or names not in errors[0]:
         problems.append(f"error line does not start with '{tool}: ' and name '{names}'")
+    elif len(errors[0]) > MAX_LINE:
+        problems.append(f"error line of {len(errors[0])} characters, more than {MAX_LINE}")
     after = snapshot(out)
     if after != before:
         added = sorted(set(after) - set(before))
@@ -162,6 +195,9 @@ def main():
     ran = 0
     for case in CASES_TABLE:
         if a.k not in case[0]:
+            continue
+        if a.sanitize and len(case) > 5 and "data_mib" in case[5]:
+            print(f"skip {case[0]} (a data limit and the sanitizers' shadow memory do not mix)")
             continue
         ran += 1
         problems = run_case(case, exes, dirs, bounds)

@@ -6,7 +6,6 @@
 
 #include "cloud_analysis/cloud/semantic.hpp"
 #include "cloud_analysis/entities/class_config.hpp"
-#include "fuzz_file.hpp"
 #include "scene_viewer/assets/class_table.hpp"
 
 extern "C" int LLVMFuzzerTestOneInput(const std::uint8_t* data, std::size_t size) {
@@ -20,7 +19,7 @@ extern "C" int LLVMFuzzerTestOneInput(const std::uint8_t* data, std::size_t size
     } catch (const std::exception&) {
     }
     try {
-        scene_viewer::load_class_table(stereoscene_fuzz::input_file(data, size, "classes.json"));
+        scene_viewer::parse_class_table(text, "/nonexistent-fuzz/classes.json");
     } catch (const std::exception&) {
     }
     return 0;

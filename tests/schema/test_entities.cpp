@@ -236,6 +236,9 @@ TEST_CASE("JSON text errors name the pointer where the text breaks, in one line"
     CHECK(pointer_of(R"([[1], [2, Infinity]])") == "/1/1");
     CHECK(pointer_of(R"({"a": )") == "/a");
     CHECK(pointer_of("") == "");
+    // Long member names are cut to 40 characters.
+    CHECK(pointer_of("{\"" + std::string(100, 'k') + "\": NaN}") ==
+          "/" + std::string(40, 'k') + "...");
     try {
         parse_json(R"({"x": 1e400})");
     } catch (const SchemaError& e) {
@@ -254,9 +257,8 @@ TEST_CASE("JSON nested past the depth limit is refused before any walk of it", "
         FAIL("read JSON nested deeper than the limit");
     } catch (const SchemaError& e) {
         CHECK(e.rule() == "nested deeper than " + std::to_string(depth) + " levels");
-        std::string pointer;
-        for (std::size_t i = 0; i < depth; ++i) pointer += "/0";
-        CHECK(e.pointer() == pointer);
+        // The pointer is cut to its first six and its last segment (one short line).
+        CHECK(e.pointer() == "/0/0/0/0/0/0/.../0");
     }
     // A million levels in an entity file's free-form member: an error, not a stack overflow.
     const std::string huge = std::string(1000000, '[') + std::string(1000000, ']');

@@ -78,7 +78,16 @@ TEST_CASE("a limit names the input, the count and the limit", "[support]") {
     CHECK_NOTHROW(support::check_limit("x.png", 10, 10, "pixels"));
     CHECK_THROWS_AS(support::check_limit("x.png", 11, 10, "pixels"), support::LimitError);
     CHECK_THROWS_WITH(support::check_limit("x.png", 11, 10, "pixels", "--max-pixels"),
-                      "x.png: 11 pixels is more than the limit of 10 (--max-pixels)");
+                      "x.png: too large: 11 pixels is more than the limit of 10; --max-pixels");
+}
+
+TEST_CASE("running out of memory is named after what was being read", "[support]") {
+    CHECK(support::name_out_of_memory("x.png", [] { return 3; }) == 3);
+    CHECK_THROWS_WITH(
+        support::name_out_of_memory("x.png: decoding", []() -> int { throw std::bad_alloc(); }),
+        Catch::StartsWith("x.png: decoding: out of memory"));
+    CHECK_THROWS_AS(support::name_out_of_memory("x", []() -> int { throw std::bad_alloc(); }),
+                    support::LimitError);
 }
 
 TEST_CASE("an atomic write refuses a directory at the target instead of swapping it aside",

@@ -1,6 +1,8 @@
 #include "analysis_flags.hpp"
 
+#include <algorithm>
 #include <stdexcept>
+#include <string>
 
 #include "cloud_analysis/cloud/cloud_io.hpp"
 #include "cloud_analysis/cloud/semantic.hpp"
@@ -212,6 +214,24 @@ void add_output_flags(CLI::App& cmd, AnalyseArgs& a) {
     cmd.add_flag("--timings", a.timings, "milliseconds per stage to stderr")->group(out);
 }
 
+namespace {
+
+/// An options field's validate() message "<field>: <reason>" as a usage error naming the flag
+/// that sets the field ("min_disparity" -> --min-disparity) when the command has that flag.
+CLI::ValidationError flag_error(const CLI::App& cmd, const std::string& message) {
+    const std::size_t colon = message.find(": ");
+    if (colon != std::string::npos) {
+        std::string flag = "--" + message.substr(0, colon);
+        std::replace(flag.begin(), flag.end(), '_', '-');
+        if (cmd.get_option_no_throw(flag) != nullptr) {
+            return CLI::ValidationError(flag, message.substr(colon + 2));
+        }
+    }
+    return CLI::ValidationError(cmd.get_name(), message);
+}
+
+}  // namespace
+
 void resolve_settings(AnalyseArgs& a, const CLI::App& cmd) {
     if (a.preset != "tuned") {
         // Start from the preset's values, then re-apply only flags the user gave.
@@ -244,7 +264,7 @@ void resolve_settings(AnalyseArgs& a, const CLI::App& cmd) {
     try {
         a.options.validate();
     } catch (const std::invalid_argument& e) {
-        throw CLI::ValidationError("analyse", e.what());
+        throw flag_error(cmd, e.what());
     }
     if (a.drop_sky) a.drop_classes.push_back("sky");
     if (!a.drop_classes.empty()) {

@@ -6,6 +6,7 @@
 #include <cstdint>
 #include <cstring>
 #include <fstream>
+#include <new>
 #include <optional>
 #include <sstream>
 #include <stdexcept>
@@ -93,8 +94,9 @@ std::vector<unsigned char> read_image_bytes(const std::filesystem::path& path) {
         check_png_chunks(bytes, path);
     }
     if (const auto pixels = header_pixels(bytes)) {
-        stereoscene::support::check_limit(
-            path.string(), *pixels, stereoscene::support::limits().max_image_pixels, "pixels");
+        stereoscene::support::check_limit(path.string(), *pixels,
+                                          stereoscene::support::limits().max_image_pixels, "pixels",
+                                          stereoscene::support::kPixelsHint);
     }
     return bytes;
 }
@@ -106,6 +108,8 @@ cv::Mat decode_raw(const std::vector<unsigned char>& bytes, const std::filesyste
         m = cv::imdecode(bytes, flags);
     } catch (const cv::Exception& e) {
         throw std::runtime_error("cannot decode image: " + e.msg + " (" + path.string() + ")");
+    } catch (const std::bad_alloc&) {
+        throw std::runtime_error("cannot decode image: out of memory (" + path.string() + ")");
     }
     if (m.empty()) {
         throw std::runtime_error("cannot decode image: unreadable or corrupt (" + path.string() +
@@ -113,7 +117,8 @@ cv::Mat decode_raw(const std::vector<unsigned char>& bytes, const std::filesyste
     }
     stereoscene::support::check_limit(
         path.string(), static_cast<std::uint64_t>(m.rows) * static_cast<std::uint64_t>(m.cols),
-        stereoscene::support::limits().max_image_pixels, "pixels");
+        stereoscene::support::limits().max_image_pixels, "pixels",
+        stereoscene::support::kPixelsHint);
     return m;
 }
 
@@ -156,7 +161,10 @@ ImageU8 read_image(const std::filesystem::path& path, ImageMode mode) {
     // an unchanged one (a KITTI colour frame decoded in 7 ms instead of 14).
     const std::vector<unsigned char> bytes = read_image_bytes(path);
     const std::optional<bool> png_grey = as_is ? png_is_grey8(bytes) : std::nullopt;
-    int flags = mode == ImageMode::kGrey ? cv::IMREAD_GRAYSCALE : cv::IMREAD_COLOR;
+    // IMREAD_ANYDEPTH: a 16-bit file keeps its depth and is refused below, instead of OpenCV's
+    // silent shift to the top 8 bits (a 12-bit camera's frames would come out nearly black).
+    int flags =
+        (mode == ImageMode::kGrey ? cv::IMREAD_GRAYSCALE : cv::IMREAD_COLOR) | cv::IMREAD_ANYDEPTH;
     if (png_grey && *png_grey) flags = cv::IMREAD_UNCHANGED;
     cv::Mat m = decode_raw(bytes, path, flags);
     if (as_is && !png_grey && m.channels() == 3) {
@@ -165,8 +173,11 @@ ImageU8 read_image(const std::filesystem::path& path, ImageMode mode) {
         if (grey.channels() == 1 && grey.depth() == CV_8U) m = grey;
     }
     if (m.depth() != CV_8U) {
-        throw std::runtime_error("cannot use image: not 8 bits per channel (" + path.string() +
-                                 ")");
+        const int bits = m.depth() == CV_16U || m.depth() == CV_16S ? 16 : 32;
+        throw std::runtime_error("cannot use image: " + std::to_string(bits) +
+                                 "-bit samples refused, the stages work on 8-bit values; "
+                                 "convert it to 8 bits per channel first (" +
+                                 path.string() + ")");
     }
     if (m.channels() == 3) cv::cvtColor(m, m, cv::COLOR_BGR2RGB);
     ImageU8 out;

@@ -25,6 +25,31 @@ using Fields = std::map<std::string, std::vector<double>>;
                              ")");
 }
 
+/// Bounds no real rig comes near; values past them pass the sign checks but overflow the later
+/// stages (depth = fx * baseline / disparity, image sizes cast to int).
+constexpr double kMaxFocalPx = 1e6;      ///< focal lengths, px
+constexpr double kMaxPrincipalPx = 1e6;  ///< |cx|, |cy|, px
+constexpr double kMaxBaselineM = 1e3;    ///< baseline, m
+constexpr double kMaxOffsetM = 1e4;      ///< |translation| of a projection matrix, m
+constexpr double kMaxImageSide = 65536;  ///< rectified width or height, px
+
+/// Refuses a value outside [lo, hi] (NaN included) with the field's name.
+void check_range(const std::string& origin, const std::string& field, double v, double lo,
+                 double hi, const char* unit) {
+    if (!(v >= lo && v <= hi)) {
+        std::ostringstream rule;
+        rule << "must be within " << lo << ".." << hi << ' ' << unit << ", is " << v;
+        fail(origin, field, rule.str());
+    }
+}
+
+/// An image side from the file as an int: a whole number 1..kMaxImageSide (checked before the
+/// cast, which is undefined for values an int cannot hold).
+int image_side(const std::string& origin, const std::string& field, double v) {
+    check_range(origin, field, v, 1, kMaxImageSide, "px");
+    return static_cast<int>(std::lround(v));
+}
+
 /// "key: v v v" lines (KITTI) and flat "key: v" / "key: [a, b]" YAML. Non-numeric values
 /// (calib_time) are skipped.
 Fields parse_lines(std::string_view text) {
@@ -99,6 +124,16 @@ const std::vector<double>& need(const Fields& f, const std::string& key, std::si
     return it->second;
 }
 
+/// Distortion coefficients k1 k2 p1 p2 [k3]: 4 or 5 finite numbers.
+std::vector<double> distortion(const Fields& f, const std::string& key, const std::string& origin) {
+    const auto& d = f.at(key);
+    if (d.size() != 4 && d.size() != 5) fail(origin, key, "must have 4 or 5 numbers");
+    for (double v : d) {
+        if (!std::isfinite(v)) fail(origin, key, "must be finite");
+    }
+    return d;
+}
+
 Eigen::Matrix<double, 3, 4> matrix34(const std::vector<double>& v) {
     Eigen::Matrix<double, 3, 4> m;
     for (int r = 0; r < 3; ++r)
@@ -125,6 +160,11 @@ StereoCamera from_projections(const Eigen::Matrix<double, 3, 4>& P_left,
     cam.cx_right_px = P_right(0, 2);
     if (!(cam.fx_px > 0.0)) fail(origin, left, "fx must be > 0");
     if (!(cam.fy_px > 0.0)) fail(origin, left, "fy must be > 0");
+    check_range(origin, left + " fx", cam.fx_px, 0, kMaxFocalPx, "px");
+    check_range(origin, left + " fy", cam.fy_px, 0, kMaxFocalPx, "px");
+    check_range(origin, left + " cx", cam.cx_px, -kMaxPrincipalPx, kMaxPrincipalPx, "px");
+    check_range(origin, left + " cy", cam.cy_px, -kMaxPrincipalPx, kMaxPrincipalPx, "px");
+    check_range(origin, right + " cx", cam.cx_right_px, -kMaxPrincipalPx, kMaxPrincipalPx, "px");
     if (std::abs(P_right(0, 0) - cam.fx_px) > 1e-6 * cam.fx_px) {
         fail(origin, right, "focal length differs from " + left + " (not rectified)");
     }
@@ -132,14 +172,19 @@ StereoCamera from_projections(const Eigen::Matrix<double, 3, 4>& P_left,
     if (!(cam.baseline_m > 0.0)) {
         fail(origin, right, "baseline must be > 0 (right camera to the right of the left one)");
     }
+    check_range(origin, right + " baseline", cam.baseline_m, 0, kMaxBaselineM, "m");
     return cam;
 }
 
 /// t of P = K [I | t]: K^-1 P[:, 3].
-Eigen::Vector3d projection_offset(const Eigen::Matrix<double, 3, 4>& P) {
+Eigen::Vector3d projection_offset(const Eigen::Matrix<double, 3, 4>& P, const std::string& field,
+                                  const std::string& origin) {
     const double tz = P(2, 3);
     const double ty = (P(1, 3) - P(1, 2) * tz) / P(1, 1);
     const double tx = (P(0, 3) - P(0, 1) * ty - P(0, 2) * tz) / P(0, 0);
+    for (const double t : {tx, ty, tz}) {
+        check_range(origin, field + " translation", t, -kMaxOffsetM, kMaxOffsetM, "m");
+    }
     return {tx, ty, tz};
 }
 
@@ -173,11 +218,11 @@ Calibration kitti_raw(const Fields& f, const std::string& origin, const Calibrat
                      " m derived from R_" + l + "/T_" + l + "/R_" + r + "/T_" + r;
     }
     calib.camera = from_projections(P_l, P_r, "P_rect_" + l, "P_rect_" + r, origin);
-    calib.reference_offset_m = projection_offset(P_l);
+    calib.reference_offset_m = projection_offset(P_l, "P_rect_" + l, origin);
     if (f.count("S_rect_" + l)) {
         const auto& s = need(f, "S_rect_" + l, 2, origin);
-        calib.camera.width_px = static_cast<int>(std::lround(s[0]));
-        calib.camera.height_px = static_cast<int>(std::lround(s[1]));
+        calib.camera.width_px = image_side(origin, "S_rect_" + l + " width", s[0]);
+        calib.camera.height_px = image_side(origin, "S_rect_" + l + " height", s[1]);
     }
     const auto raw = [&](const std::string& id,
                          const Eigen::Matrix<double, 3, 4>& P) -> std::optional<RawCamera> {
@@ -186,10 +231,9 @@ Calibration kitti_raw(const Fields& f, const std::string& origin, const Calibrat
         }
         RawCamera cam;
         cam.K = matrix33(need(f, "K_" + id, 9, origin));
-        cam.distortion = f.at("D_" + id);
-        if (cam.distortion.size() != 4 && cam.distortion.size() != 5) {
-            fail(origin, "D_" + id, "must have 4 or 5 numbers");
-        }
+        check_range(origin, "K_" + id + " fx", cam.K(0, 0), 0, kMaxFocalPx, "px");
+        check_range(origin, "K_" + id + " fy", cam.K(1, 1), 0, kMaxFocalPx, "px");
+        cam.distortion = distortion(f, "D_" + id, origin);
         cam.R_rect = matrix33(need(f, "R_rect_" + id, 9, origin));
         cam.P_rect = P;
         return cam;
@@ -206,7 +250,7 @@ Calibration kitti_object(const Fields& f, const std::string& origin, const Calib
     calib.format = "kitti_object";
     const auto P_l = matrix34(need(f, l, 12, origin));
     calib.camera = from_projections(P_l, matrix34(need(f, r, 12, origin)), l, r, origin);
-    calib.reference_offset_m = projection_offset(P_l);
+    calib.reference_offset_m = projection_offset(P_l, l, origin);
     return calib;
 }
 
@@ -220,28 +264,27 @@ Calibration simple(const Fields& f, const std::string& origin, const std::string
     cam.cy_px = need(f, "cy", 1, origin)[0];
     cam.baseline_m = need(f, "baseline_m", 1, origin)[0];
     cam.cx_right_px = f.count("cx_right") ? need(f, "cx_right", 1, origin)[0] : cam.cx_px;
-    if (f.count("width")) cam.width_px = static_cast<int>(need(f, "width", 1, origin)[0]);
-    if (f.count("height")) cam.height_px = static_cast<int>(need(f, "height", 1, origin)[0]);
+    if (f.count("width"))
+        cam.width_px = image_side(origin, "width", need(f, "width", 1, origin)[0]);
+    if (f.count("height"))
+        cam.height_px = image_side(origin, "height", need(f, "height", 1, origin)[0]);
     if (!(cam.fx_px > 0.0)) fail(origin, "fx", "must be > 0");
     if (!(cam.fy_px > 0.0)) fail(origin, "fy", "must be > 0");
     if (!(cam.baseline_m > 0.0)) fail(origin, "baseline_m", "must be > 0");
-    if (cam.width_px < 0) fail(origin, "width", "must be >= 1");
-    if (cam.height_px < 0) fail(origin, "height", "must be >= 1");
+    check_range(origin, "fx", cam.fx_px, 0, kMaxFocalPx, "px");
+    check_range(origin, "fy", cam.fy_px, 0, kMaxFocalPx, "px");
+    check_range(origin, "cx", cam.cx_px, -kMaxPrincipalPx, kMaxPrincipalPx, "px");
+    check_range(origin, "cy", cam.cy_px, -kMaxPrincipalPx, kMaxPrincipalPx, "px");
+    check_range(origin, "cx_right", cam.cx_right_px, -kMaxPrincipalPx, kMaxPrincipalPx, "px");
+    check_range(origin, "baseline_m", cam.baseline_m, 0, kMaxBaselineM, "m");
     if (f.count("distortion")) {
-        const auto& d = f.at("distortion");
-        if (d.size() != 4 && d.size() != 5) fail(origin, "distortion", "must have 4 or 5 numbers");
+        const std::vector<double> d = distortion(f, "distortion", origin);
         RawCamera raw;
         raw.K << cam.fx_px, 0, cam.cx_px, 0, cam.fy_px, cam.cy_px, 0, 0, 1;
         raw.distortion = d;
         raw.P_rect.leftCols<3>() = raw.K;
         calib.raw_left = raw;
-        if (f.count("distortion_right")) {
-            const auto& dr = f.at("distortion_right");
-            if (dr.size() != 4 && dr.size() != 5) {
-                fail(origin, "distortion_right", "must have 4 or 5 numbers");
-            }
-            raw.distortion = dr;
-        }
+        if (f.count("distortion_right")) raw.distortion = distortion(f, "distortion_right", origin);
         raw.K(0, 2) = cam.cx_right_px;
         raw.P_rect.leftCols<3>() = raw.K;
         calib.raw_right = raw;

@@ -240,7 +240,8 @@ void SyntheticOptions::validate() const {
     const std::uint64_t limit = stereoscene::support::limits().max_image_pixels;
     if (pixels > limit) {
         throw std::invalid_argument("width_px x height_px: " + std::to_string(pixels) +
-                                    " pixels is more than the limit of " + std::to_string(limit));
+                                    " pixels is more than the limit of " + std::to_string(limit) +
+                                    "; " + stereoscene::support::kPixelsHint);
     }
     if (!(fx_px > 0.0)) throw std::invalid_argument("fx_px: must be > 0");
     if (!(baseline_m > 0.0)) throw std::invalid_argument("baseline_m: must be > 0");

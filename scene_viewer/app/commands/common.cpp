@@ -1,10 +1,13 @@
 #include "common.hpp"
 
+#include <unistd.h>
+
 #include <cerrno>
 #include <cstdint>
 #include <cstring>
 #include <fstream>
 #include <iostream>
+#include <new>
 #include <set>
 #include <sstream>
 #include <stdexcept>
@@ -115,10 +118,35 @@ std::pair<int, int> size_flag(const std::string& text, const std::string& flag) 
     const auto pixels = static_cast<std::uint64_t>(size.first) * size.second;
     const std::uint64_t limit = stereoscene::support::limits().max_image_pixels;
     if (pixels > limit) {
-        usage(std::to_string(pixels) + " pixels is more than the limit of " + std::to_string(limit),
+        usage(std::to_string(pixels) + " pixels is more than the limit of " +
+                  std::to_string(limit) + "; " + stereoscene::support::kPixelsHint,
               flag);
     }
     return size;
+}
+
+void check_output_folder(const std::string& folder, const std::string& what) {
+    namespace fs = std::filesystem;
+    std::error_code ec;
+    const fs::path path = fs::absolute(folder, ec);
+    if (ec) throw Failure{what, ec.message(), folder};
+    if (fs::exists(path, ec)) {
+        if (!fs::is_directory(path, ec)) throw Failure{what, "exists and is not a folder", folder};
+        if (::access(path.c_str(), W_OK) != 0) {
+            throw Failure{what, std::string("not writable: ") + std::strerror(errno), folder};
+        }
+        return;
+    }
+    fs::path above = path.parent_path();
+    while (!above.empty() && !fs::exists(above, ec) && above != above.root_path()) {
+        above = above.parent_path();
+    }
+    if (!fs::is_directory(above, ec)) {
+        throw Failure{what, above.string() + " is not a folder", folder};
+    }
+    if (::access(above.c_str(), W_OK) != 0) {
+        throw Failure{what, above.string() + " is not writable: " + std::strerror(errno), folder};
+    }
 }
 
 scene_schema::EntityDocument read_entities(const std::string& path) {
@@ -134,10 +162,36 @@ scene_schema::EntityDocument read_entities(const std::string& path) {
     } catch (const scene_schema::SchemaError& e) {
         const std::string pointer = e.pointer().empty() ? "(document)" : e.pointer();
         throw Failure{"invalid entity file", pointer + ": " + e.rule(), path};
+    } catch (const std::bad_alloc&) {
+        throw Failure{"cannot read entity file",
+                      "out of memory reading its " + std::to_string(text.size()) + " bytes of JSON",
+                      path};
     }
 }
 
-RenderOptions render_options(const ViewArgs& a, const scene_schema::EntityDocument& document) {
+namespace {
+
+/// Refuses an image size that came from the entity file's camera (no --size) when the renderer
+/// cannot draw it while the flags alone could: the file is at fault (exit 1), not the flags.
+void check_document_size(const RenderOptions& o, const std::string& problem,
+                         const std::string& document_path) {
+    RenderOptions small = o;
+    small.width_px = small.height_px = 1;
+    try {
+        small.validate();
+    } catch (const std::invalid_argument&) {
+        return;  // the flags are at fault too: a usage error names them
+    }
+    throw Failure{"cannot render the entity file's camera image",
+                  "/frame/camera: " + std::to_string(o.width_px) + "x" +
+                      std::to_string(o.height_px) + ": " + problem + " (give --size)",
+                  document_path};
+}
+
+}  // namespace
+
+RenderOptions render_options(const ViewArgs& a, const scene_schema::EntityDocument& document,
+                             const std::string& document_path) {
     RenderOptions o;
     apply_view_kind(a, o);
     try {
@@ -152,9 +206,20 @@ RenderOptions render_options(const ViewArgs& a, const scene_schema::EntityDocume
     o.grid = !a.no_grid;
     o.ego = !a.no_ego;
     o.point_size_px = a.point_size;
+    if (a.size.empty()) {
+        const auto pixels = static_cast<std::uint64_t>(o.width_px) * o.height_px;
+        const std::uint64_t limit = stereoscene::support::limits().max_image_pixels;
+        if (pixels > limit) {
+            check_document_size(o,
+                                "too large: " + std::to_string(pixels) +
+                                    " pixels is more than the limit of " + std::to_string(limit),
+                                document_path);
+        }
+    }
     try {
         o.validate();
     } catch (const std::invalid_argument& e) {
+        if (a.size.empty()) check_document_size(o, e.what(), document_path);
         usage(e.what(), "--antialias/--msaa/--fov/--eye/--target/--point-size");
     }
     return o;

@@ -54,12 +54,19 @@ void add_view_options(CLI::App& app, ViewArgs& a);
 /// "WxH" from `flag`, or a usage Failure.
 std::pair<int, int> size_flag(const std::string& text, const std::string& flag);
 
+/// Checks, before any work, that an output folder can be made or written: an existing path must
+/// be a directory, and the nearest existing folder above a new one must be writable. Throws a
+/// Failure (exit 1) naming the folder.
+void check_output_folder(const std::string& folder, const std::string& what);
+
 /// Reads and validates an entity file, or a Failure naming it.
 scene_schema::EntityDocument read_entities(const std::string& path);
 
-/// Render options from the flags; the camera view and default size come from `document`.
+/// Render options from the flags; the camera view and default size come from `document`, read
+/// from `document_path` (blamed, exit 1, when its camera size cannot be rendered).
 scene_viewer::RenderOptions render_options(const ViewArgs& a,
-                                           const scene_schema::EntityDocument& document);
+                                           const scene_schema::EntityDocument& document,
+                                           const std::string& document_path);
 
 /// The --cloud overlay, when given.
 std::optional<scene_viewer::PointCloud> read_cloud(const ViewArgs& a);

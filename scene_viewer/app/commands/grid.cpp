@@ -40,7 +40,7 @@ int run_grid(GridArgs a) {
     }
     std::vector<scene_schema::EntityDocument> documents;
     for (const auto& path : a.inputs) documents.push_back(read_entities(path));
-    RenderOptions options = render_options(a.view, documents.front());
+    RenderOptions options = render_options(a.view, documents.front(), a.inputs.front());
     share_view(documents, options);
     const auto cloud = read_cloud(a.view);
     const auto classes = read_classes(a.view.boxes, a.view.classes);

@@ -159,6 +159,7 @@ int run(const Options& o) {
                           std::to_string(o.inputs.size()) + " inputs",
                       "--labels", 2};
     }
+    check_output_folder(o.out_dir, "cannot write the viewer");
     ViewerOptions viewer;
     viewer.title =
         o.title.empty() ? std::filesystem::path(o.inputs.front()).stem().string() : o.title;

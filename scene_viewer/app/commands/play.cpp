@@ -109,9 +109,9 @@ int run_play(const PlayArgs& a) {
     }
     if (index.frames.empty()) throw Failure{"cannot play the drive", "it has no frames", a.input};
     const double fps = a.fps > 0.0 ? a.fps : index.fps.value_or(10.0);
-    const auto first =
-        read_entities(scene_schema::frame_file(index_path, index.frames[0]).string());
-    RenderOptions options = render_options(a.view, first);
+    const std::string first_path = scene_schema::frame_file(index_path, index.frames[0]).string();
+    const auto first = read_entities(first_path);
+    RenderOptions options = render_options(a.view, first, first_path);
     if (!a.backgrounds.empty()) {
         if (options.view.kind != ViewKind::camera) usage("needs --view camera", "--backgrounds");
         options.keep_alpha = true;

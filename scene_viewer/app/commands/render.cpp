@@ -85,7 +85,7 @@ int run_render(const RenderArgs& a) {
     if (a.input.empty()) usage("an entity file is required", "input");
     if (a.output.empty() && a.glb.empty()) usage("an output path is required", "--output/--glb");
     const auto document = read_entities(a.input);
-    RenderOptions options = render_options(a.view, document);
+    RenderOptions options = render_options(a.view, document, a.input);
     if (!(a.opacity >= 0.0f && a.opacity <= 1.0f)) usage("must be in 0..1", "--opacity");
     stereoscene::support::OutputTransaction outputs;
     declare_outputs(a, outputs);

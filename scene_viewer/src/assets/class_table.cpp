@@ -85,13 +85,15 @@ RenderClass parse_class(const nlohmann::json& item, const std::string& pointer,
     return out;
 }
 
-ClassTable parse_table(const fs::path& path) {
-    std::string text;
+std::string read_table_text(const fs::path& path) {
     try {
-        text = stereoscene::support::read_text_input(path);
+        return stereoscene::support::read_text_input(path);
     } catch (const stereoscene::support::FileError& e) {
         throw TableError(e.reason());
     }
+}
+
+ClassTable parse_table(std::string_view text, const fs::path& path) {
     nlohmann::json doc;
     try {
         doc = scene_schema::parse_json(text);
@@ -152,7 +154,15 @@ const RenderClass* ClassTable::find(std::string_view name) const {
 
 ClassTable load_class_table(const std::filesystem::path& path) {
     try {
-        return parse_table(path);
+        return parse_table(read_table_text(path), path);
+    } catch (const std::exception& e) {
+        throw std::runtime_error(path.string() + ": " + e.what());
+    }
+}
+
+ClassTable parse_class_table(std::string_view text, const std::filesystem::path& path) {
+    try {
+        return parse_table(text, path);
     } catch (const std::exception& e) {
         throw std::runtime_error(path.string() + ": " + e.what());
     }

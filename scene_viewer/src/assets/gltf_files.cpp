@@ -218,7 +218,8 @@ bool load_image(tinygltf::Image* image, const int index, std::string* err, std::
         // (image_pixels throws for an unreadable header; the catch below names the image.)
         context->pixels += pixels;
         stereoscene::support::check_limit("images of the model", context->pixels,
-                                          limits.max_image_pixels, "pixels");
+                                          limits.max_image_pixels, "pixels",
+                                          stereoscene::support::kPixelsHint);
         ImageRgba8 decoded = decode_image_memory(bytes, static_cast<std::size_t>(size),
                                                  "image " + std::to_string(index));
         image->width = decoded.width;
@@ -252,8 +253,9 @@ void check_uris(const nlohmann::json& doc) {
     }
 }
 
-tinygltf::Model read_gltf(const fs::path& path) {
-    const std::vector<unsigned char> bytes = read_bytes(path);
+tinygltf::Model read_gltf(const fs::path& path) { return read_gltf_memory(read_bytes(path), path); }
+
+tinygltf::Model read_gltf_memory(const std::vector<unsigned char>& bytes, const fs::path& path) {
     const bool binary = is_glb(bytes);
     precheck_gltf_json(
         binary ? glb_json_chunk(bytes)

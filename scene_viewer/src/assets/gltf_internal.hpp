@@ -28,6 +28,11 @@ class LoadError : public std::runtime_error {
 /// through image_io, and required extensions are refused. Throws LoadError.
 tinygltf::Model read_gltf(const std::filesystem::path& path);
 
+/// read_gltf() on the file's bytes already in memory; `path` names the file (its folder is where
+/// relative URIs are looked up). read_gltf() reads with the bounded reader and calls this.
+tinygltf::Model read_gltf_memory(const std::vector<unsigned char>& bytes,
+                                 const std::filesystem::path& path);
+
 /// Checks a glTF document's JSON before tinygltf reads it: nesting within
 /// scene_schema::kMaxJsonDepth, the node count within the model limit, sizes and offsets
 /// non-negative integers up to 2^53 (so 64-bit sums cannot wrap), buffer views inside their

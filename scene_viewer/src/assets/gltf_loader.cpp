@@ -7,6 +7,7 @@
 #include <cstring>
 #include <fstream>
 #include <limits>
+#include <new>
 #include <stdexcept>
 #include <string>
 #include <system_error>
@@ -106,7 +107,8 @@ class Converter {
                           const char* unit) {
         if (accessor < 0 || static_cast<std::size_t>(accessor) >= gltf_.accessors.size()) return;
         total += gltf_.accessors[static_cast<std::size_t>(accessor)].count;
-        stereoscene::support::check_limit("the model's " + std::string(unit), total, limit, unit);
+        stereoscene::support::check_limit("the model's " + std::string(unit), total, limit, unit,
+                                          stereoscene::support::kVerticesHint);
     }
 
     void add_mesh(int mesh_index, const glm::mat4& world) {
@@ -266,8 +268,7 @@ class Converter {
     std::uint64_t indices_ = 0;   ///< indices counted so far, all primitives
 };
 
-Model load_model_unchecked(const fs::path& path) {
-    const tinygltf::Model gltf = read_gltf(path);
+Model convert_model(const tinygltf::Model& gltf, const fs::path& path) {
     Model model;
     model.name = path.filename().string();
     Converter(gltf, model).run();
@@ -282,7 +283,18 @@ Model load_model_unchecked(const fs::path& path) {
 
 Model load_model(const std::filesystem::path& path) {
     try {
-        return load_model_unchecked(path);
+        return convert_model(read_gltf(path), path);
+    } catch (const std::bad_alloc&) {
+        throw std::runtime_error(path.string() + ": out of memory loading the model");
+    } catch (const std::exception& e) {
+        throw std::runtime_error(path.string() + ": " + e.what());
+    }
+}
+
+Model load_model_memory(const std::vector<unsigned char>& bytes,
+                        const std::filesystem::path& path) {
+    try {
+        return convert_model(read_gltf_memory(bytes, path), path);
     } catch (const std::exception& e) {
         throw std::runtime_error(path.string() + ": " + e.what());
     }

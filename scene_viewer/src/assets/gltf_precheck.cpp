@@ -116,7 +116,8 @@ void precheck_gltf_json(const std::string& json_text) {
     }
     if (!doc.is_object()) throw LoadError("not valid glTF JSON: not an object");
     stereoscene::support::check_limit("glTF nodes", array_size(doc, "nodes"),
-                                      stereoscene::support::limits().max_model_vertices, "nodes");
+                                      stereoscene::support::limits().max_model_vertices, "nodes",
+                                      stereoscene::support::kVerticesHint);
     check_layout(doc);
     check_uris(doc);
 }

@@ -1,6 +1,7 @@
 #include "scene_viewer/assets/image_io.hpp"
 
 #include <climits>
+#include <cstring>
 #include <stdexcept>
 
 #include <stb/stb_image.h>
@@ -98,12 +99,17 @@ ImageRgba8 decode_image_memory(const unsigned char* bytes, std::size_t size,
         throw std::runtime_error(what + ": " + e.what());
     }
     stereoscene::support::check_limit(what, pixels, stereoscene::support::limits().max_image_pixels,
-                                      "pixels");
+                                      "pixels", stereoscene::support::kPixelsHint);
     int width = 0;
     int height = 0;
     int channels = 0;
     unsigned char* data =
         stbi_load_from_memory(bytes, static_cast<int>(size), &width, &height, &channels, 4);
+    if (data == nullptr && pixels > 0 && stbi_failure_reason() != nullptr &&
+        std::string(stbi_failure_reason()) == "outofmem") {
+        throw std::runtime_error(what + ": cannot decode image: out of memory for " +
+                                 std::to_string(pixels) + " pixels");
+    }
     if (data == nullptr) {
         const char* reason = stbi_failure_reason();
         throw std::runtime_error(
@@ -119,6 +125,16 @@ ImageRgba8 decode_image_memory(const unsigned char* bytes, std::size_t size,
 }
 
 std::uint64_t image_pixels(const unsigned char* bytes, std::size_t size) {
+    // A PNG's size from its IHDR chunk (PNG spec 11.2.2): stb's header reader refuses sizes past
+    // its own bound with "unknown image type", which would hide that the image is too large.
+    static const unsigned char kPng[] = {0x89, 'P', 'N', 'G', '\r', '\n', 0x1a, '\n'};
+    if (size >= 24 && std::memcmp(bytes, kPng, 8) == 0 && std::memcmp(bytes + 12, "IHDR", 4) == 0) {
+        const auto u32 = [&](std::size_t at) {
+            return (std::uint64_t{bytes[at]} << 24) | (std::uint64_t{bytes[at + 1]} << 16) |
+                   (std::uint64_t{bytes[at + 2]} << 8) | std::uint64_t{bytes[at + 3]};
+        };
+        return u32(16) * u32(20);
+    }
     int width = 0;
     int height = 0;
     int channels = 0;

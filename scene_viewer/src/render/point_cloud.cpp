@@ -6,8 +6,10 @@
 #include <algorithm>
 #include <cctype>
 #include <cmath>
+#include <cstdlib>
 #include <cstring>
 #include <fstream>
+#include <new>
 #include <sstream>
 #include <stdexcept>
 #include <string>
@@ -138,6 +140,18 @@ void add_point(PointCloud& cloud, const Roles& roles, const double* v, bool pack
     if (roles.cls >= 0) cloud.class_ids.push_back(clamp_cast<int>(v[roles.cls], -1, 65535));
 }
 
+/// A number of an ASCII PCD record (std::stod's own exception text names neither file nor point).
+double parse_number(const std::filesystem::path& path, const std::string& token,
+                    std::size_t point) {
+    char* end = nullptr;
+    const double v = std::strtod(token.c_str(), &end);
+    if (end == token.c_str() || *end != '\0') {
+        fail(path, "PCD point " + std::to_string(point) + ": '" + token.substr(0, 32) +
+                       "' is not a number");
+    }
+    return v;
+}
+
 bool ply_type(const std::string& t, Field& f) {
     static const struct {
         const char* name;
@@ -157,7 +171,7 @@ bool ply_type(const std::string& t, Field& f) {
     return false;
 }
 
-PointCloud read_ply(const std::filesystem::path& path, std::ifstream& in) {
+PointCloud read_ply(const std::filesystem::path& path, std::istream& in) {
     std::string line;
     std::getline(in, line);
     if (line.rfind("ply", 0) != 0) fail(path, "not a PLY file (no 'ply' magic)");
@@ -224,7 +238,7 @@ PointCloud read_ply(const std::filesystem::path& path, std::ifstream& in) {
     return cloud;
 }
 
-PointCloud read_pcd(const std::filesystem::path& path, std::ifstream& in) {
+PointCloud read_pcd(const std::filesystem::path& path, std::istream& in) {
     std::vector<std::string> names, types;
     std::vector<int> sizes, counts;
     std::size_t points = 0;
@@ -308,7 +322,7 @@ PointCloud read_pcd(const std::filesystem::path& path, std::ifstream& in) {
             for (std::size_t k = 0; k < fields.size(); ++k) {
                 std::string token;
                 if (!(in >> token)) fail(path, "PCD data truncated");
-                values[k] = std::stod(token);
+                values[k] = parse_number(path, token, i);
             }
             if (std::isfinite(values[static_cast<std::size_t>(roles.x)]))
                 add_point(cloud, roles, values.data(), packed_float);
@@ -319,7 +333,7 @@ PointCloud read_pcd(const std::filesystem::path& path, std::ifstream& in) {
     return cloud;
 }
 
-PointCloud read_xyz(const std::filesystem::path& path, std::ifstream& in) {
+PointCloud read_xyz(const std::filesystem::path& path, std::istream& in) {
     std::vector<std::string> names;
     std::string line;
     PointCloud cloud;
@@ -371,6 +385,14 @@ PointCloud read_point_cloud(const std::filesystem::path& path) {
     stereoscene::support::check_input_file(path, stereoscene::support::limits().max_file_bytes);
     std::ifstream in(path, std::ios::binary);
     if (!in) fail(path, std::string("cannot open: ") + std::strerror(errno));
+    try {
+        return read_point_cloud(in, path);
+    } catch (const std::bad_alloc&) {
+        fail(path, "out of memory reading the cloud");
+    }
+}
+
+PointCloud read_point_cloud(std::istream& in, const std::filesystem::path& path) {
     const std::string ext = lower(path.extension().string());
     PointCloud cloud;
     if (ext == ".ply") {

@@ -3,6 +3,7 @@
 #include <cerrno>
 #include <cstring>
 #include <iostream>
+#include <new>
 #include <string>
 
 #include <fcntl.h>
@@ -28,13 +29,21 @@ const char* kind_of(mode_t mode) {
     throw FileError(path, reason);
 }
 
+/// The flag that raises a byte limit, as "; <flag> raises it", or empty.
+std::string byte_hint(std::uint64_t max_bytes) {
+    if (max_bytes == limits().max_text_bytes) return "; --max-text-mib raises it";
+    if (max_bytes == limits().max_file_bytes) return "; --max-file-mib raises it";
+    return "";
+}
+
 void check_stat(const std::filesystem::path& path, const struct stat& st, std::uint64_t max_bytes) {
     if (!S_ISREG(st.st_mode)) {
         fail(path, std::string("not a regular file (") + kind_of(st.st_mode) + "), refused");
     }
     if (static_cast<std::uint64_t>(st.st_size) > max_bytes) {
-        fail(path, std::to_string(st.st_size) + " bytes is more than the limit of " +
-                       std::to_string(max_bytes) + " bytes for this kind of file");
+        fail(path, "too large: " + std::to_string(st.st_size) +
+                       " bytes is more than the limit of " + std::to_string(max_bytes) +
+                       " bytes for this kind of file" + byte_hint(max_bytes));
     }
 }
 
@@ -53,8 +62,8 @@ std::string read_all(int fd, const std::filesystem::path& path, std::uint64_t ma
         if (n == 0) break;
         out.append(chunk, static_cast<std::size_t>(n));
         if (out.size() > max_bytes) {
-            fail(path, "more than the limit of " + std::to_string(max_bytes) +
-                           " bytes for this kind of file");
+            fail(path, "too large: more than the limit of " + std::to_string(max_bytes) +
+                           " bytes for this kind of file" + byte_hint(max_bytes));
         }
     }
     return out;
@@ -97,13 +106,21 @@ std::string read_file_bounded(const std::filesystem::path& path, std::uint64_t m
     struct stat st {};
     if (::fstat(fd, &st) != 0) fail(path, std::string("cannot stat: ") + std::strerror(errno));
     check_stat(path, st, max_bytes);
-    return read_all(fd, path, max_bytes, static_cast<std::size_t>(st.st_size));
+    try {
+        return read_all(fd, path, max_bytes, static_cast<std::size_t>(st.st_size));
+    } catch (const std::bad_alloc&) {
+        fail(path, "out of memory reading its " + std::to_string(st.st_size) + " bytes");
+    }
 }
 
 std::vector<unsigned char> read_file_bytes_bounded(const std::filesystem::path& path,
                                                    std::uint64_t max_bytes) {
     const std::string text = read_file_bounded(path, max_bytes);
-    return std::vector<unsigned char>(text.begin(), text.end());
+    try {
+        return std::vector<unsigned char>(text.begin(), text.end());
+    } catch (const std::bad_alloc&) {
+        fail(path, "out of memory holding its " + std::to_string(text.size()) + " bytes");
+    }
 }
 
 std::string read_text_input(const std::filesystem::path& path) {

@@ -130,7 +130,7 @@ TEST_CASE("a textureless pair gives an empty disparity, reported as an error", "
     std::filesystem::remove_all(dir);
 }
 
-TEST_CASE("images are read as they are: grey PNGs grey, colour PNGs RGB, 16-bit grey as colour",
+TEST_CASE("images are read as they are: grey PNGs grey, colour PNGs RGB, 16-bit refused",
           "[pipeline][io]") {
     const auto dir = std::filesystem::temp_directory_path() / "stereoscene_test_read_image";
     std::filesystem::create_directories(dir);
@@ -142,7 +142,7 @@ TEST_CASE("images are read as they are: grey PNGs grey, colour PNGs RGB, 16-bit 
     ImageU8 rgb{2, 1, 3, {255, 0, 0, 10, 20, 30}};
     const auto grey_png = write("grey.png", encode_png(grey));
     const auto rgb_png = write("rgb.png", encode_png(rgb));
-    // A 16-bit grey PNG (KITTI's disparity format): OpenCV's colour decode scales it to 8 bits.
+    // A 16-bit grey PNG (KITTI's disparity format): refused in every mode, not cut to 8 bits.
     const DisparityMap d{2, 1, {1.0f, 200.0f}};
     const auto grey16_png = write("grey16.png", encode_kitti_disparity_png(d));
 
@@ -152,9 +152,10 @@ TEST_CASE("images are read as they are: grey PNGs grey, colour PNGs RGB, 16-bit 
     const ImageU8 c = read_image(rgb_png);
     CHECK(c.channels == 3);
     CHECK(c.data == rgb.data);
-    const ImageU8 c16 = read_image(grey16_png);
-    CHECK(c16.channels == 3);
-    CHECK(c16.data == std::vector<std::uint8_t>{1, 1, 1, 200, 200, 200});  // v * 256 >> 8
+    for (const ImageMode mode : {ImageMode::kAsIs, ImageMode::kGrey, ImageMode::kColour}) {
+        CHECK_THROWS_WITH(read_image(grey16_png, mode), Catch::Contains("16-bit samples refused") &&
+                                                            Catch::Contains("grey16.png"));
+    }
     CHECK(read_image(grey_png, ImageMode::kColour).channels == 3);
     CHECK(read_image(rgb_png, ImageMode::kGrey).channels == 1);
     std::filesystem::remove_all(dir);

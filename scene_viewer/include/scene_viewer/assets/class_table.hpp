@@ -45,6 +45,11 @@ struct ClassTable {
 /// must name existing files. Throws std::runtime_error "<file>: <JSON pointer>: <reason>".
 ClassTable load_class_table(const std::filesystem::path& path);
 
+/// load_class_table() on text already in memory; `path` is the file it stands for (named in
+/// errors, its folder resolves model paths). load_class_table() reads with the bounded reader
+/// and calls the same parser.
+ClassTable parse_class_table(std::string_view text, const std::filesystem::path& path);
+
 /// The project's own table: classes/render_classes.json in stereoscene::support::asset_dir().
 std::filesystem::path default_class_table_path();
 

@@ -5,6 +5,7 @@
 
 #include <cstddef>
 #include <filesystem>
+#include <vector>
 
 #include <glm/glm.hpp>
 
@@ -21,6 +22,11 @@ namespace scene_viewer {
 /// refused before anything is read. Throws std::runtime_error "<file>: <reason>"; nothing
 /// half-built escapes.
 Model load_model(const std::filesystem::path& path);
+
+/// load_model() on the bytes of a .gltf or .glb already in memory: `path` is the file they stand
+/// for (named in errors; relative URIs are looked up in its folder, under the same rules).
+/// load_model() reads the file with the bounded reader and calls the same parser.
+Model load_model_memory(const std::vector<unsigned char>& bytes, const std::filesystem::path& path);
 
 /// A unit cube centred on the origin ([-0.5, 0.5] on each axis) with outward face normals and
 /// one primitive of the given linear RGBA base colour: the stand-in for classes without a model.

@@ -7,6 +7,7 @@
 #include <array>
 #include <cstdint>
 #include <filesystem>
+#include <istream>
 #include <vector>
 
 #include <glm/glm.hpp>
@@ -23,6 +24,11 @@ struct PointCloud {
 
 /// Reads by extension (.ply, .pcd, .xyz/.txt); throws std::runtime_error naming the file and
 /// the problem (unsupported format, missing x/y/z, truncated data).
+/// The file is checked by the bounded reader's rules (a regular file within the size limit)
+/// and then parsed by the stream overload.
 PointCloud read_point_cloud(const std::filesystem::path& path);
+
+/// Parses a cloud from a stream; `path` picks the format by its extension and is named in errors.
+PointCloud read_point_cloud(std::istream& in, const std::filesystem::path& path);
 
 }  // namespace scene_viewer

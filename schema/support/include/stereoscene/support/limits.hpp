@@ -4,6 +4,7 @@
 /// them, so a small hostile file cannot make a run take minutes or gigabytes.
 
 #include <cstdint>
+#include <new>
 #include <stdexcept>
 #include <string>
 
@@ -34,14 +35,34 @@ struct Limits {
     std::uint64_t max_grid_lines = 10'000;
 };
 
+/// The flags that raise each limit (both tools take them, scene-render also
+/// --max-model-vertices), as check_limit() hints.
+inline constexpr const char* kPixelsHint = "--max-pixels raises it";
+inline constexpr const char* kVerticesHint = "--max-model-vertices raises it";
+inline constexpr const char* kEntitiesHint = "--max-entities raises it";
+
+/// Runs `work`; a std::bad_alloc it throws becomes a LimitError "<what>: out of memory (...)",
+/// so the one error line says what was being read or built instead of "std::bad_alloc".
+template <class Work>
+auto name_out_of_memory(const std::string& what, Work&& work) -> decltype(work()) {
+    try {
+        return work();
+    } catch (const std::bad_alloc&) {
+        throw LimitError(what +
+                         ": out of memory (the system refused an allocation; a smaller "
+                         "input or more memory is needed)");
+    }
+}
+
 /// The limits in force for this process: the defaults above unless set_limits() changed them.
 const Limits& limits();
 
 /// Replaces the process's limits (a CLI does this once, from its flags, before any work).
 void set_limits(const Limits& limits);
 
-/// Throws LimitError "<what>: <count> <unit> is more than the limit of <limit> (<hint>)" when
-/// count > limit; `hint` names the flag that raises the limit, or is empty.
+/// Throws LimitError "<what>: too large: <count> <unit> is more than the limit of <limit>;
+/// <hint>" when count > limit; `hint` names the flag that raises the limit, or is empty. (Not in
+/// parentheses: a trailing "(...)" is where error_line() looks for the file.)
 void check_limit(const std::string& what, std::uint64_t count, std::uint64_t limit,
                  const std::string& unit, const std::string& hint = {});
 
