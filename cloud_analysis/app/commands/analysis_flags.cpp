@@ -137,6 +137,10 @@ void add_matcher_flags(CLI::App& cmd, AnalyseArgs& a) {
         ->check(CLI::IsMember({"sgbm", "sgm"}))
         ->capture_default_str()
         ->group(sg);
+    cmd.add_option("--sgm-window", d.sgm.window,
+                   "sgm: side of the box the census costs are summed over, px, odd")
+        ->capture_default_str()
+        ->group(sg);
     cmd.add_option("--sgm-p1", d.sgm.p1, "sgm: penalty of +-1 px changes, census bits")
         ->capture_default_str()
         ->group(sg);

@@ -117,7 +117,10 @@ bool sgm_has_avx2() {
 void SgmOptions::validate() const {
     if (p1 < 1) bad("p1", "must be >= 1");
     if (p2 <= p1) bad("p2", "must be > p1");
-    if (p2 > 8000) bad("p2", "must be <= 8000 (16-bit path sums)");
+    if (window < 1 || window > 9 || window % 2 == 0) bad("window", "must be odd, 1..9");
+    if (3 * (31 * window * window + p2) > 0xFFFF) {
+        bad("p2", "must be <= 21845 - 31 * window^2 (three 16-bit path sums)");
+    }
     if (stripes < 1) bad("stripes", "must be >= 1");
     if (warmup_rows < 0) bad("warmup_rows", "must be >= 0");
     if (subpixel != "parabola" && subpixel != "equiangular") {
@@ -131,7 +134,8 @@ void SgmOptions::validate() const {
 
 /// Per-stripe working rows: a stripe runs on one thread at a time.
 struct StripeBuffers {
-    AlignedArray<std::uint16_t> cost, sum, top, top_min, right_cost;
+    AlignedArray<std::uint8_t> ring;
+    AlignedArray<std::uint16_t> cost, sum, top, top_min, right_cost, column_sum;
     AlignedArray<std::int16_t> disparity, right_disp;
 };
 
@@ -142,7 +146,7 @@ struct SgmMatcher::Impl {
     std::vector<StripeBuffers> stripes;
     std::size_t cells = 0;
 
-    void match_stripe(SgmRow row, int y0, int y1, int warm_from, const SgmRange& range,
+    void match_stripe(SgmRow row, int height, int y0, int y1, int warm_from, const SgmRange& range,
                       std::int16_t* out, std::size_t out_stride) const;
 };
 
@@ -158,7 +162,7 @@ SgmMatcher& SgmMatcher::operator=(SgmMatcher&&) noexcept = default;
 
 std::size_t SgmMatcher::last_cells() const { return impl_->cells; }
 
-void SgmMatcher::Impl::match_stripe(SgmRow row, int y0, int y1, int warm_from,
+void SgmMatcher::Impl::match_stripe(SgmRow row, int height, int y0, int y1, int warm_from,
                                     const SgmRange& range, std::int16_t* out,
                                     std::size_t out_stride) const {
     const int w = row.width;
@@ -166,12 +170,26 @@ void SgmMatcher::Impl::match_stripe(SgmRow row, int y0, int y1, int warm_from,
     const std::size_t volume = pixels * static_cast<std::size_t>(row.num_disparities);
     std::fill(row.top, row.top + volume, std::uint16_t{0});  // a path starts at its cost
     std::fill(row.top_min, row.top_min + pixels, std::uint16_t{0});
+    const int rows = 2 * row.radius + 1;  // the window's rows, in a ring
+    std::uint8_t* const ring = row.ring;
+    std::fill(ring, ring + volume * static_cast<std::size_t>(rows), std::uint8_t{0});
+    std::fill(row.column_sum, row.column_sum + volume, std::uint16_t{0});
+    const auto window = avx2 ? sgm_detail::window_row_avx2 : sgm_detail::window_row_portable;
     const auto warmup = avx2 ? sgm_detail::warmup_row_avx2 : sgm_detail::warmup_row_portable;
     const auto match = avx2 ? sgm_detail::match_row_avx2 : sgm_detail::match_row_portable;
+    // Row t enters the window (clamped to the image) in ring slot t mod rows, replacing row
+    // t - rows: the slots start at zero, so the first rows - 1 rows only add.
+    const auto enter = [&](int t) {
+        const std::size_t yc = static_cast<std::size_t>(std::clamp(t, 0, height - 1));
+        row.census_left = census_left.data() + yc * w;
+        row.census_right_rev = census_right_rev.data() + yc * w;
+        row.ring = ring + static_cast<std::size_t>((t % rows + rows) % rows) * volume;
+        window(row);
+    };
+    for (int t = warm_from - row.radius; t < warm_from + row.radius; ++t) enter(t);
     const std::int16_t invalid = static_cast<std::int16_t>((range.min_disparity - 1) * 16);
     for (int y = warm_from; y < y1; ++y) {
-        row.census_left = census_left.data() + static_cast<std::size_t>(y) * w;
-        row.census_right_rev = census_right_rev.data() + static_cast<std::size_t>(y) * w;
+        enter(y + row.radius);
         if (y < y0) {
             warmup(row);
             continue;
@@ -250,6 +268,8 @@ void SgmMatcher::compute(const std::uint8_t* left, const std::uint8_t* right, st
     cv::parallel_for_(cv::Range(0, n), [&](const cv::Range& which) {
         for (int s = which.start; s < which.end; ++s) {
             StripeBuffers& b = m.stripes[static_cast<std::size_t>(s)];
+            b.ring.reserve(volume * static_cast<std::size_t>(m.options.window));
+            b.column_sum.reserve(volume);
             b.cost.reserve(volume);
             b.sum.reserve(volume);
             b.top.reserve(volume);
@@ -264,6 +284,9 @@ void SgmMatcher::compute(const std::uint8_t* left, const std::uint8_t* right, st
             row.min_disparity = range.min_disparity;
             row.p1 = static_cast<std::uint16_t>(m.options.p1);
             row.p2 = static_cast<std::uint16_t>(m.options.p2);
+            row.ring = b.ring.data();
+            row.column_sum = b.column_sum.data();
+            row.radius = m.options.window / 2;
             row.cost = b.cost.data();
             row.sum = b.sum.data();
             row.top = b.top.data();
@@ -274,7 +297,7 @@ void SgmMatcher::compute(const std::uint8_t* left, const std::uint8_t* right, st
             row.right_cost = b.right_cost.data();
             row.right_disp = b.right_disp.data();
             const int y0 = s * height / n, y1 = (s + 1) * height / n;
-            m.match_stripe(row, y0, y1, std::max(0, y0 - m.options.warmup_rows), range, out,
+            m.match_stripe(row, height, y0, y1, std::max(0, y0 - m.options.warmup_rows), range, out,
                            out_stride);
         }
     });

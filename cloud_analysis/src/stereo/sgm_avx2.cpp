@@ -83,14 +83,36 @@ struct RowPath {
     }
 };
 
-/// Costs and top-down path of pixel i (and the left-to-right path and their sum unless
+/// Column sums of matched column index j, clamped to the matched columns.
+inline const std::uint16_t* column(const SgmRow& r, int j) {
+    const int last = r.width - 1 - r.x_begin;
+    const int at = j < 0 ? 0 : (j > last ? last : j);
+    return r.column_sum + static_cast<std::size_t>(at) * r.num_disparities;
+}
+
+/// Box costs of the first matched column into the row's cost buffer.
+inline void first_box(const SgmRow& r) {
+    const int nv = r.num_disparities / 16;
+    for (int k = 0; k < nv; ++k) {
+        __m256i sum = _mm256_setzero_si256();
+        for (int j = -r.radius; j <= r.radius; ++j) {
+            sum = _mm256_add_epi16(sum, load(column(r, j) + 16 * k));
+        }
+        store(r.cost + 16 * k, sum);
+    }
+}
+
+/// Box costs and top-down path of pixel x (and the left-to-right path and their sum unless
 /// `lr` is null), one register of disparities at a time.
 inline void forward_pixel(const SgmRow& r, int x, RowPath* lr) {
     const int nd = r.num_disparities;
     const int nv = nd / 16;
-    const std::size_t at = static_cast<std::size_t>(x - r.x_begin) * nd;
-    const __m256i left = _mm256_set1_epi32(static_cast<int>(r.census_left[x]));
-    const std::uint32_t* right = r.census_right_rev + (r.width - 1 - x + r.min_disparity);
+    const int i = x - r.x_begin;
+    const std::size_t at = static_cast<std::size_t>(i) * nd;
+    if (i == 0) first_box(r);
+    const std::uint16_t* before = r.cost + at - (i == 0 ? 0 : nd);
+    const std::uint16_t* enter = column(r, i + r.radius);
+    const std::uint16_t* leave = column(r, i - r.radius - 1);
     const __m256i p1 = _mm256_set1_epi16(static_cast<short>(r.p1));
     const __m256i none = _mm256_set1_epi16(-1);
     std::uint16_t* top = r.top + at;
@@ -103,8 +125,12 @@ inline void forward_pixel(const SgmRow& r, int x, RowPath* lr) {
     const __m256i lr_jump = _mm256_set1_epi16(static_cast<short>(lr_min + r.p2));
     __m256i lr_before = none, lr_cur = lr != nullptr ? load(lr->prev) : none, lr_acc = none;
     for (int k = 0; k < nv; ++k) {
-        const __m256i cost = costs16(right + 16 * k, left);
-        store(r.cost + at + 16 * k, cost);
+        __m256i cost = load(before + 16 * k);
+        if (i != 0) {
+            cost = _mm256_sub_epi16(_mm256_add_epi16(cost, load(enter + 16 * k)),
+                                    load(leave + 16 * k));
+            store(r.cost + at + 16 * k, cost);
+        }
         const __m256i top_next = k + 1 < nv ? load(top + 16 * (k + 1)) : none;
         const __m256i t = step16(top_before, top_cur, top_next, cost, p1, top_jump, top_minv);
         store(top + 16 * k, t);  // in place: slot k of the row above is no longer needed
@@ -195,6 +221,24 @@ inline void backward_pixel(const SgmRow& r, int x, RowPath& rl) {
 }
 
 }  // namespace
+
+void window_row_avx2(const SgmRow& r) {
+    const int nv = r.num_disparities / 16;
+    for (int x = r.x_begin; x < r.width; ++x) {
+        const std::size_t at = static_cast<std::size_t>(x - r.x_begin) * r.num_disparities;
+        const __m256i left = _mm256_set1_epi32(static_cast<int>(r.census_left[x]));
+        const std::uint32_t* right = r.census_right_rev + (r.width - 1 - x + r.min_disparity);
+        for (int k = 0; k < nv; ++k) {
+            const __m256i cost = costs16(right + 16 * k, left);
+            __m128i* slot = reinterpret_cast<__m128i*>(r.ring + at + 16 * k);
+            const __m256i leaving = _mm256_cvtepu8_epi16(_mm_load_si128(slot));
+            std::uint16_t* sum = r.column_sum + at + 16 * k;
+            store(sum, _mm256_sub_epi16(_mm256_add_epi16(load(sum), cost), leaving));
+            _mm_store_si128(slot, _mm_packus_epi16(_mm256_castsi256_si128(cost),
+                                                   _mm256_extracti128_si256(cost, 1)));
+        }
+    }
+}
 
 void warmup_row_avx2(const SgmRow& r) {
     for (int x = r.x_begin; x < r.width; ++x) forward_pixel(r, x, nullptr);

@@ -10,11 +10,28 @@
 namespace cloud_analysis::sgm_detail {
 namespace {
 
-void pixel_costs(const SgmRow& r, int x, std::uint16_t* c) {
-    const std::uint32_t left = r.census_left[x];
-    const std::uint32_t* right = r.census_right_rev + (r.width - 1 - x + r.min_disparity);
-    for (int d = 0; d < r.num_disparities; ++d) {
-        c[d] = static_cast<std::uint16_t>(__builtin_popcount(left ^ right[d]));
+/// Box costs of pixel x into `c` (the row's cost buffer at x): from pixel x - 1's, which sit
+/// just before it, unless x is the first matched column.
+void box_costs(const SgmRow& r, int x, std::uint16_t* c) {
+    const int nd = r.num_disparities;
+    const int last = r.width - 1 - r.x_begin;
+    const int i = x - r.x_begin;
+    const auto column = [&](int j) {
+        return r.column_sum + static_cast<std::size_t>(std::clamp(j, 0, last)) * nd;
+    };
+    if (i == 0) {
+        std::fill(c, c + nd, std::uint16_t{0});
+        for (int j = -r.radius; j <= r.radius; ++j) {
+            const std::uint16_t* col = column(j);
+            for (int d = 0; d < nd; ++d) c[d] = static_cast<std::uint16_t>(c[d] + col[d]);
+        }
+        return;
+    }
+    const std::uint16_t* before = c - nd;
+    const std::uint16_t* enter = column(i + r.radius);
+    const std::uint16_t* leave = column(i - r.radius - 1);
+    for (int d = 0; d < nd; ++d) {
+        c[d] = static_cast<std::uint16_t>(before[d] + enter[d] - leave[d]);
     }
 }
 
@@ -75,12 +92,27 @@ void take_winner(const SgmRow& r, int x, const std::uint16_t* s) {
 
 }  // namespace
 
+void window_row_portable(const SgmRow& r) {
+    const int nd = r.num_disparities;
+    for (int x = r.x_begin; x < r.width; ++x) {
+        const std::size_t at = static_cast<std::size_t>(x - r.x_begin) * nd;
+        const std::uint32_t left = r.census_left[x];
+        const std::uint32_t* right = r.census_right_rev + (r.width - 1 - x + r.min_disparity);
+        for (int d = 0; d < nd; ++d) {
+            const int c = __builtin_popcount(left ^ right[d]);
+            r.column_sum[at + d] =
+                static_cast<std::uint16_t>(r.column_sum[at + d] + c - r.ring[at + d]);
+            r.ring[at + d] = static_cast<std::uint8_t>(c);
+        }
+    }
+}
+
 void warmup_row_portable(const SgmRow& r) {
     const int nd = r.num_disparities;
     for (int x = r.x_begin; x < r.width; ++x) {
         const int i = x - r.x_begin;
         std::uint16_t* c = r.cost + static_cast<std::size_t>(i) * nd;
-        pixel_costs(r, x, c);
+        box_costs(r, x, c);
         top_step(r, i, c);
     }
 }
@@ -96,7 +128,7 @@ void match_row_portable(const SgmRow& r) {
         const int i = x - r.x_begin;
         const std::size_t at = static_cast<std::size_t>(i) * nd;
         std::uint16_t* c = r.cost + at;
-        pixel_costs(r, x, c);
+        box_costs(r, x, c);
         prev_min = path_step(prev, prev_min, c, nd, r.p1, r.p2, cur);
         std::swap(prev, cur);
         top_step(r, i, c);

@@ -62,8 +62,26 @@ std::vector<std::int16_t> reference_sgm(const Grey& l, const Grey& r, int first_
         return c;
     };
     const int x0 = std::max(first_column, dmin + nd - 1);
+    // Census Hamming distances summed over the window, rows clamped to the image and columns
+    // to the matched ones.
+    std::vector<std::uint32_t> census_l(static_cast<std::size_t>(w) * h), census_r = census_l;
+    for (int y = 0; y < h; ++y) {
+        for (int x = 0; x < w; ++x) {
+            census_l[static_cast<std::size_t>(y) * w + x] = census(l, x, y);
+            census_r[static_cast<std::size_t>(y) * w + x] = census(r, x, y);
+        }
+    }
+    const int radius = o.window / 2;
     const auto cost = [&](int x, int y, int d) {
-        return __builtin_popcount(census(l, x, y) ^ census(r, x - dmin - d, y));
+        int sum = 0;
+        for (int dy = -radius; dy <= radius; ++dy) {
+            for (int dx = -radius; dx <= radius; ++dx) {
+                const int xx = std::clamp(x + dx, x0, w - 1);
+                const std::size_t row = static_cast<std::size_t>(std::clamp(y + dy, 0, h - 1)) * w;
+                sum += __builtin_popcount(census_l[row + xx] ^ census_r[row + xx - dmin - d]);
+            }
+        }
+        return sum;
     };
     const auto step = [&](const std::vector<int>& prev, int y, int x) {
         const int m = *std::min_element(prev.begin(), prev.end());
@@ -163,12 +181,13 @@ TEST_CASE("census SGM kernels equal the plain reference bit for bit on random pa
     std::vector<std::string> kernels = {"portable"};
     if (sgm_has_avx2()) kernels.push_back("avx2");
     struct Case {
-        int w, h, shift, noise, first_column, min_d, nd, uniqueness, disp12, stripes, warmup;
+        int w, h, shift, noise, first_column, min_d, nd, uniqueness, disp12, stripes, warmup,
+            window;
     };
     const Case cases[] = {
-        {72, 30, 9, 20, 0, 0, 32, 0, 1, 1, 0},      {72, 30, 9, 20, 32, 0, 32, 0, 1, 3, 4},
-        {90, 26, 14, 40, 40, 5, 32, 15, -1, 2, 16}, {60, 20, 3, 255, 0, 2, 16, 5, 0, 4, 2},
-        {80, 24, 20, 10, 48, 0, 48, 0, 2, 2, 30},
+        {72, 30, 9, 20, 0, 0, 32, 0, 1, 1, 0, 1},      {72, 30, 9, 20, 32, 0, 32, 0, 1, 3, 4, 5},
+        {90, 26, 14, 40, 40, 5, 32, 15, -1, 2, 16, 3}, {60, 20, 3, 255, 0, 2, 16, 5, 0, 4, 2, 7},
+        {80, 24, 20, 10, 48, 0, 48, 0, 2, 2, 30, 5},   {40, 12, 5, 30, 36, 0, 16, 0, 1, 3, 1, 9},
     };
     unsigned seed = 1;
     for (const Case& c : cases) {
@@ -181,8 +200,9 @@ TEST_CASE("census SGM kernels equal the plain reference bit for bit on random pa
         SgmOptions o;
         o.stripes = c.stripes;
         o.warmup_rows = c.warmup;
-        o.p1 = 5 + c.shift % 4;
-        o.p2 = 40 + c.noise;
+        o.window = c.window;
+        o.p1 = (5 + c.shift % 4) * c.window;
+        o.p2 = (40 + c.noise) * c.window * c.window;
         o.subpixel = seed % 2 == 0 ? "equiangular" : "parabola";
         const auto expected = reference_sgm(left, right, c.first_column, g, o);
         for (const auto& kernel : kernels) {
@@ -259,4 +279,10 @@ TEST_CASE("the sgm matcher refuses what it does not do, naming the field", "[dis
     SgmOptions s;
     s.kernel = "neon";
     CHECK_THROWS_WITH(s.validate(), Catch::StartsWith("kernel"));
+    s = {};
+    s.window = 4;
+    CHECK_THROWS_WITH(s.validate(), Catch::StartsWith("window"));
+    s.window = 9;
+    s.p2 = 20000;  // three path sums of 31 * 81 + p2 would overflow 16 bits
+    CHECK_THROWS_WITH(s.validate(), Catch::StartsWith("p2"));
 }
