@@ -141,6 +141,11 @@ void add_matcher_flags(CLI::App& cmd, AnalyseArgs& a) {
                    "sgm: side of the box the census costs are summed over, px, odd")
         ->capture_default_str()
         ->group(sg);
+    cmd.add_option("--sgm-intensity-cap", d.sgm.intensity_cap,
+                   "sgm: adds min(|I_left - I_right|, cap) to the census cost, grey levels; "
+                   "0 = census alone")
+        ->capture_default_str()
+        ->group(sg);
     cmd.add_option("--sgm-p1", d.sgm.p1, "sgm: penalty of +-1 px changes, census bits")
         ->capture_default_str()
         ->group(sg);
@@ -258,6 +263,10 @@ void resolve_settings(AnalyseArgs& a, const CLI::App& cmd) {
         keep("--lr-check", d.lr_check, preset.lr_check);
         keep("--wls", d.wls, preset.wls);
         keep("--downscale", d.downscale, preset.downscale);
+        keep("--sgm-window", d.sgm.window, preset.sgm.window);
+        keep("--sgm-intensity-cap", d.sgm.intensity_cap, preset.sgm.intensity_cap);
+        keep("--sgm-p1", d.sgm.p1, preset.sgm.p1);
+        keep("--sgm-p2", d.sgm.p2, preset.sgm.p2);
         if (cmd.count("--colour-matching") == 0 && cmd.count("--grey-matching") == 0) {
             d.colour = preset.colour;
         }

@@ -100,6 +100,9 @@ DisparityOptions disparity_preset(const std::string& name) {
         o.block_size = 5;
         o.p2 = 0;
         o.speckle_window_size = 25;
+        // The census matcher's penalties at half scale, tuned on the rendered samples.
+        o.sgm.p1 = 200;
+        o.sgm.p2 = 1000;
         return o;
     }
     if (name == "quality") {

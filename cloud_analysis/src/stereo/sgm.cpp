@@ -118,8 +118,9 @@ void SgmOptions::validate() const {
     if (p1 < 1) bad("p1", "must be >= 1");
     if (p2 <= p1) bad("p2", "must be > p1");
     if (window < 1 || window > 9 || window % 2 == 0) bad("window", "must be odd, 1..9");
-    if (3 * (31 * window * window + p2) > 0xFFFF) {
-        bad("p2", "must be <= 21845 - 31 * window^2 (three 16-bit path sums)");
+    if (intensity_cap < 0 || intensity_cap > 31) bad("intensity_cap", "must be 0..31");
+    if (3 * ((31 + intensity_cap) * window * window + p2) > 0xFFFF) {
+        bad("p2", "must be <= 21845 - (31 + intensity_cap) * window^2 (16-bit path sums)");
     }
     if (stripes < 1) bad("stripes", "must be >= 1");
     if (warmup_rows < 0) bad("warmup_rows", "must be >= 0");
@@ -143,6 +144,9 @@ struct SgmMatcher::Impl {
     SgmOptions options;
     bool avx2 = false;
     std::vector<std::uint32_t> census_left, census_right_rev;
+    std::vector<std::uint8_t> grey_right_rev;  // the right view, rows reversed
+    const std::uint8_t* grey_left = nullptr;   // the left view of the current call
+    std::size_t grey_stride = 0;               // its row stride, bytes
     std::vector<StripeBuffers> stripes;
     std::size_t cells = 0;
 
@@ -183,6 +187,8 @@ void SgmMatcher::Impl::match_stripe(SgmRow row, int height, int y0, int y1, int 
         const std::size_t yc = static_cast<std::size_t>(std::clamp(t, 0, height - 1));
         row.census_left = census_left.data() + yc * w;
         row.census_right_rev = census_right_rev.data() + yc * w;
+        row.grey_left = grey_left + yc * grey_stride;
+        row.grey_right_rev = grey_right_rev.data() + yc * w;
         row.ring = ring + static_cast<std::size_t>((t % rows + rows) % rows) * volume;
         window(row);
     };
@@ -246,6 +252,9 @@ void SgmMatcher::compute(const std::uint8_t* left, const std::uint8_t* right, st
     const std::size_t plane = static_cast<std::size_t>(width) * height;
     m.census_left.resize(plane);
     m.census_right_rev.resize(plane);
+    m.grey_right_rev.resize(plane);
+    m.grey_left = left;
+    m.grey_stride = stride;
     cv::parallel_for_(cv::Range(0, height), [&](const cv::Range& rows) {
         std::vector<std::uint8_t> planes(4 * static_cast<std::size_t>(width));
         for (int y = rows.start; y < rows.end; ++y) {
@@ -254,6 +263,9 @@ void SgmMatcher::compute(const std::uint8_t* left, const std::uint8_t* right, st
                        false);
             census_row(right, stride, width, height, y, planes.data(),
                        m.census_right_rev.data() + at, true);
+            std::reverse_copy(right + static_cast<std::size_t>(y) * stride,
+                              right + static_cast<std::size_t>(y) * stride + width,
+                              m.grey_right_rev.data() + at);
         }
     });
 
@@ -287,6 +299,7 @@ void SgmMatcher::compute(const std::uint8_t* left, const std::uint8_t* right, st
             row.ring = b.ring.data();
             row.column_sum = b.column_sum.data();
             row.radius = m.options.window / 2;
+            row.intensity_cap = m.options.intensity_cap;
             row.cost = b.cost.data();
             row.sum = b.sum.data();
             row.top = b.top.data();

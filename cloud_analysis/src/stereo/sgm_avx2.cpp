@@ -220,16 +220,26 @@ inline void backward_pixel(const SgmRow& r, int x, RowPath& rl) {
         static_cast<std::int16_t>(subpixel16(s, best, nd, r.equiangular) + r.min_disparity * 16);
 }
 
-}  // namespace
-
-void window_row_avx2(const SgmRow& r) {
+/// Raw costs of the entering row into the ring and the column sums, with or without the
+/// intensity term (a cap of 0 adds nothing: the census-only loop skips it).
+template <bool kIntensity>
+void window_row(const SgmRow& r) {
     const int nv = r.num_disparities / 16;
+    const __m256i cap = _mm256_set1_epi16(static_cast<short>(r.intensity_cap));
     for (int x = r.x_begin; x < r.width; ++x) {
         const std::size_t at = static_cast<std::size_t>(x - r.x_begin) * r.num_disparities;
         const __m256i left = _mm256_set1_epi32(static_cast<int>(r.census_left[x]));
         const std::uint32_t* right = r.census_right_rev + (r.width - 1 - x + r.min_disparity);
+        const __m256i grey = _mm256_set1_epi16(static_cast<short>(r.grey_left[x]));
+        const std::uint8_t* grey_right = r.grey_right_rev + (r.width - 1 - x + r.min_disparity);
         for (int k = 0; k < nv; ++k) {
-            const __m256i cost = costs16(right + 16 * k, left);
+            __m256i cost = costs16(right + 16 * k, left);
+            if (kIntensity) {
+                const __m256i other = _mm256_cvtepu8_epi16(
+                    _mm_loadu_si128(reinterpret_cast<const __m128i*>(grey_right + 16 * k)));
+                cost = _mm256_add_epi16(
+                    cost, _mm256_min_epi16(_mm256_abs_epi16(_mm256_sub_epi16(grey, other)), cap));
+            }
             __m128i* slot = reinterpret_cast<__m128i*>(r.ring + at + 16 * k);
             const __m256i leaving = _mm256_cvtepu8_epi16(_mm_load_si128(slot));
             std::uint16_t* sum = r.column_sum + at + 16 * k;
@@ -237,6 +247,16 @@ void window_row_avx2(const SgmRow& r) {
             _mm_store_si128(slot, _mm_packus_epi16(_mm256_castsi256_si128(cost),
                                                    _mm256_extracti128_si256(cost, 1)));
         }
+    }
+}
+
+}  // namespace
+
+void window_row_avx2(const SgmRow& r) {
+    if (r.intensity_cap > 0) {
+        window_row<true>(r);
+    } else {
+        window_row<false>(r);
     }
 }
 

@@ -98,8 +98,11 @@ void window_row_portable(const SgmRow& r) {
         const std::size_t at = static_cast<std::size_t>(x - r.x_begin) * nd;
         const std::uint32_t left = r.census_left[x];
         const std::uint32_t* right = r.census_right_rev + (r.width - 1 - x + r.min_disparity);
+        const int grey = r.grey_left[x];
+        const std::uint8_t* grey_right = r.grey_right_rev + (r.width - 1 - x + r.min_disparity);
         for (int d = 0; d < nd; ++d) {
-            const int c = __builtin_popcount(left ^ right[d]);
+            const int c = __builtin_popcount(left ^ right[d]) +
+                          std::min(std::abs(grey - grey_right[d]), r.intensity_cap);
             r.column_sum[at + d] =
                 static_cast<std::uint16_t>(r.column_sum[at + d] + c - r.ring[at + d]);
             r.ring[at + d] = static_cast<std::uint8_t>(c);

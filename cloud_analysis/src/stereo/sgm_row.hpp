@@ -20,6 +20,9 @@ inline constexpr int kMaxDisparities = 256;
 struct SgmRow {
     const std::uint32_t* census_left = nullptr;       ///< census of the entering left row, by x
     const std::uint32_t* census_right_rev = nullptr;  ///< ... of the right row, by width-1-x
+    const std::uint8_t* grey_left = nullptr;          ///< grey levels of the entering left row
+    const std::uint8_t* grey_right_rev = nullptr;     ///< ... of the right row, by width-1-x
+    int intensity_cap = 0;                            ///< cap of the intensity term, 0 = none
     std::uint8_t* ring = nullptr;         ///< raw costs of the leaving row; replaced in place
     std::uint16_t* column_sum = nullptr;  ///< raw costs summed over the window's rows
     int radius = 0;                       ///< half the window side, px

@@ -79,6 +79,8 @@ std::vector<std::int16_t> reference_sgm(const Grey& l, const Grey& r, int first_
                 const int xx = std::clamp(x + dx, x0, w - 1);
                 const std::size_t row = static_cast<std::size_t>(std::clamp(y + dy, 0, h - 1)) * w;
                 sum += __builtin_popcount(census_l[row + xx] ^ census_r[row + xx - dmin - d]);
+                const int yy = std::clamp(y + dy, 0, h - 1);
+                sum += std::min(std::abs(l.at(xx, yy) - r.at(xx - dmin - d, yy)), o.intensity_cap);
             }
         }
         return sum;
@@ -182,12 +184,15 @@ TEST_CASE("census SGM kernels equal the plain reference bit for bit on random pa
     if (sgm_has_avx2()) kernels.push_back("avx2");
     struct Case {
         int w, h, shift, noise, first_column, min_d, nd, uniqueness, disp12, stripes, warmup,
-            window;
+            window, cap;
     };
     const Case cases[] = {
-        {72, 30, 9, 20, 0, 0, 32, 0, 1, 1, 0, 1},      {72, 30, 9, 20, 32, 0, 32, 0, 1, 3, 4, 5},
-        {90, 26, 14, 40, 40, 5, 32, 15, -1, 2, 16, 3}, {60, 20, 3, 255, 0, 2, 16, 5, 0, 4, 2, 7},
-        {80, 24, 20, 10, 48, 0, 48, 0, 2, 2, 30, 5},   {40, 12, 5, 30, 36, 0, 16, 0, 1, 3, 1, 9},
+        {72, 30, 9, 20, 0, 0, 32, 0, 1, 1, 0, 1, 0},
+        {72, 30, 9, 20, 32, 0, 32, 0, 1, 3, 4, 5, 8},
+        {90, 26, 14, 40, 40, 5, 32, 15, -1, 2, 16, 3, 31},
+        {60, 20, 3, 255, 0, 2, 16, 5, 0, 4, 2, 7, 0},
+        {80, 24, 20, 10, 48, 0, 48, 0, 2, 2, 30, 5, 20},
+        {40, 12, 5, 30, 36, 0, 16, 0, 1, 3, 1, 9, 4},
     };
     unsigned seed = 1;
     for (const Case& c : cases) {
@@ -201,6 +206,7 @@ TEST_CASE("census SGM kernels equal the plain reference bit for bit on random pa
         o.stripes = c.stripes;
         o.warmup_rows = c.warmup;
         o.window = c.window;
+        o.intensity_cap = c.cap;
         o.p1 = (5 + c.shift % 4) * c.window;
         o.p2 = (40 + c.noise) * c.window * c.window;
         o.subpixel = seed % 2 == 0 ? "equiangular" : "parabola";
@@ -282,6 +288,10 @@ TEST_CASE("the sgm matcher refuses what it does not do, naming the field", "[dis
     s = {};
     s.window = 4;
     CHECK_THROWS_WITH(s.validate(), Catch::StartsWith("window"));
+    s.window = 5;
+    s.intensity_cap = 32;
+    CHECK_THROWS_WITH(s.validate(), Catch::StartsWith("intensity_cap"));
+    s.intensity_cap = 0;
     s.window = 9;
     s.p2 = 20000;  // three path sums of 31 * 81 + p2 would overflow 16 bits
     CHECK_THROWS_WITH(s.validate(), Catch::StartsWith("p2"));

@@ -2,12 +2,14 @@
 
 /// The project's own semi-global matcher: a centre-symmetric census transform over a 9x7 window
 /// (Spangenberg et al., "Large Scale Semi-Global Matching on the CPU", IV 2014: rSGM) with the
-/// Hamming distance summed over a square window as the pixel cost (the box sum steadies the
-/// noisy census of uniform surfaces, as SGBM's block of costs does), and semi-global aggregation
-/// (Hirschmueller, PAMI 2008) along the three paths of OpenCV's MODE_SGBM_3WAY (left to right,
-/// right to left, top to bottom) in 16-bit lanes, rows in stripes over the cores. Post-processing
-/// follows cv::StereoSGBM: parabolic sub-pixel step, uniqueness ratio, the left-right check against
-/// the right view's winners drawn from the same cost volume (disp12MaxDiff); the output is CV_16S
+/// Hamming distance, plus a capped absolute intensity difference (AD-Census: Mei et al., "On
+/// Building an Accurate Stereo Matching System on Graphics Hardware", ICCV Workshops 2011),
+/// summed over a square window as the pixel cost (the box sum steadies the noisy census of
+/// uniform surfaces, as SGBM's block of costs does), and semi-global aggregation (Hirschmueller,
+/// PAMI 2008) along the three paths of OpenCV's MODE_SGBM_3WAY (left to right, right to left, top
+/// to bottom) in 16-bit lanes, rows in stripes over the cores. Post-processing follows
+/// cv::StereoSGBM: parabolic sub-pixel step, uniqueness ratio, the left-right check against the
+/// right view's winners drawn from the same cost volume (disp12MaxDiff); the output is CV_16S
 /// with 4 fractional bits. Bit-exact between its AVX2 and portable kernels.
 
 #include <cstddef>
@@ -21,7 +23,9 @@ namespace cloud_analysis {
 /// left-right check and speckles, live in DisparityOptions). Penalties and the median tuned on
 /// the rendered samples (samples/rendered; docs/performance.md).
 struct SgmOptions {
-    int window = 5;   ///< side of the box the census costs are summed over, px, odd, 1..9
+    int window = 5;         ///< side of the box the census costs are summed over, px, odd, 1..9
+    int intensity_cap = 0;  ///< adds min(|I_left - I_right|, cap) to a pixel's census cost,
+                            ///< grey levels, 0..31; 0 = census alone
     int p1 = 400;     ///< penalty of a +-1 px disparity change, census bits (cost 0..31 * window^2)
     int p2 = 2000;    ///< penalty of a larger change, census bits, > p1
     int stripes = 4;  ///< row stripes matched independently (in parallel), >= 1
