@@ -156,6 +156,7 @@ def part_batch(a, tool, result):
     for root, frames in roots:
         for preset, method, extra in [("tuned", "instances", []), ("tuned", "centroid", []),
                                       ("fast", "instances", []),
+                                      ("tuned", "instances", ["--track"]),
                                       ("tuned", "instances", ["--matcher", "sgm"]),
                                       ("fast", "instances", ["--matcher", "sgm"])]:
             out = a.out / "batch"
@@ -178,7 +179,7 @@ def part_batch(a, tool, result):
                              wait_load_ms=waits[0], wait_finish_ms=waits[1])
             result["batch"].append(rep_short)
             src = "synthetic 1242x375" if "synthetic" in str(root) else "kitti15 " + "+".join(frames)
-            name = preset + (" + sgm" if extra else "")
+            name = preset + (" + sgm" if "sgm" in extra else "") + (" + track" if "--track" in extra else "")
             rep_short["label"] = f"{src}, {name}, {method}"
             print(f"| {src} | {name} | {method} | {rep['fps']:.2f} | "
                   f"{rep['cpu_ms_per_frame']:.0f} | {100 * rep['cores_busy']:.0f} | {load:.1f} | "

@@ -23,6 +23,46 @@ grep -q '"velocity"' "$d/tracked/0000000007.json"
     --visibility "$d/drive/visibility" --min-visible-fraction 0.25 "$@" | tee "$d/eval.txt"
 grep -q "^car      all" "$d/eval.txt"
 
+# The same drive as a KITTI raw folder (image_02/data, image_03/data, timestamps.txt, the
+# calibration in the date folder above) tracked inside batch: the same track ids as
+# batch + track.
+raw=$d/raw/2011_09_26/drive_sync
+mkdir -p "$raw/image_02/data" "$raw/image_03/data"
+cp "$d/drive/image_2/"*.png "$raw/image_02/data/"
+cp "$d/drive/image_3/"*.png "$raw/image_03/data/"
+cp "$d/drive/calib/calib_cam_to_cam.txt" "$d/raw/2011_09_26/"
+for i in $(seq 0 $((frames - 1))); do printf '2011-09-26 13:02:25.%d00000000\n' "$i"; done \
+    > "$raw/image_02/timestamps.txt"
+"$analyse" batch --drive "$raw" --semantic-dir "$d/drive/semantic_rgb" --track \
+    --out-dir "$d/raw-tracked" --quiet
+python3 - "$d/tracked" "$d/raw-tracked" <<'PY'
+import json, os, sys
+a, b = sys.argv[1:3]
+index = json.load(open(os.path.join(b, "sequence.json")))
+assert index["id"] == "drive_sync", index["id"]
+times = [f["timestamp"] for f in index["frames"]]
+assert abs(times[1] - times[0] - 0.1) < 1e-6, times
+for f in index["frames"]:
+    ids = lambda d: sorted((e["id"], e.get("track_id", -1)) for e in json.load(open(os.path.join(d, f["file"])))["entities"])
+    assert ids(a) == ids(b), (f["file"], ids(a), ids(b))
+print("batch --drive --track: the same tracks as batch + track over", len(times), "frames")
+PY
+# A list of pairs, and the flags that do not go together (exit 2, nothing written).
+(cd "$d/drive" && ls image_2 | sed 's#.*#image_2/& image_3/& semantic_rgb/&#') > "$d/drive/pairs.txt"
+"$analyse" batch --pairs "$d/drive/pairs.txt" --calib "$d/drive/calib/calib_cam_to_cam.txt" \
+    --track --out-dir "$d/pairs-tracked" --quiet
+test "$(grep -c '"file"' "$d/pairs-tracked/sequence.json")" = "$frames"
+for bad in "--pairs $d/drive/pairs.txt" "--drive $raw --track --resume" "--drive $raw --evaluate" \
+    "--kitti-root $d/drive --frames 0000000000 --semantic-dir $d"; do
+    set +e
+    # shellcheck disable=SC2086
+    "$analyse" batch $bad --out-dir "$d/refused" 2> "$d/refused.err"
+    code=$?
+    set -e
+    cat "$d/refused.err"
+    test "$code" = 2 && test ! -e "$d/refused"
+done
+
 # An unreadable frame in the middle: named on stderr, exit 1, every other frame tracked and
 # listed in a valid index.
 cp -r "$d/analysed" "$d/broken"

@@ -7,6 +7,7 @@
 #include <cstdio>
 #include <cstdlib>
 #include <fstream>
+#include <map>
 #include <stdexcept>
 
 #include <nlohmann/json.hpp>
@@ -37,7 +38,7 @@ std::vector<std::string> read_frame_list(const std::filesystem::path& path) {
 /// Checks the input folder and the report's folder, then creates --out-dir when it is missing
 /// (with its parents), last, so that a refused run leaves nothing behind.
 void check_batch_folders(const BatchArgs& a) {
-    if (!std::filesystem::is_directory(a.kitti_root)) {
+    if (a.drive.empty() && !std::filesystem::is_directory(a.kitti_root)) {
         throw std::runtime_error("cannot read frames: no such folder (" + a.kitti_root.string() +
                                  ", --kitti-root)");
     }
@@ -102,6 +103,21 @@ cloud_analysis::BatchOptions batch_options(const BatchArgs& a, std::vector<std::
     cloud_analysis::BatchOptions options;
     options.kitti_root = a.kitti_root;
     options.frames = std::move(frames);
+    if (!a.drive.empty()) {
+        // The share's frames, in the drive's order.
+        std::map<std::string, const cloud_analysis::DriveFrame*> by_id;
+        for (const auto& f : a.drive) by_id[f.id] = &f;
+        for (const auto& id : options.frames) options.drive.push_back(*by_id.at(id));
+    }
+    if (a.track) {
+        options.track = a.track_options;
+        const std::filesystem::path source = !a.drive_dir.empty() ? a.drive_dir
+                                             : !a.pairs.empty()   ? a.pairs.parent_path()
+                                                                  : a.kitti_root;
+        options.sequence_id =
+            std::filesystem::absolute(source).lexically_normal().filename().string();
+        if (options.sequence_id.empty()) options.sequence_id = "drive";
+    }
     options.out_dir = a.out_dir;
     options.cloud_formats = a.cloud_formats;
     options.cloud_drop_classes = a.settings.drop_classes;
@@ -146,12 +162,36 @@ CLI::App* add_batch_command(CLI::App& app, BatchArgs& a) {
         "batch",
         "analyse many KITTI-layout frames in one process (matcher, calibration and palette "
         "kept; decoding and writing overlap matching)");
-    cmd->add_option("--kitti-root", a.kitti_root,
-                    "KITTI folder: image_2/ image_3/ semantic_rgb/ calib/")
-        ->required();
+    auto* root = cmd->add_option("--kitti-root", a.kitti_root,
+                                 "KITTI folder: image_2/ image_3/ semantic_rgb/ calib/ (with "
+                                 "--frames or --list)");
+    auto* drive = cmd->add_option("--drive", a.drive_dir,
+                                  "KITTI raw drive folder: image_02/data/*.png, image_03/data/, "
+                                  "image_02/timestamps.txt; calib_cam_to_cam.txt beside or above");
+    auto* pairs = cmd->add_option("--pairs", a.pairs,
+                                  "file of frames, one a line: LEFT RIGHT [SEMANTIC] (paths "
+                                  "relative to the file; needs --calib)");
+    root->excludes(drive)->excludes(pairs);
+    drive->excludes(pairs);
     auto* frames = cmd->add_option("--frames", a.frames, "frame ids, e.g. 000000_10 000001_10");
     auto* list = cmd->add_option("--list", a.list, "file of frame ids, one per line (# comments)");
     frames->excludes(list);
+    for (auto* f : {frames, list}) f->excludes(drive)->excludes(pairs);
+    cmd->add_option("--calib,-c", a.calib, "calibration of --drive (default: found) or --pairs");
+    cmd->add_option("--semantic-dir", a.semantic_dir,
+                    "--drive: semantic images, one per left image of the same name");
+    cmd->add_flag("--track", a.track,
+                  "track the frames in order: entity files with track_id and velocity, and "
+                  "<out-dir>/sequence.json (see `track`)");
+    cmd->add_option("--fps", a.track_options.fps,
+                    "--track: frame rate when frames carry no timestamps, Hz")
+        ->capture_default_str();
+    cmd->add_option("--min-hits", a.track_options.tracker.min_hits,
+                    "--track: hits before a track is reported")
+        ->capture_default_str();
+    cmd->add_option("--max-misses", a.track_options.tracker.max_misses,
+                    "--track: frames without a hit before a confirmed track dies")
+        ->capture_default_str();
     cmd->add_option("--out-dir", a.out_dir, "output folder: <frame>.json per frame")->required();
     cmd->add_option("--clouds", a.cloud_formats, "also write <frame>.<fmt> clouds: xyz pcd ply")
         ->check(CLI::IsMember({"xyz", "pcd", "ply"}));
@@ -181,20 +221,70 @@ CLI::App* add_batch_command(CLI::App& app, BatchArgs& a) {
     return cmd;
 }
 
-void resolve_batch(BatchArgs& a, const CLI::App& cmd) {
-    if (!a.list.empty()) a.frames = read_frame_list(a.list);
-    if (a.frames.empty()) throw CLI::RequiredError("--frames or --list (with frames)");
-    for (const std::string& frame : a.frames) {
-        if (const std::string problem = frame_id_problem(frame); !problem.empty()) {
-            throw CLI::ValidationError("--frames", "frame id '" + frame + "' " + problem);
+namespace {
+
+/// The frames of --drive or --pairs (read now: the share and --resume need their ids).
+void read_drive(BatchArgs& a) {
+    if (!a.drive_dir.empty()) {
+        a.drive = cloud_analysis::kitti_raw_drive(a.drive_dir, a.calib, a.semantic_dir);
+    } else {
+        std::string text;
+        try {
+            text = stereoscene::support::read_text_input(a.pairs);
+        } catch (const stereoscene::support::FileError& e) {
+            throw std::runtime_error("cannot read frame list: " + e.reason() + " (" +
+                                     a.pairs.string() + ", --pairs)");
         }
+        a.drive = cloud_analysis::pair_list(text, a.pairs.parent_path(), a.calib,
+                                            a.pairs.string() + ", --pairs");
     }
+    a.frames.clear();
+    for (const auto& f : a.drive) a.frames.push_back(f.id);
+}
+
+/// The flags that only make sense with one input kind, and --track's limits.
+void check_batch_flags(const BatchArgs& a) {
+    if (a.kitti_root.empty() && a.drive_dir.empty() && a.pairs.empty())
+        throw CLI::RequiredError("--kitti-root, --drive or --pairs");
+    if (!a.pairs.empty() && a.calib.empty())
+        throw CLI::ValidationError("--calib", "is required with --pairs");
+    if (!a.kitti_root.empty() && !a.calib.empty())
+        throw CLI::ValidationError("--calib",
+                                   "only with --drive or --pairs (a KITTI root has calib/)");
+    if (!a.semantic_dir.empty() && a.drive_dir.empty())
+        throw CLI::ValidationError("--semantic-dir", "only with --drive");
+    if (a.evaluate && a.kitti_root.empty())
+        throw CLI::ValidationError("--evaluate", "needs --kitti-root (its disp_occ_0/)");
+    if (a.track && a.resume)
+        throw CLI::ValidationError("--track",
+                                   "cannot resume: the tracker needs every frame in order");
+    if (a.track && a.shard.count > 1)
+        throw CLI::ValidationError("--track", "cannot track a share of the frames (--shard)");
+    try {
+        a.track_options.validate();
+    } catch (const std::invalid_argument& e) {
+        throw CLI::ValidationError("--track", e.what());
+    }
+}
+
+}  // namespace
+
+void resolve_batch(BatchArgs& a, const CLI::App& cmd) {
     try {
         a.shard = a.shard_text.empty() ? shard_from_slurm(std::getenv("SLURM_ARRAY_TASK_ID"),
                                                           std::getenv("SLURM_ARRAY_TASK_COUNT"))
                                        : parse_shard(a.shard_text);
     } catch (const std::invalid_argument& e) {
         throw CLI::ValidationError("--shard", e.what());
+    }
+    check_batch_flags(a);  // every usage error before any file is read
+    if (!a.list.empty()) a.frames = read_frame_list(a.list);
+    if (!a.drive_dir.empty() || !a.pairs.empty()) read_drive(a);
+    if (a.frames.empty()) throw CLI::RequiredError("--frames or --list (with frames)");
+    for (const std::string& frame : a.frames) {
+        if (const std::string problem = frame_id_problem(frame); !problem.empty()) {
+            throw CLI::ValidationError("--frames", "frame id '" + frame + "' " + problem);
+        }
     }
     a.list_frames = a.frames.size();
     a.frames = shard_frames(a.frames, a.shard);
@@ -235,6 +325,9 @@ int run_batch(const BatchArgs& a) {
                      kTool, frame.c_str(), what.c_str());
         bar_open = false;
     };
+    observer.warning = [](const std::string& warning) {
+        std::fprintf(stderr, "%s: warning: %s\n", kTool, warning.c_str());
+    };
     observer.progress = [&](std::size_t done, std::size_t, std::size_t failed, double seconds) {
         if (a.quiet) return;
         const std::string text = progress.update(done, failed, seconds);
@@ -249,6 +342,14 @@ int run_batch(const BatchArgs& a) {
                      "%.0f ms CPU per frame, cores %.0f %% busy\n",
                      bar_open ? "\n" : "", label.c_str(), r.frames, r.seconds, r.fps, r.failed,
                      cloud_analysis::peak_rss_mb(), r.cpu_ms_per_frame, 100.0 * r.cores_busy);
+    }
+    if (!a.quiet && r.tracking) {
+        std::fprintf(
+            stderr,
+            "%s: tracked %zu frames, %zu tracks, %zu restarts, tracker %.3f ms per frame -> %s\n",
+            label.c_str(), r.tracking->tracked, r.tracking->tracks, r.tracking->restarts,
+            r.tracking->tracked ? r.tracking->track_ms / r.tracking->tracked : 0.0,
+            (a.out_dir / "sequence.json").string().c_str());
     }
     const auto warned = warned_frames(r.per_frame);
     if (!a.quiet && !warned.empty()) {

@@ -1,6 +1,7 @@
 #pragma once
 
-/// `cloud-analysis batch`: many KITTI-layout frames in one process (cloud_analysis::run_batch),
+/// `cloud-analysis batch`: many frames in one process (cloud_analysis::run_batch) from a
+/// KITTI-layout root, a KITTI raw drive or a list of pairs, tracked in order on request,
 /// a share of the list (--shard, or a Slurm array task's), --resume, progress and failures on
 /// stderr, an optional JSON report. See docs/performance.md and docs/cluster.md.
 
@@ -12,16 +13,25 @@
 #include <CLI/CLI.hpp>
 
 #include "analysis_flags.hpp"
+#include "cloud_analysis/pipeline/drive.hpp"
 #include "cloud_analysis/pipeline/shard.hpp"
+#include "cloud_analysis/tracking/sequence.hpp"
 
 namespace cloud_analysis::app {
 
 /// Flags of `batch`.
 struct BatchArgs {
-    AnalyseArgs settings;                    ///< palette, preset, SGBM, cloud and entity flags
-    std::filesystem::path kitti_root;        ///< --kitti-root: KITTI layout folder
-    std::vector<std::string> frames;         ///< --frames: frame ids
-    std::filesystem::path list;              ///< --list: file of frame ids, one per line
+    AnalyseArgs settings;                ///< palette, preset, SGBM, cloud and entity flags
+    std::filesystem::path kitti_root;    ///< --kitti-root: KITTI layout folder
+    std::filesystem::path drive_dir;     ///< --drive: KITTI raw drive folder
+    std::filesystem::path pairs;         ///< --pairs: file of LEFT RIGHT [SEMANTIC] lines
+    std::filesystem::path calib;         ///< --calib: the calibration of --drive / --pairs
+    std::filesystem::path semantic_dir;  ///< --semantic-dir: a drive's semantic images
+    std::vector<cloud_analysis::DriveFrame> drive;  ///< the frames of --drive or --pairs
+    bool track = false;                             ///< --track: track ids + sequence.json
+    tracking::SequenceTrackOptions track_options;   ///< --fps, --min-hits, --max-misses
+    std::vector<std::string> frames;                ///< --frames: frame ids
+    std::filesystem::path list;                     ///< --list: file of frame ids, one per line
     std::filesystem::path out_dir;           ///< --out-dir: <frame>.json (+ clouds) per frame
     std::vector<std::string> cloud_formats;  ///< --clouds: any of xyz pcd ply
     bool disparity_kitti = false;            ///< --disparity-kitti: <frame>_disparity.png

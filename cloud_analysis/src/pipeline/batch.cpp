@@ -14,6 +14,7 @@
 #include <utility>
 
 #include <scene_schema/entities.hpp>
+#include <scene_schema/sequence.hpp>
 #include <stereoscene/support/output_transaction.hpp>
 
 #include "cloud_analysis/cloud/cloud_io.hpp"
@@ -69,6 +70,7 @@ struct FinishJob {
     AnalyseResult result;
     std::filesystem::path stem;          ///< out-dir/<frame>
     std::filesystem::path gt_disparity;  ///< scored against when set (BatchOptions::evaluate)
+    std::size_t position = 0;            ///< in the batch's frames (the drive's frame number)
 };
 
 /// What finishing a frame gave: an error text ("" when none) and its milliseconds.
@@ -86,9 +88,26 @@ struct FrameOutput {
     stereoscene::support::FileSync sync = stereoscene::support::FileSync::kDurable;
 };
 
+/// The frame's entity file: its entities with the drive's capture time, tracked when
+/// `sequence` is given.
+std::string frame_entities(const FinishJob& job, const BatchOptions& options,
+                           tracking::SequenceTracker* sequence) {
+    scene_schema::EntityDocument doc =
+        entity_document(job.in, job.result, options.extract, options.run);
+    std::optional<double> time;
+    if (job.position < options.drive.size()) time = options.drive[job.position].timestamp_s;
+    if (time) doc.frame.timestamp_s = time;
+    if (sequence != nullptr) {
+        doc = sequence->track(doc, static_cast<std::int64_t>(job.position),
+                              job.stem.filename().string() + ".json", time);
+    }
+    return scene_schema::dump_checked(doc);
+}
+
 /// Extracts the entities, formats every output and writes them, all or nothing, the entity
-/// file last.
-Finished finish_frame(const FinishJob& job, const BatchOptions& options) {
+/// file last; with `sequence`, tracks the frame first and adds it to the index after.
+Finished finish_frame(const FinishJob& job, const BatchOptions& options,
+                      tracking::SequenceTracker* sequence) {
     const auto start = Clock::now();
     Finished done;
     try {
@@ -112,15 +131,16 @@ Finished finish_frame(const FinishJob& job, const BatchOptions& options) {
                                options.fsync_clouds ? stereoscene::support::FileSync::kDurable
                                                     : stereoscene::support::FileSync::kAtomicOnly});
         }
-        outputs.push_back({job.stem.string() + ".json",
-                           entity_json(job.in, job.result, options.extract, options.run)});
+        outputs.push_back({job.stem.string() + ".json", frame_entities(job, options, sequence)});
         // One transaction: a frame's files are all written or none, and a failure restores
         // what a frame of an earlier run left there.
         stereoscene::support::OutputTransaction files;
         for (const auto& out : outputs) files.stage(out.path, out.bytes, out.sync);
         files.commit();
+        if (sequence != nullptr) sequence->commit(options.out_dir / "sequence.json");
     } catch (const std::exception& e) {
         done.error = e.what();
+        if (sequence != nullptr) sequence->discard();
     }
     if (done.error.empty() && !job.gt_disparity.empty()) {
         try {
@@ -145,7 +165,9 @@ class FrameLoader {
         f.frame = options_.frames[i];
         const auto start = Clock::now();
         try {
-            const InputPaths paths = kitti_layout(options_.kitti_root, f.frame);
+            const InputPaths paths = options_.drive.empty()
+                                         ? kitti_layout(options_.kitti_root, f.frame)
+                                         : options_.drive[i].paths;
             auto it = calibrations_.find(paths.calibration);
             if (it == calibrations_.end()) {
                 it = calibrations_
@@ -190,9 +212,10 @@ std::optional<FinishJob> match(LoadedFrame& frame, const AnalyseOptions& analysi
         if (!warnings.empty()) record["warnings"] = warnings;
         record["points"] = r.cloud_points;
         const auto gt = options.kitti_root / "disp_occ_0" / (frame.frame + ".png");
-        const bool scored = options.evaluate && std::filesystem::exists(gt);
+        const bool scored =
+            options.evaluate && options.drive.empty() && std::filesystem::exists(gt);
         return FinishJob{std::move(*frame.inputs), std::move(r), options.out_dir / frame.frame,
-                         scored ? gt : std::filesystem::path()};
+                         scored ? gt : std::filesystem::path(), 0};
     } catch (const std::exception& e) {
         fail(frame.frame, e.what());
         record["error"] = e.what();
@@ -253,7 +276,10 @@ BatchReport run_batch(const BatchOptions& options, const BatchObserver& observer
         throw std::runtime_error("cannot write output: no such folder (" +
                                  options.out_dir.string() + ")");
     }
-    if (!std::filesystem::is_directory(options.kitti_root)) {
+    if (!options.drive.empty() && options.drive.size() != options.frames.size()) {
+        throw std::invalid_argument("run_batch: the drive's frames and their ids differ in number");
+    }
+    if (options.drive.empty() && !std::filesystem::is_directory(options.kitti_root)) {
         throw std::runtime_error("cannot read frames: no such folder (" +
                                  options.kitti_root.string() + ")");
     }
@@ -271,6 +297,13 @@ BatchReport run_batch(const BatchOptions& options, const BatchObserver& observer
     }
     DisparityMatcher matcher(analysis.disparity);
     FrameLoader load(options, analysis, palette);
+    std::optional<tracking::SequenceTracker> sequence;
+    if (options.track) {
+        sequence.emplace(options.sequence_id, options.track->fps, *options.track,
+                         [&](const std::string& warning) {
+                             if (observer.warning) observer.warning(warning);
+                         });
+    }
 
     BatchReport report;
     const std::size_t n = options.frames.size();
@@ -311,10 +344,11 @@ BatchReport run_batch(const BatchOptions& options, const BatchObserver& observer
         collect();
         per_frame.back()["wait_finish_ms"] = ms_between(collect_start, Clock::now());
         if (job) {
+            job->position = i;
             finishing_frame = frame.frame;
             finishing_record = per_frame.size() - 1;
-            finishing = std::async(std::launch::async, [&options, j = std::move(*job)] {
-                return finish_frame(j, options);
+            finishing = std::async(std::launch::async, [&options, &sequence, j = std::move(*job)] {
+                return finish_frame(j, options, sequence ? &*sequence : nullptr);
             });
         }
         if (observer.progress) {
@@ -322,6 +356,11 @@ BatchReport run_batch(const BatchOptions& options, const BatchObserver& observer
         }
     }
     collect();
+    if (sequence) {
+        sequence->commit(options.out_dir / "sequence.json",
+                         stereoscene::support::FileSync::kDurable);
+        report.tracking = sequence->report();
+    }
     summarize(report, start, cpu_start);
     return report;
 }

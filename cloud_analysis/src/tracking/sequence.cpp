@@ -39,58 +39,77 @@ scene_schema::SequenceIndex read_frames(const fs::path& input) {
     return index;
 }
 
+SequenceTracker::SequenceTracker(std::string id, double fps, const SequenceTrackOptions& options,
+                                 std::function<void(const std::string&)> warn)
+    : tracker_(options.tracker), warn_(std::move(warn)), fps_(fps) {
+    options.validate();
+    if (!(fps > 0.0 && fps <= 1000.0)) throw std::invalid_argument("fps must be in (0, 1000]");
+    written_.id = std::move(id);
+    written_.fps = fps;
+}
+
+scene_schema::EntityDocument SequenceTracker::track(const scene_schema::EntityDocument& doc,
+                                                    std::int64_t index, const std::string& file,
+                                                    std::optional<double> time_s) {
+    const double t = doc.frame.timestamp_s.value_or(time_s.value_or(index / fps_));
+    if (last_time_ && t <= *last_time_) {
+        warn_(file + ": timestamp " + std::to_string(t) + " s is not after the previous " +
+              std::to_string(*last_time_) + " s (the tracker restarts)");
+    }
+    TrackerFrameStats stats;
+    const auto start = std::chrono::steady_clock::now();
+    scene_schema::EntityDocument tracked = tracker_.update(doc, t, &stats);
+    report_.track_ms +=
+        std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - start).count();
+    if (stats.restarted) ++report_.restarts;
+    for (const auto& e : tracked.entities) {
+        if (e.track_id) ids_.insert(*e.track_id);
+    }
+    // The index may only say time goes forward: a restart after time went back keeps the
+    // previous timestamp's order by leaving this frame's out.
+    pending_ = scene_schema::SequenceFrame{index, file, t, {}};
+    if (last_time_ && t < *last_time_) pending_->timestamp_s.reset();
+    return tracked;
+}
+
+void SequenceTracker::commit(const fs::path& index_path, stereoscene::support::FileSync sync) {
+    if (pending_) {
+        if (pending_->timestamp_s) last_time_ = pending_->timestamp_s;
+        written_.frames.push_back(std::move(*pending_));
+        pending_.reset();
+        ++report_.tracked;
+    }
+    scene_schema::write_sequence_file(written_, index_path, sync);
+}
+
+SequenceTrackReport SequenceTracker::report() const {
+    SequenceTrackReport r = report_;
+    r.frames = r.tracked + r.skipped;
+    r.tracks = ids_.size();
+    return r;
+}
+
 SequenceTrackReport track_files(const scene_schema::SequenceIndex& index,
                                 const fs::path& index_path, const fs::path& out_dir,
                                 const SequenceTrackOptions& options,
                                 const std::function<void(const std::string&)>& warn) {
     options.validate();
-    const double fps = index.fps.value_or(options.fps);
-    Tracker tracker(options.tracker);
-    SequenceTrackReport report;
-    report.frames = index.frames.size();
-    scene_schema::SequenceIndex written;
-    written.id = index.id;
-    written.fps = fps;
-    std::set<std::int64_t> ids;
-    std::optional<double> last_time;
+    SequenceTracker sequence(index.id, index.fps.value_or(options.fps), options, warn);
     for (const auto& f : index.frames) {
         scene_schema::EntityDocument doc;
         try {
             doc = scene_schema::read_file(scene_schema::frame_file(index_path, f));
         } catch (const std::exception& e) {
             warn(std::string(e.what()) + " (frame " + std::to_string(f.index) + " skipped)");
-            ++report.skipped;
+            sequence.skip();
             continue;
         }
-        const double t = doc.frame.timestamp_s.value_or(f.timestamp_s.value_or(f.index / fps));
-        if (last_time && t <= *last_time) {
-            warn(f.file + ": timestamp " + std::to_string(t) + " s is not after the previous " +
-                 std::to_string(*last_time) + " s (the tracker restarts)");
-        }
-        TrackerFrameStats stats;
-        const auto start = std::chrono::steady_clock::now();
-        const auto tracked = tracker.update(doc, t, &stats);
-        report.track_ms +=
-            std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - start)
-                .count();
-        if (stats.restarted) ++report.restarts;
-        for (const auto& e : tracked.entities) {
-            if (e.track_id) ids.insert(*e.track_id);
-        }
+        const auto tracked = sequence.track(doc, f.index, f.file, f.timestamp_s);
         scene_schema::write_file(tracked, out_dir / f.file);
-        // The index may only say time goes forward: a restart after time went back keeps the
-        // previous timestamp's order by leaving this frame's out.
-        scene_schema::SequenceFrame entry{f.index, f.file, t, {}};
-        if (last_time && t < *last_time) entry.timestamp_s.reset();
-        if (entry.timestamp_s) last_time = t;
-        written.frames.push_back(entry);
-        scene_schema::write_sequence_file(written, out_dir / "sequence.json");
-        ++report.tracked;
+        sequence.commit(out_dir / "sequence.json");
     }
-    if (written.frames.empty())
-        scene_schema::write_sequence_file(written, out_dir / "sequence.json");
-    report.tracks = ids.size();
-    return report;
+    sequence.commit(out_dir / "sequence.json", stereoscene::support::FileSync::kDurable);
+    return sequence.report();
 }
 
 }  // namespace cloud_analysis::tracking

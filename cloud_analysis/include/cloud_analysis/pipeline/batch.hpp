@@ -8,6 +8,7 @@
 #include <cstddef>
 #include <filesystem>
 #include <functional>
+#include <optional>
 #include <string>
 #include <vector>
 
@@ -16,13 +17,22 @@
 #include "cloud_analysis/entities/entity_document.hpp"
 #include "cloud_analysis/entities/extract.hpp"
 #include "cloud_analysis/pipeline/batch_report.hpp"
+#include "cloud_analysis/pipeline/drive.hpp"
+#include "cloud_analysis/tracking/sequence.hpp"
 
 namespace cloud_analysis {
 
 /// Settings of run_batch.
 struct BatchOptions {
-    std::filesystem::path kitti_root;             ///< KITTI layout folder (image_2/, image_3/, ...)
-    std::vector<std::string> frames;              ///< frame ids, analysed in this order
+    std::filesystem::path kitti_root;  ///< KITTI layout folder (image_2/, image_3/, ...)
+    std::vector<std::string> frames;   ///< frame ids, analysed in this order
+    /// Frames with their own files (a KITTI raw drive or a list of pairs), analysed in this
+    /// order; when given, `frames` must hold their ids and kitti_root is not read.
+    std::vector<DriveFrame> drive;
+    /// Track the frames in order as they are written: entity files with track ids and
+    /// out_dir/sequence.json, rewritten after every frame (tracking/sequence.hpp).
+    std::optional<tracking::SequenceTrackOptions> track;
+    std::string sequence_id = "drive";            ///< the index's id when tracking
     std::filesystem::path out_dir;                ///< <frame>.json (+ clouds) per frame; must exist
     std::vector<std::string> cloud_formats;       ///< also <frame>.<fmt> for each of xyz, pcd, ply
     std::vector<std::string> cloud_drop_classes;  ///< classes left out of the clouds ("sky")
@@ -52,6 +62,8 @@ struct BatchReport {
     /// With BatchOptions::evaluate: the scores of the frames that had ground truth (per frame:
     /// d1_all and epe_px in per_frame, or evaluation_error when the truth could not be used).
     DisparityTally evaluation;
+    /// With BatchOptions::track: frames tracked, tracks, restarts, tracker time.
+    std::optional<tracking::SequenceTrackReport> tracking;
 };
 
 /// Called on the calling thread as the batch goes: failed(frame, reason) for each frame that
@@ -62,12 +74,17 @@ struct BatchObserver {
     std::function<void(const std::string& frame, const std::string& reason)> not_scored;
     std::function<void(std::size_t done, std::size_t total, std::size_t failed, double seconds)>
         progress;
+    /// With tracking: the tracker's warnings ("<file>: <reason>"), called from the finishing
+    /// thread.
+    std::function<void(const std::string& warning)> warning;
 };
 
 /// Analyses every frame of options.frames and writes its files into options.out_dir, each
 /// frame all or nothing and its entity file last (so a killed batch leaves each frame whole or
-/// without its entity file). Throws before the first frame when a folder is missing or the palette
-/// cannot be read; a frame that fails later is reported to the observer and skipped.
+/// without its entity file). With options.track the finishing thread, which takes the frames
+/// in order, tracks each frame before writing it and adds it to the index after. Throws before the
+/// first frame when a folder is missing or the palette cannot be read; a frame that fails later is
+/// reported to the observer and skipped.
 BatchReport run_batch(const BatchOptions& options, const BatchObserver& observer);
 
 /// Peak resident set of this process so far, MB.

@@ -36,8 +36,8 @@ std::string frame_outputs_problem(const std::filesystem::path& out_dir, const st
 std::size_t cloud_file_points(const std::filesystem::path& path);
 
 /// Removes the temporary files a killed writer left beside these frames' outputs
-/// (`.<name>.tmp-XXXXXX`, see stereoscene::support::write_file_atomic); only those of the given frames,
-/// so shards sharing a folder do not touch each other's. Returns how many were removed.
+/// (`.<name>.tmp-XXXXXX`, see stereoscene::support::write_file_atomic); only those of the given
+/// frames, so shards sharing a folder do not touch each other's. Returns how many were removed.
 std::size_t remove_stale_temporaries(const std::filesystem::path& out_dir,
                                      const std::vector<std::string>& frames,
                                      const FrameOutputs& outputs);

@@ -6,6 +6,8 @@
 
 #include <filesystem>
 #include <functional>
+#include <optional>
+#include <set>
 #include <string>
 
 #include "cloud_analysis/tracking/tracker.hpp"
@@ -34,6 +36,45 @@ struct SequenceTrackReport {
     std::size_t restarts = 0;  ///< tracker restarts (gaps, time going back)
     std::size_t tracks = 0;    ///< distinct track ids written
     double track_ms = 0.0;     ///< time spent in the tracker, ms
+};
+
+/// Frames tracked as they come (a batch's frames in order, or track_files'): each tracked, then
+/// written by the caller, then added to the index, which is rewritten after every frame.
+class SequenceTracker {
+  public:
+    /// `id` and `fps` go to the index; `warn` gets "<file>: <reason>" warnings.
+    SequenceTracker(std::string id, double fps, const SequenceTrackOptions& options,
+                    std::function<void(const std::string&)> warn);
+
+    /// Tracks frame number `index` (to be written as `file`, relative to the index) at
+    /// doc.frame.timestamp, else `time_s`, else index / fps; returns the tracked document. Time
+    /// going back is warned about and restarts the tracker.
+    scene_schema::EntityDocument track(const scene_schema::EntityDocument& doc, std::int64_t index,
+                                       const std::string& file, std::optional<double> time_s);
+
+    /// Adds the frame last tracked to the index and writes it to `index_path` (atomically;
+    /// durably with kDurable). Without a frame tracked since, writes the index as it is.
+    void commit(const std::filesystem::path& index_path,
+                stereoscene::support::FileSync sync = stereoscene::support::FileSync::kAtomicOnly);
+
+    /// Leaves the frame last tracked out of the index (its file could not be written).
+    void discard() { pending_.reset(); }
+
+    /// Counts a frame that could not be read or analysed (the tracker sees a gap).
+    void skip() { ++report_.skipped; }
+
+    /// What was tracked so far (frames = tracked + skipped).
+    SequenceTrackReport report() const;
+
+  private:
+    Tracker tracker_;
+    std::function<void(const std::string&)> warn_;
+    double fps_;
+    scene_schema::SequenceIndex written_;
+    std::optional<scene_schema::SequenceFrame> pending_;
+    std::optional<double> last_time_;
+    std::set<std::int64_t> ids_;
+    SequenceTrackReport report_;
 };
 
 /// Tracks every frame of `index` (files relative to `index_path`'s folder) and writes
