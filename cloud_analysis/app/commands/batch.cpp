@@ -192,6 +192,10 @@ CLI::App* add_batch_command(CLI::App& app, BatchArgs& a) {
     cmd->add_option("--max-misses", a.track_options.tracker.max_misses,
                     "--track: frames without a hit before a confirmed track dies")
         ->capture_default_str();
+    cmd->add_option("--coast", a.track_options.tracker.coast_frames,
+                    "--track: frames a confirmed track missed by the detector is still "
+                    "reported, at its prediction")
+        ->capture_default_str();
     cmd->add_option("--out-dir", a.out_dir, "output folder: <frame>.json per frame")->required();
     cmd->add_option("--clouds", a.cloud_formats, "also write <frame>.<fmt> clouds: xyz pcd ply")
         ->check(CLI::IsMember({"xyz", "pcd", "ply"}));

@@ -28,6 +28,15 @@ CLI::App* add_track_command(CLI::App& app, TrackArgs& a) {
     cmd->add_option("--max-misses", o.tracker.max_misses,
                     "frames without a hit before a confirmed track dies")
         ->capture_default_str();
+    cmd->add_option("--settle-hits", o.tracker.size_settle_hits,
+                    "hits after confirmation during which a track's size may still change")
+        ->capture_default_str();
+    cmd->add_flag("!--no-first-frames", o.tracker.confirm_first_frames,
+                  "do not report tracks born in the first frames before their min-hits");
+    cmd->add_option("--coast", o.tracker.coast_frames,
+                    "frames a confirmed track missed by the detector is still reported, at its "
+                    "prediction")
+        ->capture_default_str();
     cmd->add_option("--max-gap", o.tracker.max_gap_s,
                     "a longer gap between frames restarts the tracker, s")
         ->capture_default_str();

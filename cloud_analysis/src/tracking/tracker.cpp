@@ -45,6 +45,7 @@ void TrackerOptions::validate() const {
     require(min_hits >= 1, "min_hits", "must be >= 1");
     require(max_misses >= 1, "max_misses", "must be >= 1");
     require(std::isfinite(max_gap_s) && max_gap_s > 0.0, "max_gap_s", "must be > 0");
+    require(coast_frames >= 0 && coast_frames <= 100, "coast_frames", "must be in 0..100");
     require(heading_gain > 0.0 && heading_gain <= 1.0, "heading_gain", "must be in (0, 1]");
     require(height_gain > 0.0 && height_gain <= 1.0, "height_gain", "must be in (0, 1]");
     require(std::isfinite(heading_from_motion_mps) && heading_from_motion_mps >= 0.0,
@@ -135,7 +136,7 @@ void absorb(Track& t, const scene_schema::Entity& e, const TrackerOptions& o) {
 }
 
 Track born(const scene_schema::Entity& e, std::int64_t id, const TrackerOptions& o) {
-    Track t{id, e.class_name, GroundKalman(e.x, e.z, o.kalman)};
+    Track t{id, e.class_name, e.class_id, e.confidence, GroundKalman(e.x, e.z, o.kalman)};
     t.y_m = e.y;
     t.theta_rad = wrap(e.theta);
     t.W = t.sum_W = e.W;
@@ -162,6 +163,27 @@ void report(const Track& t, const TrackerOptions& o, scene_schema::Entity& e) {
     e.W = t.W;
     e.H = t.H;
     e.L = t.L;
+}
+
+/// The entity of a track missed in this frame: its predicted box, the confidence of its last
+/// detection halved for every frame missed, no supporting points.
+scene_schema::Entity predicted(const Track& t, const TrackerOptions& o,
+                               const scene_schema::EntityDocument& frame) {
+    scene_schema::Entity e;
+    e.id = "track-" + std::to_string(t.id);
+    for (int k = 2;
+         std::any_of(frame.entities.begin(), frame.entities.end(),
+                     [&](const scene_schema::Entity& other) { return other.id == e.id; });
+         ++k) {
+        e.id = "track-" + std::to_string(t.id) + "-" + std::to_string(k);
+    }
+    e.class_name = t.class_name;
+    e.class_id = t.class_id;
+    e.confidence = t.confidence * std::pow(0.5, t.misses);
+    e.point_count = 0;
+    e.method = "track prediction";
+    report(t, o, e);
+    return e;
 }
 
 }  // namespace
@@ -196,6 +218,7 @@ scene_schema::EntityDocument Tracker::update(const scene_schema::EntityDocument&
             Track& t = tracks_[track_of[i]];
             t.motion.update(e.x, e.z);
             absorb(t, e, options_);
+            t.confidence = e.confidence;
             ++t.hits;
             t.misses = 0;
             hit[track_of[i]] = 1;
@@ -208,7 +231,8 @@ scene_schema::EntityDocument Tracker::update(const scene_schema::EntityDocument&
         }
         Track& t = tracks_[track_of[i]];
         if (!t.confirmed &&
-            (t.hits >= options_.min_hits || frames_since_start_ <= options_.min_hits)) {
+            (t.hits >= options_.min_hits ||
+             (options_.confirm_first_frames && frames_since_start_ <= options_.min_hits))) {
             t.confirmed = true;
             t.size_locked = true;
             t.sum_W = t.sum_H = t.sum_L = 0.0;
@@ -219,7 +243,8 @@ scene_schema::EntityDocument Tracker::update(const scene_schema::EntityDocument&
             ++s.reported;
         }
     }
-    // Misses; tentative tracks die at their first, confirmed ones after max_misses.
+    // Misses; tentative tracks die at their first, confirmed ones after max_misses. A
+    // confirmed track missed for at most coast_frames frames is reported at its prediction.
     std::vector<Track> alive;
     alive.reserve(tracks_.size());
     for (std::size_t k = 0; k < tracks_.size(); ++k) {
@@ -228,9 +253,14 @@ scene_schema::EntityDocument Tracker::update(const scene_schema::EntityDocument&
         const bool dead = t.misses > 0 && (!t.confirmed || t.misses >= options_.max_misses);
         if (dead) {
             ++s.died;
-        } else {
-            alive.push_back(std::move(t));
+            continue;
         }
+        if (!hit[k] && t.misses <= options_.coast_frames) {
+            out.entities.push_back(predicted(t, options_, out));
+            ++s.reported;
+            ++s.coasted;
+        }
+        alive.push_back(std::move(t));
     }
     tracks_ = std::move(alive);
     if (stats) *stats = s;

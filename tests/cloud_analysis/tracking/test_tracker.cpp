@@ -231,3 +231,45 @@ TEST_CASE("tracker options name the bad field", "[tracking]") {
     CHECK_THROWS_AS(track_sequence({EntityDocument{}}, {}, TrackerOptions{}),
                     std::invalid_argument);
 }
+
+TEST_CASE("a missed confirmed track coasts at its prediction for coast_frames frames",
+          "[tracking]") {
+    TrackerOptions options;
+    options.coast_frames = 2;
+    Tracker tracker(options);
+    // A car driving forward at 5 m/s, confirmed, then lost by the detector for three frames.
+    for (int i = 0; i < 6; ++i) {
+        Entity e = car(1.0, 10.0 + 0.5 * i, kPi / 2);
+        e.confidence = 0.8;
+        tracker.update(frame_of({e}), 0.1 * i);
+    }
+    const auto missed = [&](int i) { return tracker.update(frame_of({}), 0.1 * i); };
+    const auto first = missed(6);
+    REQUIRE(first.entities.size() == 1);
+    const Entity& p = first.entities[0];
+    CHECK(p.method == std::optional<std::string>("track prediction"));
+    CHECK(p.id.rfind("track-", 0) == 0);
+    CHECK(p.track_id);
+    CHECK(p.class_name == "car");
+    CHECK(p.class_id == 26);
+    CHECK(p.point_count == 0);
+    CHECK(p.confidence == Approx(0.4));
+    CHECK(p.z == Approx(13.0).margin(0.15));  // predicted on, not where it was last seen
+    const auto second = missed(7);
+    REQUIRE(second.entities.size() == 1);
+    CHECK(second.entities[0].confidence == Approx(0.2));
+    CHECK(second.entities[0].track_id == p.track_id);
+    CHECK(missed(8).entities.empty());    // a third miss: no longer reported
+    CHECK(tracker.tracks().size() == 1);  // still alive until max_misses
+}
+
+TEST_CASE("a confirmed track's size is fixed by default", "[tracking]") {
+    Tracker tracker;
+    std::vector<EntityDocument> out;
+    for (int i = 0; i < 12; ++i) {
+        // A parked car first seen truncated (3 m long), then whole (4.5 m).
+        out.push_back(tracker.update(frame_of({car(2.0, 15.0, 0.0, i < 4 ? 3.0 : 4.5)}), 0.1 * i));
+    }
+    const double L = out[3].entities[0].L;
+    for (std::size_t i = 3; i < out.size(); ++i) CHECK(out[i].entities[0].L == Approx(L));
+}

@@ -27,8 +27,16 @@ struct TrackerOptions {
         {"car", 2.5}, {"truck", 3.0}, {"bus", 3.0}, {"person", 1.2}, {"rider", 1.5}};
     double default_gate_m = 2.0;  ///< gate of classes without their own, metres
     int min_hits = 3;             ///< a track is confirmed (reported) after this many hits
+    /// Tracks born in the first min_hits frames of a run are confirmed at once (AB3DMOT's
+    /// rule: nothing is lost at the start, but their heading is then reported before their
+    /// motion can tell which way round the box is).
+    bool confirm_first_frames = true;
     int max_misses = 10;  ///< a confirmed track dies after this many frames in a row without a hit
-    double max_gap_s = 1.0;     ///< a longer gap between frames restarts the tracker, s
+    double max_gap_s = 1.0;  ///< a longer gap between frames restarts the tracker, s
+    /// A confirmed track missed in a frame is still reported, at its prediction, for this many
+    /// frames in a row (the detector losing a car for a frame or two, e.g. behind a passing
+    /// car); 0 reports only matched tracks.
+    int coast_frames = 0;
     double heading_gain = 0.3;  ///< weight of a new heading in the smoothed one, 0..1
     double height_gain = 0.3;   ///< weight of a new box centre height (y), 0..1
     /// Above this speed the heading follows the velocity's direction (resolving the box's
@@ -38,7 +46,7 @@ struct TrackerOptions {
     /// re-estimated (mean of the measurements since) when that mean leaves it by more than
     /// this in W, H or L (a car first seen truncated), metres; afterwards it is fixed.
     double size_relock_m = 0.4;
-    int size_settle_hits = 10;  ///< hits after confirmation during which the size may change
+    int size_settle_hits = 0;  ///< hits after confirmation during which the size may change
     /// The velocity is written only once the filter knows it this well (std of vx and vz,
     /// m/s); before, the entity has no `velocity` (unknown, not 0).
     double max_velocity_sigma_mps = 1.0;
@@ -54,6 +62,7 @@ struct TrackerFrameStats {
     int born = 0;            ///< new tracks
     int died = 0;            ///< tracks removed after too many misses
     int reported = 0;        ///< entities written with a track_id
+    int coasted = 0;         ///< of those, predictions of tracks missed in this frame
     bool restarted = false;  ///< the tracker dropped every track first (gap or time going back)
 };
 
@@ -61,6 +70,8 @@ struct TrackerFrameStats {
 struct Track {
     std::int64_t id = 0;               ///< the track_id written
     std::string class_name;            ///< class of its first detection
+    int class_id = 0;                  ///< its class id
+    double confidence = 1.0;           ///< of its last detection
     GroundKalman motion;               ///< position and velocity in the ground plane
     double y_m = 0.0;                  ///< smoothed box centre height (camera y), metres
     double theta_rad = 0.0;            ///< smoothed heading
