@@ -80,8 +80,8 @@ int main(int argc, char** argv) {
     app_::EvaluateTracksArgs evaluate_tracks_args;
     CLI::App* evaluate_tracks = app_::add_evaluate_tracks_command(app, evaluate_tracks_args);
     stereoscene::support::LimitFlags limit_flags;
-    for (CLI::App* command : app.get_subcommands([](CLI::App*) { return true; })) {
-        stereoscene::support::add_limit_flags(*command, limit_flags, false);
+    for (CLI::App* sub : app.get_subcommands([](CLI::App*) { return true; })) {
+        stereoscene::support::add_limit_flags(*sub, limit_flags, false);
     }
 
     try {

@@ -36,6 +36,7 @@ struct ClassState {
     std::map<std::int64_t, std::size_t> truth_frames, track_frames;
     std::map<std::int64_t, double> last_theta;                  ///< track -> its previous heading
     std::map<std::int64_t, std::array<double, 6>> parked_size;  ///< track -> min/max W, H, L
+    std::vector<HotaFrame> hota_frames;  ///< the scored truth and tracks of every frame
 };
 
 void count(TrackCounts& bin, TrackCounts& all, std::size_t TrackCounts::*field) {
@@ -155,14 +156,30 @@ void score_frame(ClassState& s, const std::vector<const TrackedObject*>& truth,
             }
         }
     }
+    HotaFrame frame;
+    std::vector<const TrackedObject*> scored_truth, scored_hyps;
+    for (const auto* gt : truth) {
+        if (gt->owed) scored_truth.push_back(gt);
+    }
     for (std::size_t h = 0; h < hyps.size(); ++h) {
         bool ignored = false;
         for (const auto& [t, hh] : pairs)
             ignored = ignored || (hh == static_cast<int>(h) && !truth[t]->owed);
         if (!ignored && distance_bin(bev_range_m(hyps[h]->box)) >= 0) {
             ++s.track_frames[hyps[h]->track_id];
+            scored_hyps.push_back(hyps[h]);
         }
     }
+    // HOTA's similarity: 1 at the same centre, 0 at the match distance (bird's eye).
+    for (const auto* gt : scored_truth) {
+        frame.truth.push_back(gt->track_id);
+        for (const auto* hy : scored_hyps) {
+            frame.similarity.push_back(
+                std::max(0.0, 1.0 - bev_distance(gt->box, hy->box) / options.max_match_distance_m));
+        }
+    }
+    for (const auto* hy : scored_hyps) frame.tracks.push_back(hy->track_id);
+    s.hota_frames.push_back(std::move(frame));
 }
 
 /// IDF1 = 2 IDTP / (truth + hypotheses) with the identity matching that maximises IDTP.
@@ -246,6 +263,7 @@ TrackEvaluation evaluate_tracks(const std::vector<TrackedFrame>& frames,
     result.frames = frames.size();
     for (auto& [name, state] : states) {
         identity_scores(state);
+        state.score.hota = hota(state.hota_frames);
         result.classes.push_back(std::move(state.score));
     }
     return result;
@@ -348,9 +366,11 @@ std::string format_track_report(const TrackEvaluation& evaluation) {
     for (const auto& c : evaluation.classes) {
         if (c.bins[kAllBins].truth == 0 && c.bins[kAllBins].hypotheses == 0) continue;
         std::snprintf(line, sizeof line,
-                      "%s: IDF1 %.3f, velocity error median %.2f m/s moving (%zu), %.2f m/s "
-                      "still (%zu), heading flips %zu, parked size spread %.3f m\n",
-                      c.class_name.c_str(), c.idf1, median(c.moving_velocity_errors_mps),
+                      "%s: IDF1 %.3f, HOTA %.3f (DetA %.3f, AssA %.3f, LocA %.3f), velocity "
+                      "error median %.2f m/s moving (%zu), %.2f m/s still (%zu), heading flips "
+                      "%zu, parked size spread %.3f m\n",
+                      c.class_name.c_str(), c.idf1, c.hota.hota, c.hota.deta, c.hota.assa,
+                      c.hota.loca, median(c.moving_velocity_errors_mps),
                       c.moving_velocity_errors_mps.size(), median(c.static_velocity_errors_mps),
                       c.static_velocity_errors_mps.size(), c.heading_flips, c.parked_size_spread_m);
         out << line;

@@ -1,7 +1,8 @@
 #pragma once
 
 /// Tracking evaluation of a drive: CLEAR MOT (Bernardin & Stiefelhagen 2008: MOTA, ID
-/// switches, fragmentations), identity scores (Ristani et al. 2016: IDF1), velocity error,
+/// switches, fragmentations), identity scores (Ristani et al. 2016: IDF1), HOTA (Luiten et
+/// al. 2020), velocity error,
 /// heading flips and the size steadiness of parked objects, per class and distance bin.
 /// The truth is a synthetic drive's per-frame entity files (scene-render sensors --frames) or
 /// KITTI tracking labels (label_02). See docs/evaluation.md "Tracking".
@@ -17,6 +18,7 @@
 #include <scene_schema/entities.hpp>
 
 #include "cloud_analysis/evaluation/entity_eval.hpp"
+#include "cloud_analysis/evaluation/hota.hpp"
 
 namespace cloud_analysis {
 
@@ -63,8 +65,10 @@ struct ClassTrackScore {
     std::string class_name;
     /// Distance bins of entity_eval (0-10, 10-20, 20-30, 30-50), then all.
     std::array<TrackCounts, kDistanceBinEdges_m.size() + 1> bins;
-    double idf1 = 1.0;                  ///< 2 IDTP / (truth + hypotheses), over all bins
-    std::size_t id_true_positives = 0;  ///< IDTP of the best identity matching
+    double idf1 = 1.0;  ///< 2 IDTP / (truth + hypotheses), over all bins
+    /// HOTA over all bins, similarity 1 - distance / max_match_distance_m (bird's eye).
+    HotaScore hota;
+    std::size_t id_true_positives = 0;               ///< IDTP of the best identity matching
     std::vector<double> moving_velocity_errors_mps;  ///< |v_hyp - v_truth|, moving truth
     std::vector<double> static_velocity_errors_mps;  ///< the same for still truth
     std::size_t heading_flips = 0;  ///< consecutive outputs of a track turning > 90 degrees
