@@ -1,9 +1,11 @@
 #!/usr/bin/env bash
 # Builds the libFuzzer harnesses (tests/fuzz, clang with ASan + UBSan, in build-fuzz/) and runs
 # each in turn, seeded from the samples, assets and the bad-input corpus. A crash is copied to
-# tests/corpus/fuzz/<harness>/ as a regression case; the totals are appended to build-fuzz/fuzz-totals.txt.
+# tests/corpus/fuzz/<harness>/ as a regression case; the totals are appended to
+# build-fuzz/fuzz-totals.txt.
 # usage: scripts/fuzz.sh [seconds per harness (default 60)] [harness name...]
-# Runs at nice 19, one job at a time (the machine is shared).
+# Runs at nice 19, one job at a time (the machine is shared); an input gets 60 s before it counts
+# as a hang, since a shared machine can starve a nice-19 process for seconds.
 set -euo pipefail
 source "$(dirname "${BASH_SOURCE[0]}")/common.sh"
 
@@ -58,7 +60,7 @@ for h in "${harnesses[@]}"; do
     ASAN_OPTIONS=detect_leaks=0:allocator_may_return_null=1 \
     UBSAN_OPTIONS=print_stacktrace=1:halt_on_error=1 \
         nice -n 19 "$build/tests/fuzz/$h" -max_total_time="$seconds" -rss_limit_mb=2048 \
-        -timeout=10 -max_len=65536 -print_final_stats=1 -artifact_prefix="$work/artifacts/" \
+        -timeout=60 -max_len=65536 -print_final_stats=1 -artifact_prefix="$work/artifacts/" \
         "$work/corpus" > "$log" 2>&1
     rc=$?
     set -e
