@@ -178,14 +178,25 @@ struct CentredPoints {
     }
 };
 
-/// Angle in [0, pi/2) of the first rectangle axis maximising Zhang et al.'s closeness score.
-double best_lshape_angle(const std::vector<Eigen::Vector2d>& pts, double step_deg) {
+/// Whether rectangle axis angle `a` lies within `tolerance` of `blocked` modulo 90 degrees
+/// (never when blocked is NaN: nothing blocked).
+bool blocked_angle(double a, double blocked, double tolerance) {
+    if (std::isnan(blocked)) return false;
+    double d = std::fmod(std::abs(a - blocked), kPi / 2.0);
+    return std::min(d, kPi / 2.0 - d) < tolerance;
+}
+
+/// Angle in [0, pi/2) of the first rectangle axis maximising Zhang et al.'s closeness score,
+/// skipping axes within `tolerance` of `blocked` (modulo 90 degrees; NaN: none).
+double best_lshape_angle(const std::vector<Eigen::Vector2d>& pts, double step_deg,
+                         double blocked = std::nan(""), double tolerance = 0.0) {
     const int steps = std::max(1, static_cast<int>(std::lround(90.0 / step_deg)));
     CentredPoints centred(pts);
     double best_angle = 0.0;
     float best_score = -1.0f;
     for (int s = 0; s < steps; ++s) {
         const double a = s * (kPi / 2.0) / steps;
+        if (blocked_angle(a, blocked, tolerance)) continue;
         const float score = centred.score(a, nullptr);
         if (score > best_score) {
             best_score = score;
@@ -199,13 +210,15 @@ double best_lshape_angle(const std::vector<Eigen::Vector2d>& pts, double step_de
 /// searched coarse to fine: kCoarseStepDeg steps over 90 degrees, then step_deg steps within
 /// one coarse step of the best (29 passes instead of 90 at 1 degree).
 double best_weighted_lshape_angle(const std::vector<Eigen::Vector2d>& pts,
-                                  const std::vector<float>& weights, double step_deg) {
+                                  const std::vector<float>& weights, double step_deg,
+                                  double blocked = std::nan(""), double tolerance = 0.0) {
     constexpr double kCoarseStepDeg = 5.0;
     CentredPoints centred(pts);
     const double coarse = kCoarseStepDeg * kPi / 180.0;
     double best_angle = 0.0;
     float best_score = -1.0f;
     const auto consider = [&](double a) {
+        if (blocked_angle(a, blocked, tolerance)) return;
         const float s = centred.score(a, weights.data());
         if (s > best_score) {
             best_score = s;
@@ -319,6 +332,22 @@ void complete_away(double& lo, double& hi, double size) {
     }
 }
 
+/// Interval [lo, hi] along an axis grown to `size` towards the image edge that cuts the object:
+/// `outward` is the axis's component of the edge's outward normal (the hidden part lies beyond
+/// the edge). An axis nearly parallel to the edge (|outward| < 0.2) is completed away from the
+/// camera as usual.
+void complete_beyond_edge(double& lo, double& hi, double size, double outward) {
+    if (std::abs(outward) < 0.2) {
+        complete_away(lo, hi, size);
+    } else if (hi - lo < size) {
+        if (outward > 0.0) {
+            hi = lo + size;
+        } else {
+            lo = hi - size;
+        }
+    }
+}
+
 /// Extents of the points along the footprint axes and of their heights (trimmed quantiles).
 struct Extents {
     double lo1, hi1;               ///< along e1, metres from the camera's foot
@@ -353,8 +382,22 @@ OrientedBox assemble_box(const GroundFrame& frame, bool has_ground, const BoxFit
     }
     // Coordinates along each axis are relative to the camera (at 0), so complete_away grows
     // the box away from it.
-    if (options.prior_L_m > 0.0) complete_away(lo1, hi1, options.prior_L_m);
-    if (options.prior_W_m > 0.0) complete_away(lo2, hi2, options.prior_W_m);
+    if (options.truncation_xz) {
+        // The border's ray and its normal pointing away from the optical axis.
+        const Eigen::Vector2d ray = frame
+                                        .footprint(Eigen::Vector3d(options.truncation_xz->x(), 0.0,
+                                                                   options.truncation_xz->y()))
+                                        .normalized();
+        Eigen::Vector2d outward(-ray.y(), ray.x());
+        if (outward.dot(frame.footprint(Eigen::Vector3d(0.0, 0.0, 1.0))) > 0.0) outward = -outward;
+        if (options.prior_L_m > 0.0)
+            complete_beyond_edge(lo1, hi1, options.prior_L_m, outward.dot(e1));
+        if (options.prior_W_m > 0.0)
+            complete_beyond_edge(lo2, hi2, options.prior_W_m, outward.dot(e2));
+    } else {
+        if (options.prior_L_m > 0.0) complete_away(lo1, hi1, options.prior_L_m);
+        if (options.prior_W_m > 0.0) complete_away(lo2, hi2, options.prior_W_m);
+    }
 
     double top = x.top_seen;
     const double bottom = has_ground && options.rest_on_ground ? 0.0 : x.bottom_seen;
@@ -391,6 +434,12 @@ void BoxFitOptions::validate() const {
     }
     if (yaw_rad && !std::isfinite(*yaw_rad)) {
         throw std::invalid_argument("box.yaw_rad: must be finite");
+    }
+    if (truncation_xz && !(truncation_xz->allFinite() && truncation_xz->norm() > 0.0)) {
+        throw std::invalid_argument("box.truncation_xz: must be finite, not the camera's foot");
+    }
+    if (!(truncation_exclusion_deg >= 0.0 && truncation_exclusion_deg < 45.0)) {
+        throw std::invalid_argument("box.truncation_exclusion_deg: must be in [0, 45)");
     }
 }
 
@@ -433,6 +482,12 @@ OrientedBox fit_upright_box(const std::vector<Eigen::Vector3f>& points_m,
     // The angle search costs 90 passes: run it on at most kMaxSearchPoints evenly strided points.
     constexpr std::size_t kMaxSearchPoints = 3000;
     double angle = 0.0;
+    double blocked = std::nan("");
+    const double tolerance = options.truncation_exclusion_deg * kPi / 180.0;
+    if (options.truncation_xz) {
+        const Eigen::Vector3d ray(options.truncation_xz->x(), 0.0, options.truncation_xz->y());
+        blocked = std::atan2(frame.ez.dot(ray), frame.ex.dot(ray));
+    }
     if (options.yaw_rad) {
         // Heading (cos t, -sin t) in camera x-z, expressed in the ground frame's axes.
         const Eigen::Vector3d heading(std::cos(*options.yaw_rad), 0.0, -std::sin(*options.yaw_rad));
@@ -480,9 +535,10 @@ OrientedBox fit_upright_box(const std::vector<Eigen::Vector3f>& points_m,
         for (std::size_t k = 0; k < cells.size(); ++k) {
             cells[k] /= static_cast<double>(counts[k]);
         }
-        angle = best_weighted_lshape_angle(cells, counts, options.angle_step_deg);
+        angle =
+            best_weighted_lshape_angle(cells, counts, options.angle_step_deg, blocked, tolerance);
     } else {
-        angle = best_lshape_angle(ab, options.angle_step_deg);
+        angle = best_lshape_angle(ab, options.angle_step_deg, blocked, tolerance);
     }
     // A straight face across the viewing ray (more than 45 degrees from it) holding most of the
     // points and longer than a width is a long side: its extent comes from pixel columns, and

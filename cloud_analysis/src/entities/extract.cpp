@@ -201,6 +201,9 @@ void ExtractOptions::validate() const {
         throw std::invalid_argument("shadow_fraction: must be in (0, 1]");
     }
     if (shadow_radius_px < 0) throw std::invalid_argument("shadow_radius_px: must be >= 0");
+    if (!(min_width_px >= 0.0 && min_width_px < 1e6)) {
+        throw std::invalid_argument("min_width_px: must be >= 0");
+    }
     if (!(fragment_height_fraction >= 0.0 && fragment_height_fraction <= 1.0)) {
         throw std::invalid_argument("fragment_height_fraction: must be in [0, 1]");
     }

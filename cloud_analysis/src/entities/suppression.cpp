@@ -116,4 +116,36 @@ double footprint_share_inside(const scene_schema::Entity& e, const std::vector<F
     return static_cast<double>(inside) / (kSamples * kSamples);
 }
 
+double median_row_width_px(const Indices& members, const std::vector<std::uint32_t>& pixels,
+                           const PixelGrid& grid) {
+    if (!grid.valid() || members.empty()) return 0.0;
+    std::vector<std::uint32_t> rows;
+    rows.reserve(members.size());
+    for (std::size_t i : members)
+        rows.push_back(pixels[i] / static_cast<std::uint32_t>(grid.width_px));
+    std::sort(rows.begin(), rows.end());
+    std::vector<double> per_row;
+    for (std::size_t a = 0; a < rows.size();) {
+        std::size_t b = a;
+        while (b < rows.size() && rows[b] == rows[a]) ++b;
+        per_row.push_back(static_cast<double>(b - a));
+        a = b;
+    }
+    std::nth_element(per_row.begin(), per_row.begin() + per_row.size() / 2, per_row.end());
+    return per_row[per_row.size() / 2];
+}
+
+std::vector<Candidate> drop_strips(std::vector<Candidate> candidates,
+                                   const std::vector<std::uint32_t>& pixels, const PixelGrid& grid,
+                                   double min_width_px) {
+    if (!grid.valid() || min_width_px <= 0.0) return candidates;
+    candidates.erase(std::remove_if(candidates.begin(), candidates.end(),
+                                    [&](const Candidate& c) {
+                                        return median_row_width_px(c.members, pixels, grid) <
+                                               min_width_px;
+                                    }),
+                     candidates.end());
+    return candidates;
+}
+
 }  // namespace cloud_analysis::instances

@@ -129,13 +129,41 @@ std::vector<Indices> thing_clusters(const std::vector<Eigen::Vector3f>& pts,
     return points_of(euclidean_clusters(voxels.centroid_m, co), voxels);
 }
 
+/// The camera-frame (x, z) mean of the points in the image's outermost kEdgeColumns columns
+/// when the image's left or right edge cuts the points (at least kMinEdgePoints of them
+/// there; the side with more); nullopt otherwise or when the pixels are unknown.
+std::optional<Eigen::Vector2d> truncation_point(const std::vector<Eigen::Vector3f>& pts,
+                                                const std::vector<std::uint32_t>& pixels,
+                                                const PixelGrid& grid, const Indices& members) {
+    constexpr int kEdgeColumns = 2;
+    constexpr std::size_t kMinEdgePoints = 10;
+    if (!grid.valid() || pixels.size() < pts.size()) return std::nullopt;
+    Eigen::Vector2d left = Eigen::Vector2d::Zero(), right = Eigen::Vector2d::Zero();
+    std::size_t n_left = 0, n_right = 0;
+    for (std::size_t i : members) {
+        const int u = static_cast<int>(pixels[i] % static_cast<std::uint32_t>(grid.width_px));
+        const Eigen::Vector2d ray(pts[i].x(), pts[i].z());
+        if (u < kEdgeColumns) {
+            left += ray;
+            ++n_left;
+        } else if (u >= grid.width_px - kEdgeColumns) {
+            right += ray;
+            ++n_right;
+        }
+    }
+    if (std::max(n_left, n_right) < kMinEdgePoints) return std::nullopt;
+    return n_left >= n_right ? Eigen::Vector2d(left / static_cast<double>(n_left))
+                             : Eigen::Vector2d(right / static_cast<double>(n_right));
+}
+
 /// The candidates of thing cluster number `cluster`: its points without smear, fitted, split
 /// when oversized (at most two levels: rows, then side by side) and refitted. Pieces cut at
 /// clear gaps keep the cluster's shadow group (`cluster`); other pieces get groups of their
 /// own, (cluster + 1) * 2^32 + k, unique over the class.
 std::vector<Candidate> candidates_of_cluster(const std::vector<Eigen::Vector3f>& pts,
-                                             Indices members, std::size_t cluster,
-                                             const ClassSettings& s,
+                                             const std::vector<std::uint32_t>& pixels,
+                                             const PixelGrid& grid, Indices members,
+                                             std::size_t cluster, const ClassSettings& s,
                                              const std::optional<GroundPlane>& ground,
                                              BoxFitOptions fit, const ExtractOptions& options) {
     std::vector<Candidate> candidates;
@@ -154,6 +182,7 @@ std::vector<Candidate> candidates_of_cluster(const std::vector<Eigen::Vector3f>&
             static_cast<std::size_t>(row_piece ? s.min_points / 2 : s.min_points);
         if (part.size() < std::max<std::size_t>(min_points, 1)) continue;
         fit.yaw_rad = yaw;
+        fit.truncation_xz = truncation_point(pts, pixels, grid, part);
         const OrientedBox box = fit_upright_box(gather(pts, part), ground, fit);
         if (depth < 2 && !yaw) {
             Split split = split_oversized(pts, part, box, s, ground, options);
@@ -193,6 +222,7 @@ std::vector<scene_schema::Entity> things_of_class(const ClassInfo& info,
                                                   const PixelGrid& grid, const ClassSettings& s,
                                                   const ExtractOptions& options) {
     if (s.has_prior()) {
+        candidates = drop_strips(std::move(candidates), pixels, grid, options.min_width_px);
         candidates = suppress_shadows(std::move(candidates), pixels, grid, s.prior_W_m,
                                       options.shadow_fraction, options.shadow_radius_px);
     }
@@ -250,9 +280,10 @@ void queue_things_of_class(TaskQueue& queue, const ClassInfo& info,
     job->left = fitted.size();
     std::vector<TaskQueue::Task> tasks;
     for (const std::size_t c : fitted) {
-        tasks.emplace_back([job, c, finish, &pts, &pending_ground, &options] {
-            job->candidates[c] = candidates_of_cluster(pts, std::move(job->clusters[c]), c, job->s,
-                                                       pending_ground.get(), job->fit.box, options);
+        tasks.emplace_back([job, c, finish, &pts, &pixels, &grid, &pending_ground, &options] {
+            job->candidates[c] =
+                candidates_of_cluster(pts, pixels, grid, std::move(job->clusters[c]), c, job->s,
+                                      pending_ground.get(), job->fit.box, options);
             if (--job->left == 0) finish(*job);
         });
     }

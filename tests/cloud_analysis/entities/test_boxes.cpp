@@ -329,3 +329,27 @@ TEST_CASE("a dense noisy car over the angle search's point limit gives its headi
         CHECK(yaw_error_mod_pi(box.theta, first.theta) < 1e-6);
     }
 }
+
+TEST_CASE("a car cut by the image edge is completed beyond the edge, not along the edge's ray",
+          "[boxes]") {
+    // Parked on the right, heading +z, 5 m ahead: the image's right edge (40 degrees off the
+    // axis) cuts its left side at z 4.9, so only 2.4 m of that side is seen.
+    const double t = -kPi / 2.0;
+    const double edge = std::tan(40.0 * kPi / 180.0);
+    std::vector<Eigen::Vector3f> seen;
+    for (const auto& p : box_faces(5.0, 5.0, t, 4.5, 1.8, 1.5, 1.65, true)) {
+        if (p.x() / p.z() < edge) seen.push_back(p);
+    }
+    REQUIRE(seen.size() > 100);
+    BoxFitOptions o;
+    o.prior_L_m = 4.5;
+    o.prior_W_m = 1.8;
+    o.truncation_xz = Eigen::Vector2d(4.1, 4.1 / edge);
+    const OrientedBox box = fit_upright_box(seen, flat_ground(1.65), o);
+    CHECK(yaw_error_mod_pi(box.theta, t) < 0.05);
+    CHECK(box.centre_m.z() == Approx(5.0).margin(0.2));
+    CHECK(box.centre_m.x() == Approx(5.0).margin(0.2));
+    // Without the cut, the prior completes the seen side away from the camera.
+    o.truncation_xz.reset();
+    CHECK(fit_upright_box(seen, flat_ground(1.65), o).centre_m.z() > 6.5);
+}

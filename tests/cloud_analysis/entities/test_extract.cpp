@@ -6,6 +6,7 @@
 
 #include "cloud_analysis/cloud/semantic.hpp"
 #include "cloud_analysis/entities/extract.hpp"
+#include "cloud_analysis/entities/suppression.hpp"
 
 using namespace cloud_analysis;
 
@@ -670,4 +671,31 @@ TEST_CASE("column_step must be 1, 2, 4 or 8, and 1 for a thing", "[entities]") {
         parse_class_config(R"({"classes": [{"name": "car", "thing": true, "column_step": 4}]})",
                            "x"),
         Catch::Contains("column_step: must be 1 for a thing"));
+}
+
+TEST_CASE("a thing a few pixels wide in the image is a strip of label bleed and is dropped",
+          "[extract][suppression]") {
+    using namespace cloud_analysis::instances;
+    const PixelGrid grid{100, 80};
+    std::vector<std::uint32_t> pixels;
+    Candidate strip, car;
+    // A 3 px wide, 40 px tall strip and a 30 x 20 px block.
+    for (std::uint32_t v = 10; v < 50; ++v) {
+        for (std::uint32_t u = 5; u < 8; ++u) {
+            strip.members.push_back(pixels.size());
+            pixels.push_back(v * 100 + u);
+        }
+    }
+    for (std::uint32_t v = 40; v < 60; ++v) {
+        for (std::uint32_t u = 50; u < 80; ++u) {
+            car.members.push_back(pixels.size());
+            pixels.push_back(v * 100 + u);
+        }
+    }
+    CHECK(median_row_width_px(strip.members, pixels, grid) == 3.0);
+    CHECK(median_row_width_px(car.members, pixels, grid) == 30.0);
+    const auto kept = drop_strips({strip, car}, pixels, grid, 8.0);
+    REQUIRE(kept.size() == 1);
+    CHECK(kept[0].members.size() == 600);
+    CHECK(drop_strips({strip, car}, pixels, grid, 0.0).size() == 2);
 }

@@ -38,6 +38,13 @@ struct BoxFitOptions {
                                     ///< is a long side, [0, 1] (0 = off)
     std::optional<double> yaw_rad;  ///< heading imposed instead of the L-shape search, radians
                                     ///< (cars cut from a row seen front-on), finite
+    /// Camera-frame (x, z) mean of the points in the image's outermost columns when the image's
+    /// left or right edge cuts them: the cut is a straight edge of points along the border's
+    /// ray, not a face, so the L-shape search skips rectangle axes within
+    /// truncation_exclusion_deg of that ray, and the prior completes each side beyond the image
+    /// edge (where the hidden part is), not away from the camera.
+    std::optional<Eigen::Vector2d> truncation_xz;
+    double truncation_exclusion_deg = 20.0;  ///< that exclusion, degrees, [0, 45)
     /// Throws std::invalid_argument naming the bad field.
     void validate() const;
 };

@@ -30,6 +30,19 @@ std::vector<Candidate> suppress_shadows(std::vector<Candidate> candidates,
                                         const PixelGrid& grid, double min_gap_m,
                                         double max_shared_fraction, int radius_px);
 
+/// Median over the image rows a candidate's pixels cover of its pixels on the row: its width in
+/// the image, pixels (0 without pixels).
+double median_row_width_px(const Indices& members, const std::vector<std::uint32_t>& pixels,
+                           const PixelGrid& grid);
+
+/// Drops thing candidates narrower in the image than min_width_px (median_row_width_px): a
+/// strip a few pixels wide along an object's outline is label bleed (a hand-drawn mask reaching
+/// over the background) or edge smear, reprojected at the background's depth; an object, even
+/// a far car (26 px at 50 m) or one seen only over a nearer car's roof, is wider.
+std::vector<Candidate> drop_strips(std::vector<Candidate> candidates,
+                                   const std::vector<std::uint32_t>& pixels, const PixelGrid& grid,
+                                   double min_width_px);
+
 /// Drops thing candidates whose centre lies inside the footprint of a candidate with more
 /// points: two objects cannot overlap that much, so the smaller is a fragment of the larger.
 std::vector<Candidate> suppress_nested(std::vector<Candidate> candidates);
