@@ -201,6 +201,13 @@ void ExtractOptions::validate() const {
         throw std::invalid_argument("shadow_fraction: must be in (0, 1]");
     }
     if (shadow_radius_px < 0) throw std::invalid_argument("shadow_radius_px: must be >= 0");
+    if (!(van_min_height_m > 0.0 && van_min_height_m < 100.0)) {
+        throw std::invalid_argument("van_min_height_m: must be in (0, 100) metres");
+    }
+    if (!(van_prior_L_m > 0.0 && van_prior_L_m < 100.0 && van_prior_W_m > 0.0 &&
+          van_prior_W_m < 100.0)) {
+        throw std::invalid_argument("van_prior_L_m, van_prior_W_m: must be in (0, 100) metres");
+    }
     if (!(min_width_px >= 0.0 && min_width_px < 1e6)) {
         throw std::invalid_argument("min_width_px: must be >= 0");
     }

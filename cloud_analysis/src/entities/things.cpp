@@ -199,6 +199,17 @@ std::vector<Candidate> candidates_of_cluster(const std::vector<Eigen::Vector3f>&
             continue;
         }
         Candidate c{box, std::move(part), 0.0, group};
+        if (!options.family_class.empty() && s.name == options.family_class) {
+            // A van shows its height: its hidden length is a van's, not a car's.
+            c.subclass = "car";
+            if (box.H_m >= options.van_min_height_m) {
+                BoxFitOptions van = fit;
+                van.prior_L_m = options.van_prior_L_m;
+                van.prior_W_m = options.van_prior_W_m;
+                c.box = fit_upright_box(gather(pts, c.members), ground, van);
+                c.subclass = "van";
+            }
+        }
         if (s.has_prior()) {
             c.fragment = c.members.size() < static_cast<std::size_t>(s.min_points) ||
                          height_spread(pts, c.members, ground) <
@@ -231,6 +242,7 @@ std::vector<scene_schema::Entity> things_of_class(const ClassInfo& info,
     for (const auto& c : candidates) {
         out.push_back(make_entity(info, c.box, c.members.size(), confidence_of(c.members.size(), s),
                                   "instances"));
+        if (!c.subclass.empty()) out.back().extra["subclass"] = c.subclass;
     }
     keep_largest(out, s.max_entities);
     return out;

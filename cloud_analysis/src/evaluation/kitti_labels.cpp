@@ -142,6 +142,8 @@ std::vector<scene_schema::Entity> entities_from_kitti_labels(const std::vector<K
         e.id = cls->first + "-" + std::to_string(i + 1);
         e.class_name = cls->first;
         e.class_id = cls->second;
+        if (l.type == "Car" || l.type == "Van")
+            e.extra["subclass"] = l.type == "Van" ? "van" : "car";
         e.x = l.x + frame.tx_m;
         e.y = l.y - 0.5 * l.h + frame.ty_m;
         e.z = l.z + frame.tz_m;
@@ -161,6 +163,9 @@ KittiLabel kitti_label_from_entity(const scene_schema::Entity& entity,
                                    const LabelFrame& frame) {
     KittiLabel l;
     l.type = kitti_type_of_class(entity.class_name).value_or("DontCare");
+    // The size family of a car (entity member `subclass`): KITTI labels vans apart.
+    const auto subclass = entity.extra.find("subclass");
+    if (l.type == "Car" && subclass != entity.extra.end() && *subclass == "van") l.type = "Van";
     l.h = entity.H;
     l.w = entity.W;
     l.l = entity.L;

@@ -351,3 +351,16 @@ TEST_CASE("visibility records are matched to the reference's things by id", "[en
         cloud_analysis::load_reference_visibility(path, reference, EntityEvalOptions{}),
         Catch::Contains("No such file"));
 }
+
+TEST_CASE("a car whose subclass is van is a KITTI Van, and a Van label reads back as one",
+          "[evaluate][kitti]") {
+    Entity van = box("car", 4.9, 18.0, -1.57, 2.0, 5.2, 2.0, 0.6);
+    CHECK(cloud_analysis::kitti_label_from_entity(van, nullptr).type == "Car");
+    van.extra["subclass"] = "van";
+    const auto label = cloud_analysis::kitti_label_from_entity(van, nullptr);
+    CHECK(label.type == "Van");
+    const auto back = cloud_analysis::entities_from_kitti_labels({label}, {});
+    REQUIRE(back.size() == 1);
+    CHECK(back[0].class_name == "car");
+    CHECK(back[0].extra.value("subclass", "") == "van");
+}

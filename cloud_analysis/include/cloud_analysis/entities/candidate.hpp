@@ -40,6 +40,7 @@ struct Candidate {
     double range_m = 0.0;   ///< mean bird's-eye range of the points
     std::size_t group = 0;  ///< pieces cut from one 3D cluster at clear gaps share a group
     bool fragment = false;  ///< short (a strip) or sparse (under min_points): edge smear?
+    std::string subclass;   ///< size family ("car", "van") of ExtractOptions::family_class
 };
 
 /// Clustering and box-fit settings of a class.

@@ -70,12 +70,13 @@ std::optional<std::pair<std::string, int>> class_of_kitti_type(std::string_view 
 std::optional<std::string> kitti_type_of_class(std::string_view class_name);
 
 /// Entities of the labels that map to a class (ids "<class>-<line>", centre y = y - h / 2,
-/// method "kitti_label_2", confidence = score or 1), moved from the label frame into the
-/// entities' camera (x + t).
+/// method "kitti_label_2", confidence = score or 1, `subclass` "car" or "van" for Car and Van),
+/// moved from the label frame into the entities' camera (x + t).
 std::vector<scene_schema::Entity> entities_from_kitti_labels(const std::vector<KittiLabel>& labels,
                                                              const LabelFrame& frame = {});
 
-/// Label of an entity: the location moved into the label frame (x - t), y bottom = y + H / 2,
+/// Label of an entity: type from its class (a car whose `subclass` is "van" is a Van), the
+/// location moved into the label frame (x - t), y bottom = y + H / 2,
 /// alpha = theta - atan2(x, z) of the label frame's x and z wrapped to [-pi, pi], score =
 /// confidence. With the entities' camera, the 2D box is the bounding box of the eight projected
 /// corners clipped to the image (-1s when the box is not in front of the camera or off the
