@@ -37,9 +37,10 @@ struct ExtractOptions {
     double fragment_height_fraction = 0.3;  ///< a thing cluster whose points span less than
                                             ///< this * prior_H_m vertically (or with fewer than
                                             ///< min_points, a row piece) is a fragment, [0, 1]
-    double min_width_px = 8.0;              ///< a thing with a prior narrower than this in the
+    double min_width_px = 0.0;              ///< a thing with a prior narrower than this in the
                                             ///< image (median pixels per row) is a strip of
                                             ///< label bleed or edge smear, pixels, >= 0, 0 = off
+                                            ///< (8 also drops far cars of small images)
     double min_height_fraction = 0.3;       ///< things lower than this * prior_H_m above the ground
                                             ///< are mislabelled ground, [0, 1)
     double row_low_fraction = 0.7;     ///< a thing blob at least two prior widths long whose top
