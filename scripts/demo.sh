@@ -9,13 +9,13 @@ source "$(dirname "${BASH_SOURCE[0]}")/common.sh"
 
 out=${1:-"$STEREOSCENE_ROOT/out/demo"}
 build="$STEREOSCENE_ROOT/build"
+echo "Demo page (written when the demo ends): $out/index.html" >&2
 stereoscene_build "$build" Release -- cloud-analysis scene-render
 
 analyse="$build/cloud_analysis/cloud-analysis"
 render="$build/scene_viewer/scene-render"
 samples="$STEREOSCENE_ROOT/samples"
 mkdir -p "$out"
-echo "Demo page (written when the demo ends): $out/index.html" >&2
 outputs=()
 listing=()
 note() {
