@@ -1,5 +1,6 @@
 // Shared by the browser tests and the viewer benchmark: Debian's chromium driven by
 // playwright-core (never a downloaded browser), and PNG reading through pngjs.
+import { spawnSync } from 'node:child_process';
 import { createRequire } from 'node:module';
 import fs from 'node:fs';
 import http from 'node:http';
@@ -12,6 +13,18 @@ export const kSkip = 77;
 export function skip(reason) {
     console.log('SKIPPED: ' + reason);
     process.exit(kSkip);
+}
+
+/// Fails the test with a message (exit 1).
+export function fail(message) {
+    console.error('FAIL: ' + message);
+    process.exit(1);
+}
+
+/// Runs a tool of the project; fails the test when it exits non-zero.
+export function runTool(exe, args) {
+    const r = spawnSync(exe, args, { encoding: 'utf8' });
+    if (r.status !== 0) fail(path.basename(exe) + ' ' + args.join(' ') + ' exited ' + r.status + ': ' + r.stderr);
 }
 
 /// playwright-core and pngjs from the project's npm folder, or a skip when they are missing.

@@ -12,10 +12,9 @@
 //   - no error logged, no request outside the folder (served by a static web server).
 // usage: node drive_test.mjs SCENE_RENDER DRIVE_SCENE.json OUT_DIR NODE_MODULES CHROMIUM
 // Exit 0 pass, 1 fail, 77 skipped (chromium or the npm packages missing).
-import { spawnSync } from 'node:child_process';
 import fs from 'node:fs';
 import path from 'node:path';
-import { launch, loadModules, openViewer, readPng, serveFolder } from './browser.mjs';
+import { fail, launch, loadModules, openViewer, readPng, runTool, serveFolder } from './browser.mjs';
 import { checkReport, compareMasks, foreground } from './compare.mjs';
 
 const [sceneRender, driveScene, outDir, nodeModules, chromium] = process.argv.slice(2);
@@ -27,15 +26,7 @@ if (!fs.existsSync(chromium || '')) {
 const kFrames = 8;
 const kFps = 10;
 
-function fail(message) {
-    console.error('FAIL: ' + message);
-    process.exit(1);
-}
-
-function run(args) {
-    const r = spawnSync(sceneRender, args, { encoding: 'utf8' });
-    if (r.status !== 0) fail('scene-render ' + args.join(' ') + ' exited ' + r.status + ': ' + r.stderr);
-}
+const run = (args) => runTool(sceneRender, args);
 
 /// The truth drive without ground and buildings (objects against the background), as a
 /// sequence of its own; returns its folder and the frame documents.

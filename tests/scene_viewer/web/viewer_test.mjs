@@ -7,10 +7,9 @@
 //           folder served by a static web server on the loopback interface.
 // usage: node viewer_test.mjs camera|pick SCENE_RENDER ENTITIES.json OUT_DIR NODE_MODULES CHROMIUM
 // Exit 0 pass, 1 fail, 77 skipped (chromium or the npm packages missing).
-import { spawnSync } from 'node:child_process';
 import fs from 'node:fs';
 import path from 'node:path';
-import { launch, loadModules, openViewer, readPng, serveFolder } from './browser.mjs';
+import { fail, launch, loadModules, openViewer, readPng, runTool, serveFolder } from './browser.mjs';
 import { carBlue, checkReport, compareMasks, foreground } from './compare.mjs';
 
 const [mode, sceneRender, entitiesFile, outDir, nodeModules, chromium] = process.argv.slice(2);
@@ -20,15 +19,7 @@ if (!fs.existsSync(chromium || '')) {
     process.exit(77);
 }
 
-function fail(message) {
-    console.error('FAIL: ' + message);
-    process.exit(1);
-}
-
-function run(args) {
-    const r = spawnSync(sceneRender, args, { encoding: 'utf8' });
-    if (r.status !== 0) fail('scene-render ' + args.join(' ') + ' exited ' + r.status + ': ' + r.stderr);
-}
+const run = (args) => runTool(sceneRender, args);
 
 /// The test scene without ground and buildings: objects against the background, so the
 /// silhouettes compare every box's place.
