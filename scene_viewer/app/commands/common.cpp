@@ -1,5 +1,7 @@
 #include "common.hpp"
 
+#include "scene_schema/json_text.hpp"
+
 #include <unistd.h>
 
 #include <cerrno>
@@ -149,24 +151,47 @@ void check_output_folder(const std::string& folder, const std::string& what) {
     }
 }
 
-scene_schema::EntityDocument read_entities(const std::string& path) {
-    std::string text;
+std::string read_entity_text(const std::string& path) {
     try {
         // "-" is standard input, as in `cloud-analysis ... -o - | scene-render - ...`.
-        text = stereoscene::support::read_text_input(path);
+        return stereoscene::support::read_text_input(path);
     } catch (const stereoscene::support::FileError& e) {
         throw Failure{"cannot read entity file", e.reason(), path};
     }
+}
+
+namespace {
+
+/// Runs `step` on an entity file's text or JSON, its schema errors and running out of memory
+/// turned into Failures naming `path`.
+template <typename Step>
+auto entity_step(Step step, const std::string& path, std::size_t bytes) {
     try {
-        return scene_schema::parse(text);
+        return step();
     } catch (const scene_schema::SchemaError& e) {
         const std::string pointer = e.pointer().empty() ? "(document)" : e.pointer();
         throw Failure{"invalid entity file", pointer + ": " + e.rule(), path};
     } catch (const std::bad_alloc&) {
         throw Failure{"cannot read entity file",
-                      "out of memory reading its " + std::to_string(text.size()) + " bytes of JSON",
+                      "out of memory reading its " + std::to_string(bytes) + " bytes of JSON",
                       path};
     }
+}
+
+}  // namespace
+
+nlohmann::json parse_entity_text(const std::string& text, const std::string& path) {
+    return entity_step([&] { return scene_schema::parse_json(text); }, path, text.size());
+}
+
+scene_schema::EntityDocument entities_from_json(const nlohmann::json& json, const std::string& path,
+                                                std::size_t bytes) {
+    return entity_step([&] { return scene_schema::from_json(json); }, path, bytes);
+}
+
+scene_schema::EntityDocument read_entities(const std::string& path) {
+    const std::string text = read_entity_text(path);
+    return entities_from_json(parse_entity_text(text, path), path, text.size());
 }
 
 namespace {

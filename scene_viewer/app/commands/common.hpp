@@ -59,8 +59,20 @@ std::pair<int, int> size_flag(const std::string& text, const std::string& flag);
 /// Failure (exit 1) naming the folder.
 void check_output_folder(const std::string& folder, const std::string& what);
 
-/// Reads and validates an entity file, or a Failure naming it.
+/// Reads and validates an entity file, or a Failure naming it: read_entity_text, then
+/// parse_entity_text, then entities_from_json.
 scene_schema::EntityDocument read_entities(const std::string& path);
+
+/// The text of an entity file ("-": standard input), or a Failure naming it.
+std::string read_entity_text(const std::string& path);
+
+/// The text (`path`'s) as JSON, or a Failure naming the file and where the text breaks.
+nlohmann::json parse_entity_text(const std::string& text, const std::string& path);
+
+/// The JSON of entity file `path` (`bytes` long) as a validated document, or a Failure naming
+/// the file and pointer.
+scene_schema::EntityDocument entities_from_json(const nlohmann::json& json, const std::string& path,
+                                                std::size_t bytes);
 
 /// Render options from the flags; the camera view and default size come from `document`, read
 /// from `document_path` (blamed, exit 1, when its camera size cannot be rendered).
