@@ -3,12 +3,18 @@
 # each in turn, seeded from the samples, assets and the bad-input corpus. A crash is copied to
 # tests/corpus/fuzz/<harness>/ as a regression case; the totals are appended to
 # build-fuzz/fuzz-totals.txt.
-# usage: scripts/fuzz.sh [seconds per harness (default 60)] [harness name...]
+# usage: scripts/fuzz.sh [--runs N] [seconds per harness (default 60)] [harness name...]
+#   --runs N   also stop a harness after N executions (whichever comes first)
 # Runs at nice 19, one job at a time (the machine is shared); an input gets 60 s before it counts
 # as a hang, since a shared machine can starve a nice-19 process for seconds.
 set -euo pipefail
 source "$(dirname "${BASH_SOURCE[0]}")/common.sh"
 
+runs_limit=()
+if [ "${1:-}" = --runs ]; then
+    runs_limit=(-runs="$2")
+    shift 2
+fi
 seconds=${1:-60}
 shift || true
 root=$STEREOSCENE_ROOT
@@ -46,12 +52,15 @@ seeds() {
 }
 
 totals=$build/fuzz-totals.txt
-echo "# $(date -u +%FT%TZ) scripts/fuzz.sh $seconds ${harnesses[*]}" >> "$totals"
+echo "# $(date -u +%FT%TZ) scripts/fuzz.sh ${runs_limit[*]} $seconds ${harnesses[*]}" \
+    "(load average $(cut -d' ' -f1-3 /proc/loadavg))" >> "$totals"
 status=0
 for h in "${harnesses[@]}"; do
     work=$build/fuzz-work/$h
     crashes=$root/tests/corpus/fuzz/$h
     mkdir -p "$work/corpus" "$work/artifacts"
+    # Earlier findings were copied to $crashes when found; only this run's are counted.
+    rm -f "$work/artifacts"/*
     { seeds "$h" 2>/dev/null || true; } | while read -r f; do cp -n "$f" "$work/corpus/" 2>/dev/null || true; done
     [ -d "$crashes" ] && cp -n "$crashes"/* "$work/corpus/" 2>/dev/null || true
     log=$work/log.txt
@@ -60,13 +69,15 @@ for h in "${harnesses[@]}"; do
     ASAN_OPTIONS=detect_leaks=0:allocator_may_return_null=1 \
     UBSAN_OPTIONS=print_stacktrace=1:halt_on_error=1 \
         nice -n 19 "$build/tests/fuzz/$h" -max_total_time="$seconds" -rss_limit_mb=2048 \
-        -timeout=60 -max_len=65536 -print_final_stats=1 -artifact_prefix="$work/artifacts/" \
+        -timeout=60 -max_len=65536 "${runs_limit[@]}" -print_final_stats=1 -artifact_prefix="$work/artifacts/" \
         "$work/corpus" > "$log" 2>&1
     rc=$?
     set -e
     runs=$(grep -o 'stat::number_of_executed_units: *[0-9]*' "$log" | grep -o '[0-9]*$' || echo 0)
     found=$(find "$work/artifacts" -type f | wc -l)
-    echo "$h executions=$runs seconds=$seconds findings=$found exit=$rc" | tee -a "$totals" >&2
+    took=$(grep -o 'Done [0-9]* runs in [0-9]* second' "$log" | grep -o 'in [0-9]*' | grep -o '[0-9]*' || echo "$seconds")
+    echo "$h executions=$runs seconds=$took findings=$found exit=$rc" \
+        "load=$(cut -d' ' -f1-3 /proc/loadavg)" | tee -a "$totals" >&2
     if [ "$found" -gt 0 ]; then
         mkdir -p "$crashes"
         cp "$work/artifacts"/* "$crashes/"
