@@ -22,7 +22,8 @@ CASES = os.path.join(HERE, "cases")
 # (name, tool, arguments, exit code, text the error line must contain[, options]). Options:
 # data_mib runs the case under that RLIMIT_DATA (skipped under the sanitizers). In arguments,
 # {c} is tests/corpus/cases, {g} the generated files, {s} the samples folder, {o} the output
-# folder (which holds keep.json, an earlier file no failure may touch).
+# folder (which holds keep.json and keep.png, earlier files no failure may touch, and a
+# directory dir).
 CA, SR = "cloud-analysis", "scene-render"
 MAX_LINE = 400  # characters of an error line: a pointer or a path, not a dump
 STEREO = "--left {s}/synthetic/left.png --right {s}/synthetic/right.png"
@@ -103,6 +104,21 @@ CASES_TABLE = [
     ("sensors --size 16384x16384", SR, f"sensors {SCENE} --size 16384x16384 --out {{o}}/rig --frame 000000", 2, "--size"),
     ("html --out is a file", SR, f"html {SCENE} --out {{o}}/keep.json", 1, "keep.json"),
     ("html --out is inside a file", SR, f"html {SCENE} --out {{o}}/keep.json/viewer", 1, "keep.json"),
+    # An earlier file at an output path survives every kind of failure, in every command that
+    # writes: a bad input, an output refused up front, a failure after the work is done.
+    ("analyse keeps an earlier -o file when the calibration is bad", CA, f"{STEREO} --calib {{c}}/calib_fx_1e300.yaml -o {{o}}/keep.json", 1, "calib_fx_1e300.yaml"),
+    ("batch keeps the earlier output of a frame that fails", CA, "batch --kitti-root {c} --frames keep --out-dir {o} --quiet", 1, "frame keep"),
+    ("evaluate keeps an earlier --json file when the entity file is bad", CA, f"evaluate --entities {{c}}/x_1e30.json --reference {SCENE} --json {{o}}/keep.json", 1, "x_1e30.json"),
+    ("export-kitti keeps an earlier -o file when the entity file is bad", CA, "export-kitti {c}/x_1e30.json -o {o}/keep.json", 1, "x_1e30.json"),
+    ("make-sample --out is a file", CA, "make-sample --out {o}/keep.json", 1, "keep.json"),
+    ("render keeps an earlier -o file when the entity file is bad", SR, "{c}/x_1e30.json --view bev -o {o}/keep.png", 1, "x_1e30.json"),
+    ("render keeps an earlier -o file when --glb is refused", SR, f"{SCENE} --view bev -o {{o}}/keep.png --glb {{o}}/dir", 1, "dir"),
+    ("grid keeps an earlier -o file when an input is bad", SR, f"grid --inputs {SCENE} {{c}}/x_1e30.json -o {{o}}/keep.png", 1, "x_1e30.json"),
+    ("sensors fails after rendering: --out is a file", SR, f"sensors {SCENE} --out {{o}}/keep.json --frame 000000", 1, "keep.json"),
+    ("play keeps an earlier frame PNG when a later frame is broken", SR, "play {c}/drive_broken --out-dir {o} --view bev", 1, "broken.json"),
+    ("play keeps an earlier --strip and makes no folder when a frame is broken", SR, "play {c}/drive_broken --out-dir {o}/new/frames --strip {o}/keep.png --view bev", 1, "broken.json"),
+    ("play --strip is a directory", SR, "play {c}/drive_broken --out-dir {o}/frames --strip {o}/dir --view bev", 1, "dir"),
+    ("play --video is a file's folder", SR, "play {c}/drive_broken --out-dir {o} --video {o}/keep.json/v.mp4 --view bev", 1, "keep.json"),
 ]
 
 
@@ -134,6 +150,8 @@ def run_case(case, exes, dirs, bounds):
     os.makedirs(os.path.join(out, "dir"))
     with open(os.path.join(out, "keep.json"), "w") as f:
         f.write('{"earlier": "file"}\n')
+    with open(os.path.join(out, "keep.png"), "wb") as f:
+        f.write(b"earlier image\n")
     with open(os.path.join(out, "dir", "inside"), "w") as f:
         f.write("x")
     before = snapshot(out)

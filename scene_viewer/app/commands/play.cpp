@@ -3,15 +3,23 @@
 #include <sys/wait.h>
 #include <unistd.h>
 
+#include <cerrno>
+#include <cstdio>
 #include <cstdlib>
+#include <cstring>
 #include <filesystem>
 #include <sstream>
+#include <string_view>
+#include <vector>
 
 #include "scene_schema/sequence.hpp"
 #include "scene_viewer/assets/image_io.hpp"
 #include "scene_viewer/render/image.hpp"
 #include "scene_viewer/render/render_setup.hpp"
 #include "scene_viewer/views/trails.hpp"
+#include "stereoscene/support/file_read.hpp"
+#include "stereoscene/support/limits.hpp"
+#include "stereoscene/support/output_transaction.hpp"
 
 namespace scene_render {
 
@@ -54,43 +62,144 @@ std::string find_on_path(const std::string& name) {
     return {};
 }
 
-/// Runs ffmpeg on the numbered frames; the MP4 is made beside the target, then renamed.
-void encode_video(const PlayArgs& a, double fps, const std::vector<std::string>& names) {
-    const std::string ffmpeg = find_on_path("ffmpeg");
-    if (ffmpeg.empty()) {
-        throw Failure{"cannot encode the video",
-                      "ffmpeg not found on PATH (Debian: apt-get install ffmpeg)", a.video};
+/// The folders of `folder` that do not exist yet, made now (outermost first), or a Failure.
+std::vector<fs::path> make_folders(const fs::path& folder) {
+    std::vector<fs::path> missing;
+    std::error_code ec;
+    for (fs::path p = folder; !p.empty() && !fs::exists(p, ec); p = p.parent_path()) {
+        missing.insert(missing.begin(), p);
     }
-    // ffmpeg's image2 demuxer wants consecutive numbers: link the frames as 000000.png...
-    const fs::path work = fs::path(a.out_dir) / ".video-frames";
-    fs::remove_all(work);
-    fs::create_directories(work);
-    for (std::size_t i = 0; i < names.size(); ++i) {
-        char name[32];
-        std::snprintf(name, sizeof name, "%06zu.png", i);
-        fs::create_symlink(fs::absolute(fs::path(a.out_dir) / (names[i] + ".png")), work / name);
+    for (const fs::path& p : missing) {
+        if (!fs::create_directory(p, ec) && ec) {
+            throw Failure{"cannot create the output folder", ec.message(), folder.string()};
+        }
     }
-    const std::string tmp = a.video + ".tmp.mp4";
-    const std::string rate = std::to_string(fps);
-    const pid_t pid = ::fork();
-    if (pid == 0) {
-        const std::string input = (work / "%06d.png").string();
-        ::execl(ffmpeg.c_str(), "ffmpeg", "-y", "-loglevel", "error", "-framerate", rate.c_str(),
-                "-i", input.c_str(), "-vf", "pad=ceil(iw/2)*2:ceil(ih/2)*2", "-c:v", "libx264",
-                "-pix_fmt", "yuv420p", "-r", rate.c_str(), tmp.c_str(),
-                static_cast<char*>(nullptr));
-        ::_exit(127);
-    }
-    int status = 0;
-    if (pid < 0 || ::waitpid(pid, &status, 0) < 0 || !WIFEXITED(status) ||
-        WEXITSTATUS(status) != 0) {
-        fs::remove(tmp);
-        fs::remove_all(work);
-        throw Failure{"cannot encode the video", "ffmpeg failed (see its message above)", a.video};
-    }
-    fs::remove_all(work);
-    fs::rename(tmp, a.video);
+    return missing;
 }
+
+/// Everything play writes, committed together after the last frame: every frame's PNG, the
+/// strip and the video. Until then the files are staged under hidden names beside their
+/// targets (and the video's frames in a hidden folder of --out-dir); a failure removes all of
+/// it, and the folders this run made, so the output paths hold what they held before the run.
+class PlayOutputs {
+  public:
+    PlayOutputs(const PlayArgs& a, const std::vector<std::string>& names) : args_(a) {
+        check_output_folder(a.out_dir, "cannot write the frames");
+        made_ = make_folders(a.out_dir);
+        try {
+            for (const std::string& name : names) files_.declare(frame_path(name), "frame");
+            if (!a.strip.empty()) files_.declare(a.strip, "--strip");
+            if (!a.video.empty()) files_.declare(a.video, "--video");
+            if (!a.video.empty()) {
+                std::string work = (fs::path(a.out_dir) / ".play-video-XXXXXX").string();
+                if (::mkdtemp(work.data()) == nullptr) {
+                    throw Failure{"cannot encode the video", std::strerror(errno), a.out_dir};
+                }
+                video_work_ = work;
+            }
+        } catch (const stereoscene::support::FileError& e) {
+            remove_made_folders();
+            throw Failure{"unusable output path", e.reason(), e.path().string()};
+        } catch (...) {
+            remove_made_folders();
+            throw;
+        }
+    }
+    PlayOutputs(const PlayOutputs&) = delete;
+    PlayOutputs& operator=(const PlayOutputs&) = delete;
+    ~PlayOutputs() {
+        std::error_code ignored;
+        if (!video_work_.empty()) fs::remove_all(video_work_, ignored);
+        if (committed_) return;
+        files_.roll_back();
+        remove_made_folders();
+    }
+
+    /// Stages frame `index` (named `name`) as a PNG, and as the video's next frame.
+    void frame(std::size_t index, const std::string& name, const ImageRgba8& image) {
+        const std::vector<unsigned char> png = encode_png(image, 1);
+        const std::string_view bytes(reinterpret_cast<const char*>(png.data()), png.size());
+        try {
+            files_.stage(frame_path(name), bytes);
+            if (!video_work_.empty()) {
+                char numbered[32];
+                std::snprintf(numbered, sizeof numbered, "%06zu.png", index);
+                stereoscene::support::write_file_atomic(
+                    video_work_ / numbered, bytes, stereoscene::support::FileSync::kAtomicOnly);
+            }
+        } catch (const stereoscene::support::FileError& e) {
+            throw Failure{"cannot write image", e.reason(), e.path().string()};
+        }
+    }
+
+    /// Stages the strip and the video, then commits every file.
+    void commit(const std::vector<ImageRgba8>& strip, double fps) {
+        try {
+            if (!args_.strip.empty()) {
+                const std::vector<unsigned char> png = encode_png(side_by_side(strip), 1);
+                files_.stage(
+                    args_.strip,
+                    std::string_view(reinterpret_cast<const char*>(png.data()), png.size()));
+            }
+            if (!args_.video.empty()) {
+                const std::string mp4 = encode_video(fps);
+                files_.stage(args_.video, mp4);
+            }
+            files_.commit();
+        } catch (const stereoscene::support::FileError& e) {
+            throw Failure{"cannot write output", e.reason(), e.path().string()};
+        }
+        committed_ = true;
+    }
+
+  private:
+    void remove_made_folders() noexcept {
+        std::error_code ignored;
+        for (auto it = made_.rbegin(); it != made_.rend(); ++it) fs::remove(*it, ignored);
+    }
+
+    std::string frame_path(const std::string& name) const {
+        return (fs::path(args_.out_dir) / (name + ".png")).string();
+    }
+
+    /// Runs ffmpeg on the numbered frames of the hidden folder; returns the MP4's bytes.
+    std::string encode_video(double fps) const {
+        const std::string ffmpeg = find_on_path("ffmpeg");
+        if (ffmpeg.empty()) {
+            throw Failure{"cannot encode the video",
+                          "ffmpeg not found on PATH (Debian: apt-get install ffmpeg)", args_.video};
+        }
+        const std::string input = (video_work_ / "%06d.png").string();
+        const std::string output = (video_work_ / "video.mp4").string();
+        const std::string rate = std::to_string(fps);
+        const pid_t pid = ::fork();
+        if (pid == 0) {
+            ::execl(ffmpeg.c_str(), "ffmpeg", "-y", "-loglevel", "error", "-framerate",
+                    rate.c_str(), "-i", input.c_str(), "-vf", "pad=ceil(iw/2)*2:ceil(ih/2)*2",
+                    "-c:v", "libx264", "-pix_fmt", "yuv420p", "-r", rate.c_str(), output.c_str(),
+                    static_cast<char*>(nullptr));
+            ::_exit(127);
+        }
+        int status = 0;
+        if (pid < 0 || ::waitpid(pid, &status, 0) < 0 || !WIFEXITED(status) ||
+            WEXITSTATUS(status) != 0) {
+            throw Failure{"cannot encode the video", "ffmpeg failed (see its message above)",
+                          args_.video};
+        }
+        try {
+            return stereoscene::support::read_file_bounded(
+                output, stereoscene::support::limits().max_file_bytes);
+        } catch (const stereoscene::support::FileError& e) {
+            throw Failure{"cannot encode the video", e.reason(), args_.video};
+        }
+    }
+
+    const PlayArgs& args_;
+    std::vector<fs::path> made_;  ///< folders this run made, outermost first
+    stereoscene::support::OutputTransaction files_;
+    fs::path video_work_;  ///< hidden folder of the video's numbered frames; empty: no video
+    bool committed_ = false;
+};
 
 }  // namespace
 
@@ -118,41 +227,36 @@ int run_play(const PlayArgs& a) {
     }
     const auto cloud = read_cloud(a.view);
     const auto classes = read_classes(a.view.boxes, a.view.classes);
-    std::error_code ec;
-    fs::create_directories(a.out_dir, ec);
-    if (ec) throw Failure{"cannot create the output folder", ec.message(), a.out_dir};
+    std::vector<std::string> names;
+    for (const auto& f : index.frames) names.push_back(fs::path(f.file).stem().string());
+    PlayOutputs outputs(a, names);
 
     auto gpu = start_gpu(classes);
     TrailHistory trails(a.trail);
-    std::vector<std::string> names;
     std::vector<ImageRgba8> strip;
     const std::size_t n = index.frames.size();
     const std::size_t every = std::max<std::size_t>(1, (n + a.strip_frames - 1) / a.strip_frames);
     for (std::size_t i = 0; i < n; ++i) {
-        const auto& f = index.frames[i];
-        const auto file = scene_schema::frame_file(index_path, f);
+        const auto file = scene_schema::frame_file(index_path, index.frames[i]);
         const auto document = read_entities(file.string());
         gpu->renderer.load(trails.with_trails(document), cloud ? &*cloud : nullptr, options);
         ImageRgba8 image = gpu->renderer.render_frame();
-        const std::string name = fs::path(f.file).stem().string();
         if (!a.backgrounds.empty()) {
-            const fs::path bg = fs::path(a.backgrounds) / (name + ".png");
+            const fs::path bg = fs::path(a.backgrounds) / (names[i] + ".png");
             try {
                 composite_background(image, decode_image(bg), a.opacity, options.shading);
             } catch (const std::exception& e) {
                 throw Failure{"cannot read background image", e.what(), bg.string()};
             }
         }
-        write_png_output((fs::path(a.out_dir) / (name + ".png")).string(), image);
-        names.push_back(name);
+        outputs.frame(i, names[i], image);
         if (!a.strip.empty() && (i % every == 0 || i + 1 == n) &&
             static_cast<int>(strip.size()) < a.strip_frames) {
             strip.push_back(std::move(image));
         }
         trails.remember(document);
     }
-    if (!a.strip.empty()) write_png_output(a.strip, side_by_side(strip));
-    if (!a.video.empty()) encode_video(a, fps, names);
+    outputs.commit(strip, fps);
     std::fprintf(stderr, "play: %zu frames at %.3g fps -> %s\n", n, fps, a.out_dir.c_str());
     return 0;
 }

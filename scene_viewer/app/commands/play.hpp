@@ -25,8 +25,9 @@ struct PlayArgs {
 
 CLI::App* add_play_command(CLI::App& app, PlayArgs& args);
 
-/// Renders and writes; throws Failure. Frames are written as they are rendered, so a failure
-/// leaves the earlier frames whole.
+/// Renders and writes; throws Failure. Every output (the frames' PNGs, the strip, the video) is
+/// staged and committed together after the last frame: a failure leaves the output paths as
+/// they were before the run.
 int run_play(const PlayArgs& args);
 
 }  // namespace scene_render
