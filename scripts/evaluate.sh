@@ -8,7 +8,7 @@
 # ground plane, the thesis's one-per-class extractors, and the stereo-only path (--semantics
 # geometry: the semantic image ignored; docs/stereo-only.md) beside them.
 # usage: scripts/evaluate.sh [--no-build] [--build-dir DIR] [--kitti-root DIR] [--out DIR]
-#            [--parking-seeds "2 4 5 6"] [frames...]
+#            [--parking-seeds "2 4 5 6 7 8 9 10 11 12"] [frames...]
 #   default frames: 000000_10 000001_10; default KITTI root: ../shared/data/kitti15
 set -euo pipefail
 source "$(dirname "${BASH_SOURCE[0]}")/common.sh"
@@ -18,7 +18,7 @@ build_dir="$STEREOSCENE_ROOT/build"
 kitti_root="$STEREOSCENE_ROOT/../shared/data/kitti15"
 out_dir=""
 frames=()
-parking_seeds="2 4 5 6"
+parking_seeds="2 4 5 6 7 8 9 10 11 12"
 while [ $# -gt 0 ]; do
     case "$1" in
         --no-build) build=0 ;;

@@ -41,13 +41,13 @@ set(STEREOSCENE_CLOSED_LOOP_VISIBILITY --min-visible-fraction 0.25)
 # recall 1.0, precision >= 0.95, median centre error <= 0.4 m, heading <= 8 deg and BEV IoU
 # >= 0.5 for 80 % of the cars; these are the levels measured today.
 set(STEREOSCENE_CLOSED_LOOP_BARS_parking-street-1
-    --bar-class car --bar-range 30 --require-recall 0.875 --max-spurious 3
+    --bar-class car --bar-range 30 --require-recall 0.875 --max-spurious 4
     --max-stuff-on-things 0 --max-median-centre-error 0.4 --max-median-heading-error 8
     --min-good-iou-fraction 0.875)
 set(STEREOSCENE_CLOSED_LOOP_BARS_parking-street-3
-    --bar-class car --bar-range 30 --require-recall 0.55 --max-spurious 5
+    --bar-class car --bar-range 30 --require-recall 1.0 --max-spurious 3
     --max-stuff-on-things 0 --max-median-centre-error 0.4 --max-median-heading-error 8
-    --min-good-iou-fraction 0.55)
+    --min-good-iou-fraction 0.88)
 # Scenes whose hidden cars are found today too: a third test owes them every car within 30 m,
 # unfiltered, so the visibility rule cannot hide a regression there (parking-row: 4 of its 11
 # cars are less than a quarter visible, behind the cars beside them, and all are found).

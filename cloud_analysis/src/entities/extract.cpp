@@ -222,6 +222,24 @@ void ExtractOptions::validate() const {
     }
     if (!(row_low_extent_m > 0.0)) throw std::invalid_argument("row_low_extent_m: must be > 0");
     if (!(row_gap_m >= 0.0)) throw std::invalid_argument("row_gap_m: must be >= 0");
+    if (!(row_valley_depth_m >= 0.0 && row_valley_depth_m < 100.0)) {
+        throw std::invalid_argument("row_valley_depth_m: must be in [0, 100) metres");
+    }
+    if (!(row_valley_min_length_fraction > 0.0 && row_valley_min_length_fraction < 100.0)) {
+        throw std::invalid_argument("row_valley_min_length_fraction: must be in (0, 100)");
+    }
+    if (!(row_valley_min_peak_fraction >= 0.0 && row_valley_min_peak_fraction <= 2.0)) {
+        throw std::invalid_argument("row_valley_min_peak_fraction: must be in [0, 2]");
+    }
+    if (!(row_valley_min_piece_m > 0.0 && row_valley_min_piece_m < 100.0)) {
+        throw std::invalid_argument("row_valley_min_piece_m: must be in (0, 100) metres");
+    }
+    if (!(row_valley_bin_m >= 0.01 && row_valley_bin_m <= 10.0)) {
+        throw std::invalid_argument("row_valley_bin_m: must be in [0.01, 10] metres");
+    }
+    if (!(row_valley_closing_m >= 0.0 && row_valley_closing_m <= 10.0)) {
+        throw std::invalid_argument("row_valley_closing_m: must be in [0, 10] metres");
+    }
     if (threads < 1) throw std::invalid_argument("threads: must be >= 1");
     if (!(stuff_on_thing_fraction > 0.0 && stuff_on_thing_fraction <= 1.0)) {
         throw std::invalid_argument("stuff_on_thing_fraction: must be in (0, 1]");

@@ -131,6 +131,152 @@ bool front_on_row(const std::vector<Eigen::Vector3f>& pts, const Indices& idx,
     return low_extent >= options.row_low_extent_m;
 }
 
+/// The top profile of a blob along its length, in bins from the lowest along-coordinate.
+struct TopProfile {
+    std::vector<double> top;  ///< per bin, its points' 90 % height above the ground after a
+                              ///< closing over `closing` bins either side, metres; -1 unknown
+                              ///< (fewer than 3 points)
+    std::vector<int> count;   ///< points per bin
+};
+
+/// The top profile of the points idx (their along-coordinates `along`) in bins of bin_m from
+/// lo to hi.
+TopProfile top_profile(const std::vector<Eigen::Vector3f>& pts, const Indices& idx,
+                       const std::vector<double>& along, const GroundPlane& ground, double bin_m,
+                       double lo, double hi, int closing) {
+    constexpr double kTopQuantile = 0.9;
+    constexpr std::size_t kMinBinPoints = 3;
+    const int bins = static_cast<int>((hi - lo) / bin_m) + 1;
+    std::vector<std::vector<double>> heights(static_cast<std::size_t>(bins));
+    for (std::size_t k = 0; k < idx.size(); ++k) {
+        const int b = static_cast<int>((along[k] - lo) / bin_m);
+        if (b < 0 || b >= bins) continue;
+        heights[static_cast<std::size_t>(b)].push_back(ground.height(pts[idx[k]].cast<double>()));
+    }
+    std::vector<double> top(static_cast<std::size_t>(bins), -1.0);
+    for (int b = 0; b < bins; ++b) {
+        auto& h = heights[static_cast<std::size_t>(b)];
+        if (h.size() >= kMinBinPoints) top[static_cast<std::size_t>(b)] = quantile(h, kTopQuantile);
+    }
+    // Narrow dips (a sparse bin, a window's reflection) are noise, not the ends of two things:
+    // each known bin takes the highest known top within `closing` bins.
+    std::vector<double> closed = top;
+    for (int b = 0; b < bins; ++b) {
+        if (top[static_cast<std::size_t>(b)] < 0.0) continue;
+        for (int k = std::max(0, b - closing); k <= std::min(bins - 1, b + closing); ++k) {
+            closed[static_cast<std::size_t>(b)] =
+                std::max(closed[static_cast<std::size_t>(b)], top[static_cast<std::size_t>(k)]);
+        }
+    }
+    std::vector<int> count(static_cast<std::size_t>(bins));
+    for (int b = 0; b < bins; ++b) {
+        count[static_cast<std::size_t>(b)] =
+            static_cast<int>(heights[static_cast<std::size_t>(b)].size());
+    }
+    return {closed, count};
+}
+
+/// The cuts (along-coordinates) of a blob at the valleys of its top profile: a thing is a hump
+/// (a car's roof over its lower bonnet and boot), so where the top drops at least depth_m below
+/// the highest top on both sides within `reach` bins, and both those tops reach min_peak_m,
+/// two things meet. Each valley is cut at the emptiest bin of its part below half its depth
+/// (the gap between the two; the one nearest that part's middle among equals): a profile's
+/// shape is smeared along the viewing ray, the gap's emptiness less so. Cuts closer than
+/// min_piece_m to an end or to a deeper cut are dropped.
+std::vector<double> valley_cuts(const TopProfile& profile, double lo, double bin_m, int reach,
+                                double depth_m, double min_peak_m, double min_piece_m) {
+    const std::vector<double>& top = profile.top;
+    const int bins = static_cast<int>(top.size());
+    struct Valley {
+        double at, depth;
+    };
+    std::vector<Valley> valleys;
+    int b = 0;
+    while (b < bins) {
+        // Deepest valley bin of a run of valley bins.
+        int best = -1;
+        double best_depth = 0.0, best_floor = 0.0;
+        for (; b < bins; ++b) {
+            const double t = top[static_cast<std::size_t>(b)];
+            double left = -1.0, right = -1.0;
+            for (int k = std::max(0, b - reach); k < b; ++k) {
+                left = std::max(left, top[static_cast<std::size_t>(k)]);
+            }
+            for (int k = b + 1; k <= std::min(bins - 1, b + reach); ++k) {
+                right = std::max(right, top[static_cast<std::size_t>(k)]);
+            }
+            const double peak = std::min(left, right);
+            const bool valley = t >= 0.0 && peak >= min_peak_m && peak - t >= depth_m;
+            if (!valley) {
+                if (best >= 0) break;
+                continue;
+            }
+            if (best < 0 || peak - t > best_depth) {
+                best = b;
+                best_depth = peak - t;
+                best_floor = t;
+            }
+        }
+        if (best < 0) break;
+        // The part of the valley below half its depth, unknown bins included.
+        const double half = best_floor + 0.5 * best_depth;
+        int first = best, last = best;
+        while (first > 0 && top[static_cast<std::size_t>(first - 1)] < half) --first;
+        while (last + 1 < bins && top[static_cast<std::size_t>(last + 1)] < half) ++last;
+        // Cut at its emptiest bin (the gap), the one nearest its middle among equals.
+        const double middle = 0.5 * (first + last);
+        int at = best;
+        for (int k = first; k <= last; ++k) {
+            const int nk = profile.count[static_cast<std::size_t>(k)];
+            const int na = profile.count[static_cast<std::size_t>(at)];
+            if (nk < na || (nk == na && std::abs(k - middle) < std::abs(at - middle))) at = k;
+        }
+        valleys.push_back({lo + (at + 0.5) * bin_m, best_depth});
+    }
+    // Deepest first, each kept when it leaves pieces of at least min_piece_m.
+    std::sort(valleys.begin(), valleys.end(),
+              [](const Valley& a, const Valley& c) { return a.depth > c.depth; });
+    const double hi = lo + bins * bin_m;
+    std::vector<double> cuts;
+    for (const Valley& v : valleys) {
+        bool fits = v.at - lo >= min_piece_m && hi - v.at >= min_piece_m;
+        for (double c : cuts) fits = fits && std::abs(c - v.at) >= min_piece_m;
+        if (fits) cuts.push_back(v.at);
+    }
+    std::sort(cuts.begin(), cuts.end());
+    return cuts;
+}
+
+/// Pieces of a blob cut along (dir_x, dir_z) at the valleys of its top profile (things parked
+/// end to end, their roofs higher than the ends where they meet); empty without a valley.
+std::vector<Indices> split_at_valleys(const std::vector<Eigen::Vector3f>& pts, const Indices& idx,
+                                      double dir_x, double dir_z, const ClassSettings& s,
+                                      const GroundPlane& ground, const ExtractOptions& options) {
+    if (idx.size() < 20) return {};
+    std::vector<double> along(idx.size());
+    for (std::size_t k = 0; k < idx.size(); ++k) {
+        along[k] = double{pts[idx[k]].x()} * dir_x + double{pts[idx[k]].z()} * dir_z;
+    }
+    std::vector<double> sorted = along;
+    const auto [lo, hi] = quantiles(sorted, 0.005, 0.995);
+    const double bin = options.row_valley_bin_m;
+    if (hi - lo < 2.0 * options.row_valley_min_piece_m) return {};
+    const int closing = static_cast<int>(std::lround(options.row_valley_closing_m / bin));
+    const TopProfile profile = top_profile(pts, idx, along, ground, bin, lo, hi, closing);
+    const int reach = std::max(1, static_cast<int>(std::lround(0.5 * s.prior_L_m / bin)));
+    const std::vector<double> cuts = valley_cuts(
+        profile, lo, bin, reach, options.row_valley_depth_m,
+        options.row_valley_min_peak_fraction * s.prior_H_m, options.row_valley_min_piece_m);
+    if (cuts.empty()) return {};
+    std::vector<Indices> parts(cuts.size() + 1);
+    for (std::size_t k = 0; k < idx.size(); ++k) {
+        const auto part = static_cast<std::size_t>(
+            std::upper_bound(cuts.begin(), cuts.end(), along[k]) - cuts.begin());
+        parts[part].push_back(idx[k]);
+    }
+    return parts;
+}
+
 }  // namespace
 
 /// Vertical extent of points (2 % to 98 % height quantiles above the ground, or along -y
@@ -160,6 +306,12 @@ Split split_oversized(const std::vector<Eigen::Vector3f>& pts, const Indices& id
         split.yaw_rad = normalize_angle(box.theta + kHalfPi);
         split.at_gaps = true;  // a row of distinct things, whatever the density at the cuts
         return split;
+    }
+    if (ground && options.row_valley_depth_m > 0.0 &&
+        box.L_m > options.row_valley_min_length_fraction * s.prior_L_m) {
+        // Parked end to end: cut where the evidence says, at the valleys between the roofs.
+        std::vector<Indices> parts = split_at_valleys(pts, idx, c, -sn, s, *ground, options);
+        if (parts.size() > 1) return {std::move(parts), true, std::nullopt};
     }
     if (box.L_m > s.split_factor * s.prior_L_m) {
         // Parked end to end: walk the gaps from the near end when there are gaps (the far end

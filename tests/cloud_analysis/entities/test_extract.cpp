@@ -212,6 +212,12 @@ TEST_CASE("extract options name the bad field", "[entities]") {
     o.row_low_extent_m = 0.6;
     o.row_gap_m = -0.1;
     CHECK_THROWS_WITH(o.validate(), Catch::Contains("row_gap_m"));
+    o.row_gap_m = 0.6;
+    o.row_valley_depth_m = -0.1;
+    CHECK_THROWS_WITH(o.validate(), Catch::Contains("row_valley_depth_m"));
+    o.row_valley_depth_m = 0.4;
+    o.row_valley_bin_m = 0.0;
+    CHECK_THROWS_WITH(o.validate(), Catch::Contains("row_valley_bin_m"));
 }
 
 TEST_CASE("image-space clustering also separates two cars and keeps each whole", "[entities]") {
@@ -507,6 +513,54 @@ TEST_CASE("a parked row whose far car is half hidden is cut at its gaps walked f
     std::sort(centres.begin(), centres.end());
     REQUIRE(centres.size() == 3);
     for (int k = 0; k < 3; ++k) CHECK(centres[k] == Approx(starts[k] + 2.1).margin(0.3));
+}
+
+namespace {
+
+/// The right side of a thing heading along z from z0 to z1, seen from x = 0 at x = -1.1:
+/// heights up to top(z) above the road y = 1.65, every 5 cm.
+template <typename Top>
+void add_side(LabeledCloud& cloud, float z0, float z1, Top top) {
+    for (float z = z0; z <= z1; z += 0.05f) {
+        for (float h = 0.3f; h <= top(z - z0); h += 0.05f) {
+            add_point(cloud, {-1.1f, 1.65f - h, z}, 2);
+        }
+    }
+}
+
+}  // namespace
+
+TEST_CASE("a car and the front of the next one are cut at the valley between their roofs",
+          "[entities][split]") {
+    LabeledCloud cloud;
+    for (float x = -6.0f; x <= 6.0f; x += 0.25f) {
+        for (float z = 3.0f; z <= 40.0f; z += 0.25f) add_point(cloud, {x, 1.65f, z}, 0);
+    }
+    // A 4.5 m car (bonnet 0.85 m high for 0.9 m, roof 1.45 m, boot 1.0 m for the last 0.7 m),
+    // 0.3 m behind it the first 1.8 m of the next (its bonnet, then roof; the rest hidden).
+    // One blob 6.6 m long: too short for two priors, so a cut at the prior length never falls.
+    add_side(cloud, 10.0f, 14.5f,
+             [](float a) { return a < 0.9f ? 0.85f : (a < 3.8f ? 1.45f : 1.0f); });
+    add_side(cloud, 14.8f, 16.6f, [](float a) { return a < 0.8f ? 0.85f : 1.45f; });
+    project_pixels(cloud);
+    ExtractOptions o = options_with_bundled_config("instances");
+    const auto cars_of = [&](const ExtractOptions& options) {
+        std::vector<scene_schema::Entity> cars;
+        for (const auto& e :
+             extract_entities(cloud, test_palette(), StereoCamera{}, options).entities) {
+            if (e.class_name == "car") cars.push_back(e);
+        }
+        std::sort(cars.begin(), cars.end(), [](const auto& a, const auto& b) { return a.z < b.z; });
+        return cars;
+    };
+    const auto cars = cars_of(o);
+    REQUIRE(cars.size() == 2);
+    // The first box ends at the gap, the second starts there (each within 0.3 m).
+    CHECK(cars[0].z - cars[0].L / 2.0 == Approx(10.0).margin(0.3));
+    CHECK(cars[0].z + cars[0].L / 2.0 == Approx(14.5).margin(0.3));
+    CHECK(cars[1].z - cars[1].L / 2.0 == Approx(14.8).margin(0.3));
+    o.row_valley_depth_m = 0.0;  // off: one box over both
+    CHECK(cars_of(o).size() == 1);
 }
 
 TEST_CASE("the sparse far car of a parked row needs only half the class's minimum of points",

@@ -43,19 +43,34 @@ struct ExtractOptions {
                                             ///< (8 also drops far cars of small images)
     double min_height_fraction = 0.3;       ///< things lower than this * prior_H_m above the ground
                                             ///< are mislabelled ground, [0, 1)
-    double row_low_fraction = 0.7;     ///< a thing blob at least two prior widths long whose top
-                                       ///< stays below this * its highest top for row_low_extent_m
-                                       ///< across it from the camera's side (bonnets) is a row side
-                                       ///< by side seen front-on, [0, 1), 0 = off
-    double row_low_extent_m = 0.6;     ///< that low extent, metres, > 0
-    double row_gap_m = 0.6;            ///< gap between things in a row: pitch = prior W + this
-                                       ///< side by side, prior L + this end to end, metres, >= 0
-    std::string family_class = "car";  ///< class whose boxes get a size family (car / van) in
-                                       ///< the entity's `subclass`, "" = none
-    double van_min_height_m = 1.82;    ///< a box of that class at least this tall is a van
-                                       ///< (cars 1.4-1.5 m, SUVs 1.7 m, vans 1.9-2.1 m), metres
-    double van_prior_L_m = 5.2;        ///< a van's length prior (completes what is hidden), m
-    double van_prior_W_m = 2.0;        ///< a van's width prior, metres
+    double row_low_fraction = 0.7;    ///< a thing blob at least two prior widths long whose top
+                                      ///< stays below this * its highest top for row_low_extent_m
+                                      ///< across it from the camera's side (bonnets) is a row side
+                                      ///< by side seen front-on, [0, 1), 0 = off
+    double row_low_extent_m = 0.6;    ///< that low extent, metres, > 0
+    double row_gap_m = 0.6;           ///< gap between things in a row: pitch = prior W + this
+                                      ///< side by side, prior L + this end to end, metres, >= 0
+    double row_valley_depth_m = 0.4;  ///< a thing blob longer than
+                                      ///< row_valley_min_length_fraction * prior_L_m is cut
+                                      ///< where its top profile along its length drops this
+                                      ///< far below the tops on both sides (the ends of two
+                                      ///< things parked end to end between their roofs),
+                                      ///< metres, >= 0, 0 = off
+    double row_valley_min_length_fraction = 1.1;  ///< that length, times prior_L_m, > 0
+    double row_valley_min_peak_fraction = 0.7;    ///< both tops reach this * prior_H_m, [0, 2]
+    double row_valley_min_piece_m = 1.0;   ///< no cut closer than this to an end or another cut,
+                                           ///< metres, > 0
+    double row_valley_bin_m = 0.15;        ///< bin of the top profile along the length, metres,
+                                           ///< [0.01, 10]
+    double row_valley_closing_m = 0.3;     ///< dips of the top profile narrower than twice
+                                           ///< this are noise (each bin takes the highest top
+                                           ///< within this), metres, [0, 10]
+    std::string family_class = "car";      ///< class whose boxes get a size family (car / van) in
+                                           ///< the entity's `subclass`, "" = none
+    double van_min_height_m = 1.82;        ///< a box of that class at least this tall is a van
+                                           ///< (cars 1.4-1.5 m, SUVs 1.7 m, vans 1.9-2.1 m), metres
+    double van_prior_L_m = 5.2;            ///< a van's length prior (completes what is hidden), m
+    double van_prior_W_m = 2.0;            ///< a van's width prior, metres
     double stuff_on_thing_fraction = 0.5;  ///< a stuff entity with more than this share of its
                                            ///< footprint inside thing boxes is dropped (stuff
                                            ///< smeared onto a thing's silhouette), (0, 1],
