@@ -30,11 +30,12 @@ struct Classes {
           other(find_class(p, "static")) {}
 };
 
-/// One u-disparity cell: the obstacle pixels of a column band at one disparity.
+/// One u-disparity cell: the obstacle pixels of a column band at one disparity, in one of two
+/// layers: below layer_height_m (where cars are) or above it (crowns, walls' upper floors).
 struct Cell {
     int count = 0;          ///< obstacle pixels at or above low_cut_m
     int green = 0;          ///< of them green
-    int tall = 0;           ///< of them above car_max_height_m
+    int at_cut = 0;         ///< of them within continuity_band_m of the layers' border
     float top1 = -1e9f;     ///< highest height above the road, metres
     float top2 = -1e9f;     ///< second highest (robust top)
     float low = 1e9f;       ///< lowest height, metres
@@ -42,8 +43,11 @@ struct Cell {
     int top_u = 0;          ///< column of that pixel
     bool occluded = false;  ///< a nearer surface lies right above that pixel: top unknown
     int segment = -1;       ///< segment index once linked; -1: sparse (noise)
-    bool is_tall = false;
+    bool is_tall = false;   ///< upper layer, or a lower layer the surface above continues
 };
+
+/// Cells per (column band, disparity bin): the lower and the upper layer.
+constexpr int kLayers = 2;
 
 /// The rig's depth of disparity d and the pixel grid, shared by the passes.
 struct Rig {
@@ -160,7 +164,7 @@ Grid fill_grid(const DisparityMap& disparity, const Rig& rig, const ImageU8& lef
     Grid g;
     g.bins_u = (w + o.column_bin_px - 1) / o.column_bin_px;
     make_bins(max_d, o.disparity_bin_share, g);
-    g.cells.resize(static_cast<std::size_t>(g.bins_u) * g.bins_d);
+    g.cells.resize(static_cast<std::size_t>(g.bins_u) * g.bins_d * kLayers);
     g.pixel_cell.assign(static_cast<std::size_t>(w) * h, -1);
     g.pixel_low.assign(g.pixel_cell.size(), 0);
     g.pixel_green.assign(g.pixel_cell.size(), 0);
@@ -169,7 +173,8 @@ Grid fill_grid(const DisparityMap& disparity, const Rig& rig, const ImageU8& lef
     const double min_d = rig.fb / o.max_depth_m;
     // Height error of a road point at depth z for a disparity error e: h_cam * z * e / (f B).
     const double slope = o.disparity_noise_px * plane_d / rig.fb;
-    const auto tall_m = static_cast<float>(o.car_max_height_m);
+    const auto tall_m = static_cast<float>(o.layer_height_m);
+    const auto band_m = static_cast<float>(o.continuity_band_m);
     for (int v = 0; v < h; ++v) {
         const std::size_t row = static_cast<std::size_t>(v) * w;
         const double row_term = n.y() * (v - rig.cy) / rig.fy + n.z();
@@ -185,8 +190,12 @@ Grid fill_grid(const DisparityMap& disparity, const Rig& rig, const ImageU8& lef
                 out.class_index[row + u] = road;
                 continue;
             }
-            const int cell = (u / o.column_bin_px) * g.bins_d +
-                             g.bin_of_tenth[static_cast<std::size_t>(d * 10.0)];
+            const float hf = static_cast<float>(std::min(height, o.max_obstacle_height_m));
+            const int upper = hf > tall_m ? 1 : 0;
+            const int cell = ((u / o.column_bin_px) * g.bins_d +
+                              g.bin_of_tenth[static_cast<std::size_t>(d * 10.0)]) *
+                                 kLayers +
+                             upper;
             g.pixel_cell[row + u] = cell;
             const bool green = is_green(left, u, v);
             if (height < o.low_cut_m) {
@@ -195,9 +204,8 @@ Grid fill_grid(const DisparityMap& disparity, const Rig& rig, const ImageU8& lef
                 continue;
             }
             Cell& c = g.cells[static_cast<std::size_t>(cell)];
-            const float hf = static_cast<float>(std::min(height, o.max_obstacle_height_m));
             ++c.count;
-            c.tall += hf > tall_m ? 1 : 0;
+            c.at_cut += std::abs(hf - tall_m) <= band_m ? 1 : 0;
             c.green += green ? 1 : 0;
             if (hf > c.top1) {
                 c.top2 = c.top1;
@@ -227,43 +235,64 @@ bool top_occluded(const DisparityMap& disparity, const Cell& c, double cell_d) {
     return false;
 }
 
-/// Pass 2: dense cells linked to dense cells of the same kind (tall or not) in the next two
-/// column bands within link_depth_m; returns each dense cell's root (-1 for sparse cells).
+/// Pass 2: dense cells linked to dense cells of the same kind in the next two column bands
+/// within link_depth_m; returns each dense cell's root (-1 for sparse cells). A cell's kind is
+/// tall in the upper layer, and in the lower layer when its surface runs on across the layers'
+/// border (a wall, a trunk): then both layers join. A car under a tree's crown has a gap there,
+/// so its cells stay low and apart from the crown's.
 std::vector<int> link_cells(Grid& g, const DisparityMap& disparity, const Rig& rig,
                             const GeometryOptions& o) {
     std::vector<int> parent(g.cells.size(), -1);
+    const auto cell = [&](int bu, int bd, int layer) -> Cell& {
+        return g.cells[static_cast<std::size_t>((bu * g.bins_d + bd) * kLayers + layer)];
+    };
     for (int bd = 0; bd < g.bins_d; ++bd) {
-        // Pixels a surface min_cell_height_m tall fills in a cell at this disparity.
-        const double expected = o.min_cell_height_m * rig.fy *
-                                g.bin_centre[static_cast<std::size_t>(bd)] / rig.fb *
-                                o.column_bin_px;
-        const int min_count = std::max(o.min_cell_pixels, static_cast<int>(expected));
+        // Pixels a surface h metres tall fills in a cell at this disparity.
+        const double px_per_m =
+            rig.fy * g.bin_centre[static_cast<std::size_t>(bd)] / rig.fb * o.column_bin_px;
+        const int min_count =
+            std::max(o.min_cell_pixels, static_cast<int>(o.min_cell_height_m * px_per_m));
+        const double at_cut = o.continuity_share * o.continuity_band_m * px_per_m;
         for (int bu = 0; bu < g.bins_u; ++bu) {
-            const int i = bu * g.bins_d + bd;
-            Cell& c = g.cells[static_cast<std::size_t>(i)];
-            if (c.count < min_count) continue;
-            parent[static_cast<std::size_t>(i)] = i;
-            c.is_tall = c.tall > o.tall_share * c.count;
-            c.occluded = top_occluded(disparity, c, g.bin_centre[static_cast<std::size_t>(bd)]);
+            for (int layer = 0; layer < kLayers; ++layer) {
+                const int i = (bu * g.bins_d + bd) * kLayers + layer;
+                Cell& c = g.cells[static_cast<std::size_t>(i)];
+                if (c.count < min_count) continue;
+                parent[static_cast<std::size_t>(i)] = i;
+                c.occluded = top_occluded(disparity, c, g.bin_centre[static_cast<std::size_t>(bd)]);
+            }
+            Cell& lower = cell(bu, bd, 0);
+            Cell& upper = cell(bu, bd, 1);
+            upper.is_tall = true;
+            int upper_at_cut = 0;  // the border rows of the surface above, noise spread over bins
+            for (int k = std::max(0, bd - 1); k <= std::min(g.bins_d - 1, bd + 1); ++k) {
+                upper_at_cut += cell(bu, k, 1).at_cut;
+            }
+            lower.is_tall = lower.at_cut >= at_cut && upper_at_cut >= at_cut;
         }
     }
     for (int bu = 0; bu < g.bins_u; ++bu) {
         for (int bd = 0; bd < g.bins_d; ++bd) {
-            const int i = bu * g.bins_d + bd;
-            if (parent[static_cast<std::size_t>(i)] < 0) continue;
-            const bool tall = g.cells[static_cast<std::size_t>(i)].is_tall;
             const double dd = g.bin_centre[static_cast<std::size_t>(bd)];
             const double bin_width = std::max(1.0, o.disparity_bin_share * dd);
             const int reach = std::clamp(
                 static_cast<int>(std::ceil(o.link_depth_m * dd * dd / rig.fb / bin_width)), 1, 6);
-            for (int du = 0; du <= 2 && bu + du < g.bins_u; ++du) {
-                for (int k = (du == 0 ? 1 : -reach); k <= reach; ++k) {
-                    const int nd = bd + k;
-                    if (nd < 0 || nd >= g.bins_d) continue;
-                    const int j = (bu + du) * g.bins_d + nd;
-                    if (parent[static_cast<std::size_t>(j)] >= 0 &&
-                        g.cells[static_cast<std::size_t>(j)].is_tall == tall) {
-                        unite(parent, i, j);
+            for (int layer = 0; layer < kLayers; ++layer) {
+                const int i = (bu * g.bins_d + bd) * kLayers + layer;
+                if (parent[static_cast<std::size_t>(i)] < 0) continue;
+                const bool tall = g.cells[static_cast<std::size_t>(i)].is_tall;
+                for (int du = 0; du <= 2 && bu + du < g.bins_u; ++du) {
+                    for (int k = -reach; k <= reach; ++k) {
+                        const int nd = bd + k;
+                        if (nd < 0 || nd >= g.bins_d) continue;
+                        for (int nl = 0; nl < kLayers; ++nl) {
+                            const int j = ((bu + du) * g.bins_d + nd) * kLayers + nl;
+                            if (j <= i && du == 0) continue;
+                            if (parent[static_cast<std::size_t>(j)] >= 0 &&
+                                g.cells[static_cast<std::size_t>(j)].is_tall == tall) {
+                                unite(parent, i, j);
+                            }
+                        }
                     }
                 }
             }
@@ -300,8 +329,9 @@ std::vector<SegmentStats> gather_segments(Grid& g, std::vector<int>& parent, con
         st.occluded += c.occluded ? static_cast<std::size_t>(c.count) : 0;
         st.tops.push_back(c.count > 1 ? c.top2 : c.top1);
         st.lows.push_back(c.low);
-        const double z = rig.fb / g.bin_centre[static_cast<std::size_t>(i % g.bins_d)];
-        const double u = ((i / g.bins_d) + 0.5) * o.column_bin_px;
+        const int column_bin = i / kLayers;
+        const double z = rig.fb / g.bin_centre[static_cast<std::size_t>(column_bin % g.bins_d)];
+        const double u = ((column_bin / g.bins_d) + 0.5) * o.column_bin_px;
         st.depths.push_back(static_cast<float>(z));
         st.footprint.emplace_back((u - rig.cx) * z / rig.fx, z, c.count);
     }

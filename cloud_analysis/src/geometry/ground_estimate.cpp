@@ -56,8 +56,17 @@ void GeometryOptions::validate() const {
         throw std::invalid_argument("geometry.min_cell_height_m: must be >= 0");
     }
     positive(low_cut_m, "geometry.low_cut_m");
-    if (!(tall_share > 0.0 && tall_share <= 1.0)) {
-        throw std::invalid_argument("geometry.tall_share: must be in (0, 1]");
+    if (!(layer_height_m > car_max_height_m)) {
+        throw std::invalid_argument("geometry.layer_height_m: must be above car_max_height_m");
+    }
+    if (!(continuity_band_m > 0.0)) {
+        throw std::invalid_argument("geometry.continuity_band_m: must be > 0");
+    }
+    if (!(continuity_share > 0.0 && continuity_share <= 1.0)) {
+        throw std::invalid_argument("geometry.continuity_share: must be in (0, 1]");
+    }
+    if (!(min_face_share >= 0.0 && min_face_share < 1.0)) {
+        throw std::invalid_argument("geometry.min_face_share: must be in [0, 1)");
     }
     if (!(green_fraction > 0.0 && green_fraction <= 1.0)) {
         throw std::invalid_argument("geometry.green_fraction: must be in (0, 1]");

@@ -27,9 +27,11 @@ StereoCamera kitti_rig() {
     return c;
 }
 
-/// An upright box (x from x0 to x1, face at depth z, from the road up to top_m) in a scene.
+/// An upright box (x from x0 to x1, face at depth z, from bottom_m above the road up to top_m)
+/// in a scene.
 struct Box {
     double x0, x1, z, top_m;
+    double bottom_m = 0.0;
 };
 
 /// Ray casting of a flat road `height_m` below the camera (pitch 0) and upright boxes facing
@@ -48,7 +50,7 @@ DisparityMap render(const StereoCamera& c, double height_m, const std::vector<Bo
             for (const Box& b : boxes) {
                 const double px = x * b.z, py = y * b.z;
                 if (b.z < z && px >= b.x0 && px <= b.x1 && py <= height_m &&
-                    py >= height_m - b.top_m) {
+                    py >= height_m - b.top_m && py <= height_m - b.bottom_m) {
                     z = b.z;
                 }
             }
@@ -112,6 +114,28 @@ TEST_CASE("a car-shaped object on the road is car, a facade building, a pole pol
     CHECK(class_at(g, palette, wu, wv) == "wall");
 }
 
+TEST_CASE("a car under a tree's crown stays a car, a facade runs on above the car's layer",
+          "[geometry]") {
+    const StereoCamera cam = kitti_rig();
+    const auto palette = cloud_analysis::load_palette("cityscapes");
+    // The crown hangs 1.5 m above the roof at the car's own depth: one u-disparity cell holds
+    // both, in different layers. The wall beside it (a facade's foot) is continuous.
+    const std::vector<Box> boxes = {{-1.0, 0.8, 12.0, 1.0},       // a car's back
+                                    {-0.8, 0.6, 12.6, 1.5},       // its cabin
+                                    {-2.5, 2.5, 12.3, 6.0, 3.0},  // a crown, 3 to 6 m up
+                                    {4.0, 12.0, 12.0, 6.0}};      // a facade
+    const SceneGeometry g = derive_semantics(render(cam, 1.65, boxes), cam, ImageU8{}, palette, {});
+    REQUIRE(g.ground.found);
+    const auto [cu, cv] = pixel_of(cam, 0.0, 0.8, 12.0);
+    CHECK(class_at(g, palette, cu, cv) == "car");
+    const auto [tu, tv] = pixel_of(cam, 0.0, 4.5, 12.3);
+    CHECK(class_at(g, palette, tu, tv) != "car");
+    for (const double up : {0.8, 2.0, 4.0}) {
+        const auto [fu, fv] = pixel_of(cam, 8.0, up, 12.0);
+        CHECK(class_at(g, palette, fu, fv) == "building");
+    }
+}
+
 TEST_CASE("a wall filling the view or a wrong baseline gives no ground and a warning",
           "[geometry]") {
     StereoCamera cam = kitti_rig();
@@ -162,4 +186,10 @@ TEST_CASE("geometry options name the bad field", "[geometry]") {
     o = GeometryOptions{};
     o.max_camera_height_m = 0.1;
     CHECK_THROWS_WITH(o.validate(), Catch::Contains("max_camera_height_m"));
+    o = GeometryOptions{};
+    o.layer_height_m = o.car_max_height_m;
+    CHECK_THROWS_WITH(o.validate(), Catch::Contains("layer_height_m"));
+    o = GeometryOptions{};
+    o.min_face_share = 1.0;
+    CHECK_THROWS_WITH(o.validate(), Catch::Contains("min_face_share"));
 }

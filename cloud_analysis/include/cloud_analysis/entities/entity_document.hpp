@@ -5,6 +5,7 @@
 /// the file was made.
 
 #include <string>
+#include <vector>
 
 #include <scene_schema/entities.hpp>
 
@@ -20,6 +21,13 @@ struct RunSettings {
     std::string class_config = "default";  ///< class config file, "default" for the bundled one
     std::string tool_version;              ///< version of the tool that made the file
 };
+
+/// Drops the thing entities (classes with a size prior) seen over less than `min_face_share`
+/// of their smallest prior face, W x H (each point covers (z / fx) (z / fy) square metres at the
+/// box's depth): fragments of a roof or a row, and clutter. The stereo-only path applies it
+/// (geometry::GeometryOptions::min_face_share). Each class's ids are numbered again from 1.
+void drop_faint_things(std::vector<scene_schema::Entity>& entities, const ClassConfig& classes,
+                       double fx_px, double fy_px, double min_face_share);
 
 /// The entities of analysis `r` of frame `in` (extract_entities on its per-class points when
 /// the analysis made no cloud, else on the cloud), with frame.id, frame.camera and source

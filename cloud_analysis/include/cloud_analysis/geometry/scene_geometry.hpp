@@ -42,10 +42,16 @@ struct GeometryOptions {
                                          ///< surface this tall across the cell would, metres
     double low_cut_m = 0.35;             ///< pixels lower than this above the road take their
                                          ///< cell's class, or sidewalk/terrain alone, metres
-    double tall_share = 0.3;             ///< cells with more of their pixels above
-                                         ///< car_max_height_m are tall (walls, trees), (0, 1]
+    double layer_height_m = 2.3;         ///< cells hold the pixels below and above this height in
+                                         ///< two layers: cars below, crowns and walls' upper
+                                         ///< floors above, metres
+    double continuity_band_m = 0.3;      ///< a surface continues across layer_height_m (a
+                                         ///< wall, a trunk: its cells are tall) when it fills
+    double continuity_share = 0.3;       ///< this share of the band this tall on both sides of
+                                         ///< it; else the layers stay apart, metres, (0, 1]
     double car_min_height_m = 0.9;       ///< car tops lie between this ...
-    double car_max_height_m = 2.3;       ///< ... and this above the road, metres
+    double car_max_height_m = 2.2;       ///< ... and this above the road (below layer_height_m:
+                                         ///< a segment reaching it meets a surface above), m
     double car_min_width_m = 1.2;        ///< narrower objects are persons or poles, metres
     double building_min_height_m = 2.6;  ///< taller objects are buildings (or trees), metres
     double wall_top_spread_m = 0.15;     ///< a thin segment whose tops (25th-97th percentile) vary
@@ -54,6 +60,9 @@ struct GeometryOptions {
     double pole_max_width_m = 0.6;       ///< tall objects narrower than this are poles, metres
     double low_max_height_m = 0.6;       ///< objects lower than this are kerbs or low plants, m
     double green_fraction = 0.45;        ///< objects with more green pixels are vegetation, (0,1]
+    double min_face_share = 0.15;        ///< a thing entity seen over less than this share of
+                                         ///< its smallest prior face (W x H) is a fragment or
+                                         ///< clutter and is dropped, [0, 1), 0 = off
     /// Throws std::invalid_argument naming the bad field.
     void validate() const;
 };
