@@ -1,4 +1,5 @@
 #include <algorithm>
+#include <array>
 #include <cmath>
 #include <numeric>
 #include <stdexcept>
@@ -69,7 +70,7 @@ struct Grid {
     std::vector<Cell> cells;
     std::vector<std::int32_t> pixel_cell;  ///< per pixel: its cell, -1 when none
     std::vector<char> pixel_low;           ///< per pixel: below low_cut_m
-    std::vector<char> pixel_green;         ///< per low pixel: green
+    std::vector<char> pixel_green;         ///< per pixel: green (green_mask)
 };
 
 int find_root(std::vector<int>& parent, int i) {
@@ -86,11 +87,43 @@ void unite(std::vector<int>& parent, int a, int b) {
     if (a != b) parent[std::max(a, b)] = std::min(a, b);
 }
 
-bool is_green(const ImageU8& left, int u, int v) {
-    if (left.channels != 3) return false;
-    const std::uint8_t* p = left.at(u, v);
-    const int r = p[0], g = p[1], b = p[2];
-    return g >= r + 6 && g * 10 >= r * 11 && g * 10 >= b * 11;
+bool is_green(int r, int g, int b) { return g >= r + 6 && g * 10 >= r * 11 && g * 10 >= b * 11; }
+
+/// Per pixel: whether the mean colour of its (2 radius + 1)^2 window is green (foliage's own
+/// shadows between sunlit leaves are green only on average); all 0 without a colour image.
+std::vector<char> green_mask(const ImageU8& left, int w, int h, int radius) {
+    std::vector<char> mask(static_cast<std::size_t>(w) * h, 0);
+    if (left.channels != 3 || left.empty() || left.width_px != w || left.height_px != h) {
+        return mask;
+    }
+    // Integral image of the three channels, (w + 1) x (h + 1).
+    const std::size_t stride = static_cast<std::size_t>(w) + 1;
+    std::vector<std::array<std::int64_t, 3>> sum(stride * (h + 1), {0, 0, 0});
+    for (int v = 0; v < h; ++v) {
+        std::array<std::int64_t, 3> row{0, 0, 0};
+        for (int u = 0; u < w; ++u) {
+            const std::uint8_t* p = left.at(u, v);
+            for (int c = 0; c < 3; ++c) {
+                row[c] += p[c];
+                sum[(v + 1) * stride + u + 1][c] = sum[v * stride + u + 1][c] + row[c];
+            }
+        }
+    }
+    for (int v = 0; v < h; ++v) {
+        const int v0 = std::max(0, v - radius), v1 = std::min(h, v + radius + 1);
+        for (int u = 0; u < w; ++u) {
+            const int u0 = std::max(0, u - radius), u1 = std::min(w, u + radius + 1);
+            std::array<std::int64_t, 3> m{};
+            for (int c = 0; c < 3; ++c) {
+                m[c] = sum[v1 * stride + u1][c] - sum[v0 * stride + u1][c] -
+                       sum[v1 * stride + u0][c] + sum[v0 * stride + u0][c];
+            }
+            const std::int64_t n = static_cast<std::int64_t>(v1 - v0) * (u1 - u0);
+            mask[static_cast<std::size_t>(v) * w + u] = is_green(
+                static_cast<int>(m[0] / n), static_cast<int>(m[1] / n), static_cast<int>(m[2] / n));
+        }
+    }
+    return mask;
 }
 
 double quantile(std::vector<float>& v, double q) {
@@ -175,6 +208,7 @@ Grid fill_grid(const DisparityMap& disparity, const Rig& rig, const ImageU8& lef
     const double slope = o.disparity_noise_px * plane_d / rig.fb;
     const auto tall_m = static_cast<float>(o.layer_height_m);
     const auto band_m = static_cast<float>(o.continuity_band_m);
+    const std::vector<char> green_px = green_mask(left, w, h, o.green_window_px);
     for (int v = 0; v < h; ++v) {
         const std::size_t row = static_cast<std::size_t>(v) * w;
         const double row_term = n.y() * (v - rig.cy) / rig.fy + n.z();
@@ -197,10 +231,10 @@ Grid fill_grid(const DisparityMap& disparity, const Rig& rig, const ImageU8& lef
                                  kLayers +
                              upper;
             g.pixel_cell[row + u] = cell;
-            const bool green = is_green(left, u, v);
+            const bool green = green_px[row + u] != 0;
+            g.pixel_green[row + u] = green ? 1 : 0;
             if (height < o.low_cut_m) {
                 g.pixel_low[row + u] = 1;
-                g.pixel_green[row + u] = green ? 1 : 0;
                 continue;
             }
             Cell& c = g.cells[static_cast<std::size_t>(cell)];
@@ -438,7 +472,9 @@ SceneGeometry derive_semantics(const DisparityMap& disparity, const StereoCamera
         if (cell < 0) continue;
         const int s = grid.cells[static_cast<std::size_t>(cell)].segment;
         if (s >= 0) {
-            out.classes.class_index[p] = segment_class[static_cast<std::size_t>(s)];
+            // Green pixels of a car segment are the hedge or bush it touches.
+            const std::uint16_t c = segment_class[static_cast<std::size_t>(s)];
+            out.classes.class_index[p] = c == cls.car && grid.pixel_green[p] ? cls.vegetation : c;
         } else if (grid.pixel_low[p]) {
             out.classes.class_index[p] = grid.pixel_green[p] ? cls.terrain : cls.sidewalk;
         }

@@ -65,6 +65,9 @@ void GeometryOptions::validate() const {
     if (!(continuity_share > 0.0 && continuity_share <= 1.0)) {
         throw std::invalid_argument("geometry.continuity_share: must be in (0, 1]");
     }
+    if (green_window_px < 0 || green_window_px > 64) {
+        throw std::invalid_argument("geometry.green_window_px: must be in [0, 64]");
+    }
     if (!(min_face_share >= 0.0 && min_face_share < 1.0)) {
         throw std::invalid_argument("geometry.min_face_share: must be in [0, 1)");
     }

@@ -136,6 +136,37 @@ TEST_CASE("a car under a tree's crown stays a car, a facade runs on above the ca
     }
 }
 
+TEST_CASE("the green pixels of a car segment are vegetation, by their window's mean colour",
+          "[geometry]") {
+    const StereoCamera cam = kitti_rig();
+    const auto palette = cloud_analysis::load_palette("cityscapes");
+    const std::vector<Box> boxes = {{-1.0, 0.8, 10.0, 1.0}, {-0.8, 0.6, 10.6, 1.5}};
+    // A grey image with a bush over the car's left half: green leaves every other column, dark
+    // shadows between them (not green one by one, green on average).
+    ImageU8 left;
+    left.width_px = cam.width_px;
+    left.height_px = cam.height_px;
+    left.channels = 3;
+    left.data.assign(static_cast<std::size_t>(left.width_px) * left.height_px * 3, 120);
+    const auto [bu0, bv0] = pixel_of(cam, -1.0, 1.0, 10.0);
+    const auto [bu1, bv1] = pixel_of(cam, -0.1, 0.4, 10.0);
+    for (int v = bv0; v <= bv1; ++v) {
+        for (int u = bu0; u <= bu1; ++u) {
+            auto* p = left.data.data() + (static_cast<std::size_t>(v) * left.width_px + u) * 3;
+            const bool leaf = u % 2 == 0;
+            p[0] = leaf ? 60 : 40;
+            p[1] = leaf ? 140 : 40;
+            p[2] = leaf ? 40 : 40;
+        }
+    }
+    const SceneGeometry g = derive_semantics(render(cam, 1.65, boxes), cam, left, palette, {});
+    REQUIRE(g.ground.found);
+    const auto [gu, gv] = pixel_of(cam, -0.6, 0.7, 10.0);
+    CHECK(class_at(g, palette, gu | 1, gv) == "vegetation");  // a shadow column
+    const auto [cu, cv] = pixel_of(cam, 0.5, 0.7, 10.0);
+    CHECK(class_at(g, palette, cu, cv) == "car");
+}
+
 TEST_CASE("a wall filling the view or a wrong baseline gives no ground and a warning",
           "[geometry]") {
     StereoCamera cam = kitti_rig();
@@ -192,4 +223,7 @@ TEST_CASE("geometry options name the bad field", "[geometry]") {
     o = GeometryOptions{};
     o.min_face_share = 1.0;
     CHECK_THROWS_WITH(o.validate(), Catch::Contains("min_face_share"));
+    o = GeometryOptions{};
+    o.green_window_px = -1;
+    CHECK_THROWS_WITH(o.validate(), Catch::Contains("green_window_px"));
 }

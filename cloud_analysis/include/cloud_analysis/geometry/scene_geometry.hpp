@@ -60,6 +60,8 @@ struct GeometryOptions {
     double pole_max_width_m = 0.6;       ///< tall objects narrower than this are poles, metres
     double low_max_height_m = 0.6;       ///< objects lower than this are kerbs or low plants, m
     double green_fraction = 0.45;        ///< objects with more green pixels are vegetation, (0,1]
+    int green_window_px = 2;             ///< a pixel is green when the mean colour of the window
+                                         ///< this far around it is (leaves' shadows), px, >= 0
     double min_face_share = 0.15;        ///< a thing entity seen over less than this share of
                                          ///< its smallest prior face (W x H) is a fragment or
                                          ///< clutter and is dropped, [0, 1), 0 = off
