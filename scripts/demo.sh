@@ -89,6 +89,12 @@ note "entities, stereo pair only" "$out/street-stereo-only.json"
 note "classes from geometry" "$out/street-stereo-only-classes.png"
 note "scores, stereo pair only" "$out/street-stereo-only-eval.json"
 note "stereo-only over the left image" "$out/street-stereo-only-camera.png"
+for view in camera bev; do
+    "$render" grid --inputs "$r/scenes/street.json" "$out/street-instances.json" \
+        "$out/street-stereo-only.json" --labels "truth" "with the semantic image" \
+        "stereo pair only" --columns 1 --view "$view" -o "$out/street-labels-vs-stereo-$view.png"
+    note "semantic image vs stereo pair only, $view view" "$out/street-labels-vs-stereo-$view.png"
+done
 
 # 3b. A drive: the short sample drive rendered with its truth (half size, 10 frames, to keep the
 #     demo fast), analysed, tracked, scored, then played to a video and a BEV strip with trails.
@@ -132,11 +138,12 @@ if [ -d "$kitti/image_2" ]; then
     note "KITTI BEV" "$out/kitti-000000_10-bev.png"
 fi
 
-# 5. The interactive viewer: the analysis with its cloud and left image, compared with the truth
-#    and the thesis extractors; then the page that embeds it and links everything above.
+# 5. The interactive viewer: the analysis with its cloud and left image, compared with the truth,
+#    the stereo-only run and the thesis extractors; then the page that embeds it and links
+#    everything above.
 if "$render" html "$out/street-instances.json" "$r/scenes/street.json" \
-    "$out/street-centroid.json" "$out/street-variance.json" \
-    --labels instances truth "centre of mass" variance --cloud "$out/street.ply" \
+    "$out/street-stereo-only.json" "$out/street-centroid.json" "$out/street-variance.json" \
+    --labels instances truth "stereo only" "centre of mass" variance --cloud "$out/street.ply" \
     --background "$r/street/image_2/000000.png" --title "rendered street" --out "$out/viewer"; then
     note "interactive viewer (browser)" "$out/viewer/index.html"
 else
