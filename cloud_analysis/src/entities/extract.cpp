@@ -211,6 +211,12 @@ void ExtractOptions::validate() const {
     if (!(min_width_px >= 0.0 && min_width_px < 1e6)) {
         throw std::invalid_argument("min_width_px: must be >= 0");
     }
+    if (!(strip_beside_width_px >= 0.0 && strip_beside_width_px < 1e6)) {
+        throw std::invalid_argument("strip_beside_width_px: must be >= 0");
+    }
+    if (!(strip_beside_gap_m >= 0.0 && strip_beside_gap_m < 1e6)) {
+        throw std::invalid_argument("strip_beside_gap_m: must be >= 0");
+    }
     if (!(fragment_height_fraction >= 0.0 && fragment_height_fraction <= 1.0)) {
         throw std::invalid_argument("fragment_height_fraction: must be in [0, 1]");
     }

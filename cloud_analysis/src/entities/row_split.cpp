@@ -311,7 +311,7 @@ Split split_oversized(const std::vector<Eigen::Vector3f>& pts, const Indices& id
         box.L_m > options.row_valley_min_length_fraction * s.prior_L_m) {
         // Parked end to end: cut where the evidence says, at the valleys between the roofs.
         std::vector<Indices> parts = split_at_valleys(pts, idx, c, -sn, s, *ground, options);
-        if (parts.size() > 1) return {std::move(parts), true, std::nullopt};
+        if (parts.size() > 1) return {std::move(parts), false, std::nullopt};
     }
     if (box.L_m > s.split_factor * s.prior_L_m) {
         // Parked end to end: walk the gaps from the near end when there are gaps (the far end

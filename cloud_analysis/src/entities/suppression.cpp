@@ -148,4 +148,52 @@ std::vector<Candidate> drop_strips(std::vector<Candidate> candidates,
     return candidates;
 }
 
+std::vector<Candidate> drop_strips_beside(std::vector<Candidate> candidates,
+                                          const std::vector<std::uint32_t>& pixels,
+                                          const PixelGrid& grid, double width_px, int radius_px,
+                                          double min_gap_m) {
+    if (!grid.valid() || width_px <= 0.0 || candidates.size() < 2) return candidates;
+    const auto width = static_cast<std::uint32_t>(grid.width_px);
+    // Per candidate, per image row, its column extent (lo > hi: no pixels on the row).
+    std::vector<std::vector<std::pair<int, int>>> extents(candidates.size());
+    for (std::size_t k = 0; k < candidates.size(); ++k) {
+        auto& rows = extents[k];
+        rows.assign(static_cast<std::size_t>(grid.height_px), {grid.width_px, -1});
+        for (std::size_t i : candidates[k].members) {
+            auto& e = rows[pixels[i] / width];
+            const int u = static_cast<int>(pixels[i] % width);
+            e.first = std::min(e.first, u);
+            e.second = std::max(e.second, u);
+        }
+    }
+    std::vector<bool> drop(candidates.size(), false);
+    for (std::size_t k = 0; k < candidates.size(); ++k) {
+        const Candidate& c = candidates[k];
+        if (median_row_width_px(c.members, pixels, grid) >= width_px) continue;
+
+        for (std::size_t o = 0; o < candidates.size() && !drop[k]; ++o) {
+            const Candidate& big = candidates[o];
+            if (o == k || big.group == c.group || big.members.size() <= c.members.size() ||
+                std::abs(big.range_m - c.range_m) < min_gap_m) {
+                continue;
+            }
+            std::size_t beside = 0;
+            for (std::size_t i : c.members) {
+                const auto& e = extents[o][pixels[i] / width];
+                const int u = static_cast<int>(pixels[i] % width);
+                beside +=
+                    (e.first <= e.second && u >= e.first - radius_px && u <= e.second + radius_px)
+                        ? 1
+                        : 0;
+            }
+            drop[k] = 2 * beside >= c.members.size();
+        }
+    }
+    std::vector<Candidate> kept;
+    for (std::size_t k = 0; k < candidates.size(); ++k) {
+        if (!drop[k]) kept.push_back(std::move(candidates[k]));
+    }
+    return kept;
+}
+
 }  // namespace cloud_analysis::instances

@@ -234,6 +234,9 @@ std::vector<scene_schema::Entity> things_of_class(const ClassInfo& info,
                                                   const ExtractOptions& options) {
     if (s.has_prior()) {
         candidates = drop_strips(std::move(candidates), pixels, grid, options.min_width_px);
+        candidates =
+            drop_strips_beside(std::move(candidates), pixels, grid, options.strip_beside_width_px,
+                               options.shadow_radius_px, options.strip_beside_gap_m);
         candidates = suppress_shadows(std::move(candidates), pixels, grid, s.prior_W_m,
                                       options.shadow_fraction, options.shadow_radius_px);
     }

@@ -218,6 +218,9 @@ TEST_CASE("extract options name the bad field", "[entities]") {
     o.row_valley_depth_m = 0.4;
     o.row_valley_bin_m = 0.0;
     CHECK_THROWS_WITH(o.validate(), Catch::Contains("row_valley_bin_m"));
+    o.row_valley_bin_m = 0.15;
+    o.strip_beside_width_px = -1.0;
+    CHECK_THROWS_WITH(o.validate(), Catch::Contains("strip_beside_width_px"));
 }
 
 TEST_CASE("image-space clustering also separates two cars and keeps each whole", "[entities]") {
@@ -752,4 +755,44 @@ TEST_CASE("a thing a few pixels wide in the image is a strip of label bleed and 
     REQUIRE(kept.size() == 1);
     CHECK(kept[0].members.size() == 600);
     CHECK(drop_strips({strip, car}, pixels, grid, 0.0).size() == 2);
+}
+
+TEST_CASE("a strip along a larger car at another range is dropped, a narrow car on its own kept",
+          "[extract][suppression]") {
+    using namespace cloud_analysis::instances;
+    const PixelGrid grid{100, 80};
+    std::vector<std::uint32_t> pixels;
+    Candidate strip, car, far_car;
+    const auto add = [&](Candidate& c, std::uint32_t u0, std::uint32_t u1, std::uint32_t v0,
+                         std::uint32_t v1) {
+        for (std::uint32_t v = v0; v < v1; ++v) {
+            for (std::uint32_t u = u0; u < u1; ++u) {
+                c.members.push_back(pixels.size());
+                pixels.push_back(v * 100 + u);
+            }
+        }
+    };
+    // A 30 x 20 px car at 18 m; a 4 px strip right of it at 15 m (a pole's smear over its
+    // end); a 5 px wide car at 35 m far left in the image, beside nothing.
+    add(car, 40, 70, 40, 60);
+    car.range_m = 18.0;
+    car.group = 1;
+    add(strip, 71, 75, 38, 58);
+    strip.range_m = 15.0;
+    strip.group = 2;
+    add(far_car, 5, 10, 30, 34);
+    far_car.range_m = 35.0;
+    far_car.group = 3;
+    const auto kept = drop_strips_beside({strip, car, far_car}, pixels, grid, 8.0, 10, 1.0);
+    REQUIRE(kept.size() == 2);
+    CHECK(kept[0].members.size() == car.members.size());
+    CHECK(kept[1].members.size() == far_car.members.size());
+    // At the car's range it is part of the car's surface, not another object's depth.
+    strip.range_m = 18.5;
+    CHECK(drop_strips_beside({strip, car, far_car}, pixels, grid, 8.0, 10, 1.0).size() == 3);
+    strip.range_m = 15.0;
+    CHECK(drop_strips_beside({strip, car, far_car}, pixels, grid, 0.0, 10, 1.0).size() == 3);
+    // A piece of the car's own row (its group) is a thing of the row, however narrow.
+    strip.group = car.group;
+    CHECK(drop_strips_beside({strip, car, far_car}, pixels, grid, 8.0, 10, 1.0).size() == 3);
 }

@@ -41,6 +41,13 @@ struct ExtractOptions {
                                             ///< image (median pixels per row) is a strip of
                                             ///< label bleed or edge smear, pixels, >= 0, 0 = off
                                             ///< (8 also drops far cars of small images)
+    double strip_beside_width_px = 8.0;     ///< a thing narrower than this in the image lying
+                                            ///< along a larger thing of its class (within
+                                            ///< shadow_radius_px of it on its rows) at another
+                                            ///< range is that thing's outline at another object's
+                                            ///< depth (bleed, smear) and is dropped, pixels,
+                                            ///< >= 0, 0 = off
+    double strip_beside_gap_m = 1.0;        ///< that other range: at least this far, metres, >= 0
     double min_height_fraction = 0.3;       ///< things lower than this * prior_H_m above the ground
                                             ///< are mislabelled ground, [0, 1)
     double row_low_fraction = 0.7;    ///< a thing blob at least two prior widths long whose top

@@ -43,6 +43,19 @@ std::vector<Candidate> drop_strips(std::vector<Candidate> candidates,
                                    const std::vector<std::uint32_t>& pixels, const PixelGrid& grid,
                                    double min_width_px);
 
+/// Drops thing candidates narrower in the image than width_px (median_row_width_px) that lie
+/// along a larger candidate of the class: at least half their pixels within radius_px of that
+/// candidate's column extent on the same image row, and its range differing by at least
+/// min_gap_m. Such a strip is the outline of the larger thing at another object's depth:
+/// label bleed over the background behind it, or a nearer pole's or tree's disparity smeared
+/// over its pixels. A far car on its own, however narrow, lies beside no larger one; pieces of
+/// one group (a row cut at clear gaps, whose sparse far end may be narrow) never drop each
+/// other.
+std::vector<Candidate> drop_strips_beside(std::vector<Candidate> candidates,
+                                          const std::vector<std::uint32_t>& pixels,
+                                          const PixelGrid& grid, double width_px, int radius_px,
+                                          double min_gap_m);
+
 /// Drops thing candidates whose centre lies inside the footprint of a candidate with more
 /// points: two objects cannot overlap that much, so the smaller is a fragment of the larger.
 std::vector<Candidate> suppress_nested(std::vector<Candidate> candidates);
