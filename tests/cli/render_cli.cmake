@@ -112,3 +112,18 @@ render_cli_test("html with a label count that differs exits 2" ARGS html ${_stre
 render_cli_test("html with a missing point cloud exits 1 naming --cloud" ARGS html ${_street}
     --cloud ${_render_out}/none.ply --out ${_render_out}/html_nocloud CODE 1 STDERR "--cloud"
     OUTPUT ${_render_out}/html_nocloud/index.html OUTPUT_EXISTS 0)
+
+# play: a two-frame drive to every frame's PNG, a strip and an MP4 (ffmpeg is a dependency,
+# scripts/install-deps.sh), and nothing else in the folder (no staged or hidden file left).
+set(_play_frame ${PROJECT_SOURCE_DIR}/tests/corpus/cases/drive_broken/keep.json)
+add_test(NAME "scene-render play writes every frame, the strip and the video, nothing else"
+    COMMAND bash -c "set -euo pipefail; d=${_render_out}/play; rm -rf \"$d\"; mkdir -p \"$d/drive\"; \
+cp ${_play_frame} \"$d/drive/a.json\"; cp ${_play_frame} \"$d/drive/b.json\"; \
+echo '{\"schema_version\": \"1.1.0\", \"id\": \"two\", \"fps\": 5, \"frames\": [{\"index\": 0, \"file\": \"a.json\"}, {\"index\": 1, \"file\": \"b.json\"}]}' > \"$d/drive/sequence.json\"; \
+$<TARGET_FILE:scene-render> play \"$d/drive\" --out-dir \"$d/out\" --strip \"$d/out/strip.png\" \
+    --video \"$d/out/drive.mp4\" --view bev --size 160x120; \
+test \"$(ls -A \"$d/out\" | tr '\\n' ' ')\" = 'a.png b.png drive.mp4 strip.png '; \
+for f in a b strip; do test \"$(head -c 4 \"$d/out/$f.png\" | od -An -tx1 | tr -d ' ')\" = 89504e47; done; \
+head -c 12 \"$d/out/drive.mp4\" | grep -q ftyp")
+set_tests_properties("scene-render play writes every frame, the strip and the video, nothing else"
+    PROPERTIES TIMEOUT 120)
