@@ -66,6 +66,7 @@ for h in "${harnesses[@]}"; do
     log=$work/log.txt
     echo "fuzz: $h for $seconds s" >&2
     set +e
+    start=$SECONDS
     ASAN_OPTIONS=detect_leaks=0:allocator_may_return_null=1 \
     UBSAN_OPTIONS=print_stacktrace=1:halt_on_error=1 \
         nice -n 19 "$build/tests/fuzz/$h" -max_total_time="$seconds" -rss_limit_mb=2048 \
@@ -78,7 +79,7 @@ for h in "${harnesses[@]}"; do
     # crash-, timeout-, oom- and leak- inputs are findings; libFuzzer's slow-unit- files (an input
     # over -report_slow_units seconds, which a starved nice-19 process can hit) are not.
     found=$(find "$work/artifacts" -type f ! -name 'slow-unit-*' | wc -l)
-    took=$(grep -o 'Done [0-9]* runs in [0-9]* second' "$log" | grep -o 'in [0-9]*' | grep -o '[0-9]*' || echo "$seconds")
+    took=$((SECONDS - start))  # wall clock: also right for a run stopped early (--runs, SIGINT)
     echo "$h executions=$runs seconds=$took findings=$found exit=$rc" \
         "load=$(cut -d' ' -f1-3 /proc/loadavg)" | tee -a "$totals" >&2
     if [ "$found" -gt 0 ]; then
