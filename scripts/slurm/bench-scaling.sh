@@ -2,7 +2,7 @@
 # Measures a sharded batch on the single-node Slurm of local-cluster.sh: the same frames with
 # 1, 2 and 4 array tasks (throughput, task start-up, overhead per task), for docs/cluster.md.
 # Frames are rendered here with `scene-render sensors` (never committed): DISTINCT frames
-# (the three scenes of samples/rendered/scenes with different sensor-noise seeds), linked to
+# (the scenes of samples/rendered/scenes in turn, with different sensor-noise seeds), linked to
 # FRAMES frame ids in a KITTI-layout folder.
 # usage: scripts/slurm/bench-scaling.sh [WORK_DIR]   (env: FRAMES=200 DISTINCT=24 TASKS="1 2 4"
 #        CPUS_PER_TASK=1 PRESET=fast; BUILD=build)
