@@ -4,6 +4,7 @@
 #include <cstring>
 #include <filesystem>
 #include <fstream>
+#include <sstream>
 #include <string>
 
 #include <unistd.h>
@@ -100,7 +101,9 @@ TEST_CASE("an exported textured model keeps its texture pixels", "[export]") {
 /// The JSON chunk of a .glb file (12-byte header, then a JSON chunk: length, "JSON", text).
 nlohmann::json glb_json(const fs::path& path) {
     std::ifstream in(path, std::ios::binary);
-    std::string bytes((std::istreambuf_iterator<char>(in)), {});
+    std::ostringstream text;
+    text << in.rdbuf();
+    const std::string bytes = text.str();
     REQUIRE(bytes.size() > 20);
     REQUIRE(bytes.compare(0, 4, "glTF") == 0);
     std::uint32_t length = 0;
