@@ -5,6 +5,7 @@
 
 #include <cmath>
 #include <cstdio>
+#include <initializer_list>
 #include <regex>
 #include <string>
 #include <vector>
@@ -146,5 +147,16 @@ class CheckerBase {
         }
     }
 };
+
+/// The members of `object` not named in `known` (kept verbatim in a document's `extra`).
+inline json without(const json& object, std::initializer_list<const char*> known) {
+    json extra = json::object();
+    for (auto it = object.begin(); it != object.end(); ++it) {
+        bool is_known = false;
+        for (const char* k : known) is_known = is_known || it.key() == k;
+        if (!is_known) extra[it.key()] = it.value();
+    }
+    return extra;
+}
 
 }  // namespace scene_schema::detail

@@ -23,6 +23,7 @@
 
 namespace scene_schema {
 
+using detail::without;
 using nlohmann::json;
 
 SchemaError::SchemaError(std::string pointer, std::string rule)
@@ -169,16 +170,6 @@ class Checker : public detail::CheckerBase {
         }
     }
 };
-
-json without(const json& object, std::initializer_list<const char*> known) {
-    json extra = json::object();
-    for (auto it = object.begin(); it != object.end(); ++it) {
-        bool is_known = false;
-        for (const char* k : known) is_known = is_known || it.key() == k;
-        if (!is_known) extra[it.key()] = it.value();
-    }
-    return extra;
-}
 
 void merge_extra(json& target, const json& extra) {
     for (auto it = extra.begin(); it != extra.end(); ++it) {

@@ -11,6 +11,7 @@
 
 namespace scene_schema {
 
+using detail::without;
 using nlohmann::json;
 
 namespace {
@@ -79,16 +80,6 @@ class SequenceChecker : public detail::CheckerBase {
         if (const json* v = required(value, "", "frames")) frames(*v);
     }
 };
-
-json without(const json& object, std::initializer_list<const char*> known) {
-    json extra = json::object();
-    for (auto it = object.begin(); it != object.end(); ++it) {
-        bool is_known = false;
-        for (const char* k : known) is_known = is_known || it.key() == k;
-        if (!is_known) extra[it.key()] = it.value();
-    }
-    return extra;
-}
 
 }  // namespace
 
