@@ -51,6 +51,12 @@ void add_input_settings_flags(CLI::App& cmd, AnalyseArgs& a) {
         ->check(CLI::IsMember({"labels", "geometry", "auto"}))
         ->capture_default_str()
         ->group(in);
+    cmd.add_option("--stereo-segmentation", a.options.geometry.segmentation,
+                   "--semantics geometry: obstacles split by columns (u-disparity, the default) "
+                   "or clusters (3D Euclidean clustering; docs/entities.md compares them)")
+        ->check(CLI::IsMember({"columns", "clusters"}))
+        ->capture_default_str()
+        ->group(in);
     cmd.add_option("--palette", a.options.palette,
                    "semantic palette: cityscapes, carla, thesis or a palette JSON file")
         ->capture_default_str()

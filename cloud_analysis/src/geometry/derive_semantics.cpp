@@ -7,6 +7,7 @@
 #include <utility>
 #include <vector>
 
+#include "cloud_analysis/entities/cluster.hpp"
 #include "cloud_analysis/geometry/scene_geometry.hpp"
 
 namespace cloud_analysis::geometry {
@@ -35,6 +36,7 @@ struct Classes {
 /// layers: below layer_height_m (where cars are) or above it (crowns, walls' upper floors).
 struct Cell {
     int count = 0;          ///< obstacle pixels at or above low_cut_m
+    float height_sum = 0;   ///< sum of their heights above the road, metres
     int green = 0;          ///< of them green
     int at_cut = 0;         ///< of them within continuity_band_m of the layers' border
     float top1 = -1e9f;     ///< highest height above the road, metres
@@ -239,6 +241,7 @@ Grid fill_grid(const DisparityMap& disparity, const Rig& rig, const ImageU8& lef
             }
             Cell& c = g.cells[static_cast<std::size_t>(cell)];
             ++c.count;
+            c.height_sum += hf;
             c.at_cut += std::abs(hf - tall_m) <= band_m ? 1 : 0;
             c.green += green ? 1 : 0;
             if (hf > c.top1) {
@@ -335,9 +338,39 @@ std::vector<int> link_cells(Grid& g, const DisparityMap& disparity, const Rig& r
     return parent;
 }
 
+/// The alternative to link_cells (GeometryOptions::segmentation "clusters"): the dense cells
+/// link_cells kept, as 3D points (x, mean height, z), grouped by Euclidean clustering with the
+/// extractor's depth-grown distance, whatever their kind (docs/entities.md compares the two).
+std::vector<int> cluster_cells(Grid& g, const DisparityMap& disparity, const Rig& rig,
+                               const GeometryOptions& o) {
+    std::vector<int> dense = link_cells(g, disparity, rig, o);  // marks density and kinds
+    std::vector<Eigen::Vector3f> centres;
+    std::vector<int> ids;
+    for (int i = 0; i < static_cast<int>(g.cells.size()); ++i) {
+        if (dense[static_cast<std::size_t>(i)] < 0) continue;
+        const Cell& c = g.cells[static_cast<std::size_t>(i)];
+        const int column_bin = i / kLayers;
+        const double z = rig.fb / g.bin_centre[static_cast<std::size_t>(column_bin % g.bins_d)];
+        const double u = ((column_bin / g.bins_d) + 0.5) * o.column_bin_px;
+        centres.emplace_back(static_cast<float>((u - rig.cx) * z / rig.fx),
+                             c.height_sum / static_cast<float>(c.count), static_cast<float>(z));
+        ids.push_back(i);
+    }
+    ClusterOptions co;
+    co.distance_at_10m_m = o.cluster_distance_m;
+    co.growth = 1.0;
+    co.distance_max_m = 4.0 * o.cluster_distance_m;
+    std::vector<int> parent(g.cells.size(), -1);
+    for (const auto& cluster : euclidean_clusters(centres, co)) {
+        const int root = ids[cluster.front()];
+        for (const std::size_t k : cluster) parent[static_cast<std::size_t>(ids[k])] = root;
+    }
+    return parent;
+}
+
 /// Statistics of one linked segment, gathered from its cells.
 struct SegmentStats {
-    std::size_t pixels = 0, green = 0, occluded = 0;
+    std::size_t pixels = 0, green = 0, occluded = 0, tall_pixels = 0;
     bool tall = false;
     std::vector<float> tops, lows, depths;
     std::vector<Eigen::Vector3d> footprint;  ///< (x, z, pixels) of each cell
@@ -354,11 +387,11 @@ std::vector<SegmentStats> gather_segments(Grid& g, std::vector<int>& parent, con
         if (s < 0) {
             s = static_cast<int>(stats.size());
             stats.emplace_back();
-            stats.back().tall = c.is_tall;
         }
         c.segment = s;
         SegmentStats& st = stats[static_cast<std::size_t>(s)];
         st.pixels += static_cast<std::size_t>(c.count);
+        st.tall_pixels += c.is_tall ? static_cast<std::size_t>(c.count) : 0;
         st.green += static_cast<std::size_t>(c.green);
         st.occluded += c.occluded ? static_cast<std::size_t>(c.count) : 0;
         st.tops.push_back(c.count > 1 ? c.top2 : c.top1);
@@ -369,6 +402,8 @@ std::vector<SegmentStats> gather_segments(Grid& g, std::vector<int>& parent, con
         st.depths.push_back(static_cast<float>(z));
         st.footprint.emplace_back((u - rig.cx) * z / rig.fx, z, c.count);
     }
+    // Cells of one kind make a linked segment; a cluster is tall when most of its pixels are.
+    for (SegmentStats& st : stats) st.tall = 2 * st.tall_pixels > st.pixels;
     return stats;
 }
 
@@ -460,7 +495,8 @@ SceneGeometry derive_semantics(const DisparityMap& disparity, const StereoCamera
         return out;
     }
     Grid grid = fill_grid(disparity, rig, left, out.ground, o, cls.road, out.classes);
-    std::vector<int> parent = link_cells(grid, disparity, rig, o);
+    std::vector<int> parent = o.segmentation == "clusters" ? cluster_cells(grid, disparity, rig, o)
+                                                           : link_cells(grid, disparity, rig, o);
     std::vector<SegmentStats> stats = gather_segments(grid, parent, rig, o);
     std::vector<std::uint16_t> segment_class(stats.size(), kVoidClass);
     for (std::size_t s = 0; s < stats.size(); ++s) {

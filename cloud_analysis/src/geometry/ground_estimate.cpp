@@ -56,6 +56,10 @@ void GeometryOptions::validate() const {
         throw std::invalid_argument("geometry.min_cell_height_m: must be >= 0");
     }
     positive(low_cut_m, "geometry.low_cut_m");
+    if (segmentation != "columns" && segmentation != "clusters") {
+        throw std::invalid_argument("geometry.segmentation: must be columns or clusters");
+    }
+    positive(cluster_distance_m, "geometry.cluster_distance_m");
     if (!(layer_height_m > car_max_height_m)) {
         throw std::invalid_argument("geometry.layer_height_m: must be above car_max_height_m");
     }

@@ -136,6 +136,28 @@ TEST_CASE("a car under a tree's crown stays a car, a facade runs on above the ca
     }
 }
 
+TEST_CASE("columns keep a car parked against a wall a car; 3D clusters join it to the wall",
+          "[geometry]") {
+    const StereoCamera cam = kitti_rig();
+    const auto palette = cloud_analysis::load_palette("cityscapes");
+    // The wall stands 0.3 m behind the car's cabin, across the whole view.
+    const std::vector<Box> boxes = {
+        {-1.0, 0.8, 10.0, 1.0}, {-0.8, 0.6, 10.6, 1.5}, {-8.0, 8.0, 10.9, 4.0}};
+    GeometryOptions columns;
+    GeometryOptions clusters;
+    clusters.segmentation = "clusters";
+    const auto [cu, cv] = pixel_of(cam, 0.0, 0.8, 10.0);
+    const auto [wu, wv] = pixel_of(cam, 4.0, 3.0, 10.9);
+    const SceneGeometry a =
+        derive_semantics(render(cam, 1.65, boxes), cam, ImageU8{}, palette, columns);
+    CHECK(class_at(a, palette, cu, cv) == "car");
+    CHECK(class_at(a, palette, wu, wv) == "building");
+    const SceneGeometry b =
+        derive_semantics(render(cam, 1.65, boxes), cam, ImageU8{}, palette, clusters);
+    CHECK(class_at(b, palette, cu, cv) == "building");
+    CHECK(class_at(b, palette, wu, wv) == "building");
+}
+
 TEST_CASE("the green pixels of a car segment are vegetation, by their window's mean colour",
           "[geometry]") {
     const StereoCamera cam = kitti_rig();
@@ -226,4 +248,7 @@ TEST_CASE("geometry options name the bad field", "[geometry]") {
     o = GeometryOptions{};
     o.green_window_px = -1;
     CHECK_THROWS_WITH(o.validate(), Catch::Contains("green_window_px"));
+    o = GeometryOptions{};
+    o.segmentation = "stixels";
+    CHECK_THROWS_WITH(o.validate(), Catch::Contains("segmentation"));
 }

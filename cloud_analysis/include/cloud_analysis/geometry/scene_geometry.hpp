@@ -25,46 +25,52 @@ inline constexpr double kConfidenceScale = 0.6;
 
 /// Settings of derive_semantics.
 struct GeometryOptions {
-    double ground_max_range_m = 35.0;    ///< only pixels nearer than this vote for the road, m
-    double ground_inlier_m = 0.08;       ///< RANSAC inlier distance of the road plane, metres
-    double ground_tolerance_m = 0.12;    ///< pixels this close to the plane are road (at 0 m), m
-    double disparity_noise_px = 1.0;     ///< disparity error the road tolerance grows with, px
-    double min_camera_height_m = 0.3;    ///< a plane nearer the camera than this is no road, m
-    double max_camera_height_m = 4.0;    ///< a plane farther below the camera is no road, m
-    double max_depth_m = 60.0;           ///< obstacle pixels beyond this stay unlabelled, m
-    double max_obstacle_height_m = 6.0;  ///< heights above this count as this, metres
-    int column_bin_px = 4;               ///< u-disparity cell width, pixels, >= 1
-    double disparity_bin_share = 0.04;   ///< u-disparity bins are 1 px or this share of the
-                                         ///< disparity wide, whichever is wider, (0, 1)
-    double link_depth_m = 0.8;           ///< cells closer in depth than this join, metres
-    int min_cell_pixels = 3;             ///< sparser u-disparity cells are noise, pixels, >= 1
-    double min_cell_height_m = 0.2;      ///< ... and so are cells holding fewer pixels than a
-                                         ///< surface this tall across the cell would, metres
-    double low_cut_m = 0.35;             ///< pixels lower than this above the road take their
-                                         ///< cell's class, or sidewalk/terrain alone, metres
-    double layer_height_m = 2.3;         ///< cells hold the pixels below and above this height in
-                                         ///< two layers: cars below, crowns and walls' upper
-                                         ///< floors above, metres
-    double continuity_band_m = 0.3;      ///< a surface continues across layer_height_m (a
-                                         ///< wall, a trunk: its cells are tall) when it fills
-    double continuity_share = 0.3;       ///< this share of the band this tall on both sides of
-                                         ///< it; else the layers stay apart, metres, (0, 1]
-    double car_min_height_m = 0.9;       ///< car tops lie between this ...
-    double car_max_height_m = 2.2;       ///< ... and this above the road (below layer_height_m:
-                                         ///< a segment reaching it meets a surface above), m
-    double car_min_width_m = 1.2;        ///< narrower objects are persons or poles, metres
-    double building_min_height_m = 2.6;  ///< taller objects are buildings (or trees), metres
-    double wall_top_spread_m = 0.15;     ///< a thin segment whose tops (25th-97th percentile) vary
-                                         ///< less than this is a wall or fence, metres
-    double wall_max_thickness_m = 0.8;   ///< ... when its footprint is thinner than this, metres
-    double pole_max_width_m = 0.6;       ///< tall objects narrower than this are poles, metres
-    double low_max_height_m = 0.6;       ///< objects lower than this are kerbs or low plants, m
-    double green_fraction = 0.45;        ///< objects with more green pixels are vegetation, (0,1]
-    int green_window_px = 2;             ///< a pixel is green when the mean colour of the window
-                                         ///< this far around it is (leaves' shadows), px, >= 0
-    double min_face_share = 0.15;        ///< a thing entity seen over less than this share of
-                                         ///< its smallest prior face (W x H) is a fragment or
-                                         ///< clutter and is dropped, [0, 1), 0 = off
+    double ground_max_range_m = 35.0;      ///< only pixels nearer than this vote for the road, m
+    double ground_inlier_m = 0.08;         ///< RANSAC inlier distance of the road plane, metres
+    double ground_tolerance_m = 0.12;      ///< pixels this close to the plane are road (at 0 m), m
+    double disparity_noise_px = 1.0;       ///< disparity error the road tolerance grows with, px
+    double min_camera_height_m = 0.3;      ///< a plane nearer the camera than this is no road, m
+    double max_camera_height_m = 4.0;      ///< a plane farther below the camera is no road, m
+    double max_depth_m = 60.0;             ///< obstacle pixels beyond this stay unlabelled, m
+    double max_obstacle_height_m = 6.0;    ///< heights above this count as this, metres
+    std::string segmentation = "columns";  ///< obstacles split into segments by "columns"
+                                           ///< (u-disparity cells linked column band to band,
+                                           ///< tall and low apart) or "clusters" (the same cells
+                                           ///< grouped by 3D Euclidean clustering; compared in
+                                           ///< docs/entities.md)
+    double cluster_distance_m = 0.5;       ///< "clusters": distance at 10 m, growing with depth, m
+    int column_bin_px = 4;                 ///< u-disparity cell width, pixels, >= 1
+    double disparity_bin_share = 0.04;     ///< u-disparity bins are 1 px or this share of the
+                                           ///< disparity wide, whichever is wider, (0, 1)
+    double link_depth_m = 0.8;             ///< cells closer in depth than this join, metres
+    int min_cell_pixels = 3;               ///< sparser u-disparity cells are noise, pixels, >= 1
+    double min_cell_height_m = 0.2;        ///< ... and so are cells holding fewer pixels than a
+                                           ///< surface this tall across the cell would, metres
+    double low_cut_m = 0.35;               ///< pixels lower than this above the road take their
+                                           ///< cell's class, or sidewalk/terrain alone, metres
+    double layer_height_m = 2.3;           ///< cells hold the pixels below and above this height in
+                                           ///< two layers: cars below, crowns and walls' upper
+                                           ///< floors above, metres
+    double continuity_band_m = 0.3;        ///< a surface continues across layer_height_m (a
+                                           ///< wall, a trunk: its cells are tall) when it fills
+    double continuity_share = 0.3;         ///< this share of the band this tall on both sides of
+                                           ///< it; else the layers stay apart, metres, (0, 1]
+    double car_min_height_m = 0.9;         ///< car tops lie between this ...
+    double car_max_height_m = 2.2;         ///< ... and this above the road (below layer_height_m:
+                                           ///< a segment reaching it meets a surface above), m
+    double car_min_width_m = 1.2;          ///< narrower objects are persons or poles, metres
+    double building_min_height_m = 2.6;    ///< taller objects are buildings (or trees), metres
+    double wall_top_spread_m = 0.15;    ///< a thin segment whose tops (25th-97th percentile) vary
+                                        ///< less than this is a wall or fence, metres
+    double wall_max_thickness_m = 0.8;  ///< ... when its footprint is thinner than this, metres
+    double pole_max_width_m = 0.6;      ///< tall objects narrower than this are poles, metres
+    double low_max_height_m = 0.6;      ///< objects lower than this are kerbs or low plants, m
+    double green_fraction = 0.45;       ///< objects with more green pixels are vegetation, (0,1]
+    int green_window_px = 2;            ///< a pixel is green when the mean colour of the window
+                                        ///< this far around it is (leaves' shadows), px, >= 0
+    double min_face_share = 0.15;       ///< a thing entity seen over less than this share of
+                                        ///< its smallest prior face (W x H) is a fragment or
+                                        ///< clutter and is dropped, [0, 1), 0 = off
     /// Throws std::invalid_argument naming the bad field.
     void validate() const;
 };
