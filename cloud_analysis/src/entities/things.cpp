@@ -198,7 +198,10 @@ std::vector<Candidate> candidates_of_cluster(const std::vector<Eigen::Vector3f>&
         if (s.prior_H_m > 0.0 && ground && box.H_m < options.min_height_fraction * s.prior_H_m) {
             continue;
         }
-        Candidate c{box, std::move(part), 0.0, group};
+        Candidate c;
+        c.box = box;
+        c.members = std::move(part);
+        c.group = group;
         if (!options.family_class.empty() && s.name == options.family_class) {
             // A van shows its height: its hidden length is a van's, not a car's.
             c.subclass = "car";

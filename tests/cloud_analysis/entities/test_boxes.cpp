@@ -338,7 +338,7 @@ TEST_CASE("a car cut by the image edge is completed beyond the edge, not along t
     const double edge = std::tan(40.0 * kPi / 180.0);
     std::vector<Eigen::Vector3f> seen;
     for (const auto& p : box_faces(5.0, 5.0, t, 4.5, 1.8, 1.5, 1.65, true)) {
-        if (p.x() / p.z() < edge) seen.push_back(p);
+        if (static_cast<double>(p.x() / p.z()) < edge) seen.push_back(p);
     }
     REQUIRE(seen.size() > 100);
     BoxFitOptions o;
