@@ -151,7 +151,7 @@ TEST_CASE("the class table and the renderer's palette agree with the palette fil
         CHECK(entry->colour == palette.at(entry->name).colour);
         CHECK(scene_viewer::cityscapes_by_name(entry->name)->class_id == id);
     }
-    CHECK(known == 21);
+    CHECK(known == 22);
     for (const auto& [name, c] : palette) {
         const auto entry = scene_viewer::cityscapes_by_name(name);
         if (entry) CHECK(entry->class_id == c.id);
@@ -168,12 +168,13 @@ TEST_CASE("the class table maps every class to its labelId, palette colour and m
     };
     using K = scene_viewer::RenderKind;
     const Expected expected[] = {
-        {"road", K::Ground},          {"sidewalk", K::Ground},     {"building", K::Block},
-        {"wall", K::Block},           {"fence", K::Block},         {"pole", K::Object},
-        {"traffic light", K::Object}, {"traffic sign", K::Object}, {"vegetation", K::Object},
-        {"terrain", K::Ground},       {"person", K::Object},       {"rider", K::Object},
-        {"car", K::Object},           {"truck", K::Object},        {"bus", K::Object},
-        {"train", K::Object},         {"motorcycle", K::Object},   {"bicycle", K::Object},
+        {"road", K::Ground},       {"sidewalk", K::Ground},      {"static", K::Block},
+        {"building", K::Block},    {"wall", K::Block},           {"fence", K::Block},
+        {"pole", K::Object},       {"traffic light", K::Object}, {"traffic sign", K::Object},
+        {"vegetation", K::Object}, {"terrain", K::Ground},       {"person", K::Object},
+        {"rider", K::Object},      {"car", K::Object},           {"truck", K::Object},
+        {"bus", K::Object},        {"train", K::Object},         {"motorcycle", K::Object},
+        {"bicycle", K::Object},
     };
     CHECK(table.classes.size() == std::size(expected));
     for (const Expected& e : expected) {
