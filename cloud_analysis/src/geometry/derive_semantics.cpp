@@ -272,13 +272,12 @@ bool top_occluded(const DisparityMap& disparity, const Cell& c, double cell_d) {
     return false;
 }
 
-/// Pass 2: dense cells linked to dense cells of the same kind in the next two column bands
-/// within link_depth_m; returns each dense cell's root (-1 for sparse cells). A cell's kind is
-/// tall in the upper layer, and in the lower layer when its surface runs on across the layers'
-/// border (a wall, a trunk): then both layers join. A car under a tree's crown has a gap there,
-/// so its cells stay low and apart from the crown's.
-std::vector<int> link_cells(Grid& g, const DisparityMap& disparity, const Rig& rig,
-                            const GeometryOptions& o) {
+/// Pass 2a: the dense cells (each its own root; -1 for sparse cells) and every cell's kind: tall
+/// in the upper layer, and in the lower layer when its surface runs on across the layers' border
+/// (a wall, a trunk: then both layers join when linked). A car under a tree's crown has a gap
+/// there, so its cells stay low and apart from the crown's.
+std::vector<int> dense_cells(Grid& g, const DisparityMap& disparity, const Rig& rig,
+                             const GeometryOptions& o) {
     std::vector<int> parent(g.cells.size(), -1);
     const auto cell = [&](int bu, int bd, int layer) -> Cell& {
         return g.cells[static_cast<std::size_t>((bu * g.bins_d + bd) * kLayers + layer)];
@@ -308,6 +307,14 @@ std::vector<int> link_cells(Grid& g, const DisparityMap& disparity, const Rig& r
             lower.is_tall = lower.at_cut >= at_cut && upper_at_cut >= at_cut;
         }
     }
+    return parent;
+}
+
+/// Pass 2b: each dense cell (dense_cells) linked to the dense cells of the same kind in the next
+/// two column bands within link_depth_m; returns each dense cell's root (-1 for sparse cells).
+std::vector<int> link_cells(Grid& g, const DisparityMap& disparity, const Rig& rig,
+                            const GeometryOptions& o) {
+    std::vector<int> parent = dense_cells(g, disparity, rig, o);
     for (int bu = 0; bu < g.bins_u; ++bu) {
         for (int bd = 0; bd < g.bins_d; ++bd) {
             const double dd = g.bin_centre[static_cast<std::size_t>(bd)];
@@ -338,12 +345,12 @@ std::vector<int> link_cells(Grid& g, const DisparityMap& disparity, const Rig& r
     return parent;
 }
 
-/// The alternative to link_cells (GeometryOptions::segmentation "clusters"): the dense cells
-/// link_cells kept, as 3D points (x, mean height, z), grouped by Euclidean clustering with the
+/// The alternative to link_cells (GeometryOptions::segmentation "clusters"): the dense cells,
+/// as 3D points (x, mean height, z), grouped by Euclidean clustering with the
 /// extractor's depth-grown distance, whatever their kind (docs/entities.md compares the two).
 std::vector<int> cluster_cells(Grid& g, const DisparityMap& disparity, const Rig& rig,
                                const GeometryOptions& o) {
-    std::vector<int> dense = link_cells(g, disparity, rig, o);  // marks density and kinds
+    const std::vector<int> dense = dense_cells(g, disparity, rig, o);
     std::vector<Eigen::Vector3f> centres;
     std::vector<int> ids;
     for (int i = 0; i < static_cast<int>(g.cells.size()); ++i) {
