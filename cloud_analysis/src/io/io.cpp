@@ -11,6 +11,7 @@
 #include <sstream>
 #include <stdexcept>
 
+#include <zlib.h>
 #include <opencv2/core.hpp>
 #include <opencv2/imgcodecs.hpp>
 #include <opencv2/imgproc.hpp>
@@ -41,20 +42,10 @@ std::optional<std::uint64_t> header_pixels(const std::vector<unsigned char>& b) 
     return std::nullopt;
 }
 
-/// CRC-32 of PNG chunks (ISO 3309, the polynomial of PNG spec section 5.5).
+/// CRC-32 of PNG chunks (ISO 3309, the polynomial of PNG spec section 5.5), by zlib's table-
+/// driven crc32 (a byte-at-a-time loop cost ~4 % of a KITTI batch frame's CPU).
 std::uint32_t png_crc(const unsigned char* p, std::size_t n) {
-    static const auto table = [] {
-        std::array<std::uint32_t, 256> t{};
-        for (std::uint32_t i = 0; i < 256; ++i) {
-            std::uint32_t c = i;
-            for (int k = 0; k < 8; ++k) c = (c & 1u) ? 0xEDB88320u ^ (c >> 1) : c >> 1;
-            t[i] = c;
-        }
-        return t;
-    }();
-    std::uint32_t c = 0xFFFFFFFFu;
-    for (std::size_t i = 0; i < n; ++i) c = table[(c ^ p[i]) & 0xFFu] ^ (c >> 8);
-    return c ^ 0xFFFFFFFFu;
+    return static_cast<std::uint32_t>(crc32_z(crc32_z(0L, Z_NULL, 0), p, n));
 }
 
 /// Walks a PNG's chunks (PNG spec section 5.3): each inside the file with its CRC right, IHDR
