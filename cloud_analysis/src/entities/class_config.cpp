@@ -30,7 +30,8 @@ void read_settings(const nlohmann::json& j, const std::string& pointer, ClassSet
                                                 "prior_W_m",      "prior_H_m",
                                                 "split_factor",   "voxel_m",
                                                 "voxel_max_m",    "max_entities",
-                                                "column_step",    "comment"};
+                                                "column_step",    "cluster_cross_growth",
+                                                "comment"};
     for (const auto& item : j.items()) {
         if (known.count(item.key()) == 0) {
             throw std::invalid_argument(pointer + "/" + item.key() + ": unknown member");
@@ -66,6 +67,11 @@ void read_settings(const nlohmann::json& j, const std::string& pointer, ClassSet
     number("cluster_distance_m", s.cluster_distance_m);
     number("cluster_growth", s.cluster_growth);
     number("cluster_distance_max_m", s.cluster_distance_max_m);
+    if (j.contains("cluster_cross_growth")) {
+        double g = 0.0;
+        number("cluster_cross_growth", g);
+        s.cluster_cross_growth = g;
+    }
     integer("min_points", s.min_points);
     number("prior_L_m", s.prior_L_m);
     number("prior_W_m", s.prior_W_m);
@@ -83,6 +89,9 @@ void ClassSettings::validate() const {
     const std::string where = "class '" + name + "'";
     require(cluster_distance_m > 0.0, where + " cluster_distance_m", "must be > 0");
     require(cluster_growth >= 0.0, where + " cluster_growth", "must be >= 0");
+    require(!cluster_cross_growth ||
+                (*cluster_cross_growth >= 0.0 && *cluster_cross_growth <= cluster_growth),
+            where + " cluster_cross_growth", "must be >= 0 and <= cluster_growth");
     require(cluster_distance_max_m >= cluster_distance_m, where + " cluster_distance_max_m",
             "must be >= cluster_distance_m");
     require(min_points >= 1, where + " min_points", "must be >= 1");

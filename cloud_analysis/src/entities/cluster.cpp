@@ -214,6 +214,18 @@ class LevelCells {
     CellTable hash_;
 };
 
+/// Whether the horizontal offset d = q - p across the viewing ray through the midpoint of p
+/// and q (camera at the origin, x right, z forward) is at most `cross_m`.
+bool within_across_ray(const Eigen::Vector3f& p, const Eigen::Vector3f& q, const Eigen::Vector3f& d,
+                       double cross_m) {
+    const double mx = 0.5 * (double{p.x()} + double{q.x()});
+    const double mz = 0.5 * (double{p.z()} + double{q.z()});
+    const double norm2 = mx * mx + mz * mz;
+    if (norm2 <= 0.0) return true;
+    const double across = double{d.x()} * mz - double{d.z()} * mx;  // |d x ray| * |ray|
+    return across * across <= cross_m * cross_m * norm2;
+}
+
 }  // namespace
 
 void ClusterOptions::validate() const {
@@ -227,6 +239,9 @@ void ClusterOptions::validate() const {
         throw std::invalid_argument("cluster.distance_max_m: must be <= 1000 * distance_at_10m_m");
     }
     if (min_points < 1) throw std::invalid_argument("cluster.min_points: must be >= 1");
+    if (cross_growth && !(*cross_growth >= 0.0 && *cross_growth <= growth)) {
+        throw std::invalid_argument("cluster.cross_growth: must be >= 0 and <= growth");
+    }
 }
 
 double ClusterOptions::distance_at(double z_m) const {
@@ -237,6 +252,12 @@ double ClusterOptions::distance_at(double z_m) const {
         scale = growth == 1.0 ? r : growth == 2.0 ? r * r : std::pow(r, growth);
     }
     return std::min(distance_at_10m_m * scale, distance_max_m);
+}
+
+double ClusterOptions::cross_distance_at(double z_m) const {
+    if (!cross_growth) return distance_at(z_m);
+    const double scale = z_m > 10.0 ? std::pow(z_m / 10.0, *cross_growth) : 1.0;
+    return std::min({distance_at_10m_m * scale, distance_max_m, distance_at(z_m)});
 }
 
 std::vector<std::vector<std::size_t>> euclidean_clusters(
@@ -292,14 +313,20 @@ std::vector<std::vector<std::size_t>> euclidean_clusters(
         Eigen::Vector3f p;
         std::uint32_t point;
         double radius;
+        double cross;  // distance across the ray, horizontally
     };
+    const bool anisotropic = options.cross_growth.has_value();
+    std::vector<double> cross(n);
+    for (std::size_t i = 0; i < n; ++i) {
+        cross[i] = anisotropic ? options.cross_distance_at(double{points_m[i].z()}) : radius[i];
+    }
     std::vector<Member> members(n);
     std::vector<std::uint32_t> slot_of(n);
     std::vector<std::uint32_t> cell_left(cell_count.size(), 0);
     for (std::size_t i = 0; i < n; ++i) {
         const std::uint32_t c = cell_of[i];
         const std::uint32_t slot = cell_start[c] + cell_left[c]++;
-        members[slot] = Member{points_m[i], static_cast<std::uint32_t>(i), radius[i]};
+        members[slot] = Member{points_m[i], static_cast<std::uint32_t>(i), radius[i], cross[i]};
         slot_of[i] = slot;
     }
     const auto remove = [&](std::uint32_t i) {
@@ -345,6 +372,7 @@ std::vector<std::vector<std::size_t>> euclidean_clusters(
             const std::size_t i = queue[head];
             const Eigen::Vector3f p = points_m[i];
             const double ri = radius[i];
+            const double ci = cross[i];
             const std::uint32_t id = cells_near(i);
             for (std::uint32_t k = near_begin[id]; k < near_end[id];) {
                 const std::uint32_t c = near_cells[k];
@@ -356,7 +384,9 @@ std::vector<std::vector<std::size_t>> euclidean_clusters(
                 for (std::uint32_t slot = cell_start[c]; slot < cell_start[c] + cell_left[c];) {
                     const Member& m = members[slot];
                     const double link = std::min(ri, m.radius);
-                    if (double{(m.p - p).squaredNorm()} > link * link) {
+                    const Eigen::Vector3f d = m.p - p;
+                    if (double{d.squaredNorm()} > link * link ||
+                        (anisotropic && !within_across_ray(p, m.p, d, std::min(ci, m.cross)))) {
                         ++slot;
                         continue;
                     }

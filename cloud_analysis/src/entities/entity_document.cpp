@@ -33,9 +33,10 @@ scene_schema::EntityDocument entity_document(const LoadedInputs& in, const Analy
         r.points.xyz_m.empty() ? extract_entities(r.cloud, in.palette, r.camera, extract)
                                : extract_entities(r.points, in.palette, extract);
     doc.frame.id = in.paths.frame_id;
+    // Fragments and smears too faint to be a thing, whatever made the class image.
+    drop_faint_things(doc.entities, extract.classes, r.camera.fx_px, r.camera.fy_px,
+                      run.analyse.geometry.min_face_share);
     if (r.geometry) {
-        drop_faint_things(doc.entities, extract.classes, r.camera.fx_px, r.camera.fy_px,
-                          run.analyse.geometry.min_face_share);
         // Classes from geometry are guesses the labelled path does not make: less confidence.
         for (auto& e : doc.entities) e.confidence *= geometry::kConfidenceScale;
         const auto& g = r.geometry->ground;

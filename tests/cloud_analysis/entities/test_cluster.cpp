@@ -59,6 +59,54 @@ TEST_CASE("the clustering distance grows with depth so far blobs merge", "[clust
     CHECK(euclidean_clusters(pts, o).size() == 2);
 }
 
+namespace {
+
+/// Points on a vertical strip along the viewing ray through (x, z): a car's side face seen at
+/// a grazing angle, `length` metres along the ray, 1 m high, 5 cm apart.
+void add_face_along_ray(std::vector<Eigen::Vector3f>& pts, float x, float z, float length) {
+    const Eigen::Vector3f ray = Eigen::Vector3f(x, 0.0f, z).normalized();
+    for (float s = -0.5f * length; s <= 0.5f * length; s += 0.05f) {
+        for (float y = 0.0f; y <= 1.0f; y += 0.05f) {
+            pts.push_back(Eigen::Vector3f(x, y, z) + s * ray);
+        }
+    }
+}
+
+}  // namespace
+
+TEST_CASE("across the viewing ray the distance grows by its own exponent", "[cluster]") {
+    ClusterOptions o;
+    o.distance_at_10m_m = 0.4;
+    o.growth = 2.0;
+    o.distance_max_m = 1.5;
+    // A parked car's side face and the side of the car passing beside it, 0.6 m apart across
+    // the ray at 16 m: the grown distance (1.02 m) links them, the cross distance (0.4 m) not.
+    std::vector<Eigen::Vector3f> pts;
+    add_face_along_ray(pts, 3.0f, 16.0f, 4.0f);
+    const Eigen::Vector3f across = Eigen::Vector3f(16.0f, 0.0f, -3.0f).normalized();
+    const std::size_t first = pts.size();
+    add_face_along_ray(pts, 3.0f + 0.6f * across.x(), 16.0f + 0.6f * across.z(), 4.0f);
+    CHECK(euclidean_clusters(pts, o).size() == 1);
+    o.cross_growth = 0.0;
+    CHECK(o.cross_distance_at(16.0) == Approx(0.4));
+    CHECK(o.distance_at(16.0) == Approx(1.024));
+    const auto apart = euclidean_clusters(pts, o);
+    REQUIRE(apart.size() == 2);
+    CHECK(apart[0].size() == first);
+    // Along the ray the grown distance still holds: a face whose depth smear has a 0.7 m gap
+    // (more than the cross distance, within the grown one) stays one cluster.
+    std::vector<Eigen::Vector3f> smear;
+    add_face_along_ray(smear, 3.0f, 15.0f, 2.0f);  // 15.30 m from the camera, 2 m long
+    const float beyond = (15.297f + 1.0f + 0.7f + 0.5f) / 15.297f;  // 0.7 m gap, 1 m long
+    add_face_along_ray(smear, 3.0f * beyond, 15.0f * beyond, 1.0f);
+    CHECK(euclidean_clusters(smear, o).size() == 1);
+    ClusterOptions bad = o;
+    bad.cross_growth = 2.5;  // more than growth
+    CHECK_THROWS_WITH(bad.validate(), Catch::Contains("cross_growth"));
+    bad.cross_growth = -1.0;
+    CHECK_THROWS_WITH(bad.validate(), Catch::Contains("cross_growth"));
+}
+
 TEST_CASE("clusters below min_points are dropped", "[cluster]") {
     std::vector<Eigen::Vector3f> pts;
     add_blob(pts, {0.0f, 0.0f, 10.0f});

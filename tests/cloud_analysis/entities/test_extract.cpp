@@ -71,6 +71,10 @@ TEST_CASE("the bundled class config loads with the documented car prior", "[enti
     CHECK(car.prior_L_m == 4.2);
     CHECK(car.prior_W_m == 1.8);
     CHECK(car.prior_H_m == 1.5);
+    // Cars link across the viewing ray within 0.4 m at any depth; other classes isotropically.
+    REQUIRE(car.cluster_cross_growth.has_value());
+    CHECK(*car.cluster_cross_growth == 0.0);
+    CHECK_FALSE(c.find("vegetation").cluster_cross_growth.has_value());
     CHECK_FALSE(c.find("sky").entity);
     CHECK(c.find("some class nobody listed").name == "some class nobody listed");
     CHECK(default_class_config_path().filename() == "entity_config.json");
@@ -116,6 +120,12 @@ TEST_CASE("a malformed class config names the bad member", "[entities]") {
                       Catch::Contains("/classes/0/prior_L: unknown member"));
     CHECK_THROWS_WITH(parse_class_config(R"({"classes": [{"thing": true}]})", "x"),
                       Catch::Contains("/classes/0/name"));
+    CHECK_THROWS_WITH(
+        parse_class_config(R"({"classes": [{"name": "car", "cluster_cross_growth": 3}]})", "x"),
+        Catch::Contains("cluster_cross_growth"));
+    CHECK_THROWS_WITH(
+        parse_class_config(R"({"classes": [{"name": "car", "cluster_cross_growth": "0"}]})", "x"),
+        Catch::Contains("/classes/0/cluster_cross_growth: must be a number"));
     CHECK_THROWS_WITH(parse_class_config("{", "cfg.json"), Catch::Contains("cfg.json"));
     CHECK_THROWS_WITH(parse_class_config(R"({"classes": [], "clases": []})", "x"),
                       Catch::Contains("/clases: unknown member"));

@@ -5,6 +5,7 @@
 /// docs/entities.md).
 
 #include <filesystem>
+#include <optional>
 #include <string>
 #include <string_view>
 #include <vector>
@@ -22,12 +23,15 @@ struct ClassSettings {
     double cluster_distance_m = 0.5;      ///< clustering distance at 10 m depth, metres, > 0
     double cluster_growth = 2.0;          ///< distance grows as (z / 10 m)^growth beyond 10 m, >= 0
     double cluster_distance_max_m = 3.0;  ///< cap of the grown clustering distance, metres
-    int min_points = 50;                  ///< clusters with fewer points are dropped, >= 1
-    double prior_L_m = 0.0;               ///< typical length along the heading, metres (0 = none)
-    double prior_W_m = 0.0;               ///< typical width across the heading, metres (0 = none)
-    double prior_H_m = 0.0;               ///< typical height, metres (0 = none)
-    double split_factor = 1.6;            ///< split a cluster longer than split_factor * prior_L_m
-    double voxel_m = 0.0;                 ///< voxel size used before clustering, metres (0 = none)
+    /// Exponent of the growth of the distance across the viewing ray, horizontally (empty:
+    /// cluster_growth, the same distance in every direction), in [0, cluster_growth].
+    std::optional<double> cluster_cross_growth;
+    int min_points = 50;        ///< clusters with fewer points are dropped, >= 1
+    double prior_L_m = 0.0;     ///< typical length along the heading, metres (0 = none)
+    double prior_W_m = 0.0;     ///< typical width across the heading, metres (0 = none)
+    double prior_H_m = 0.0;     ///< typical height, metres (0 = none)
+    double split_factor = 1.6;  ///< split a cluster longer than split_factor * prior_L_m
+    double voxel_m = 0.0;       ///< voxel size used before clustering, metres (0 = none)
     /// Largest voxel edge, metres (0 = voxel_m): the edge doubles with depth as the clustering
     /// distance doubles (voxel_doubling_depths), up to this.
     double voxel_max_m = 0.0;

@@ -5,6 +5,7 @@
 
 #include <cstddef>
 #include <cstdint>
+#include <optional>
 #include <vector>
 
 #include <Eigen/Core>
@@ -18,17 +19,25 @@ struct ClusterOptions {
     double distance_max_m = 3.0;     ///< cap of the grown distance, metres, in
                                      ///< [distance_at_10m_m, 1000 * distance_at_10m_m]
     std::size_t min_points = 1;      ///< smaller clusters are dropped, >= 1
+    /// Exponent of the growth beyond 10 m of the distance across the viewing ray, horizontally
+    /// (empty: growth, i.e. one distance in every direction). Stereo depth error runs along
+    /// the ray, so a smaller exponent keeps two objects side by side apart (a parked car and
+    /// the car passing beside it) without cutting a far object along its own depth smear.
+    std::optional<double> cross_growth;  ///< >= 0 and <= growth
     /// Throws std::invalid_argument naming the bad field.
     void validate() const;
     /// Clustering distance at depth z_m, metres.
     double distance_at(double z_m) const;
+    /// Distance across the viewing ray, horizontally, at depth z_m, metres (<= distance_at).
+    double cross_distance_at(double z_m) const;
 };
 
 /// Groups points: two points are linked when closer than the distance at the nearer one's
-/// depth. Returns clusters (indices into points_m) sorted by size, largest first (ties in the
-/// order of their first point). Neighbours are found on a hierarchical hash grid (cells of
-/// distance_at_10m_m * 2^level, a point in the finest level whose cell holds its distance);
-/// cost about linear in the number of points.
+/// depth (and, with cross_growth, when their horizontal offset across the viewing ray through
+/// their midpoint is within the cross distance at the nearer one's depth). Returns clusters
+/// (indices into points_m) sorted by size, largest first (ties in the order of their first point).
+/// Neighbours are found on a hierarchical hash grid (cells of distance_at_10m_m * 2^level, a point
+/// in the finest level whose cell holds its distance); cost about linear in the number of points.
 std::vector<std::vector<std::size_t>> euclidean_clusters(
     const std::vector<Eigen::Vector3f>& points_m, const ClusterOptions& options);
 

@@ -24,8 +24,9 @@ struct RunSettings {
 
 /// Drops the thing entities (classes with a size prior) seen over less than `min_face_share`
 /// of their smallest prior face, W x H (each point covers (z / fx) (z / fy) square metres at the
-/// box's depth): fragments of a roof or a row, and clutter. The stereo-only path applies it
-/// (geometry::GeometryOptions::min_face_share). Each class's ids are numbered again from 1.
+/// box's depth): fragments of a roof or a row, the smear behind a car, and clutter. Both paths
+/// apply it (geometry::GeometryOptions::min_face_share). Each class's ids are numbered again
+/// from 1.
 void drop_faint_things(std::vector<scene_schema::Entity>& entities, const ClassConfig& classes,
                        double fx_px, double fy_px, double min_face_share);
 

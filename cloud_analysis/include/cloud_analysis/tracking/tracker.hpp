@@ -36,7 +36,7 @@ struct TrackerOptions {
     /// A confirmed track missed in a frame is still reported, at its prediction, for this many
     /// frames in a row (the detector losing a car for a frame or two, e.g. behind a passing
     /// car); 0 reports only matched tracks.
-    int coast_frames = 0;
+    int coast_frames = 2;
     double heading_gain = 0.3;  ///< weight of a new heading in the smoothed one, 0..1
     double height_gain = 0.3;   ///< weight of a new box centre height (y), 0..1
     /// Above this speed the heading follows the velocity's direction (resolving the box's
