@@ -67,7 +67,9 @@ for h in "${harnesses[@]}"; do
     echo "fuzz: $h for $seconds s" >&2
     set +e
     start=$SECONDS
-    ASAN_OPTIONS=detect_leaks=0:allocator_may_return_null=1 \
+    # malloc_context_size=2: allocation stacks of two frames (recording 30 took 12-18 % of the
+    # JSON harnesses' time); a crash's own stack is still complete.
+    ASAN_OPTIONS=detect_leaks=0:allocator_may_return_null=1:malloc_context_size=2 \
     UBSAN_OPTIONS=print_stacktrace=1:halt_on_error=1 \
         nice -n 19 "$build/tests/fuzz/$h" -max_total_time="$seconds" -rss_limit_mb=2048 \
         -timeout=60 -report_slow_units=60 -max_len=65536 "${runs_limit[@]}" -print_final_stats=1 \
