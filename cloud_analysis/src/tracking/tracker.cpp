@@ -105,7 +105,11 @@ void absorb(Track& t, const scene_schema::Entity& e, const TrackerOptions& o) {
     t.y_m += o.height_gain * (e.y - t.y_m);
     double target = align_modulo_pi(e.theta, t.theta_rad);
     const double speed = std::hypot(t.motion.vx_mps(), t.motion.vz_mps());
-    if (speed > o.heading_from_motion_mps) {
+    // Only a velocity known well enough to be reported may turn the heading: a track's first
+    // velocities are differences of two boxes, whose jitter alone can pass the speed.
+    const auto& P = t.motion.covariance();
+    const double v2 = o.max_velocity_sigma_mps * o.max_velocity_sigma_mps;
+    if (speed > o.heading_from_motion_mps && P(2, 2) <= v2 && P(3, 3) <= v2) {
         // Moving: the box's axis, turned to point where the object goes.
         const double motion = std::atan2(-t.motion.vz_mps(), t.motion.vx_mps());
         target = align_modulo_pi(target, motion);
