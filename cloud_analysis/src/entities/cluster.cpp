@@ -226,6 +226,14 @@ bool within_across_ray(const Eigen::Vector3f& p, const Eigen::Vector3f& q, const
     return across * across <= cross_m * cross_m * norm2;
 }
 
+/// (z / 10 m)^exponent beyond 10 m, 1 nearer; the shipped exponents (0, 1 and 2) without a
+/// call to pow (once per point).
+double depth_growth(double z_m, double exponent) {
+    if (!(z_m > 10.0) || exponent == 0.0) return 1.0;
+    const double r = z_m / 10.0;
+    return exponent == 1.0 ? r : exponent == 2.0 ? r * r : std::pow(r, exponent);
+}
+
 }  // namespace
 
 void ClusterOptions::validate() const {
@@ -245,19 +253,12 @@ void ClusterOptions::validate() const {
 }
 
 double ClusterOptions::distance_at(double z_m) const {
-    double scale = 1.0;
-    if (z_m > 10.0) {
-        // The shipped growths (1 and 2) without a call to pow (once per point).
-        const double r = z_m / 10.0;
-        scale = growth == 1.0 ? r : growth == 2.0 ? r * r : std::pow(r, growth);
-    }
-    return std::min(distance_at_10m_m * scale, distance_max_m);
+    return std::min(distance_at_10m_m * depth_growth(z_m, growth), distance_max_m);
 }
 
 double ClusterOptions::cross_distance_at(double z_m) const {
     if (!cross_growth) return distance_at(z_m);
-    const double scale = z_m > 10.0 ? std::pow(z_m / 10.0, *cross_growth) : 1.0;
-    return std::min({distance_at_10m_m * scale, distance_max_m, distance_at(z_m)});
+    return std::min(distance_at_10m_m * depth_growth(z_m, *cross_growth), distance_at(z_m));
 }
 
 std::vector<std::vector<std::size_t>> euclidean_clusters(
