@@ -317,17 +317,15 @@ std::vector<std::vector<std::size_t>> euclidean_clusters(
         double cross;  // distance across the ray, horizontally
     };
     const bool anisotropic = options.cross_growth.has_value();
-    std::vector<double> cross(n);
-    for (std::size_t i = 0; i < n; ++i) {
-        cross[i] = anisotropic ? options.cross_distance_at(double{points_m[i].z()}) : radius[i];
-    }
     std::vector<Member> members(n);
     std::vector<std::uint32_t> slot_of(n);
     std::vector<std::uint32_t> cell_left(cell_count.size(), 0);
     for (std::size_t i = 0; i < n; ++i) {
         const std::uint32_t c = cell_of[i];
         const std::uint32_t slot = cell_start[c] + cell_left[c]++;
-        members[slot] = Member{points_m[i], static_cast<std::uint32_t>(i), radius[i], cross[i]};
+        const double cross =
+            anisotropic ? options.cross_distance_at(double{points_m[i].z()}) : radius[i];
+        members[slot] = Member{points_m[i], static_cast<std::uint32_t>(i), radius[i], cross};
         slot_of[i] = slot;
     }
     const auto remove = [&](std::uint32_t i) {
@@ -373,7 +371,7 @@ std::vector<std::vector<std::size_t>> euclidean_clusters(
             const std::size_t i = queue[head];
             const Eigen::Vector3f p = points_m[i];
             const double ri = radius[i];
-            const double ci = cross[i];
+            const double ci = members[slot_of[i]].cross;  // slot_of follows point i
             const std::uint32_t id = cells_near(i);
             for (std::uint32_t k = near_begin[id]; k < near_end[id];) {
                 const std::uint32_t c = near_cells[k];

@@ -1,7 +1,6 @@
 #include "cloud_analysis/io/io.hpp"
 
 #include <algorithm>
-#include <array>
 #include <cmath>
 #include <cstdint>
 #include <cstring>
