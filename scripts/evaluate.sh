@@ -8,7 +8,8 @@
 # ground plane, the thesis's one-per-class extractors, and the stereo-only path (--semantics
 # geometry: the semantic image ignored; docs/stereo-only.md) beside them.
 # usage: scripts/evaluate.sh [--no-build] [--build-dir DIR] [--kitti-root DIR] [--out DIR]
-#            [--parking-seeds "2 4 5 6 7 8 9 10 11 12"] [frames...]
+#            [--parking-seeds "2 4 5 6 7 8 9 10 11 12"] [--class-config FILE] [frames...]
+#   --class-config: per-class extractor settings for every analysis (to compare settings)
 #   default frames: 000000_10 000001_10; default KITTI root: ../shared/data/kitti15
 set -euo pipefail
 source "$(dirname "${BASH_SOURCE[0]}")/common.sh"
@@ -19,6 +20,7 @@ kitti_root="$STEREOSCENE_ROOT/../shared/data/kitti15"
 out_dir=""
 frames=()
 parking_seeds="2 4 5 6 7 8 9 10 11 12"
+analysis_args=()
 while [ $# -gt 0 ]; do
     case "$1" in
         --no-build) build=0 ;;
@@ -26,7 +28,8 @@ while [ $# -gt 0 ]; do
         --kitti-root) kitti_root=$2; shift ;;
         --out) out_dir=$2; shift ;;
         --parking-seeds) parking_seeds=$2; shift ;;
-        -h|--help) sed -n '2,12p' "$0"; exit 0 ;;
+        --class-config) analysis_args+=(--class-config "$2"); shift ;;
+        -h|--help) sed -n '2,13p' "$0"; exit 0 ;;
         *) frames+=("$1") ;;
     esac
     shift
@@ -73,7 +76,8 @@ for r in "${rendered[@]}"; do
         label="$name (committed)"
     fi
     base="$out_dir/rendered-$name"
-    "$ca" --kitti-root "$dir" --frame 000000 -o "$base.json" 2>"$base.log"
+    "$ca" --kitti-root "$dir" --frame 000000 -o "$base.json" "${analysis_args[@]}" \
+        2>"$base.log"
     code=0
     "$ca" evaluate --entities "$base.json" --reference "$truth" "${goal[@]}" \
         --min-visible-fraction 0.25 --kitti-root "$dir" --frame 000000 --json "$base-eval.json" \
@@ -114,7 +118,7 @@ echo "=== KITTI frames (checks) ==="
 for f in "${frames[@]}"; do
     echo "=== frame $f ==="
     for preset in tuned opencv-sample; do
-        "$ca" --kitti-root "$kitti_root" --frame "$f" --preset "$preset" \
+        "$ca" --kitti-root "$kitti_root" --frame "$f" --preset "$preset" "${analysis_args[@]}" \
             -o "$out_dir/$f-$preset.json" --disparity-kitti "$out_dir/$f-$preset-disp.png" 2>"$out_dir/$f-$preset.log"
         echo "--- disparity preset: $preset"
         "$ca" evaluate --kitti-root "$kitti_root" --frame "$f" \
@@ -126,7 +130,7 @@ for f in "${frames[@]}"; do
             --json "$out_dir/$f-$preset-eval-oldrule.json" >/dev/null
     done
     # The stereo-only path: tuned disparity, classes from the geometry, the semantic image unread.
-    "$ca" --kitti-root "$kitti_root" --frame "$f" --semantics geometry \
+    "$ca" --kitti-root "$kitti_root" --frame "$f" --semantics geometry "${analysis_args[@]}" \
         -o "$out_dir/$f-stereo-only.json" --disparity-kitti "$out_dir/$f-stereo-only-disp.png" \
         --semantic-out "$out_dir/$f-stereo-only-semantic.png" 2>"$out_dir/$f-stereo-only.log"
     echo "--- stereo only (--semantics geometry), tuned disparity"

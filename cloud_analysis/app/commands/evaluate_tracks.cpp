@@ -37,6 +37,9 @@ CLI::App* add_evaluate_tracks_command(CLI::App& app, EvaluateTracksArgs& a) {
         ->capture_default_str();
     cmd->add_option("--eval-range", a.options.max_range_m, "truth farther than this is not owed, m")
         ->capture_default_str();
+    cmd->add_flag("--events", a.events,
+                  "after the table, one line per miss, false positive, ID switch and heading "
+                  "flip, by class and frame");
     const std::string bg = "Bars (exit 3 when one is missed; off unless given)";
     cmd->add_option("--class", a.bars.class_name, "class the bars apply to")
         ->capture_default_str()
@@ -125,6 +128,11 @@ int run_evaluate_tracks(const EvaluateTracksArgs& a) {
     }
     const auto evaluation = evaluate_tracks(frames, a.options);
     std::cout << format_track_report(evaluation);
+    if (a.events) {
+        for (const auto& c : evaluation.classes) {
+            for (const auto& e : c.events) std::cout << c.class_name << " " << describe(e) << "\n";
+        }
+    }
     const auto missed = check_track_bars(evaluation, a.bars);
     for (const auto& m : missed) std::cerr << kTool << ": bar missed: " << m << "\n";
     return missed.empty() ? 0 : kExitBarMissed;

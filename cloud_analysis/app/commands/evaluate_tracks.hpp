@@ -22,6 +22,7 @@ struct EvaluateTracksArgs {
     double min_visible_fraction = 0.0;         ///< --min-visible-fraction: less visible = not owed
     cloud_analysis::TrackEvalOptions options;  ///< --match-distance, --eval-range
     cloud_analysis::TrackBars bars;            ///< --min-mota, ... (exit 3)
+    bool events = false;  ///< --events: list every miss, false positive, switch and flip
 };
 
 /// Registers `evaluate-tracks` on app and binds its flags to args.

@@ -10,6 +10,7 @@ ClassFit class_fit(const ClassSettings& s) {
     f.cluster.distance_at_10m_m = s.cluster_distance_m;
     f.cluster.growth = s.cluster_growth;
     f.cluster.cross_growth = s.cluster_cross_growth;
+    f.cluster.cross_distance_at_10m_m = s.cluster_cross_distance_m;
     f.cluster.distance_max_m = s.cluster_distance_max_m;
     f.cluster.min_points = 1;
     if (s.thing && s.has_prior()) {

@@ -23,14 +23,23 @@ void require(bool ok, const std::string& where, const std::string& rule) {
 /// Reads the members present in `j` over `s` (missing members keep their value).
 void read_settings(const nlohmann::json& j, const std::string& pointer, ClassSettings& s) {
     if (!j.is_object()) throw std::invalid_argument(pointer + ": must be an object");
-    static const std::set<std::string> known = {"name",           "thing",
-                                                "entity",         "cluster_distance_m",
-                                                "cluster_growth", "cluster_distance_max_m",
-                                                "min_points",     "prior_L_m",
-                                                "prior_W_m",      "prior_H_m",
-                                                "split_factor",   "voxel_m",
-                                                "voxel_max_m",    "max_entities",
-                                                "column_step",    "cluster_cross_growth",
+    static const std::set<std::string> known = {"name",
+                                                "thing",
+                                                "entity",
+                                                "cluster_distance_m",
+                                                "cluster_growth",
+                                                "cluster_distance_max_m",
+                                                "min_points",
+                                                "prior_L_m",
+                                                "prior_W_m",
+                                                "prior_H_m",
+                                                "split_factor",
+                                                "voxel_m",
+                                                "voxel_max_m",
+                                                "max_entities",
+                                                "column_step",
+                                                "cluster_cross_growth",
+                                                "cluster_cross_distance_m",
                                                 "comment"};
     for (const auto& item : j.items()) {
         if (known.count(item.key()) == 0) {
@@ -72,6 +81,11 @@ void read_settings(const nlohmann::json& j, const std::string& pointer, ClassSet
         number("cluster_cross_growth", g);
         s.cluster_cross_growth = g;
     }
+    if (j.contains("cluster_cross_distance_m")) {
+        double d = 0.0;
+        number("cluster_cross_distance_m", d);
+        s.cluster_cross_distance_m = d;
+    }
     integer("min_points", s.min_points);
     number("prior_L_m", s.prior_L_m);
     number("prior_W_m", s.prior_W_m);
@@ -92,6 +106,9 @@ void ClassSettings::validate() const {
     require(!cluster_cross_growth ||
                 (*cluster_cross_growth >= 0.0 && *cluster_cross_growth <= cluster_growth),
             where + " cluster_cross_growth", "must be >= 0 and <= cluster_growth");
+    require(!cluster_cross_distance_m || (*cluster_cross_distance_m > 0.0 &&
+                                          *cluster_cross_distance_m <= cluster_distance_m),
+            where + " cluster_cross_distance_m", "must be > 0 and <= cluster_distance_m");
     require(cluster_distance_max_m >= cluster_distance_m, where + " cluster_distance_max_m",
             "must be >= cluster_distance_m");
     require(min_points >= 1, where + " min_points", "must be >= 1");

@@ -250,6 +250,11 @@ void ClusterOptions::validate() const {
     if (cross_growth && !(*cross_growth >= 0.0 && *cross_growth <= growth)) {
         throw std::invalid_argument("cluster.cross_growth: must be >= 0 and <= growth");
     }
+    if (cross_distance_at_10m_m &&
+        !(*cross_distance_at_10m_m > 0.0 && *cross_distance_at_10m_m <= distance_at_10m_m)) {
+        throw std::invalid_argument(
+            "cluster.cross_distance_at_10m_m: must be > 0 and <= distance_at_10m_m");
+    }
 }
 
 double ClusterOptions::distance_at(double z_m) const {
@@ -257,8 +262,10 @@ double ClusterOptions::distance_at(double z_m) const {
 }
 
 double ClusterOptions::cross_distance_at(double z_m) const {
-    if (!cross_growth) return distance_at(z_m);
-    return std::min(distance_at_10m_m * depth_growth(z_m, *cross_growth), distance_at(z_m));
+    if (!cross_growth && !cross_distance_at_10m_m) return distance_at(z_m);
+    return std::min(cross_distance_at_10m_m.value_or(distance_at_10m_m) *
+                        depth_growth(z_m, cross_growth.value_or(growth)),
+                    distance_at(z_m));
 }
 
 std::vector<std::vector<std::size_t>> euclidean_clusters(
@@ -316,7 +323,8 @@ std::vector<std::vector<std::size_t>> euclidean_clusters(
         double radius;
         double cross;  // distance across the ray, horizontally
     };
-    const bool anisotropic = options.cross_growth.has_value();
+    const bool anisotropic =
+        options.cross_growth.has_value() || options.cross_distance_at_10m_m.has_value();
     std::vector<Member> members(n);
     std::vector<std::uint32_t> slot_of(n);
     std::vector<std::uint32_t> cell_left(cell_count.size(), 0);

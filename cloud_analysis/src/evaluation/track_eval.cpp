@@ -79,13 +79,25 @@ std::vector<std::pair<int, int>> match_frame(const std::vector<const TrackedObje
     return pairs;
 }
 
+TrackEvent event(TrackEvent::Kind kind, std::int64_t frame, const TrackedObject* truth,
+                 const TrackedObject* hyp) {
+    TrackEvent e;
+    e.kind = kind;
+    e.frame = frame;
+    if (truth) e.truth_id = truth->track_id;
+    if (hyp) e.track_id = hyp->track_id;
+    e.range_m = bev_range_m(truth ? truth->box : hyp->box);
+    return e;
+}
+
 /// Heading flips and the parked size spread of a matched hypothesis.
-void track_shape(ClassState& s, const TrackedObject& truth, const TrackedObject& hyp,
-                 const TrackEvalOptions& options) {
+void track_shape(ClassState& s, std::int64_t frame, const TrackedObject& truth,
+                 const TrackedObject& hyp, const TrackEvalOptions& options) {
     const auto& b = hyp.box;
     auto last = s.last_theta.find(hyp.track_id);
     if (last != s.last_theta.end() && std::abs(wrap(b.theta - last->second)) > kPi / 2.0) {
         ++s.score.heading_flips;
+        s.score.events.push_back(event(TrackEvent::Kind::kHeadingFlip, frame, &truth, &hyp));
     }
     s.last_theta[hyp.track_id] = b.theta;
     if (!truth.box.velocity || speed(truth.box) > options.moving_speed_mps) return;
@@ -98,7 +110,8 @@ void track_shape(ClassState& s, const TrackedObject& truth, const TrackedObject&
         std::max({s.score.parked_size_spread_m, r[1] - r[0], r[3] - r[2], r[5] - r[4]});
 }
 
-void score_frame(ClassState& s, const std::vector<const TrackedObject*>& truth,
+void score_frame(ClassState& s, std::int64_t frame_index,
+                 const std::vector<const TrackedObject*>& truth,
                  const std::vector<const TrackedObject*>& hyps, const TrackEvalOptions& options) {
     auto& all = s.score.bins[kAllBins];
     const auto pairs = match_frame(truth, hyps, s, options.max_match_distance_m);
@@ -109,6 +122,7 @@ void score_frame(ClassState& s, const std::vector<const TrackedObject*>& truth,
         const TrackedObject& hy = *hyps[h];
         auto last = s.last_track.find(gt.track_id);
         const bool switched = last != s.last_track.end() && last->second != hy.track_id;
+        const std::int64_t previous = switched ? last->second : -1;
         s.last_track[gt.track_id] = hy.track_id;
         if (!gt.owed) continue;
         const int bin = std::max(0, distance_bin(bev_range_m(gt.box)));
@@ -116,7 +130,11 @@ void score_frame(ClassState& s, const std::vector<const TrackedObject*>& truth,
         count(b, all, &TrackCounts::truth);
         count(b, all, &TrackCounts::hypotheses);
         count(b, all, &TrackCounts::matches);
-        if (switched) count(b, all, &TrackCounts::id_switches);
+        if (switched) {
+            count(b, all, &TrackCounts::id_switches);
+            s.score.events.push_back(event(TrackEvent::Kind::kIdSwitch, frame_index, &gt, &hy));
+            s.score.events.back().previous_track = previous;
+        }
         auto covered = s.covered.find(gt.track_id);
         if (covered != s.covered.end() && !covered->second) {
             count(b, all, &TrackCounts::fragmentations);
@@ -129,13 +147,14 @@ void score_frame(ClassState& s, const std::vector<const TrackedObject*>& truth,
                                                       : s.score.static_velocity_errors_mps)
                 .push_back(e);
         }
-        track_shape(s, gt, hy, options);
+        track_shape(s, frame_index, gt, hy, options);
     }
     for (std::size_t t = 0; t < truth.size(); ++t) {
         if (truth_matched[t] || !truth[t]->owed) continue;
         const int bin = std::max(0, distance_bin(bev_range_m(truth[t]->box)));
         count(s.score.bins[bin], all, &TrackCounts::truth);
         count(s.score.bins[bin], all, &TrackCounts::misses);
+        s.score.events.push_back(event(TrackEvent::Kind::kMiss, frame_index, truth[t], nullptr));
         auto covered = s.covered.find(truth[t]->track_id);
         if (covered != s.covered.end()) covered->second = false;
     }
@@ -145,6 +164,8 @@ void score_frame(ClassState& s, const std::vector<const TrackedObject*>& truth,
         if (bin < 0) continue;  // beyond the scored range
         count(s.score.bins[bin], all, &TrackCounts::hypotheses);
         count(s.score.bins[bin], all, &TrackCounts::false_positives);
+        s.score.events.push_back(
+            event(TrackEvent::Kind::kFalsePositive, frame_index, nullptr, hyps[h]));
     }
     // Identity overlaps: every owed truth / track pair within the distance, per frame.
     for (const auto* gt : truth) {
@@ -255,7 +276,7 @@ TrackEvaluation evaluate_tracks(const std::vector<TrackedFrame>& frames,
             for (const auto& h : frame.hypotheses) {
                 if (h.box.class_name == name) hyps.push_back(&h);
             }
-            score_frame(state, truth, hyps, options);
+            score_frame(state, frame.index, truth, hyps, options);
         }
     }
     TrackEvaluation result;
@@ -285,6 +306,33 @@ std::vector<TrackedObject> truth_of(const scene_schema::EntityDocument& document
         if (e.track_id) out.push_back({*e.track_id, e, i >= owed.size() || owed[i]});
     }
     return out;
+}
+
+std::string describe(const TrackEvent& event) {
+    char line[160];
+    const long long frame = event.frame, truth = event.truth_id, track = event.track_id;
+    switch (event.kind) {
+        case TrackEvent::Kind::kMiss:
+            std::snprintf(line, sizeof line, "frame %lld miss: truth %lld at %.1f m", frame, truth,
+                          event.range_m);
+            break;
+        case TrackEvent::Kind::kFalsePositive:
+            std::snprintf(line, sizeof line, "frame %lld false positive: track %lld at %.1f m",
+                          frame, track, event.range_m);
+            break;
+        case TrackEvent::Kind::kIdSwitch:
+            std::snprintf(line, sizeof line,
+                          "frame %lld id switch: truth %lld to track %lld (was %lld) at %.1f m",
+                          frame, truth, track, static_cast<long long>(event.previous_track),
+                          event.range_m);
+            break;
+        case TrackEvent::Kind::kHeadingFlip:
+            std::snprintf(line, sizeof line,
+                          "frame %lld heading flip: track %lld on truth %lld at %.1f m", frame,
+                          track, truth, event.range_m);
+            break;
+    }
+    return line;
 }
 
 bool TrackBars::any() const {

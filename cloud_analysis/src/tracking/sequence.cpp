@@ -3,6 +3,7 @@
 #include <algorithm>
 #include <chrono>
 #include <cmath>
+#include <deque>
 #include <set>
 #include <stdexcept>
 
@@ -10,8 +11,16 @@ namespace cloud_analysis::tracking {
 
 namespace fs = std::filesystem;
 
+namespace {
+
+constexpr double kPi = 3.14159265358979323846;
+
+}  // namespace
+
 void SequenceTrackOptions::validate() const {
     if (!(fps > 0.0 && fps <= 1000.0)) throw std::invalid_argument("fps must be in (0, 1000]");
+    if (lag_frames < 0 || lag_frames > 1000)
+        throw std::invalid_argument("lag_frames must be in 0..1000");
     tracker.validate();
 }
 
@@ -62,21 +71,25 @@ scene_schema::EntityDocument SequenceTracker::track(const scene_schema::EntityDo
     report_.track_ms +=
         std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - start).count();
     if (stats.restarted) ++report_.restarts;
+    turned_ = std::move(stats.turned);
     for (const auto& e : tracked.entities) {
         if (e.track_id) ids_.insert(*e.track_id);
     }
     // The index may only say time goes forward: a restart after time went back keeps the
     // previous timestamp's order by leaving this frame's out.
-    pending_ = scene_schema::SequenceFrame{index, file, t, {}};
-    if (last_time_ && t < *last_time_) pending_->timestamp_s.reset();
+    pending_.push_back(scene_schema::SequenceFrame{index, file, t, {}});
+    if (last_time_ && t < *last_time_) {
+        pending_.back().timestamp_s.reset();
+    } else {
+        last_time_ = t;
+    }
     return tracked;
 }
 
 void SequenceTracker::commit(const fs::path& index_path, stereoscene::support::FileSync sync) {
-    if (pending_) {
-        if (pending_->timestamp_s) last_time_ = pending_->timestamp_s;
-        written_.frames.push_back(std::move(*pending_));
-        pending_.reset();
+    if (!pending_.empty()) {
+        written_.frames.push_back(std::move(pending_.front()));
+        pending_.pop_front();
         ++report_.tracked;
     }
     scene_schema::write_sequence_file(written_, index_path, sync);
@@ -95,6 +108,13 @@ SequenceTrackReport track_files(const scene_schema::SequenceIndex& index,
                                 const std::function<void(const std::string&)>& warn) {
     options.validate();
     SequenceTracker sequence(index.id, index.fps.value_or(options.fps), options, warn);
+    // Frames tracked but not yet written, oldest first, with their file names.
+    std::deque<std::pair<scene_schema::EntityDocument, std::string>> held;
+    const auto write_oldest = [&](stereoscene::support::FileSync sync) {
+        scene_schema::write_file(held.front().first, out_dir / held.front().second);
+        held.pop_front();
+        sequence.commit(out_dir / "sequence.json", sync);
+    };
     for (const auto& f : index.frames) {
         scene_schema::EntityDocument doc;
         try {
@@ -104,10 +124,19 @@ SequenceTrackReport track_files(const scene_schema::SequenceIndex& index,
             sequence.skip();
             continue;
         }
-        const auto tracked = sequence.track(doc, f.index, f.file, f.timestamp_s);
-        scene_schema::write_file(tracked, out_dir / f.file);
-        sequence.commit(out_dir / "sequence.json");
+        held.emplace_back(sequence.track(doc, f.index, f.file, f.timestamp_s), f.file);
+        // A track the motion turned round faced backwards in the frames still held as well.
+        for (const std::int64_t id : sequence.turned()) {
+            for (std::size_t k = 0; k + 1 < held.size(); ++k) {
+                for (auto& e : held[k].first.entities) {
+                    if (e.track_id == id) e.theta = std::remainder(e.theta + kPi, 2.0 * kPi);
+                }
+            }
+        }
+        while (held.size() > static_cast<std::size_t>(options.lag_frames))
+            write_oldest(stereoscene::support::FileSync::kAtomicOnly);
     }
+    while (!held.empty()) write_oldest(stereoscene::support::FileSync::kAtomicOnly);
     sequence.commit(out_dir / "sequence.json", stereoscene::support::FileSync::kDurable);
     return sequence.report();
 }

@@ -100,9 +100,11 @@ void Tracker::associate(const scene_schema::EntityDocument& frame, std::vector<i
 
 namespace {
 
-/// Folds a measured box into a matched track's height, heading and size.
-void absorb(Track& t, const scene_schema::Entity& e, const TrackerOptions& o) {
+/// Folds a measured box into a matched track's height, heading and size; true when the
+/// direction of motion turned the track's heading round.
+bool absorb(Track& t, const scene_schema::Entity& e, const TrackerOptions& o) {
     t.y_m += o.height_gain * (e.y - t.y_m);
+    bool turned = false;
     double target = align_modulo_pi(e.theta, t.theta_rad);
     const double speed = std::hypot(t.motion.vx_mps(), t.motion.vz_mps());
     // Only a velocity known well enough to be reported may turn the heading: a track's first
@@ -114,7 +116,10 @@ void absorb(Track& t, const scene_schema::Entity& e, const TrackerOptions& o) {
         const double motion = std::atan2(-t.motion.vz_mps(), t.motion.vx_mps());
         target = align_modulo_pi(target, motion);
         // A track born facing backwards turns round at once, not through a half turn.
-        if (std::abs(wrap(t.theta_rad - motion)) > kPi / 2.0) t.theta_rad = wrap(t.theta_rad + kPi);
+        if (std::abs(wrap(t.theta_rad - motion)) > kPi / 2.0) {
+            t.theta_rad = wrap(t.theta_rad + kPi);
+            turned = true;
+        }
     }
     t.theta_rad = wrap(t.theta_rad + o.heading_gain * wrap(target - t.theta_rad));
     t.sum_W += e.W;
@@ -137,6 +142,7 @@ void absorb(Track& t, const scene_schema::Entity& e, const TrackerOptions& o) {
         t.sum_W = t.sum_H = t.sum_L = 0.0;
         t.size_samples = 0;
     }
+    return turned;
 }
 
 Track born(const scene_schema::Entity& e, std::int64_t id, const TrackerOptions& o) {
@@ -221,7 +227,7 @@ scene_schema::EntityDocument Tracker::update(const scene_schema::EntityDocument&
         if (track_of[i] >= 0) {
             Track& t = tracks_[track_of[i]];
             t.motion.update(e.x, e.z);
-            absorb(t, e, options_);
+            if (absorb(t, e, options_)) s.turned.push_back(t.id);
             t.confidence = e.confidence;
             ++t.hits;
             t.misses = 0;

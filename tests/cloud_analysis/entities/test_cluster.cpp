@@ -107,6 +107,32 @@ TEST_CASE("across the viewing ray the distance grows by its own exponent", "[clu
     CHECK_THROWS_WITH(bad.validate(), Catch::Contains("cross_growth"));
 }
 
+TEST_CASE("the distance across the viewing ray has its own base", "[cluster]") {
+    ClusterOptions o;
+    o.distance_at_10m_m = 0.4;
+    o.growth = 2.0;
+    o.distance_max_m = 1.5;
+    o.cross_growth = 0.0;
+    // Two side faces 0.35 m apart across the ray at 16 m: linked within 0.4 m, apart within 0.3.
+    std::vector<Eigen::Vector3f> pts;
+    add_face_along_ray(pts, 3.0f, 16.0f, 4.0f);
+    const Eigen::Vector3f across = Eigen::Vector3f(16.0f, 0.0f, -3.0f).normalized();
+    add_face_along_ray(pts, 3.0f + 0.35f * across.x(), 16.0f + 0.35f * across.z(), 4.0f);
+    CHECK(euclidean_clusters(pts, o).size() == 1);
+    o.cross_distance_at_10m_m = 0.3;
+    CHECK(o.cross_distance_at(16.0) == Approx(0.3));
+    CHECK(o.distance_at(16.0) == Approx(1.024));  // along the ray unchanged
+    CHECK(euclidean_clusters(pts, o).size() == 2);
+    // Without cross_growth the base grows with the clustering exponent.
+    o.cross_growth.reset();
+    CHECK(o.cross_distance_at(20.0) == Approx(1.2));
+    ClusterOptions bad = o;
+    bad.cross_distance_at_10m_m = 0.5;  // more than the clustering distance
+    CHECK_THROWS_WITH(bad.validate(), Catch::Contains("cross_distance_at_10m_m"));
+    bad.cross_distance_at_10m_m = 0.0;
+    CHECK_THROWS_WITH(bad.validate(), Catch::Contains("cross_distance_at_10m_m"));
+}
+
 TEST_CASE("clusters below min_points are dropped", "[cluster]") {
     std::vector<Eigen::Vector3f> pts;
     add_blob(pts, {0.0f, 0.0f, 10.0f});

@@ -126,6 +126,15 @@ TEST_CASE("a malformed class config names the bad member", "[entities]") {
     CHECK_THROWS_WITH(
         parse_class_config(R"({"classes": [{"name": "car", "cluster_cross_growth": "0"}]})", "x"),
         Catch::Contains("/classes/0/cluster_cross_growth: must be a number"));
+    CHECK_THROWS_WITH(parse_class_config(R"({"classes": [{"name": "car", "cluster_distance_m": 0.4,
+                                             "cluster_cross_distance_m": 0.5}]})",
+                                         "x"),
+                      Catch::Contains("cluster_cross_distance_m"));
+    const auto parsed = parse_class_config(
+        R"({"classes": [{"name": "car", "cluster_distance_m": 0.4, "cluster_cross_distance_m": 0.3}]})",
+        "x");
+    REQUIRE(parsed.find("car").cluster_cross_distance_m.has_value());
+    CHECK(*parsed.find("car").cluster_cross_distance_m == 0.3);
     CHECK_THROWS_WITH(parse_class_config("{", "cfg.json"), Catch::Contains("cfg.json"));
     CHECK_THROWS_WITH(parse_class_config(R"({"classes": [], "clases": []})", "x"),
                       Catch::Contains("/clases: unknown member"));

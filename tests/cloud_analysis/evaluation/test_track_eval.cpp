@@ -137,3 +137,19 @@ TEST_CASE("KITTI tracking labels give per-frame truth with velocities from posit
                       "cannot read KITTI tracking labels: line 1: expected a frame number and a "
                       "track id (f.txt)");
 }
+
+TEST_CASE("every miss, false positive, switch and flip is listed as an event", "[track_eval]") {
+    auto frames = drive();
+    for (int i = 5; i < 10; ++i) frames[i].hypotheses[0].track_id = 300;  // switch at frame 5
+    frames[2].hypotheses.erase(frames[2].hypotheses.begin() + 1);         // truth 2 missed
+    frames[6].hypotheses.push_back(object(400, -5.0, 40.0));              // stray box
+    frames[8].hypotheses[1].box.theta = 3.1;                              // track 200 turns
+    const auto e = evaluate_tracks(frames, TrackEvalOptions{});
+    std::vector<std::string> lines;
+    for (const auto& event : e.of("car").events) lines.push_back(describe(event));
+    REQUIRE(lines.size() == 4);
+    CHECK(lines[0] == "frame 2 miss: truth 2 at 25.2 m");
+    CHECK(lines[1] == "frame 5 id switch: truth 1 to track 300 (was 100) at 16.8 m");
+    CHECK(lines[2] == "frame 6 false positive: track 400 at 40.3 m");
+    CHECK(lines[3] == "frame 8 heading flip: track 200 on truth 2 at 25.2 m");
+}

@@ -2,6 +2,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <filesystem>
 #include <map>
 #include <numeric>
 #include <random>
@@ -9,6 +10,7 @@
 
 #include "cloud_analysis/tracking/assignment.hpp"
 #include "cloud_analysis/tracking/kalman.hpp"
+#include "cloud_analysis/tracking/sequence.hpp"
 #include "cloud_analysis/tracking/tracker.hpp"
 
 using namespace cloud_analysis::tracking;
@@ -291,4 +293,101 @@ TEST_CASE(
         CHECK(std::abs(std::remainder(e.theta + kPi / 2, 2 * kPi)) < 0.3);
         if (i == 1) CHECK_FALSE(e.velocity);
     }
+}
+
+TEST_CASE("the tracker says which tracks the direction of motion turned round", "[tracking]") {
+    // A car driving +x at 6 m/s whose boxes all face -x (theta pi): reported backwards from the
+    // first frames, turned round once its velocity is known.
+    Tracker tracker;
+    std::int64_t turned_id = -1;
+    int turned_at = -1;
+    for (int i = 0; i < 10; ++i) {
+        TrackerFrameStats stats;
+        const auto out =
+            tracker.update(frame_of({car(-10.0 + 0.6 * i, 15.0, kPi)}), 0.1 * i, &stats);
+        REQUIRE(out.entities.size() == 1);
+        if (!stats.turned.empty()) {
+            CHECK(turned_at == -1);  // once
+            turned_at = i;
+            turned_id = stats.turned.front();
+            CHECK(turned_id == *out.entities[0].track_id);
+        }
+    }
+    CHECK(turned_at > 0);
+    CHECK(turned_id >= 0);
+}
+
+namespace {
+
+std::filesystem::path fresh_dir(const std::string& name) {
+    const auto dir = std::filesystem::temp_directory_path() / ("cloud_analysis_tracking_" + name);
+    std::filesystem::remove_all(dir);
+    std::filesystem::create_directories(dir);
+    return dir;
+}
+
+/// Heading changes over 90 degrees between consecutive frames of one track in a tracked folder.
+int heading_flips(const std::filesystem::path& dir, int frames) {
+    std::map<std::int64_t, double> last;
+    int flips = 0;
+    for (int i = 0; i < frames; ++i) {
+        const auto doc = scene_schema::read_file(dir / ("f" + std::to_string(i) + ".json"));
+        for (const auto& e : doc.entities) {
+            if (!e.track_id) continue;
+            const auto it = last.find(*e.track_id);
+            if (it != last.end() &&
+                std::abs(std::remainder(e.theta - it->second, 2 * kPi)) > kPi / 2)
+                ++flips;
+            last[*e.track_id] = e.theta;
+        }
+    }
+    return flips;
+}
+
+}  // namespace
+
+TEST_CASE("track_files with a lag turns a backwards-born track round in the frames it holds",
+          "[tracking]") {
+    const auto in = fresh_dir("lag_in");
+    scene_schema::SequenceIndex index;
+    index.id = "lag";
+    const int frames = 12;
+    for (int i = 0; i < frames; ++i) {
+        auto doc = frame_of({car(-10.0 + 0.6 * i, 15.0, kPi), car(4.0, 20.0, kPi / 2)});
+        doc.frame.id = std::to_string(i);
+        const std::string file = "f" + std::to_string(i) + ".json";
+        scene_schema::write_file(doc, in / file);
+        index.frames.push_back({i, file, 0.1 * i, {}});
+    }
+    scene_schema::write_sequence_file(index, in / "sequence.json");
+    const auto quiet = [](const std::string&) {};
+
+    SequenceTrackOptions options;
+    options.lag_frames = 0;
+    const auto at_once = fresh_dir("lag_0");
+    track_files(index, in / "sequence.json", at_once, options, quiet);
+    CHECK(heading_flips(at_once, frames) == 1);  // the moving car turns round once
+
+    options.lag_frames = 5;
+    const auto lagged = fresh_dir("lag_5");
+    const auto report = track_files(index, in / "sequence.json", lagged, options, quiet);
+    CHECK(report.tracked == static_cast<std::size_t>(frames));
+    CHECK(heading_flips(lagged, frames) == 0);
+    // Every frame is written and indexed, in order, and the moving car faces +x throughout.
+    const auto written = scene_schema::read_sequence_file(lagged / "sequence.json");
+    REQUIRE(written.frames.size() == static_cast<std::size_t>(frames));
+    for (int i = 0; i < frames; ++i) {
+        CHECK(written.frames[i].file == "f" + std::to_string(i) + ".json");
+        const auto doc = scene_schema::read_file(lagged / written.frames[i].file);
+        for (const auto& e : doc.entities) {
+            if (e.track_id && std::abs(e.z - 15.0) < 1.0)
+                CHECK(std::abs(std::remainder(e.theta, 2 * kPi)) < 0.5);
+        }
+    }
+}
+
+TEST_CASE("sequence track options refuse a negative lag", "[tracking]") {
+    SequenceTrackOptions options;
+    options.lag_frames = -1;
+    CHECK_THROWS_WITH(options.validate(), Catch::Contains("lag_frames"));
 }

@@ -26,6 +26,9 @@ struct ClassSettings {
     /// Exponent of the growth of the distance across the viewing ray, horizontally (empty:
     /// cluster_growth, the same distance in every direction), in [0, cluster_growth].
     std::optional<double> cluster_cross_growth;
+    /// Distance across the viewing ray at 10 m, horizontally, metres (empty:
+    /// cluster_distance_m); in (0, cluster_distance_m].
+    std::optional<double> cluster_cross_distance_m;
     int min_points = 50;        ///< clusters with fewer points are dropped, >= 1
     double prior_L_m = 0.0;     ///< typical length along the heading, metres (0 = none)
     double prior_W_m = 0.0;     ///< typical width across the heading, metres (0 = none)

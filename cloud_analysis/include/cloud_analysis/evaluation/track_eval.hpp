@@ -60,6 +60,20 @@ struct TrackCounts {
     double mota() const;
 };
 
+/// One scored event of a drive, for diagnosis (evaluate-tracks --events).
+struct TrackEvent {
+    enum class Kind { kMiss, kFalsePositive, kIdSwitch, kHeadingFlip };
+    Kind kind = Kind::kMiss;
+    std::int64_t frame = 0;            ///< frame number
+    std::int64_t truth_id = -1;        ///< truth object (-1 for a false positive)
+    std::int64_t track_id = -1;        ///< track (-1 for a miss)
+    std::int64_t previous_track = -1;  ///< an ID switch's earlier track
+    double range_m = 0.0;              ///< bird's-eye range of the truth (else the track)
+};
+
+/// "frame 12 id switch: truth 3 track 7 (was 4) at 18.2 m".
+std::string describe(const TrackEvent& event);
+
 /// Scores of one class.
 struct ClassTrackScore {
     std::string class_name;
@@ -75,6 +89,7 @@ struct ClassTrackScore {
     /// Largest spread (max - min over W, H, L) of a track's size while it follows a still
     /// truth object, metres (0 when none).
     double parked_size_spread_m = 0.0;
+    std::vector<TrackEvent> events;  ///< every miss, false positive, ID switch and flip
 };
 
 /// Result of evaluate_tracks.

@@ -4,6 +4,7 @@
 /// written with its track ids as soon as it is done, with the sequence index rewritten after
 /// every frame, so a run stopped half-way leaves complete, valid frames and an index of them.
 
+#include <deque>
 #include <filesystem>
 #include <functional>
 #include <optional>
@@ -19,6 +20,10 @@ namespace cloud_analysis::tracking {
 struct SequenceTrackOptions {
     double fps = 10.0;       ///< frame rate when neither the index nor a file has timestamps, Hz
     TrackerOptions tracker;  ///< association, birth, death, smoothing
+    /// track_files holds this many frames before writing them: a track whose motion shows,
+    /// within that many frames, that its box was reported facing backwards is turned round in
+    /// the held frames too (no heading flip in the output). 0 writes each frame at once.
+    int lag_frames = 5;
     /// Throws std::invalid_argument naming the bad field.
     void validate() const;
 };
@@ -52,13 +57,19 @@ class SequenceTracker {
     scene_schema::EntityDocument track(const scene_schema::EntityDocument& doc, std::int64_t index,
                                        const std::string& file, std::optional<double> time_s);
 
-    /// Adds the frame last tracked to the index and writes it to `index_path` (atomically;
-    /// durably with kDurable). Without a frame tracked since, writes the index as it is.
+    /// Adds the oldest frame tracked and not yet committed to the index and writes it to
+    /// `index_path` (atomically; durably with kDurable). Without such a frame, writes the
+    /// index as it is.
     void commit(const std::filesystem::path& index_path,
                 stereoscene::support::FileSync sync = stereoscene::support::FileSync::kAtomicOnly);
 
-    /// Leaves the frame last tracked out of the index (its file could not be written).
-    void discard() { pending_.reset(); }
+    /// Leaves the oldest frame not yet committed out of the index (its file could not be
+    /// written).
+    void discard() {
+        if (!pending_.empty()) pending_.pop_front();
+    }
+    /// Tracks the last track() turned round by pi (see TrackerFrameStats::turned).
+    const std::vector<std::int64_t>& turned() const { return turned_; }
 
     /// Counts a frame that could not be read or analysed (the tracker sees a gap).
     void skip() { ++report_.skipped; }
@@ -71,8 +82,9 @@ class SequenceTracker {
     std::function<void(const std::string&)> warn_;
     double fps_;
     scene_schema::SequenceIndex written_;
-    std::optional<scene_schema::SequenceFrame> pending_;
-    std::optional<double> last_time_;
+    std::deque<scene_schema::SequenceFrame> pending_;  ///< tracked, not yet committed
+    std::optional<double> last_time_;  ///< of the last frame tracked with a usable timestamp
+    std::vector<std::int64_t> turned_;
     std::set<std::int64_t> ids_;
     SequenceTrackReport report_;
 };

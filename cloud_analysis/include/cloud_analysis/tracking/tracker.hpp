@@ -64,6 +64,10 @@ struct TrackerFrameStats {
     int reported = 0;        ///< entities written with a track_id
     int coasted = 0;         ///< of those, predictions of tracks missed in this frame
     bool restarted = false;  ///< the tracker dropped every track first (gap or time going back)
+    /// Tracks whose heading the direction of motion turned round by pi in this frame (a box
+    /// reported facing backwards before its velocity was known); a fixed-lag writer turns
+    /// their entities in the frames it still holds.
+    std::vector<std::int64_t> turned;
 };
 
 /// One followed object.

@@ -1,0 +1,55 @@
+#!/usr/bin/env bash
+# A drive end to end against its truth: render a moving scene with scene-render sensors
+# (--frames), analyse every frame with cloud-analysis batch, track them with cloud-analysis
+# track, and score the tracks with evaluate-tracks and the goal's bars (docs/evaluation.md
+# "Tracking"). Prints evaluate-tracks' table; exits non-zero when a bar is missed.
+# usage: scripts/evaluate-drive.sh [--no-build] [--build-dir DIR] [--out DIR]
+#        [--scene FILE] [--frames N] [--reuse]   (--reuse: keep a render already in --out)
+#        [--class-config FILE]   (per-class extractor settings for the batch)
+#        [-- extra `track` flags...]
+set -euo pipefail
+source "$(dirname "${BASH_SOURCE[0]}")/common.sh"
+
+build=1
+build_dir="$STEREOSCENE_ROOT/build"
+out_dir=""
+scene="$STEREOSCENE_ROOT/samples/drives/scenes/long-drive.json"
+frames=100
+reuse=0
+batch_args=()
+track_args=()
+while [ $# -gt 0 ]; do
+    case "$1" in
+        --no-build) build=0 ;;
+        --build-dir) build_dir=$2; shift ;;
+        --out) out_dir=$2; shift ;;
+        --scene) scene=$2; shift ;;
+        --frames) frames=$2; shift ;;
+        --reuse) reuse=1 ;;
+        --class-config) batch_args+=(--class-config "$2"); shift ;;
+        --) shift; track_args=("$@"); break ;;
+        -h|--help) sed -n '2,9p' "$0"; exit 0 ;;
+        *) echo "evaluate-drive.sh: error: unknown argument: $1 (see --help)" >&2; exit 2 ;;
+    esac
+    shift
+done
+[ -n "$out_dir" ] || out_dir="$build_dir/drive-$(basename "$scene" .json)"
+if [ "$build" = 1 ]; then
+    stereoscene_build "$build_dir" Release -- cloud-analysis scene-render
+fi
+ca="$build_dir/cloud_analysis/cloud-analysis"
+render="$out_dir/render"
+
+if [ "$reuse" = 0 ] || [ ! -d "$render/truth" ]; then
+    rm -rf "$render"
+    "$build_dir/scene_viewer/scene-render" sensors "$scene" --out "$render" --frames "$frames" >&2
+fi
+ls "$render/image_2" | sed 's/\.png$//' >"$out_dir/frames.txt"
+rm -rf "$out_dir/detections" "$out_dir/tracked"
+"$ca" batch --kitti-root "$render" --list "$out_dir/frames.txt" --out-dir "$out_dir/detections" \
+    --quiet "${batch_args[@]}"
+"$ca" track "$out_dir/detections" --out-dir "$out_dir/tracked" --fps 10 "${track_args[@]}"
+"$ca" evaluate-tracks --tracks "$out_dir/tracked" --truth "$render/truth" \
+    --visibility "$render/visibility" --min-visible-fraction 0.25 --min-mota 0.9 \
+    --max-id-switches 2 --min-idf1 0.9 --max-velocity-error 0.5 --max-heading-flips 0 \
+    --max-size-spread 0.05
