@@ -6,6 +6,7 @@
 # usage: scripts/evaluate-drive.sh [--no-build] [--build-dir DIR] [--out DIR]
 #        [--scene FILE] [--frames N] [--reuse]   (--reuse: keep a render already in --out)
 #        [--class-config FILE]   (per-class extractor settings for the batch)
+#        [--events]   (list every miss, false positive, ID switch and heading flip)
 #        [-- extra `track` flags...]
 set -euo pipefail
 source "$(dirname "${BASH_SOURCE[0]}")/common.sh"
@@ -17,6 +18,7 @@ scene="$STEREOSCENE_ROOT/samples/drives/scenes/long-drive.json"
 frames=100
 reuse=0
 batch_args=()
+eval_args=()
 track_args=()
 while [ $# -gt 0 ]; do
     case "$1" in
@@ -26,9 +28,10 @@ while [ $# -gt 0 ]; do
         --scene) scene=$2; shift ;;
         --frames) frames=$2; shift ;;
         --reuse) reuse=1 ;;
+        --events) eval_args+=(--events) ;;
         --class-config) batch_args+=(--class-config "$2"); shift ;;
         --) shift; track_args=("$@"); break ;;
-        -h|--help) sed -n '2,9p' "$0"; exit 0 ;;
+        -h|--help) sed -n '2,10p' "$0"; exit 0 ;;
         *) echo "evaluate-drive.sh: error: unknown argument: $1 (see --help)" >&2; exit 2 ;;
     esac
     shift
@@ -52,4 +55,4 @@ rm -rf "$out_dir/detections" "$out_dir/tracked"
 "$ca" evaluate-tracks --tracks "$out_dir/tracked" --truth "$render/truth" \
     --visibility "$render/visibility" --min-visible-fraction 0.25 --min-mota 0.9 \
     --max-id-switches 2 --min-idf1 0.9 --max-velocity-error 0.5 --max-heading-flips 0 \
-    --max-size-spread 0.05
+    --max-size-spread 0.05 "${eval_args[@]}"
