@@ -10,6 +10,10 @@ namespace cloud_analysis::instances {
 namespace {
 
 constexpr double kGapFraction = 0.25;
+/// Boxes wider than this many prior widths are looked at for two things side by side.
+constexpr double kSideBySideWidth = 1.3;
+/// The narrowest gap (0.1 m bins) that parts two things side by side.
+constexpr int kSideBySideGapBins = 2;
 constexpr double kHalfPi = 1.57079632679489661923;
 
 /// Splits the points of a merged blob along the unit direction (dir_x, dir_z) into pieces of
@@ -277,6 +281,61 @@ std::vector<Indices> split_at_valleys(const std::vector<Eigen::Vector3f>& pts, c
     return parts;
 }
 
+/// Two pieces of a blob cut along the unit direction (dir_x, dir_z) in its widest clear gap
+/// (a run of at least min_gap_bins 0.1 m bins each holding at most a quarter of the median
+/// occupied bin's points) that leaves each piece at least a fifth of the points (a sliver or
+/// a sparse far side is no second thing); nothing when there is no such gap.
+std::optional<Split> split_at_gap(const std::vector<Eigen::Vector3f>& pts, const Indices& idx,
+                                  double dir_x, double dir_z, int min_gap_bins) {
+    if (idx.size() < 20) return std::nullopt;
+    std::vector<double> along(idx.size());
+    double lo = 1e300, hi = -1e300;
+    for (std::size_t k = 0; k < idx.size(); ++k) {
+        along[k] = double{pts[idx[k]].x()} * dir_x + double{pts[idx[k]].z()} * dir_z;
+        lo = std::min(lo, along[k]);
+        hi = std::max(hi, along[k]);
+    }
+    constexpr double kBin = 0.1;
+    const int bins = static_cast<int>((hi - lo) / kBin) + 1;
+    std::vector<std::size_t> hist(static_cast<std::size_t>(bins), 0);
+    for (double a : along) ++hist[static_cast<std::size_t>((a - lo) / kBin)];
+    std::vector<std::size_t> occupied;
+    for (std::size_t h : hist) {
+        if (h > 0) occupied.push_back(h);
+    }
+    std::nth_element(occupied.begin(), occupied.begin() + occupied.size() / 2, occupied.end());
+    const double gap_count = kGapFraction * static_cast<double>(occupied[occupied.size() / 2]);
+    const std::size_t total = idx.size();
+    std::size_t before = 0;  // points in the bins before b
+    int best_width = 0;
+    double best_cut = 0.0;
+    for (int b = 0; b < bins;) {
+        if (static_cast<double>(hist[static_cast<std::size_t>(b)]) > gap_count) {
+            before += hist[static_cast<std::size_t>(b++)];
+            continue;
+        }
+        int end = b;  // one past the run of gap bins
+        std::size_t inside = 0;
+        while (end < bins && static_cast<double>(hist[static_cast<std::size_t>(end)]) <= gap_count)
+            inside += hist[static_cast<std::size_t>(end++)];
+        const std::size_t left = before + inside / 2, right = total - left;
+        if (end - b >= min_gap_bins && end - b > best_width && 5 * left >= total &&
+            5 * right >= total) {
+            best_width = end - b;
+            best_cut = lo + 0.5 * (b + end) * kBin;
+        }
+        before += inside;
+        b = end;
+    }
+    if (best_width == 0) return std::nullopt;
+    Split split;
+    split.at_gaps = true;
+    split.parts.resize(2);
+    for (std::size_t k = 0; k < idx.size(); ++k)
+        split.parts[along[k] < best_cut ? 0 : 1].push_back(idx[k]);
+    return split;
+}
+
 }  // namespace
 
 /// Vertical extent of points (2 % to 98 % height quantiles above the ground, or along -y
@@ -299,6 +358,12 @@ Split split_oversized(const std::vector<Eigen::Vector3f>& pts, const Indices& id
                       const std::optional<GroundPlane>& ground, const ExtractOptions& options) {
     if (!s.has_prior()) return {{idx}, false, std::nullopt};
     const double c = std::cos(box.theta), sn = std::sin(box.theta);
+    if (box.W_m > kSideBySideWidth * s.prior_W_m) {
+        // Things side by side along their length (a car passing a parked one): a clear gap
+        // across the heading that leaves each side a real share of the points parts them
+        // before any reading of the blob as one row.
+        if (auto across = split_at_gap(pts, idx, sn, c, kSideBySideGapBins)) return *across;
+    }
     if (ground && options.row_low_fraction > 0.0 &&
         front_on_row(pts, idx, box, s, *ground, options)) {
         // Side by side: cut along the box's length at the row's pitch; each piece heads across.

@@ -815,3 +815,38 @@ TEST_CASE("a strip along a larger car at another range is dropped, a narrow car 
     strip.group = car.group;
     CHECK(drop_strips_beside({strip, car, far_car}, pixels, grid, 8.0, 10, 1.0).size() == 3);
 }
+
+TEST_CASE("a car passing a parked one 0.3 m beside it is cut from it at the gap",
+          "[entities][split]") {
+    LabeledCloud cloud;
+    add_road(cloud);
+    // Parked at x = -4.0 (right side and the right part of its rear seen), the passing car at
+    // x = -1.9 (rear and right side): 0.3 m between the parked car's right side and the
+    // passing car's left edge, one blob for the clustering, 2.8 m wide across the common
+    // heading: more than one car, less than the two widths at which a blob is cut evenly.
+    const auto rear_and_right_side = [&](float x, float z_rear, float rear_from) {
+        for (float y = 0.15f; y <= 1.65f; y += 0.05f) {
+            for (float a = rear_from; a <= 0.9f; a += 0.05f)
+                add_point(cloud, {x + a, y, z_rear}, 2);
+            for (float z = z_rear; z <= z_rear + 4.2f; z += 0.05f)
+                add_point(cloud, {x + 0.9f, y, z}, 2);
+        }
+    };
+    rear_and_right_side(-4.0f, 10.9f, 0.2f);
+    rear_and_right_side(-1.9f, 12.5f, -0.9f);
+    project_pixels(cloud);
+    std::vector<scene_schema::Entity> cars;
+    for (const auto& e : extract_entities(cloud, test_palette(), StereoCamera{},
+                                          options_with_bundled_config("instances"))
+                             .entities) {
+        if (e.class_name == "car") cars.push_back(e);
+    }
+    std::sort(cars.begin(), cars.end(), [](const auto& a, const auto& b) { return a.x < b.x; });
+    REQUIRE(cars.size() == 2);
+    const double x_true[] = {-4.0, -1.9}, z_true[] = {13.0, 14.6};
+    for (std::size_t k = 0; k < 2; ++k) {
+        CHECK(std::abs(std::cos(cars[k].theta)) < std::sin(10.0 * kPi / 180.0));  // along z
+        CHECK(cars[k].x == Approx(x_true[k]).margin(0.3));
+        CHECK(cars[k].z == Approx(z_true[k]).margin(0.4));
+    }
+}

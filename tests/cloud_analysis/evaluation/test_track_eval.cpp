@@ -147,9 +147,10 @@ TEST_CASE("every miss, false positive, switch and flip is listed as an event", "
     const auto e = evaluate_tracks(frames, TrackEvalOptions{});
     std::vector<std::string> lines;
     for (const auto& event : e.of("car").events) lines.push_back(describe(event));
-    REQUIRE(lines.size() == 4);
+    REQUIRE(lines.size() == 5);
     CHECK(lines[0] == "frame 2 miss: truth 2 at 25.2 m");
     CHECK(lines[1] == "frame 5 id switch: truth 1 to track 300 (was 100) at 16.8 m");
     CHECK(lines[2] == "frame 6 false positive: track 400 at 40.3 m");
     CHECK(lines[3] == "frame 8 heading flip: track 200 on truth 2 at 25.2 m");
+    CHECK(lines[4] == "frame 9 heading flip: track 200 on truth 2 at 25.2 m");
 }
