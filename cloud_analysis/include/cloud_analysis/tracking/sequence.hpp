@@ -23,7 +23,7 @@ struct SequenceTrackOptions {
     /// track_files holds this many frames before writing them: a track whose motion shows,
     /// within that many frames, that its box was reported facing backwards is turned round in
     /// the held frames too (no heading flip in the output). 0 writes each frame at once.
-    int lag_frames = 5;
+    int lag_frames = 15;
     /// Throws std::invalid_argument naming the bad field.
     void validate() const;
 };
