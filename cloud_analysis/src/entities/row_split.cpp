@@ -1,6 +1,7 @@
 #include "cloud_analysis/entities/row_split.hpp"
 
 #include <algorithm>
+#include <array>
 #include <cmath>
 #include <limits>
 
@@ -14,6 +15,8 @@ constexpr double kGapFraction = 0.25;
 constexpr double kSideBySideWidth = 1.3;
 /// The narrowest gap (0.1 m bins) that parts two things side by side.
 constexpr int kSideBySideGapBins = 2;
+/// How far two things side by side overlap along the gap between them, at least, metres.
+constexpr double kSideBySideOverlap = 0.5;
 constexpr double kHalfPi = 1.57079632679489661923;
 
 /// Splits the points of a merged blob along the unit direction (dir_x, dir_z) into pieces of
@@ -286,7 +289,8 @@ std::vector<Indices> split_at_valleys(const std::vector<Eigen::Vector3f>& pts, c
 /// occupied bin's points) that leaves each piece at least a fifth of the points (a sliver or
 /// a sparse far side is no second thing); nothing when there is no such gap.
 std::optional<Split> split_at_gap(const std::vector<Eigen::Vector3f>& pts, const Indices& idx,
-                                  double dir_x, double dir_z, int min_gap_bins) {
+                                  double dir_x, double dir_z, int min_gap_bins,
+                                  double min_extent_m = 0.0, int* gap_bins = nullptr) {
     if (idx.size() < 20) return std::nullopt;
     std::vector<double> along(idx.size());
     double lo = 1e300, hi = -1e300;
@@ -295,6 +299,7 @@ std::optional<Split> split_at_gap(const std::vector<Eigen::Vector3f>& pts, const
         lo = std::min(lo, along[k]);
         hi = std::max(hi, along[k]);
     }
+    if (hi - lo < min_extent_m) return std::nullopt;
     constexpr double kBin = 0.1;
     const int bins = static_cast<int>((hi - lo) / kBin) + 1;
     std::vector<std::size_t> hist(static_cast<std::size_t>(bins), 0);
@@ -331,8 +336,19 @@ std::optional<Split> split_at_gap(const std::vector<Eigen::Vector3f>& pts, const
     Split split;
     split.at_gaps = true;
     split.parts.resize(2);
-    for (std::size_t k = 0; k < idx.size(); ++k)
-        split.parts[along[k] < best_cut ? 0 : 1].push_back(idx[k]);
+    // Side by side, the two overlap along the cut (a gap seen obliquely between two things
+    // end to end does not): their 5-95 % extents along it share at least kSideBySideOverlap.
+    std::array<std::vector<double>, 2> along_cut;
+    for (std::size_t k = 0; k < idx.size(); ++k) {
+        const int side = along[k] < best_cut ? 0 : 1;
+        split.parts[side].push_back(idx[k]);
+        along_cut[side].push_back(-double{pts[idx[k]].x()} * dir_z +
+                                  double{pts[idx[k]].z()} * dir_x);
+    }
+    const auto [lo0, hi0] = quantiles(along_cut[0], 0.05, 0.95);
+    const auto [lo1, hi1] = quantiles(along_cut[1], 0.05, 0.95);
+    if (std::min(hi0, hi1) - std::max(lo0, lo1) < kSideBySideOverlap) return std::nullopt;
+    if (gap_bins) *gap_bins = best_width;
     return split;
 }
 
@@ -358,12 +374,30 @@ Split split_oversized(const std::vector<Eigen::Vector3f>& pts, const Indices& id
                       const std::optional<GroundPlane>& ground, const ExtractOptions& options) {
     if (!s.has_prior()) return {{idx}, false, std::nullopt};
     const double c = std::cos(box.theta), sn = std::sin(box.theta);
-    if (box.W_m > kSideBySideWidth * s.prior_W_m) {
-        // Things side by side along their length (a car passing a parked one): a clear gap
-        // across the heading that leaves each side a real share of the points parts them
-        // before any reading of the blob as one row.
-        if (auto across = split_at_gap(pts, idx, sn, c, kSideBySideGapBins)) return *across;
-    }
+    // Things side by side (a car passing a parked one): a clear gap that leaves each side a
+    // real share of the points parts them before any reading of the blob as one row. Looked
+    // for across the box's heading, when the box is wider than one thing, and across the
+    // viewing ray, where stereo keeps gaps open, for a box that took a heading between the
+    // two things' (their faces at an angle to it): seven directions within 30 degrees of
+    // across the ray to the box. The widest gap of all wins. (Any direction cuts the rows of
+    // parked streets apart at random; a single direction across the ray mixes the long faces
+    // of two cars side by side.)
+    const double min_width = kSideBySideWidth * s.prior_W_m;
+    std::optional<Split> widest;
+    int widest_bins = 0;
+    const auto consider = [&](double a, double min_extent) {
+        int bins = 0;
+        auto cut =
+            split_at_gap(pts, idx, std::sin(a), std::cos(a), kSideBySideGapBins, min_extent, &bins);
+        if (cut && bins > widest_bins) {
+            widest = std::move(cut);
+            widest_bins = bins;
+        }
+    };
+    if (box.W_m > min_width) consider(box.theta, 0.0);
+    const double ray = std::atan2(box.centre_m.x(), box.centre_m.z());  // from +z towards +x
+    for (int k = -3; k <= 3; ++k) consider(ray + kHalfPi + k * kHalfPi / 9.0, min_width);
+    if (widest) return *widest;
     if (ground && options.row_low_fraction > 0.0 &&
         front_on_row(pts, idx, box, s, *ground, options)) {
         // Side by side: cut along the box's length at the row's pitch; each piece heads across.

@@ -157,9 +157,9 @@ std::optional<Eigen::Vector2d> truncation_point(const std::vector<Eigen::Vector3
 }
 
 /// The candidates of thing cluster number `cluster`: its points without smear, fitted, split
-/// when oversized (at most two levels: rows, then side by side) and refitted. Pieces cut at
-/// clear gaps keep the cluster's shadow group (`cluster`); other pieces get groups of their
-/// own, (cluster + 1) * 2^32 + k, unique over the class.
+/// when oversized (at most three levels: side by side, rows, their pieces) and refitted. Pieces cut
+/// at clear gaps keep the cluster's shadow group (`cluster`); other pieces get groups of their own,
+/// (cluster + 1) * 2^32 + k, unique over the class.
 std::vector<Candidate> candidates_of_cluster(const std::vector<Eigen::Vector3f>& pts,
                                              const std::vector<std::uint32_t>& pixels,
                                              const PixelGrid& grid, Indices members,
@@ -184,7 +184,7 @@ std::vector<Candidate> candidates_of_cluster(const std::vector<Eigen::Vector3f>&
         fit.yaw_rad = yaw;
         fit.truncation_xz = truncation_point(pts, pixels, grid, part);
         const OrientedBox box = fit_upright_box(gather(pts, part), ground, fit);
-        if (depth < 2 && !yaw) {
+        if (depth < 3 && !yaw) {
             Split split = split_oversized(pts, part, box, s, ground, options);
             if (split.parts.size() > 1) {
                 for (auto& piece : split.parts) {

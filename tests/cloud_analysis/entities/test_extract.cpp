@@ -1,11 +1,13 @@
 #include <algorithm>
 #include <cmath>
+#include <numeric>
 #include <vector>
 
 #include <catch2/catch.hpp>
 
 #include "cloud_analysis/cloud/semantic.hpp"
 #include "cloud_analysis/entities/extract.hpp"
+#include "cloud_analysis/entities/row_split.hpp"
 #include "cloud_analysis/entities/suppression.hpp"
 
 using namespace cloud_analysis;
@@ -824,11 +826,13 @@ TEST_CASE("a car passing a parked one 0.3 m beside it is cut from it at the gap"
     // x = -1.9 (rear and right side): 0.3 m between the parked car's right side and the
     // passing car's left edge, one blob for the clustering, 2.8 m wide across the common
     // heading: more than one car, less than the two widths at which a blob is cut evenly.
+    // Points as a camera samples them: the rears, seen square-on, densely (3 cm), the sides,
+    // at a grazing angle, sparsely (15 cm).
     const auto rear_and_right_side = [&](float x, float z_rear, float rear_from) {
         for (float y = 0.15f; y <= 1.65f; y += 0.05f) {
-            for (float a = rear_from; a <= 0.9f; a += 0.05f)
+            for (float a = rear_from; a <= 0.9f; a += 0.03f)
                 add_point(cloud, {x + a, y, z_rear}, 2);
-            for (float z = z_rear; z <= z_rear + 4.2f; z += 0.05f)
+            for (float z = z_rear; z <= z_rear + 4.2f; z += 0.15f)
                 add_point(cloud, {x + 0.9f, y, z}, 2);
         }
     };
@@ -848,5 +852,37 @@ TEST_CASE("a car passing a parked one 0.3 m beside it is cut from it at the gap"
         CHECK(std::abs(std::cos(cars[k].theta)) < std::sin(10.0 * kPi / 180.0));  // along z
         CHECK(cars[k].x == Approx(x_true[k]).margin(0.3));
         CHECK(cars[k].z == Approx(z_true[k]).margin(0.4));
+    }
+}
+
+TEST_CASE("two cars side by side under a box at an angle are cut across the viewing ray",
+          "[entities][split]") {
+    // The passing car (x 0.9..2.7, z 12.4..16.6): rear and left side seen. The parked car
+    // beside it, 0.6 m to the right (x 3.3..5.1): its left side from z 13.7. The box fitted to
+    // the union of a drive's frame lay 30 degrees off both: across it (and along it) the
+    // gap is closed, across the viewing ray it is open. Points as a camera samples them: a
+    // face seen square-on densely (3 cm), side faces at a grazing angle sparsely (15 cm).
+    std::vector<Eigen::Vector3f> pts;
+    for (float y = 0.15f; y <= 1.65f; y += 0.05f) {
+        for (float x = 0.9f; x <= 2.7f; x += 0.03f) pts.emplace_back(x, y, 12.4f);
+        for (float z = 12.4f; z <= 16.6f; z += 0.15f) pts.emplace_back(0.9f, y, z);
+        for (float z = 13.7f; z <= 17.9f; z += 0.15f) pts.emplace_back(3.3f, y, z);
+    }
+    instances::Indices idx(pts.size());
+    std::iota(idx.begin(), idx.end(), std::size_t{0});
+    OrientedBox box;
+    box.centre_m = Eigen::Vector3d(2.6, 0.9, 14.7);
+    box.theta = -kPi / 2.0 + kPi / 6.0;
+    box.L_m = 4.6;
+    box.W_m = 3.4;
+    box.H_m = 1.5;
+    const auto config = load_class_config(std::string(STEREOSCENE_SOURCE_DIR) +
+                                          "/assets/classes/entity_config.json");
+    const auto split = instances::split_oversized(pts, idx, box, config.find("car"), std::nullopt,
+                                                  ExtractOptions{});
+    REQUIRE(split.parts.size() == 2);
+    for (const auto& part : split.parts) {
+        const bool left = pts[part.front()].x() < 3.0f;
+        for (std::size_t i : part) CHECK((pts[i].x() < 3.0f) == left);
     }
 }
