@@ -301,6 +301,8 @@ ClassPoints points_by_class(const LabeledCloud& cloud, const ClassSelection& sel
     };
     std::vector<std::vector<std::size_t>> start(chunks, std::vector<std::size_t>(classes, 0));
     std::vector<std::uint32_t> last_pixel(chunks, 0);
+    std::vector<std::uint32_t> first_col(chunks, std::numeric_limits<std::uint32_t>::max()),
+        last_col(chunks, 0);
     for_each_chunk(cloud.size(), chunks, [&](std::size_t c, std::size_t first, std::size_t last) {
         // Every point of each class (an upper bound once the columns are thinned).
         auto& size = start[c];
@@ -308,8 +310,12 @@ ClassPoints points_by_class(const LabeledCloud& cloud, const ClassSelection& sel
             const auto k = cloud.class_index[i];
             if (k < classes) ++size[k];
         }
+        std::uint32_t row_start = 0;
         for (std::size_t i = first; has_pixels && i < last; ++i) {
             last_pixel[c] = std::max(last_pixel[c], cloud.pixel[i]);
+            const std::uint32_t u = column_of(cloud.pixel[i], row_start);
+            first_col[c] = std::min(first_col[c], u);
+            last_col[c] = std::max(last_col[c], u);
         }
     });
     const bool grid = has_pixels && cloud.width_px > 0 && cloud.height_px > 0 &&
@@ -318,6 +324,9 @@ ClassPoints points_by_class(const LabeledCloud& cloud, const ClassSelection& sel
     if (grid) {
         out.width_px = cloud.width_px;
         out.height_px = cloud.height_px;
+        out.first_column = static_cast<int>(
+            std::min(*std::min_element(first_col.begin(), first_col.end()), width - 1));
+        out.last_column = static_cast<int>(*std::max_element(last_col.begin(), last_col.end()));
     }
     // Sized for every point of the class, written by index, then cut to the points kept.
     for (std::size_t k = 0; k < classes; ++k) {
@@ -361,7 +370,8 @@ scene_schema::EntityDocument extract_entities(const ClassPoints& points, const P
     const auto& per_class = points.xyz_m;
     const auto& per_class_pixels = points.pixel;
     const auto& step = points.weight;
-    const PixelGrid grid{points.width_px, points.height_px};
+    const PixelGrid grid{points.width_px, points.height_px, points.first_column,
+                         points.last_column};
 
     // The ground plane is the first task, fitted beside the clustering of the classes (which
     // does not need it); a class waits for it once clustered. Thing points cost about four

@@ -129,24 +129,29 @@ std::vector<Indices> thing_clusters(const std::vector<Eigen::Vector3f>& pts,
     return points_of(euclidean_clusters(voxels.centroid_m, co), voxels);
 }
 
-/// The camera-frame (x, z) mean of the points in the image's outermost kEdgeColumns columns
-/// when the image's left or right edge cuts the points (at least kMinEdgePoints of them
-/// there; the side with more); nullopt otherwise or when the pixels are unknown.
+/// The camera-frame (x, z) mean of the points in the outermost kEdgeColumns columns of what
+/// stereo sees (the image's edges, or the border the matcher leaves without disparity: the
+/// grid's first and last columns with points) when that edge cuts the points (at least
+/// kMinEdgePoints of them there; the side with more); nullopt otherwise or when the pixels
+/// are unknown.
 std::optional<Eigen::Vector2d> truncation_point(const std::vector<Eigen::Vector3f>& pts,
                                                 const std::vector<std::uint32_t>& pixels,
                                                 const PixelGrid& grid, const Indices& members) {
-    constexpr int kEdgeColumns = 2;
+    constexpr int kEdgeColumns = 8;  // the matcher leaves a ragged border of a few columns
     constexpr std::size_t kMinEdgePoints = 10;
     if (!grid.valid() || pixels.size() < pts.size()) return std::nullopt;
     Eigen::Vector2d left = Eigen::Vector2d::Zero(), right = Eigen::Vector2d::Zero();
     std::size_t n_left = 0, n_right = 0;
+    const bool seen = grid.last_column > grid.first_column;
+    const int first = seen ? grid.first_column : 0;
+    const int last = seen ? grid.last_column : grid.width_px - 1;
     for (std::size_t i : members) {
         const int u = static_cast<int>(pixels[i] % static_cast<std::uint32_t>(grid.width_px));
         const Eigen::Vector2d ray(pts[i].x(), pts[i].z());
-        if (u < kEdgeColumns) {
+        if (u < first + kEdgeColumns) {
             left += ray;
             ++n_left;
-        } else if (u >= grid.width_px - kEdgeColumns) {
+        } else if (u > last - kEdgeColumns) {
             right += ray;
             ++n_right;
         }

@@ -65,7 +65,11 @@ struct ClassPoints {
     std::vector<std::size_t> weight;  ///< per class: cloud points each point stands for (>= 1)
     int width_px = 0;                 ///< pixel grid of `pixel`; 0 when the pixels are unknown
     int height_px = 0;                ///< pixel grid height; 0 when the pixels are unknown
-    std::size_t cloud_points = 0;     ///< points of the whole cloud (every class and void)
+    /// The leftmost and rightmost image columns holding any point of the cloud: the edges of
+    /// what stereo sees (the image's, or the border the matcher leaves without disparity).
+    int first_column = 0;
+    int last_column = 0;
+    std::size_t cloud_points = 0;  ///< points of the whole cloud (every class and void)
 };
 
 }  // namespace cloud_analysis

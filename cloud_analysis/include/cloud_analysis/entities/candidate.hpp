@@ -28,8 +28,10 @@ using PendingGround = std::shared_future<std::optional<GroundPlane>>;
 
 /// Pixel grid of the source image, to reason about clusters in image space.
 struct PixelGrid {
-    int width_px = 0;   ///< columns; 0 when the pixels are unknown
-    int height_px = 0;  ///< rows; 0 when the pixels are unknown
+    int width_px = 0;      ///< columns; 0 when the pixels are unknown
+    int height_px = 0;     ///< rows; 0 when the pixels are unknown
+    int first_column = 0;  ///< leftmost column holding a point (the edge of what stereo sees)
+    int last_column = 0;   ///< rightmost column holding a point
     bool valid() const { return width_px > 0 && height_px > 0; }
 };
 
