@@ -41,9 +41,9 @@ set(STEREOSCENE_CLOSED_LOOP_VISIBILITY --min-visible-fraction 0.25)
 # recall 1.0, precision >= 0.95, median centre error <= 0.4 m, heading <= 8 deg and BEV IoU
 # >= 0.5 for 80 % of the cars; these are the levels measured today.
 set(STEREOSCENE_CLOSED_LOOP_BARS_parking-street-1
-    --bar-class car --bar-range 30 --require-recall 0.875 --max-spurious 2
+    --bar-class car --bar-range 30 --require-recall 1.0 --max-spurious 1
     --max-stuff-on-things 0 --max-median-centre-error 0.4 --max-median-heading-error 8
-    --min-good-iou-fraction 0.875)
+    --min-good-iou-fraction 1.0)
 set(STEREOSCENE_CLOSED_LOOP_BARS_parking-street-3
     --bar-class car --bar-range 30 --require-recall 1.0 --max-spurious 1
     --max-stuff-on-things 0 --max-median-centre-error 0.4 --max-median-heading-error 8
