@@ -19,6 +19,24 @@ constexpr int kSideBySideGapBins = 2;
 constexpr double kSideBySideOverlap = 0.5;
 constexpr double kHalfPi = 1.57079632679489661923;
 
+/// The points' coordinates along the unit direction (dir_x, dir_z) and their range.
+struct Projection {
+    std::vector<double> along;
+    double lo = 1e300, hi = -1e300;
+};
+
+Projection project(const std::vector<Eigen::Vector3f>& pts, const Indices& idx, double dir_x,
+                   double dir_z) {
+    Projection p;
+    p.along.resize(idx.size());
+    for (std::size_t k = 0; k < idx.size(); ++k) {
+        p.along[k] = double{pts[idx[k]].x()} * dir_x + double{pts[idx[k]].z()} * dir_z;
+        p.lo = std::min(p.lo, p.along[k]);
+        p.hi = std::max(p.hi, p.along[k]);
+    }
+    return p;
+}
+
 /// Splits the points of a merged blob along the unit direction (dir_x, dir_z) into pieces of
 /// about `prior_m`, cutting at the emptiest place near each even cut (touching parked cars).
 /// With `from_near_end`, the cuts are walked from the end nearer the camera instead, each at
@@ -27,13 +45,9 @@ constexpr double kHalfPi = 1.57079632679489661923;
 Split split_along(const std::vector<Eigen::Vector3f>& pts, const Indices& idx, double dir_x,
                   double dir_z, double extent_m, double prior_m, bool from_near_end = false) {
     const int pieces = std::max(2, static_cast<int>(std::lround(extent_m / prior_m)));
-    std::vector<double> along(idx.size());
-    double lo = 1e300, hi = -1e300;
-    for (std::size_t k = 0; k < idx.size(); ++k) {
-        along[k] = double{pts[idx[k]].x()} * dir_x + double{pts[idx[k]].z()} * dir_z;
-        lo = std::min(lo, along[k]);
-        hi = std::max(hi, along[k]);
-    }
+    const Projection p = project(pts, idx, dir_x, dir_z);
+    const std::vector<double>& along = p.along;
+    const double lo = p.lo, hi = p.hi;
     // Density histogram along the direction, 0.1 m bins.
     const double bin = 0.1;
     const int bins = std::max(1, static_cast<int>(std::ceil((hi - lo) / bin)) + 1);
@@ -260,10 +274,7 @@ std::vector<Indices> split_at_valleys(const std::vector<Eigen::Vector3f>& pts, c
                                       double dir_x, double dir_z, const ClassSettings& s,
                                       const GroundPlane& ground, const ExtractOptions& options) {
     if (idx.size() < 20) return {};
-    std::vector<double> along(idx.size());
-    for (std::size_t k = 0; k < idx.size(); ++k) {
-        along[k] = double{pts[idx[k]].x()} * dir_x + double{pts[idx[k]].z()} * dir_z;
-    }
+    const std::vector<double> along = project(pts, idx, dir_x, dir_z).along;
     std::vector<double> sorted = along;
     const auto [lo, hi] = quantiles(sorted, 0.005, 0.995);
     const double bin = options.row_valley_bin_m;
@@ -292,13 +303,9 @@ std::optional<Split> split_at_gap(const std::vector<Eigen::Vector3f>& pts, const
                                   double dir_x, double dir_z, int min_gap_bins,
                                   double min_extent_m = 0.0, int* gap_bins = nullptr) {
     if (idx.size() < 20) return std::nullopt;
-    std::vector<double> along(idx.size());
-    double lo = 1e300, hi = -1e300;
-    for (std::size_t k = 0; k < idx.size(); ++k) {
-        along[k] = double{pts[idx[k]].x()} * dir_x + double{pts[idx[k]].z()} * dir_z;
-        lo = std::min(lo, along[k]);
-        hi = std::max(hi, along[k]);
-    }
+    const Projection p = project(pts, idx, dir_x, dir_z);
+    const std::vector<double>& along = p.along;
+    const double lo = p.lo, hi = p.hi;
     if (hi - lo < min_extent_m) return std::nullopt;
     constexpr double kBin = 0.1;
     const int bins = static_cast<int>((hi - lo) / kBin) + 1;
