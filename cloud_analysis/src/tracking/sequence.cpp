@@ -110,10 +110,10 @@ SequenceTrackReport track_files(const scene_schema::SequenceIndex& index,
     SequenceTracker sequence(index.id, index.fps.value_or(options.fps), options, warn);
     // Frames tracked but not yet written, oldest first, with their file names.
     std::deque<std::pair<scene_schema::EntityDocument, std::string>> held;
-    const auto write_oldest = [&](stereoscene::support::FileSync sync) {
+    const auto write_oldest = [&] {
         scene_schema::write_file(held.front().first, out_dir / held.front().second);
         held.pop_front();
-        sequence.commit(out_dir / "sequence.json", sync);
+        sequence.commit(out_dir / "sequence.json");
     };
     for (const auto& f : index.frames) {
         scene_schema::EntityDocument doc;
@@ -133,10 +133,9 @@ SequenceTrackReport track_files(const scene_schema::SequenceIndex& index,
                 }
             }
         }
-        while (held.size() > static_cast<std::size_t>(options.lag_frames))
-            write_oldest(stereoscene::support::FileSync::kAtomicOnly);
+        while (held.size() > static_cast<std::size_t>(options.lag_frames)) write_oldest();
     }
-    while (!held.empty()) write_oldest(stereoscene::support::FileSync::kAtomicOnly);
+    while (!held.empty()) write_oldest();
     sequence.commit(out_dir / "sequence.json", stereoscene::support::FileSync::kDurable);
     return sequence.report();
 }

@@ -72,20 +72,33 @@ void add_face_along_ray(std::vector<Eigen::Vector3f>& pts, float x, float z, flo
     }
 }
 
-}  // namespace
-
-TEST_CASE("across the viewing ray the distance grows by its own exponent", "[cluster]") {
+/// The car class's clustering distances: 0.4 m at 10 m, growing with z^2, at most 1.5 m.
+ClusterOptions car_clustering() {
     ClusterOptions o;
     o.distance_at_10m_m = 0.4;
     o.growth = 2.0;
     o.distance_max_m = 1.5;
-    // A parked car's side face and the side of the car passing beside it, 0.6 m apart across
-    // the ray at 16 m: the grown distance (1.02 m) links them, the cross distance (0.4 m) not.
-    std::vector<Eigen::Vector3f> pts;
+    return o;
+}
+
+/// Two 4 m side faces along the viewing ray at 16 m, the second `gap_m` beyond the first
+/// across the ray; returns the index of the second face's first point.
+std::size_t add_faces_across_ray(std::vector<Eigen::Vector3f>& pts, float gap_m) {
     add_face_along_ray(pts, 3.0f, 16.0f, 4.0f);
     const Eigen::Vector3f across = Eigen::Vector3f(16.0f, 0.0f, -3.0f).normalized();
     const std::size_t first = pts.size();
-    add_face_along_ray(pts, 3.0f + 0.6f * across.x(), 16.0f + 0.6f * across.z(), 4.0f);
+    add_face_along_ray(pts, 3.0f + gap_m * across.x(), 16.0f + gap_m * across.z(), 4.0f);
+    return first;
+}
+
+}  // namespace
+
+TEST_CASE("across the viewing ray the distance grows by its own exponent", "[cluster]") {
+    ClusterOptions o = car_clustering();
+    // A parked car's side face and the side of the car passing beside it, 0.6 m apart across
+    // the ray at 16 m: the grown distance (1.02 m) links them, the cross distance (0.4 m) not.
+    std::vector<Eigen::Vector3f> pts;
+    const std::size_t first = add_faces_across_ray(pts, 0.6f);
     CHECK(euclidean_clusters(pts, o).size() == 1);
     o.cross_growth = 0.0;
     CHECK(o.cross_distance_at(16.0) == Approx(0.4));
@@ -108,16 +121,11 @@ TEST_CASE("across the viewing ray the distance grows by its own exponent", "[clu
 }
 
 TEST_CASE("the distance across the viewing ray has its own base", "[cluster]") {
-    ClusterOptions o;
-    o.distance_at_10m_m = 0.4;
-    o.growth = 2.0;
-    o.distance_max_m = 1.5;
+    ClusterOptions o = car_clustering();
     o.cross_growth = 0.0;
     // Two side faces 0.35 m apart across the ray at 16 m: linked within 0.4 m, apart within 0.3.
     std::vector<Eigen::Vector3f> pts;
-    add_face_along_ray(pts, 3.0f, 16.0f, 4.0f);
-    const Eigen::Vector3f across = Eigen::Vector3f(16.0f, 0.0f, -3.0f).normalized();
-    add_face_along_ray(pts, 3.0f + 0.35f * across.x(), 16.0f + 0.35f * across.z(), 4.0f);
+    add_faces_across_ray(pts, 0.35f);
     CHECK(euclidean_clusters(pts, o).size() == 1);
     o.cross_distance_at_10m_m = 0.3;
     CHECK(o.cross_distance_at(16.0) == Approx(0.3));
