@@ -17,6 +17,8 @@ constexpr double kSideBySideWidth = 1.3;
 constexpr int kSideBySideGapBins = 2;
 /// How far two things side by side overlap along the gap between them, at least, metres.
 constexpr double kSideBySideOverlap = 0.5;
+/// The share of a row's points, at its near end, that a walk of cuts starts after.
+constexpr double kWalkStartQuantile = 0.01;
 constexpr double kHalfPi = 1.57079632679489661923;
 
 /// The points' coordinates along the unit direction (dir_x, dir_z) and their range.
@@ -75,10 +77,20 @@ Split split_along(const std::vector<Eigen::Vector3f>& pts, const Indices& idx, d
         cuts.push_back(lo + (best + 0.5) * bin);
         if (hist[static_cast<std::size_t>(best)] > gap_count) split.at_gaps = false;
     };
-    if (from_near_end && std::abs(hi) < std::abs(lo)) {
-        for (int b = emptiest(bins - 1 - step); b >= step / 4; b = emptiest(b - step)) add_cut(b);
-    } else if (from_near_end) {
-        for (int b = emptiest(step); b < bins - step / 4; b = emptiest(b + step)) add_cut(b);
+    if (from_near_end) {
+        // The walk starts where the bulk of the points starts, not at a stray point smeared
+        // towards the camera: a cut one car length from such a point falls inside the first car.
+        std::vector<double> sorted = along;
+        const auto [q_lo, q_hi] = quantiles(sorted, kWalkStartQuantile, 1.0 - kWalkStartQuantile);
+        if (std::abs(hi) < std::abs(lo)) {
+            const int start = static_cast<int>((q_hi - lo) / bin);
+            for (int b = emptiest(start - step); b >= step / 4; b = emptiest(b - step)) add_cut(b);
+        } else {
+            const int start = static_cast<int>((q_lo - lo) / bin);
+            for (int b = emptiest(start + step); b < bins - step / 4; b = emptiest(b + step)) {
+                add_cut(b);
+            }
+        }
     }
     const double piece = (hi - lo) / pieces;
     for (int k = 1; k < pieces && !from_near_end; ++k) {

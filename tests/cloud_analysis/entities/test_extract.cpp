@@ -539,6 +539,41 @@ TEST_CASE("a parked row whose far car is half hidden is cut at its gaps walked f
     for (int k = 0; k < 3; ++k) CHECK(centres[k] == Approx(starts[k] + 2.1).margin(0.3));
 }
 
+TEST_CASE("a parked row's walk of cuts starts at its first car, not at points smeared before it",
+          "[entities][split]") {
+    LabeledCloud cloud;
+    for (float x = -6.0f; x <= 6.0f; x += 0.25f) {
+        for (float z = 3.0f; z <= 40.0f; z += 0.25f) add_point(cloud, {x, 1.65f, z}, 0);
+    }
+    // Three cars' sides 0.45 m apart, and a sparse trail of wrong matches smeared 2.5 m towards
+    // the camera from the first: a walk from the trail's end cuts the first car in its middle.
+    const double starts[] = {8.0, 12.65, 17.3};
+    for (double start : starts) {
+        for (float y = 0.15f; y <= 1.65f; y += 0.05f) {
+            for (auto z = static_cast<float>(start); z <= static_cast<float>(start) + 4.2f;
+                 z += 0.05f) {
+                add_point(cloud, {-1.1f, y, z}, 2);
+            }
+        }
+    }
+    for (float z = 5.5f; z < 8.0f; z += 0.2f) {
+        for (float y = 0.6f; y <= 1.2f; y += 0.3f) add_point(cloud, {-1.1f, y, z}, 2);
+    }
+    project_pixels(cloud);
+    const auto doc = extract_entities(cloud, test_palette(), StereoCamera{},
+                                      options_with_bundled_config("instances"));
+    std::vector<std::pair<double, double>> spans;  // along z
+    for (const auto& e : doc.entities) {
+        if (e.class_name == "car") spans.emplace_back(e.z - e.L / 2.0, e.z + e.L / 2.0);
+    }
+    std::sort(spans.begin(), spans.end());
+    REQUIRE(spans.size() == 3);
+    for (int k = 0; k < 3; ++k) {
+        CHECK(spans[k].first == Approx(starts[k]).margin(0.3));
+        CHECK(spans[k].second == Approx(starts[k] + 4.2).margin(0.3));
+    }
+}
+
 namespace {
 
 /// The right side of a thing heading along z from z0 to z1, seen from x = 0 at x = -1.1:
