@@ -47,6 +47,10 @@ CLI::App* add_track_command(CLI::App& app, TrackArgs& a) {
     cmd->add_option("--car-gate", o.tracker.gate_m["car"],
                     "how far a car may be from its track's prediction, m")
         ->capture_default_str();
+    cmd->add_option("--gate-chi2", o.tracker.gate_chi2,
+                    "statistical gate: squared Mahalanobis distance from a track's prediction "
+                    "(9.21 keeps 99 % of true matches; 0 = off)")
+        ->capture_default_str();
     cmd->add_flag("--quiet", a.quiet, "no summary line on stderr");
     cmd->add_option("--bench-objects", a.bench_objects,
                     "benchmark: time the tracker on N moving objects per frame (no files)");

@@ -17,6 +17,7 @@ void KalmanOptions::validate() const {
     };
     positive(acceleration_sigma_mps2, "acceleration_sigma_mps2");
     positive(position_sigma_m, "position_sigma_m");
+    positive(across_sigma_m, "across_sigma_m");
     positive(initial_speed_sigma_mps, "initial_speed_sigma_mps");
     if (!(range_sigma_per_m2 >= 0.0 && std::isfinite(range_sigma_per_m2))) {
         throw std::invalid_argument("range_sigma_per_m2 must be >= 0");
@@ -26,10 +27,9 @@ void KalmanOptions::validate() const {
 GroundKalman::GroundKalman(double x_m, double z_m, const KalmanOptions& options)
     : options_(options) {
     state_ << x_m, z_m, 0.0, 0.0;
-    const double sigma = measurement_sigma_m(std::hypot(x_m, z_m));
-    const double p2 = sigma * sigma;
     const double v2 = options.initial_speed_sigma_mps * options.initial_speed_sigma_mps;
-    covariance_ = Eigen::Vector4d(p2, p2, v2, v2).asDiagonal();
+    covariance_ = Eigen::Vector4d(0.0, 0.0, v2, v2).asDiagonal();
+    covariance_.topLeftCorner<2, 2>() = measurement_covariance(x_m, z_m);
 }
 
 void GroundKalman::predict(double dt_s) {
@@ -52,8 +52,8 @@ void GroundKalman::predict(double dt_s) {
 
 namespace {
 
-Eigen::Matrix2d innovation_covariance(const Eigen::Matrix4d& P, double r2) {
-    return P.topLeftCorner<2, 2>() + Eigen::Matrix2d::Identity() * r2;
+Eigen::Matrix2d innovation_covariance(const Eigen::Matrix4d& P, const Eigen::Matrix2d& R) {
+    return P.topLeftCorner<2, 2>() + R;
 }
 
 }  // namespace
@@ -62,10 +62,19 @@ double GroundKalman::measurement_sigma_m(double range_m) const {
     return std::max(options_.position_sigma_m, options_.range_sigma_per_m2 * range_m * range_m);
 }
 
+Eigen::Matrix2d GroundKalman::measurement_covariance(double x_m, double z_m) const {
+    const double range = std::hypot(x_m, z_m);
+    const double along = measurement_sigma_m(range);
+    const double across = options_.across_sigma_m;
+    if (!(range > 0.0)) return Eigen::Matrix2d::Identity() * std::max(along, across);
+    const Eigen::Vector2d ray(x_m / range, z_m / range);
+    const Eigen::Vector2d side(ray.y(), -ray.x());
+    return along * along * ray * ray.transpose() + across * across * side * side.transpose();
+}
+
 void GroundKalman::update(double x_m, double z_m) {
-    const double sigma = measurement_sigma_m(std::hypot(x_m, z_m));
-    const double r2 = sigma * sigma;
-    const Eigen::Matrix2d S = innovation_covariance(covariance_, r2);
+    const Eigen::Matrix2d R = measurement_covariance(x_m, z_m);
+    const Eigen::Matrix2d S = innovation_covariance(covariance_, R);
     const Eigen::Matrix<double, 4, 2> K = covariance_.leftCols<2>() * S.inverse();
     const Eigen::Vector2d innovation(x_m - state_(0), z_m - state_(1));
     state_ += K * innovation;
@@ -73,14 +82,14 @@ void GroundKalman::update(double x_m, double z_m) {
     H(0, 0) = H(1, 1) = 1.0;
     // Joseph form keeps the covariance symmetric and positive definite.
     const Eigen::Matrix4d I_KH = Eigen::Matrix4d::Identity() - K * H;
-    covariance_ = I_KH * covariance_ * I_KH.transpose() + K * (r2 * K.transpose());
+    covariance_ = I_KH * covariance_ * I_KH.transpose() + K * R * K.transpose();
 }
 
 double GroundKalman::mahalanobis2(double x_m, double z_m) const {
-    const double sigma = measurement_sigma_m(std::hypot(x_m, z_m));
-    const double r2 = sigma * sigma;
     const Eigen::Vector2d innovation(x_m - state_(0), z_m - state_(1));
-    return innovation.dot(innovation_covariance(covariance_, r2).inverse() * innovation);
+    return innovation.dot(
+        innovation_covariance(covariance_, measurement_covariance(x_m, z_m)).inverse() *
+        innovation);
 }
 
 }  // namespace cloud_analysis::tracking

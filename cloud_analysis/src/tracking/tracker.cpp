@@ -42,6 +42,7 @@ void TrackerOptions::validate() const {
             throw std::invalid_argument("gate_m[" + name + "] must be > 0");
         }
     }
+    require(std::isfinite(gate_chi2) && gate_chi2 >= 0.0, "gate_chi2", "must be >= 0");
     require(min_hits >= 1, "min_hits", "must be >= 1");
     require(max_misses >= 1, "max_misses", "must be >= 1");
     require(std::isfinite(max_gap_s) && max_gap_s > 0.0, "max_gap_s", "must be > 0");
@@ -80,7 +81,9 @@ void Tracker::associate(const scene_schema::EntityDocument& frame, std::vector<i
     costs.rows = static_cast<int>(tracks_.size());
     costs.cols = static_cast<int>(detections.size());
     costs.cost.resize(static_cast<std::size_t>(costs.rows) * costs.cols);
-    // Cost: bird's-eye centre distance over the class's gate, so one gate of 1 serves all.
+    // Cost: bird's-eye centre distance over the class's gate, so one gate of 1 serves all; a
+    // detection outside the track's statistical gate (its prediction's covariance plus the
+    // stereo measurement's, long along the viewing ray) is not the track's either.
     for (int r = 0; r < costs.rows; ++r) {
         const Track& t = tracks_[r];
         const auto gate = options_.gate_m.find(t.class_name);
@@ -89,13 +92,32 @@ void Tracker::associate(const scene_schema::EntityDocument& frame, std::vector<i
         for (int c = 0; c < costs.cols; ++c) {
             const auto& e = frame.entities[detections[c]];
             const double d = std::hypot(e.x - t.motion.x_m(), e.z - t.motion.z_m());
+            const bool inside =
+                options_.gate_chi2 <= 0.0 || t.motion.mahalanobis2(e.x, e.z) <= options_.gate_chi2;
             costs.cost[static_cast<std::size_t>(r) * costs.cols + c] =
-                e.class_name == t.class_name ? d / gate_m : 2.0;
+                e.class_name == t.class_name && inside ? d / gate_m : 2.0;
         }
     }
     track_of.assign(frame.entities.size(), -2);  // -2: not a tracked class
     for (int d : detections) track_of[d] = -1;   // -1: not matched yet
-    for (const Match& m : assign(costs, 1.0)) track_of[detections[m.col]] = m.row;
+    // Confirmed tracks first, then tentative ones with the detections left (the matching
+    // cascade of DeepSORT, Wojke et al. 2017): a track born on a stray box two frames ago
+    // never takes the detection of a car followed for seconds.
+    std::vector<char> taken(static_cast<std::size_t>(costs.cols), 0);
+    for (const bool confirmed : {true, false}) {
+        CostMatrix stage = costs;
+        for (int r = 0; r < costs.rows; ++r) {
+            for (int c = 0; c < costs.cols; ++c) {
+                if (tracks_[r].confirmed != confirmed || taken[c]) {
+                    stage.cost[static_cast<std::size_t>(r) * costs.cols + c] = 2.0;
+                }
+            }
+        }
+        for (const Match& m : assign(stage, 1.0)) {
+            track_of[detections[m.col]] = m.row;
+            taken[m.col] = 1;
+        }
+    }
 }
 
 namespace {

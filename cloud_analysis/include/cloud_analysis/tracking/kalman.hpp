@@ -12,10 +12,15 @@ namespace cloud_analysis::tracking {
 /// Noise of the filter.
 struct KalmanOptions {
     double acceleration_sigma_mps2 = 1.5;  ///< process noise: std of the acceleration, m/s^2
-    double position_sigma_m = 0.25;        ///< measurement noise near the camera: std of x, z, m
-    /// Stereo depth error grows with the square of the range (z^2 sigma_d / (f B)): the
-    /// measurement's std is max(position_sigma_m, this * range^2), metres per square metre.
-    double range_sigma_per_m2 = 0.0007;
+    /// Measurement noise along the viewing ray near the camera (std), metres.
+    double position_sigma_m = 0.25;
+    /// Stereo depth error grows with the square of the range (z^2 sigma_d / (f B)): along
+    /// the viewing ray the measurement's std is max(position_sigma_m, this * range^2),
+    /// metres per square metre.
+    double range_sigma_per_m2 = 0.0011;
+    /// Across the viewing ray a box centre holds to the box fit's error, not the depth's:
+    /// this std whatever the range, metres.
+    double across_sigma_m = 0.35;
     double initial_speed_sigma_mps = 10.0;  ///< std of the unknown velocity at birth, m/s
     /// Throws std::invalid_argument naming the bad field.
     void validate() const;
@@ -32,8 +37,12 @@ class GroundKalman {
     void update(double x_m, double z_m);
     /// Squared Mahalanobis distance of a measurement from the predicted one.
     double mahalanobis2(double x_m, double z_m) const;
-    /// Measurement noise (std, metres) of a position at this bird's-eye range.
+    /// Measurement noise (std, metres) along the viewing ray of a position at this
+    /// bird's-eye range.
     double measurement_sigma_m(double range_m) const;
+    /// Measurement covariance of a position measured at (x, z): measurement_sigma_m along
+    /// the viewing ray, across_sigma_m across it.
+    Eigen::Matrix2d measurement_covariance(double x_m, double z_m) const;
 
     double x_m() const { return state_(0); }
     double z_m() const { return state_(1); }

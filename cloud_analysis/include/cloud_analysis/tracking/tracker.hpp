@@ -26,7 +26,12 @@ struct TrackerOptions {
     std::map<std::string, double> gate_m{
         {"car", 2.5}, {"truck", 3.0}, {"bus", 3.0}, {"person", 1.2}, {"rider", 1.5}};
     double default_gate_m = 2.0;  ///< gate of classes without their own, metres
-    int min_hits = 3;             ///< a track is confirmed (reported) after this many hits
+    /// Statistical gate: a detection whose squared Mahalanobis distance from a track's
+    /// prediction (its covariance plus the measurement's, GroundKalman::mahalanobis2) exceeds
+    /// this is not that track's. 9.21 keeps 99 % of true matches (chi-square, 2 degrees of
+    /// freedom); 0 turns it off.
+    double gate_chi2 = 9.21;
+    int min_hits = 3;  ///< a track is confirmed (reported) after this many hits
     /// Tracks born in the first min_hits frames of a run are confirmed at once (AB3DMOT's
     /// rule: nothing is lost at the start, but their heading is then reported before their
     /// motion can tell which way round the box is).
