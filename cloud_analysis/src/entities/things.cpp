@@ -86,10 +86,11 @@ class AzimuthBins {
 
 /// Drops stereo smear behind a thing: per viewing direction (0.5 degree azimuth bins), points
 /// farther (bird's-eye range) than the nearest one plus the prior's diagonal plus a margin;
-/// and points implausibly high above or below the ground.
+/// and points implausibly high above or below the ground. `behind`, when given, receives the
+/// points dropped for their range.
 Indices drop_outliers(const std::vector<Eigen::Vector3f>& pts, const Indices& idx,
                       const ClassSettings& s, const std::optional<GroundPlane>& ground,
-                      double margin_m) {
+                      double margin_m, Indices* behind = nullptr) {
     if (!s.has_prior() || idx.size() < 10) return idx;
     static const AzimuthBins azimuth_bin;
     std::vector<double> range(idx.size());
@@ -106,15 +107,21 @@ Indices drop_outliers(const std::vector<Eigen::Vector3f>& pts, const Indices& id
     const double depth = std::hypot(s.prior_L_m, s.prior_W_m) + margin_m;
     Indices kept;
     kept.reserve(idx.size());
+    Indices far;
     for (std::size_t k = 0; k < idx.size(); ++k) {
-        if (range[k] > nearest[static_cast<std::size_t>(bin[k])] + depth) continue;
+        if (range[k] > nearest[static_cast<std::size_t>(bin[k])] + depth) {
+            far.push_back(idx[k]);
+            continue;
+        }
         if (ground) {
             const double h = ground->height(pts[idx[k]].cast<double>());
             if (h < -0.5 || h > 1.5 * s.prior_H_m + 0.5) continue;
         }
         kept.push_back(idx[k]);
     }
-    return kept.size() >= static_cast<std::size_t>(s.min_points) ? kept : idx;
+    if (kept.size() < static_cast<std::size_t>(s.min_points)) return idx;
+    if (behind) *behind = std::move(far);
+    return kept;
 }
 
 /// The clusters of a thing class (point indices in point order).
@@ -164,19 +171,42 @@ std::optional<Eigen::Vector2d> truncation_point(const std::vector<Eigen::Vector3
 /// The candidates of thing cluster number `cluster`: its points without smear, fitted, split
 /// when oversized (at most three levels: side by side, rows, their pieces) and refitted. Pieces cut
 /// at clear gaps keep the cluster's shadow group (`cluster`); other pieces get groups of their own,
-/// (cluster + 1) * 2^32 + k, unique over the class.
+/// (cluster + 1) * 2^32 + k, unique over the class. The points the smear filter drops are
+/// clustered again: a thing behind another, joined to it by smear, is a cluster of its own.
 std::vector<Candidate> candidates_of_cluster(const std::vector<Eigen::Vector3f>& pts,
                                              const std::vector<std::uint32_t>& pixels,
                                              const PixelGrid& grid, Indices members,
                                              std::size_t cluster, const ClassSettings& s,
+                                             const ClassFit& class_fit,
                                              const std::optional<GroundPlane>& ground,
-                                             BoxFitOptions fit, const ExtractOptions& options) {
+                                             const ExtractOptions& options) {
     std::vector<Candidate> candidates;
-    members = drop_outliers(pts, members, s, ground, options.outlier_margin_m);
+    BoxFitOptions fit = class_fit.box;
+    Indices behind;
+    members = drop_outliers(pts, members, s, ground, options.outlier_margin_m, &behind);
     std::size_t next_group = (cluster + 1) << 32;
     // Work items: points, split depth, shadow group, imposed heading.
     std::vector<std::tuple<Indices, int, std::size_t, std::optional<double>>> work = {
         {std::move(members), 0, cluster, std::nullopt}};
+    if (behind.size() >= static_cast<std::size_t>(s.min_points)) {
+        // What lies farther than a thing behind the nearest points of the cluster is smear or
+        // another thing behind it, joined to it by smear: clustered again on its own, each
+        // piece is a thing of its own (shadow suppression then drops the smear).
+        std::vector<Eigen::Vector3f> far_pts;
+        std::vector<std::uint32_t> far_pixels;
+        for (std::size_t i : behind) {
+            far_pts.push_back(pts[i]);
+            if (pixels.size() >= pts.size()) far_pixels.push_back(pixels[i]);
+        }
+        for (const Indices& c :
+             thing_clusters(far_pts, far_pixels, grid, s, class_fit.cluster, options)) {
+            if (c.size() < static_cast<std::size_t>(s.min_points)) continue;
+            Indices piece;
+            for (std::size_t k : c) piece.push_back(behind[k]);
+            piece = drop_outliers(pts, piece, s, ground, options.outlier_margin_m);
+            work.emplace_back(std::move(piece), 0, next_group++, std::nullopt);
+        }
+    }
     while (!work.empty()) {
         auto [part, depth, group, yaw] = std::move(work.back());
         work.pop_back();
@@ -306,7 +336,7 @@ void queue_things_of_class(TaskQueue& queue, const ClassInfo& info,
         tasks.emplace_back([job, c, finish, &pts, &pixels, &grid, &pending_ground, &options] {
             job->candidates[c] =
                 candidates_of_cluster(pts, pixels, grid, std::move(job->clusters[c]), c, job->s,
-                                      pending_ground.get(), job->fit.box, options);
+                                      job->fit, pending_ground.get(), options);
             if (--job->left == 0) finish(*job);
         });
     }

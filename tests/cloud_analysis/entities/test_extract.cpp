@@ -853,6 +853,35 @@ TEST_CASE("a strip along a larger car at another range is dropped, a narrow car 
     CHECK(drop_strips_beside({strip, car, far_car}, pixels, grid, 8.0, 10, 1.0).size() == 3);
 }
 
+TEST_CASE("a van behind a low car, joined to it by smear, is a car entity of its own",
+          "[entities][split]") {
+    LabeledCloud cloud;
+    add_road(cloud);
+    // A 1.2 m high car 10 m ahead (rear and right side) and a 2 m high van 7 m behind it,
+    // straight ahead: only the van's top, above the car's roof line, is seen. A trail of
+    // wrong matches along the ray joins them into one cluster, and the van lies farther
+    // behind the car's nearest points than a car is long: the smear filter drops it.
+    for (float y = 0.45f; y <= 1.65f; y += 0.02f) {
+        for (float x = -0.9f; x <= 0.9f; x += 0.02f) add_point(cloud, {x, y, 10.0f}, 2);
+        for (float z = 10.0f; z <= 14.2f; z += 0.05f) add_point(cloud, {0.9f, y, z}, 2);
+    }
+    for (float y = -0.35f; y <= 0.45f * 1.7f; y += 0.02f) {
+        for (float x = -0.9f; x <= 0.9f; x += 0.02f) add_point(cloud, {x, y, 17.0f}, 2);
+    }
+    for (float z = 10.2f; z < 17.0f; z += 0.3f) add_point(cloud, {0.0f, 0.6f, z}, 2);
+    project_pixels(cloud);
+    std::vector<double> centres;
+    for (const auto& e : extract_entities(cloud, test_palette(), StereoCamera{},
+                                          options_with_bundled_config("instances"))
+                             .entities) {
+        if (e.class_name == "car") centres.push_back(e.z);
+    }
+    std::sort(centres.begin(), centres.end());
+    REQUIRE(centres.size() == 2);
+    CHECK(centres[0] == Approx(12.1).margin(0.3));
+    CHECK(centres[1] > 17.0);
+}
+
 TEST_CASE("a car passing a parked one 0.3 m beside it is cut from it at the gap",
           "[entities][split]") {
     LabeledCloud cloud;
