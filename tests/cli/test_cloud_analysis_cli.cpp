@@ -717,3 +717,15 @@ TEST_CASE("batch creates its output folder and reports the frames that warned", 
     CHECK(refused.code == 1);
     CHECK_FALSE(fs::exists(never));
 }
+
+TEST_CASE("track's benchmark follows 50 cars without losing one and says how long it took",
+          "[cli]") {
+    const auto dir = scratch("track-bench");
+    const Run r = run(tool() + " track --bench-objects 50 --bench-frames 60", dir);
+    CHECK(r.code == 0);
+    CHECK(r.out.rfind("tracking 50 objects: ", 0) == 0);
+    CHECK(r.err.empty());
+    const Run bad = run(tool() + " track --bench-objects -1", dir);
+    CHECK(bad.code == 2);
+    CHECK(bad.err.find("--bench-objects") != std::string::npos);
+}
