@@ -428,6 +428,9 @@ void BoxFitOptions::validate() const {
     if (!(trim_fraction >= 0.0 && trim_fraction < 0.2)) {
         throw std::invalid_argument("box.trim_fraction: must be in [0, 0.2)");
     }
+    if (!(near_trim_fraction >= trim_fraction && near_trim_fraction < 0.2)) {
+        throw std::invalid_argument("box.near_trim_fraction: must be in [trim_fraction, 0.2)");
+    }
     if (!(face_tolerance_m > 0.0)) throw std::invalid_argument("box.face_tolerance_m: must be > 0");
     if (!(face_share >= 0.0 && face_share <= 1.0)) {
         throw std::invalid_argument("box.face_share: must be in [0, 1]");
@@ -567,6 +570,23 @@ OrientedBox fit_upright_box(const std::vector<Eigen::Vector3f>& points_m,
     const double t = options.trim_fraction;
     auto [lo1, hi1] = quantiles(c1, t, 1.0 - t);
     auto [lo2, hi2] = quantiles(c2, t, 1.0 - t);
+    if (options.near_trim_fraction > t) {
+        // The end nearer the camera (coordinates are relative to it) of an axis along the
+        // viewing ray: trimmed further, as the near face's points are spread in front of it.
+        const Eigen::Vector2d ray =
+            (((lo1 + hi1) / 2.0) * e1 + ((lo2 + hi2) / 2.0) * e2).normalized();
+        const auto trim_near = [&](std::vector<double>& c, double& lo, double& hi,
+                                   const Eigen::Vector2d& e) {
+            if (std::abs(ray.dot(e)) < std::sqrt(0.5)) return;
+            if (lo + hi >= 0.0) {
+                lo = quantiles(c, options.near_trim_fraction, 1.0 - t).first;
+            } else {
+                hi = quantiles(c, t, 1.0 - options.near_trim_fraction).second;
+            }
+        };
+        trim_near(c1, lo1, hi1, e1);
+        trim_near(c2, lo2, hi2, e2);
+    }
 
     const auto [bottom_seen, top_seen] = quantiles(heights, t, 1.0 - t);
     return assemble_box(frame, ground.has_value(), options, face_is_length, e1, e2,

@@ -201,6 +201,9 @@ void ExtractOptions::validate() const {
         throw std::invalid_argument("shadow_fraction: must be in (0, 1]");
     }
     if (shadow_radius_px < 0) throw std::invalid_argument("shadow_radius_px: must be >= 0");
+    if (!(near_trim_fraction >= 0.0 && near_trim_fraction < 0.2)) {
+        throw std::invalid_argument("near_trim_fraction: must be in [0, 0.2)");
+    }
     if (!(van_min_height_m > 0.0 && van_min_height_m < 100.0)) {
         throw std::invalid_argument("van_min_height_m: must be in (0, 100) metres");
     }

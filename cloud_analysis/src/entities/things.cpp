@@ -237,11 +237,18 @@ std::vector<Candidate> candidates_of_cluster(const std::vector<Eigen::Vector3f>&
         c.box = box;
         c.members = std::move(part);
         c.group = group;
+        // The splits above read the box as fitted; the thing's own box trims its near end
+        // further along the viewing ray.
+        BoxFitOptions final_fit = fit;
+        final_fit.near_trim_fraction = std::max(fit.trim_fraction, options.near_trim_fraction);
+        if (final_fit.near_trim_fraction > fit.near_trim_fraction) {
+            c.box = fit_upright_box(gather(pts, c.members), ground, final_fit);
+        }
         if (!options.family_class.empty() && s.name == options.family_class) {
             // A van shows its height: its hidden length is a van's, not a car's.
             c.subclass = "car";
             if (box.H_m >= options.van_min_height_m) {
-                BoxFitOptions van = fit;
+                BoxFitOptions van = final_fit;
                 van.prior_L_m = options.van_prior_L_m;
                 van.prior_W_m = options.van_prior_W_m;
                 c.box = fit_upright_box(gather(pts, c.members), ground, van);

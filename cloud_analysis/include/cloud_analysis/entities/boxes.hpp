@@ -25,12 +25,16 @@ struct OrientedBox {
 
 /// Settings of fit_upright_box.
 struct BoxFitOptions {
-    double prior_L_m = 0.0;         ///< class length prior, metres (0 = no completion)
-    double prior_W_m = 0.0;         ///< class width prior, metres (0 = no completion)
-    double prior_H_m = 0.0;         ///< class height prior, metres (0 = observed height)
-    double angle_step_deg = 1.0;    ///< L-shape search step, degrees, in (0, 10]
-    double min_extent_m = 0.05;     ///< smallest box side, metres, > 0
-    double trim_fraction = 0.02;    ///< fraction of points trimmed at each end per axis, [0, 0.2)
+    double prior_L_m = 0.0;       ///< class length prior, metres (0 = no completion)
+    double prior_W_m = 0.0;       ///< class width prior, metres (0 = no completion)
+    double prior_H_m = 0.0;       ///< class height prior, metres (0 = observed height)
+    double angle_step_deg = 1.0;  ///< L-shape search step, degrees, in (0, 10]
+    double min_extent_m = 0.05;   ///< smallest box side, metres, > 0
+    double trim_fraction = 0.02;  ///< fraction of points trimmed at each end per axis, [0, 0.2)
+    /// Fraction trimmed instead at the end nearer the camera of an axis within 45 degrees of
+    /// the viewing ray: stereo spreads a face along the ray both ways, so the nearest points
+    /// of a near face lie in front of it, [trim_fraction, 0.2) (trim_fraction = no change).
+    double near_trim_fraction = 0.02;
     bool rest_on_ground = true;     ///< bottom on the plane (else the lowest point)
     double face_tolerance_m = 0.2;  ///< distance of a point from a straight face, metres, > 0
     double face_share = 0.5;        ///< a straight face across the viewing ray holding this

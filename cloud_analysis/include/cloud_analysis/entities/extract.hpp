@@ -26,6 +26,9 @@ struct ExtractOptions {
     int image_radius_px = 2;               ///< "image": pixel neighbourhood linked, >= 1
     double max_range_m = 60.0;             ///< points farther than this (z) are ignored, metres
     std::vector<std::string> ground_classes = {"road", "sidewalk", "parking"};  ///< plane votes
+    double near_trim_fraction = 0.03;       ///< a thing's box trims this fraction of its points
+                                            ///< at the end nearer the camera of an axis along
+                                            ///< the viewing ray (BoxFitOptions), [0, 0.2)
     double outlier_margin_m = 0.5;          ///< thing points farther than near + prior diagonal +
                                             ///< this (bird's-eye range) are stereo smear, metres
     double shadow_fraction = 0.5;           ///< a thing cluster with more of its pixels than this
