@@ -120,11 +120,13 @@ void score_frame(ClassState& s, std::int64_t frame_index,
         truth_matched[t] = hyp_matched[h] = 1;
         const TrackedObject& gt = *truth[t];
         const TrackedObject& hy = *hyps[h];
+        // Truth that is not owed is left out of the frame, as TrackEval's preprocessing removes
+        // it: a track on it neither counts nor becomes the identity a later switch is from.
+        if (!gt.owed) continue;
         auto last = s.last_track.find(gt.track_id);
         const bool switched = last != s.last_track.end() && last->second != hy.track_id;
         const std::int64_t previous = switched ? last->second : -1;
         s.last_track[gt.track_id] = hy.track_id;
-        if (!gt.owed) continue;
         const int bin = std::max(0, distance_bin(bev_range_m(gt.box)));
         auto& b = s.score.bins[bin];
         count(b, all, &TrackCounts::truth);

@@ -93,6 +93,26 @@ TEST_CASE("boxes on unowed truth are neither hits nor false positives", "[track_
     CHECK(e.of("car").idf1 == 1.0);
 }
 
+TEST_CASE("a track on truth while it was not owed is no identity a later switch is from",
+          "[track_eval]") {
+    // The parked car is barely visible (not owed) in the first 3 frames, where a track 500
+    // happens to lie on it; owed from then on, it is followed by track 200 alone. As in
+    // TrackEval, which removes unowed truth before scoring, that is no ID switch; a switch
+    // between two owed frames still is.
+    auto frames = drive();
+    for (int i = 0; i < 3; ++i) {
+        frames[i].truth[1].owed = false;
+        frames[i].hypotheses[1].track_id = 500;
+    }
+    auto e = evaluate_tracks(frames, TrackEvalOptions{});
+    CHECK(all(e).id_switches == 0);
+    CHECK(all(e).truth == 17);
+    CHECK(all(e).mota() == 1.0);
+    frames[3].hypotheses[1].track_id = 500;  // owed in frame 3 on track 500, then on 200
+    e = evaluate_tracks(frames, TrackEvalOptions{});
+    CHECK(all(e).id_switches == 1);
+}
+
 TEST_CASE("heading flips and a parked car's changing size are counted", "[track_eval]") {
     auto frames = drive();
     frames[3].hypotheses[0].box.theta = 3.1;
