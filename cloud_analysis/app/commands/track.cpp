@@ -37,6 +37,9 @@ CLI::App* add_track_command(CLI::App& app, TrackArgs& a) {
                     "frames a confirmed track missed by the detector is still reported, at its "
                     "prediction")
         ->capture_default_str();
+    cmd->add_option("--coast-min-hits", o.tracker.coast_min_hits,
+                    "only a track hit at least this often coasts")
+        ->capture_default_str();
     cmd->add_option("--lag", o.lag_frames,
                     "frames held before writing, so a track whose motion shows it was reported "
                     "facing backwards is turned round in them too")

@@ -47,6 +47,7 @@ void TrackerOptions::validate() const {
     require(max_misses >= 1, "max_misses", "must be >= 1");
     require(std::isfinite(max_gap_s) && max_gap_s > 0.0, "max_gap_s", "must be > 0");
     require(coast_frames >= 0 && coast_frames <= 100, "coast_frames", "must be in 0..100");
+    require(coast_min_hits >= 0, "coast_min_hits", "must be >= 0");
     require(heading_gain > 0.0 && heading_gain <= 1.0, "heading_gain", "must be in (0, 1]");
     require(height_gain > 0.0 && height_gain <= 1.0, "height_gain", "must be in (0, 1]");
     require(std::isfinite(heading_from_motion_mps) && heading_from_motion_mps >= 0.0,
@@ -276,7 +277,8 @@ scene_schema::EntityDocument Tracker::update(const scene_schema::EntityDocument&
         }
     }
     // Misses; tentative tracks die at their first, confirmed ones after max_misses. A
-    // confirmed track missed for at most coast_frames frames is reported at its prediction.
+    // confirmed track of at least coast_min_hits hits missed for at most coast_frames frames
+    // is reported at its prediction.
     std::vector<Track> alive;
     alive.reserve(tracks_.size());
     for (std::size_t k = 0; k < tracks_.size(); ++k) {
@@ -287,7 +289,7 @@ scene_schema::EntityDocument Tracker::update(const scene_schema::EntityDocument&
             ++s.died;
             continue;
         }
-        if (!hit[k] && t.misses <= options_.coast_frames) {
+        if (!hit[k] && t.misses <= options_.coast_frames && t.hits >= options_.coast_min_hits) {
             out.entities.push_back(predicted(t, options_, out));
             ++s.reported;
             ++s.coasted;

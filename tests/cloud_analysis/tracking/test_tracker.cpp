@@ -332,6 +332,24 @@ TEST_CASE("a missed confirmed track coasts at its prediction for coast_frames fr
     CHECK(tracker.tracks().size() == 1);  // still alive until max_misses
 }
 
+TEST_CASE("a track lost right after its confirmation does not coast", "[tracking]") {
+    TrackerOptions options;
+    options.confirm_first_frames = false;
+    options.coast_min_hits = 6;
+    Tracker tracker(options);
+    // Three stray boxes in a row confirm a track, then nothing: no prediction is reported.
+    for (int i = 0; i < 3; ++i) {
+        CHECK(tracker.update(frame_of({car(4.0, 17.3, -kPi / 2)}), 0.1 * i).entities.size() == 1);
+    }
+    CHECK(tracker.update(frame_of({}), 0.3).entities.empty());
+    options.coast_min_hits = 0;  // every confirmed track coasts
+    Tracker every(options);
+    for (int i = 0; i < 3; ++i) every.update(frame_of({car(4.0, 17.3, -kPi / 2)}), 0.1 * i);
+    CHECK(every.update(frame_of({}), 0.3).entities.size() == 1);
+    options.coast_min_hits = -1;
+    CHECK_THROWS_WITH(options.validate(), "coast_min_hits must be >= 0");
+}
+
 TEST_CASE("a confirmed track's size is fixed by default", "[tracking]") {
     Tracker tracker;
     std::vector<EntityDocument> out;

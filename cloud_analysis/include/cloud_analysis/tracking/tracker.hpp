@@ -42,6 +42,10 @@ struct TrackerOptions {
     /// frames in a row (the detector losing a car for a frame or two, e.g. behind a passing
     /// car); 0 reports only matched tracks.
     int coast_frames = 2;
+    /// Only a track hit at least this often coasts: one confirmed on a few stray boxes and
+    /// lost at once is more likely a stray than a car the detector missed. 0 coasts every
+    /// confirmed track.
+    int coast_min_hits = 6;
     double heading_gain = 0.3;  ///< weight of a new heading in the smoothed one, 0..1
     double height_gain = 0.3;   ///< weight of a new box centre height (y), 0..1
     /// Above this speed the heading follows the velocity's direction (resolving the box's
