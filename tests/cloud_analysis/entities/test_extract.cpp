@@ -43,12 +43,26 @@ void add_car(LabeledCloud& cloud, float x, float z) {
     }
 }
 
-/// Road y = 1.65 from z 3 to 40, x -6..6, and a sky patch far away.
-LabeledCloud test_scene() {
-    LabeledCloud cloud;
+/// Road y = 1.65 from z 3 to 40, x -6..6.
+void add_road(LabeledCloud& cloud) {
     for (float x = -6.0f; x <= 6.0f; x += 0.25f) {
         for (float z = 3.0f; z <= 40.0f; z += 0.25f) add_point(cloud, {x, 1.65f, z}, 0);
     }
+}
+
+/// The right sides (x = -1.1, 1.5 m high) of 4.2 m cars parked along z from each start.
+void add_row_sides(LabeledCloud& cloud, const std::vector<float>& starts) {
+    for (float start : starts) {
+        for (float y = 0.15f; y <= 1.65f; y += 0.05f) {
+            for (float z = start; z <= start + 4.2f; z += 0.05f) add_point(cloud, {-1.1f, y, z}, 2);
+        }
+    }
+}
+
+/// Road y = 1.65 from z 3 to 40, x -6..6, and a sky patch far away.
+LabeledCloud test_scene() {
+    LabeledCloud cloud;
+    add_road(cloud);
     for (float x = -5.0f; x <= 5.0f; x += 0.5f) add_point(cloud, {x, -10.0f, 50.0f}, 1);
     add_car(cloud, -3.5f, 12.0f);
     add_car(cloud, 3.5f, 20.0f);
@@ -319,13 +333,6 @@ TEST_CASE("wrong matches interleaved with a near car's pixels are not a second c
 
 namespace {
 
-/// Road y = 1.65 from z 3 to 40, x -6..6.
-void add_road(LabeledCloud& cloud) {
-    for (float x = -6.0f; x <= 6.0f; x += 0.25f) {
-        for (float z = 3.0f; z <= 40.0f; z += 0.25f) add_point(cloud, {x, 1.65f, z}, 0);
-    }
-}
-
 /// The rear face of a car 10 m ahead (x -0.9..0.9, 1.5 m high): pixels u 955-1045 and
 /// v 1007-1082 for project_pixels' camera; optionally with a hole in x -0.7..0.7, y 0.4..1.4
 /// (u 965-1035, v 1020-1070), where the dark body gave no disparity.
@@ -415,17 +422,11 @@ TEST_CASE("a fragment whose box centre falls inside a larger car is dropped", "[
 TEST_CASE("a parked row cut at clear gaps keeps every car although each hides the next",
           "[entities]") {
     LabeledCloud cloud;
-    for (float x = -6.0f; x <= 6.0f; x += 0.25f) {
-        for (float z = 3.0f; z <= 40.0f; z += 0.25f) add_point(cloud, {x, 1.65f, z}, 0);
-    }
+    add_road(cloud);
     // Three cars parked along z, 0.5 m apart (one blob for the clustering), right sides seen:
     // in the image each farther car lies right beside the nearer one, as a shadow would.
-    const double starts[] = {8.0, 12.7, 17.4};
-    for (float start : starts) {
-        for (float y = 0.15f; y <= 1.65f; y += 0.05f) {
-            for (float z = start; z <= start + 4.2f; z += 0.05f) add_point(cloud, {-1.1f, y, z}, 2);
-        }
-    }
+    const std::vector<float> starts = {8.0f, 12.7f, 17.4f};
+    add_row_sides(cloud, starts);
     project_pixels(cloud);
     const auto doc = extract_entities(cloud, test_palette(), StereoCamera{},
                                       options_with_bundled_config("instances"));
@@ -542,20 +543,11 @@ TEST_CASE("a parked row whose far car is half hidden is cut at its gaps walked f
 TEST_CASE("a parked row's walk of cuts starts at its first car, not at points smeared before it",
           "[entities][split]") {
     LabeledCloud cloud;
-    for (float x = -6.0f; x <= 6.0f; x += 0.25f) {
-        for (float z = 3.0f; z <= 40.0f; z += 0.25f) add_point(cloud, {x, 1.65f, z}, 0);
-    }
+    add_road(cloud);
     // Three cars' sides 0.45 m apart, and a sparse trail of wrong matches smeared 2.5 m towards
     // the camera from the first: a walk from the trail's end cuts the first car in its middle.
-    const double starts[] = {8.0, 12.65, 17.3};
-    for (double start : starts) {
-        for (float y = 0.15f; y <= 1.65f; y += 0.05f) {
-            for (auto z = static_cast<float>(start); z <= static_cast<float>(start) + 4.2f;
-                 z += 0.05f) {
-                add_point(cloud, {-1.1f, y, z}, 2);
-            }
-        }
-    }
+    const std::vector<float> starts = {8.0f, 12.65f, 17.3f};
+    add_row_sides(cloud, starts);
     for (float z = 5.5f; z < 8.0f; z += 0.2f) {
         for (float y = 0.6f; y <= 1.2f; y += 0.3f) add_point(cloud, {-1.1f, y, z}, 2);
     }
