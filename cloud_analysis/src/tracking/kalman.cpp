@@ -66,7 +66,10 @@ Eigen::Matrix2d GroundKalman::measurement_covariance(double x_m, double z_m) con
     const double range = std::hypot(x_m, z_m);
     const double along = measurement_sigma_m(range);
     const double across = options_.across_sigma_m;
-    if (!(range > 0.0)) return Eigen::Matrix2d::Identity() * std::max(along, across);
+    if (!(range > 0.0)) {
+        const double sigma = std::max(along, across);
+        return Eigen::Matrix2d::Identity() * (sigma * sigma);
+    }
     const Eigen::Vector2d ray(x_m / range, z_m / range);
     const Eigen::Vector2d side(ray.y(), -ray.x());
     return along * along * ray * ray.transpose() + across * across * side * side.transpose();
