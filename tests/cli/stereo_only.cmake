@@ -7,13 +7,6 @@ include_guard(GLOBAL)
 set(STEREOSCENE_STEREO_ONLY_BARS
     --bar-class car --bar-range 30 --require-recall 1.0 --max-median-centre-error 0.5
     --max-median-heading-error 10)
-# The parking streets (docs/evaluation.md "Hard parking streets"): the levels measured today.
-set(STEREOSCENE_STEREO_ONLY_BARS_parking-street-1
-    --bar-class car --bar-range 30 --require-recall 0.875 --max-median-centre-error 0.5
-    --max-median-heading-error 10)
-set(STEREOSCENE_STEREO_ONLY_BARS_parking-street-3
-    --bar-class car --bar-range 30 --require-recall 0.88 --max-median-centre-error 0.5
-    --max-median-heading-error 10)
 set(_so_samples ${PROJECT_SOURCE_DIR}/samples/rendered)
 set(_so_out ${CMAKE_CURRENT_BINARY_DIR}/stereo_only_out)
 file(MAKE_DIRECTORY ${_so_out})
@@ -28,10 +21,6 @@ foreach(_calib IN LISTS _so_calibs)
     endif()
     set(_entities ${_so_out}/${_scene}-000000.json)
     set(_name "stereo-only closed loop ${_scene}/000000")
-    set(_bars ${STEREOSCENE_STEREO_ONLY_BARS})
-    if(DEFINED STEREOSCENE_STEREO_ONLY_BARS_${_scene})
-        set(_bars ${STEREOSCENE_STEREO_ONLY_BARS_${_scene}})
-    endif()
     add_test(NAME "${_name}: cloud-analysis --semantics geometry reconstructs the scene"
         COMMAND $<TARGET_FILE:cloud-analysis> --kitti-root ${_dir} --frame 000000
             --semantics geometry -o ${_entities})
@@ -39,7 +28,7 @@ foreach(_calib IN LISTS _so_calibs)
         PROPERTIES FIXTURES_SETUP "stereo_only_${_scene}" LABELS closed_loop)
     add_test(NAME "${_name}: cars within 30 m meet the stereo-only bars"
         COMMAND $<TARGET_FILE:cloud-analysis> evaluate --entities ${_entities}
-            --reference ${_truth} ${_bars} --min-visible-fraction 0.25
+            --reference ${_truth} ${STEREOSCENE_STEREO_ONLY_BARS} --min-visible-fraction 0.25
             --kitti-root ${_dir} --frame 000000 --json ${_so_out}/${_scene}-000000-eval.json)
     set_tests_properties("${_name}: cars within 30 m meet the stereo-only bars"
         PROPERTIES FIXTURES_REQUIRED "stereo_only_${_scene}" LABELS closed_loop)

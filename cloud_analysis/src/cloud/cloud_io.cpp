@@ -269,6 +269,7 @@ LabeledCloud without_classes(const LabeledCloud& cloud, const std::vector<std::u
     LabeledCloud out;
     out.width_px = cloud.width_px;
     out.height_px = cloud.height_px;
+    out.border = cloud.border;
     for (std::size_t i = 0; i < cloud.size(); ++i) {
         if (std::find(dropped.begin(), dropped.end(), cloud.class_index[i]) != dropped.end()) {
             continue;

@@ -177,6 +177,7 @@ LabeledCloud reproject(const DisparityMap& disparity, const StereoCamera& camera
     LabeledCloud cloud;
     cloud.width_px = rows.width();
     cloud.height_px = h;
+    cloud.border = match_border(camera);
     const std::size_t n = offset.back();
     cloud.xyz_m.resize(n);
     cloud.colour.resize(n);
@@ -258,6 +259,7 @@ ClassPoints reproject_by_class(const DisparityMap& disparity, const StereoCamera
     ClassPoints out;
     out.width_px = rows.width();
     out.height_px = h;
+    out.border = match_border(camera);
     out.xyz_m.resize(k_count);
     out.pixel.resize(k_count);
     out.weight.resize(k_count);

@@ -277,6 +277,7 @@ ClassPoints points_by_class(const LabeledCloud& cloud, const ClassSelection& sel
     const std::size_t classes = selection.column_mask.size();
     ClassPoints out;
     out.cloud_points = cloud.size();
+    out.border = cloud.border;
     auto& per_class = out.xyz_m;
     auto& per_class_pixels = out.pixel;
     per_class.resize(classes);
@@ -359,11 +360,12 @@ ClassPoints points_by_class(const LabeledCloud& cloud, const ClassSelection& sel
 scene_schema::EntityDocument extract_entities(const LabeledCloud& cloud, const Palette& palette,
                                               const StereoCamera& camera,
                                               const ExtractOptions& options) {
-    static_cast<void>(camera);  // not needed by the current extractors (see extract.hpp)
     options.validate();
-    return extract_entities(
-        points_by_class(cloud, class_selection(palette, options), options.threads), palette,
-        options);
+    ClassPoints points = points_by_class(cloud, class_selection(palette, options), options.threads);
+    if (!(points.border.fb_px_m > 0.0) && camera.fx_px > 0.0 && camera.baseline_m > 0.0) {
+        points.border = match_border(camera);
+    }
+    return extract_entities(points, palette, options);
 }
 
 scene_schema::EntityDocument extract_entities(const ClassPoints& points, const Palette& palette,
@@ -373,8 +375,8 @@ scene_schema::EntityDocument extract_entities(const ClassPoints& points, const P
     const auto& per_class = points.xyz_m;
     const auto& per_class_pixels = points.pixel;
     const auto& step = points.weight;
-    const PixelGrid grid{points.width_px, points.height_px, points.first_column,
-                         points.last_column};
+    const PixelGrid grid{points.width_px, points.height_px, points.first_column, points.last_column,
+                         points.border};
 
     // The ground plane is the first task, fitted beside the clustering of the classes (which
     // does not need it); a class waits for it once clustered. Thing points cost about four

@@ -17,6 +17,9 @@ constexpr double kSideBySideWidth = 1.3;
 constexpr int kSideBySideGapBins = 2;
 /// How far two things side by side overlap along the gap between them, at least, metres.
 constexpr double kSideBySideOverlap = 0.5;
+/// How far two things in line (one behind the other) overlap across the gap between them, at
+/// least, metres: no more than a rounding error apart.
+constexpr double kInLineOverlap = -0.1;
 /// The share of a row's points, at its near end, that a walk of cuts starts after.
 constexpr double kWalkStartQuantile = 0.01;
 constexpr double kHalfPi = 1.57079632679489661923;
@@ -310,10 +313,14 @@ std::vector<Indices> split_at_valleys(const std::vector<Eigen::Vector3f>& pts, c
 /// Two pieces of a blob cut along the unit direction (dir_x, dir_z) in its widest clear gap
 /// (a run of at least min_gap_bins 0.1 m bins each holding at most a quarter of the median
 /// occupied bin's points) that leaves each piece at least a fifth of the points (a sliver or
-/// a sparse far side is no second thing); nothing when there is no such gap.
+/// a sparse far side is no second thing), or at least min_piece points when that is set, and
+/// whose pieces overlap along the cut by at least min_overlap_m; nothing when there is no such
+/// gap.
 std::optional<Split> split_at_gap(const std::vector<Eigen::Vector3f>& pts, const Indices& idx,
                                   double dir_x, double dir_z, int min_gap_bins,
-                                  double min_extent_m = 0.0, int* gap_bins = nullptr) {
+                                  double min_extent_m = 0.0, int* gap_bins = nullptr,
+                                  std::size_t min_piece = 0,
+                                  double min_overlap_m = kSideBySideOverlap) {
     if (idx.size() < 20) return std::nullopt;
     const Projection p = project(pts, idx, dir_x, dir_z);
     const std::vector<double>& along = p.along;
@@ -343,8 +350,9 @@ std::optional<Split> split_at_gap(const std::vector<Eigen::Vector3f>& pts, const
         while (end < bins && static_cast<double>(hist[static_cast<std::size_t>(end)]) <= gap_count)
             inside += hist[static_cast<std::size_t>(end++)];
         const std::size_t left = before + inside / 2, right = total - left;
-        if (end - b >= min_gap_bins && end - b > best_width && 5 * left >= total &&
-            5 * right >= total) {
+        const bool pieces = min_piece > 0 ? std::min(left, right) >= min_piece
+                                          : 5 * left >= total && 5 * right >= total;
+        if (end - b >= min_gap_bins && end - b > best_width && pieces) {
             best_width = end - b;
             best_cut = lo + 0.5 * (b + end) * kBin;
         }
@@ -366,7 +374,7 @@ std::optional<Split> split_at_gap(const std::vector<Eigen::Vector3f>& pts, const
     }
     const auto [lo0, hi0] = quantiles(along_cut[0], 0.05, 0.95);
     const auto [lo1, hi1] = quantiles(along_cut[1], 0.05, 0.95);
-    if (std::min(hi0, hi1) - std::max(lo0, lo1) < kSideBySideOverlap) return std::nullopt;
+    if (std::min(hi0, hi1) - std::max(lo0, lo1) < min_overlap_m) return std::nullopt;
     if (gap_bins) *gap_bins = best_width;
     return split;
 }
@@ -390,7 +398,8 @@ double height_spread(const std::vector<Eigen::Vector3f>& pts, const Indices& idx
 /// cars side by side merged by the semantic image); {idx} when it fits the prior.
 Split split_oversized(const std::vector<Eigen::Vector3f>& pts, const Indices& idx,
                       const OrientedBox& box, const ClassSettings& s,
-                      const std::optional<GroundPlane>& ground, const ExtractOptions& options) {
+                      const std::optional<GroundPlane>& ground, const ExtractOptions& options,
+                      bool truncated) {
     if (!s.has_prior()) return {{idx}, false, std::nullopt};
     const double c = std::cos(box.theta), sn = std::sin(box.theta);
     // Things side by side (a car passing a parked one): a clear gap that leaves each side a
@@ -437,6 +446,23 @@ Split split_oversized(const std::vector<Eigen::Vector3f>& pts, const Indices& id
         Split walk = split_along(pts, idx, c, -sn, box.L_m, s.prior_L_m + options.row_gap_m, true);
         if (walk.at_gaps && walk.parts.size() > 1) return walk;
         return split_along(pts, idx, c, -sn, box.L_m, s.prior_L_m);
+    }
+    if (truncated && box.L_m > options.row_valley_min_length_fraction * s.prior_L_m) {
+        // The image's edge cuts the thing: what shows of it is at most its own length, so a
+        // longer blob holds a second thing beyond it, parted by a clear gap along the row
+        // (looked for within 20 degrees of the box's heading, which smear skews; the two in
+        // line, their sides seen edge-on as thin as they are).
+        for (int k = -4; k <= 4; ++k) {
+            const double a = box.theta + k * kHalfPi / 18.0;
+            int bins = 0;
+            auto cut = split_at_gap(pts, idx, std::cos(a), -std::sin(a), kSideBySideGapBins, 0.0,
+                                    &bins, static_cast<std::size_t>(s.min_points), kInLineOverlap);
+            if (cut && bins > widest_bins) {
+                widest = std::move(cut);
+                widest_bins = bins;
+            }
+        }
+        if (widest) return *widest;
     }
     // Across the heading only for a clear double width: smear and oblique views widen single cars.
     if (box.W_m > std::max(s.split_factor, 1.9) * s.prior_W_m) {

@@ -138,9 +138,10 @@ std::vector<Indices> thing_clusters(const std::vector<Eigen::Vector3f>& pts,
 
 /// The camera-frame (x, z) mean of the points in the outermost kEdgeColumns columns of what
 /// stereo sees (the image's edges, or the border the matcher leaves without disparity: the
-/// grid's first and last columns with points) when that edge cuts the points (at least
-/// kMinEdgePoints of them there; the side with more); nullopt otherwise or when the pixels
-/// are unknown.
+/// grid's first and last columns with points, and on the left the column below which nothing
+/// at the point's own depth has a match in the right image) when that edge cuts the points (at
+/// least kMinEdgePoints of them there; the side with more); nullopt otherwise or when the
+/// pixels are unknown.
 std::optional<Eigen::Vector2d> truncation_point(const std::vector<Eigen::Vector3f>& pts,
                                                 const std::vector<std::uint32_t>& pixels,
                                                 const PixelGrid& grid, const Indices& members) {
@@ -155,7 +156,8 @@ std::optional<Eigen::Vector2d> truncation_point(const std::vector<Eigen::Vector3
     for (std::size_t i : members) {
         const int u = static_cast<int>(pixels[i] % static_cast<std::uint32_t>(grid.width_px));
         const Eigen::Vector2d ray(pts[i].x(), pts[i].z());
-        if (u < first + kEdgeColumns) {
+        const double left_edge = std::max<double>(first, grid.border.left_column(pts[i].z()));
+        if (u < left_edge + kEdgeColumns) {
             left += ray;
             ++n_left;
         } else if (u > last - kEdgeColumns) {
@@ -220,7 +222,8 @@ std::vector<Candidate> candidates_of_cluster(const std::vector<Eigen::Vector3f>&
         fit.truncation_xz = truncation_point(pts, pixels, grid, part);
         const OrientedBox box = fit_upright_box(gather(pts, part), ground, fit);
         if (depth < 3 && !yaw) {
-            Split split = split_oversized(pts, part, box, s, ground, options);
+            Split split =
+                split_oversized(pts, part, box, s, ground, options, fit.truncation_xz.has_value());
             if (split.parts.size() > 1) {
                 for (auto& piece : split.parts) {
                     work.emplace_back(std::move(piece), depth + 1,

@@ -370,6 +370,7 @@ LabeledCloud cloud_from_gt_disparity(const std::filesystem::path& disparity_png,
     LabeledCloud cloud;
     cloud.width_px = disparity.width_px;
     cloud.height_px = disparity.height_px;
+    cloud.border = match_border(camera);
     for (int v = 0; v < disparity.height_px; ++v) {
         for (int u = 0; u < disparity.width_px; ++u) {
             const std::size_t i = static_cast<std::size_t>(v) * disparity.width_px + u;

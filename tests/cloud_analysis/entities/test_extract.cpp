@@ -942,3 +942,97 @@ TEST_CASE("two cars side by side under a box at an angle are cut across the view
         for (std::size_t i : part) CHECK((pts[i].x() < 3.0f) == left);
     }
 }
+
+namespace {
+
+/// A KITTI-like rig: f = 720 px, principal point (620, 190), 1242 x 375 px, baseline 0.54 m.
+StereoCamera kitti_like_rig() {
+    StereoCamera c;
+    c.width_px = 1242;
+    c.height_px = 375;
+    c.fx_px = c.fy_px = 720.0;
+    c.cx_px = c.cx_right_px = 620.0;
+    c.cy_px = 190.0;
+    c.baseline_m = 0.54;
+    return c;
+}
+
+/// The points of `cloud` the left camera of `c` sees and the matcher can match (column at
+/// least fx * B / z: the right view holds the match), with their pixels.
+LabeledCloud matched_view(const LabeledCloud& cloud, const StereoCamera& c) {
+    LabeledCloud out;
+    out.width_px = c.width_px;
+    out.height_px = c.height_px;
+    for (std::size_t i = 0; i < cloud.size(); ++i) {
+        const Eigen::Vector3f& p = cloud.xyz_m[i];
+        const long u = std::lround(c.fx_px * p.x() / p.z() + c.cx_px);
+        const long v = std::lround(c.fy_px * p.y() / p.z() + c.cy_px);
+        if (u < c.fx_px * c.baseline_m / p.z() || u >= c.width_px || v < 0 || v >= c.height_px) {
+            continue;
+        }
+        add_point(out, p, cloud.class_index[i]);
+        out.pixel.back() = static_cast<std::uint32_t>(v * c.width_px + u);
+    }
+    return out;
+}
+
+/// The road, far sky, and the right sides (x = -3.95, 1.5 m high) of cars parked along z from
+/// each z0 to z1: cars beside the left edge of kitti_like_rig's view.
+LabeledCloud left_edge_scene(const std::vector<std::pair<float, float>>& sides) {
+    LabeledCloud cloud;
+    for (float x = -8.0f; x <= 6.0f; x += 0.25f) {
+        for (float z = 3.0f; z <= 40.0f; z += 0.25f) add_point(cloud, {x, 1.65f, z}, 0);
+    }
+    for (float x = -20.0f; x <= 20.0f; x += 0.5f) add_point(cloud, {x, -10.0f, 50.0f}, 1);
+    for (const auto& [z0, z1] : sides) {
+        for (float y = 0.15f; y <= 1.65f; y += 0.05f) {
+            for (float z = z0; z <= z1; z += 0.05f) add_point(cloud, {-3.95f, y, z}, 2);
+        }
+    }
+    return cloud;
+}
+
+std::vector<double> car_centres_z(const scene_schema::EntityDocument& doc) {
+    std::vector<double> z;
+    for (const auto& e : doc.entities) {
+        if (e.class_name == "car") z.push_back(e.z);
+    }
+    std::sort(z.begin(), z.end());
+    return z;
+}
+
+}  // namespace
+
+TEST_CASE(
+    "a car cut by the left edge of what the matcher sees at its depth is completed "
+    "towards the camera",
+    "[entities][truncation]") {
+    // A car 4.7 m long from z 3.06 to 7.76: its side shows from z 5.2 (the right view holds no
+    // match of anything nearer at that column), far from the image's own first columns,
+    // which the far sky reaches. Completed from the visible far end, not from the cut.
+    const LabeledCloud cloud = matched_view(left_edge_scene({{3.06f, 7.76f}}), kitti_like_rig());
+    const auto with_rig = car_centres_z(extract_entities(cloud, test_palette(), kitti_like_rig(),
+                                                         options_with_bundled_config("instances")));
+    REQUIRE(with_rig.size() == 1);
+    CHECK(with_rig[0] == Approx(7.76 - 2.1).margin(0.3));
+    // Without the rig the cut is taken for the car's near end.
+    const auto without = car_centres_z(extract_entities(cloud, test_palette(), StereoCamera{},
+                                                        options_with_bundled_config("instances")));
+    REQUIRE(without.size() == 1);
+    CHECK(without[0] > 7.0);
+}
+
+TEST_CASE("a car cut by the matcher's left edge and the next car in its row are two cars",
+          "[entities][truncation][split]") {
+    // The cut car shows 2.5 m, then a 0.7 m gap bridged by a sparse trail of wrong matches,
+    // then 2 m of the next car: 5.3 m in all, too short for a row of two uncut cars but more
+    // than the cut car can show.
+    LabeledCloud scene = left_edge_scene({{3.06f, 7.76f}, {8.46f, 10.46f}});
+    for (float z = 7.8f; z < 8.46f; z += 0.1f) add_point(scene, {-3.95f, 1.0f, z}, 2);
+    const LabeledCloud cloud = matched_view(scene, kitti_like_rig());
+    const auto centres = car_centres_z(extract_entities(cloud, test_palette(), kitti_like_rig(),
+                                                        options_with_bundled_config("instances")));
+    REQUIRE(centres.size() == 2);
+    CHECK(centres[0] == Approx(7.76 - 2.1).margin(0.3));
+    CHECK(centres[1] == Approx(8.46 + 2.1).margin(0.3));
+}

@@ -43,6 +43,23 @@ struct Palette {
 /// Class index value for pixels whose colour is not in the palette.
 inline constexpr std::uint16_t kVoidClass = 0xFFFF;
 
+/// Where the matcher's view ends on the left: a left-image pixel at column u and disparity d
+/// has its match at column u - d of the right image, so at depth z nothing left of column
+/// offset_px + fb_px_m / z can be matched. Unknown (no depth-dependent border) when fb_px_m is 0.
+struct MatchBorder {
+    double fb_px_m = 0.0;    ///< focal length x baseline: the disparity of depth z is fb / z
+    double offset_px = 0.0;  ///< left minus right principal point x
+    /// The leftmost column that can be matched at depth z; 0 when unknown.
+    double left_column(double z_m) const {
+        return fb_px_m > 0.0 && z_m > 0.0 ? offset_px + fb_px_m / z_m : 0.0;
+    }
+};
+
+/// The matching border of a rig.
+inline MatchBorder match_border(const StereoCamera& c) {
+    return {c.fx_px * c.baseline_m, c.cx_px - c.cx_right_px};
+}
+
 /// A metric point cloud in the rectified left camera frame (x right, y down, z forward,
 /// metres), one entry per valid pixel, structure of arrays.
 struct LabeledCloud {
@@ -52,6 +69,7 @@ struct LabeledCloud {
     std::vector<Rgb> colour;                 ///< left image colour at the pixel
     std::vector<std::uint16_t> class_index;  ///< index into Palette::classes, or kVoidClass
     std::vector<std::uint32_t> pixel;        ///< v * width_px + u of the source pixel
+    MatchBorder border;                      ///< the rig's left matching border
     std::size_t size() const { return xyz_m.size(); }
 };
 
@@ -69,6 +87,7 @@ struct ClassPoints {
     /// what stereo sees (the image's, or the border the matcher leaves without disparity).
     int first_column = 0;
     int last_column = 0;
+    MatchBorder border;            ///< the rig's left matching border (depth-dependent)
     std::size_t cloud_points = 0;  ///< points of the whole cloud (every class and void)
 };
 

@@ -32,6 +32,7 @@ struct PixelGrid {
     int height_px = 0;     ///< rows; 0 when the pixels are unknown
     int first_column = 0;  ///< leftmost column holding a point (the edge of what stereo sees)
     int last_column = 0;   ///< rightmost column holding a point
+    MatchBorder border;    ///< the matcher's left border at each depth
     bool valid() const { return width_px > 0 && height_px > 0; }
 };
 

@@ -111,8 +111,9 @@ scene_schema::EntityDocument extract_entities(const ClassPoints& points, const P
                                               const ExtractOptions& options);
 
 /// The same from the labelled cloud: extract_entities(points_by_class(cloud, ...), ...).
-/// `camera` is not needed by the current extractors (image-space steps use the cloud's pixel
-/// indices); it stays in the signature for stages that project.
+/// Image-space steps use the cloud's pixel indices; `camera` (when its focal length and
+/// baseline are set) gives the matcher's left border at each depth to a cloud that does not
+/// carry it (LabeledCloud::border).
 scene_schema::EntityDocument extract_entities(const LabeledCloud& cloud, const Palette& palette,
                                               const StereoCamera& camera,
                                               const ExtractOptions& options);

@@ -25,7 +25,8 @@ struct Split {
 /// cars side by side merged by the semantic image); {idx} when it fits the prior.
 Split split_oversized(const std::vector<Eigen::Vector3f>& pts, const Indices& idx,
                       const OrientedBox& box, const ClassSettings& s,
-                      const std::optional<GroundPlane>& ground, const ExtractOptions& options);
+                      const std::optional<GroundPlane>& ground, const ExtractOptions& options,
+                      bool truncated = false);
 
 /// Vertical extent of points (2 % to 98 % height quantiles above the ground, or along -y
 /// without a ground plane), metres.
