@@ -85,12 +85,23 @@ Split split_along(const std::vector<Eigen::Vector3f>& pts, const Indices& idx, d
         // towards the camera: a cut one car length from such a point falls inside the first car.
         std::vector<double> sorted = along;
         const auto [q_lo, q_hi] = quantiles(sorted, kWalkStartQuantile, 1.0 - kWalkStartQuantile);
+        // A cut in a gap wider than the cut: the next thing starts where the gap ends.
+        const auto gap_end = [&](int b, int dir) {
+            while (b + dir >= 0 && b + dir < bins &&
+                   hist[static_cast<std::size_t>(b + dir)] <= gap_count)
+                b += dir;
+            return b;
+        };
         if (std::abs(hi) < std::abs(lo)) {
             const int start = static_cast<int>((q_hi - lo) / bin);
-            for (int b = emptiest(start - step); b >= step / 4; b = emptiest(b - step)) add_cut(b);
+            for (int b = emptiest(start - step); b >= step / 4;
+                 b = emptiest(gap_end(b, -1) - step)) {
+                add_cut(b);
+            }
         } else {
             const int start = static_cast<int>((q_lo - lo) / bin);
-            for (int b = emptiest(start + step); b < bins - step / 4; b = emptiest(b + step)) {
+            for (int b = emptiest(start + step); b < bins - step / 4;
+                 b = emptiest(gap_end(b, 1) + step)) {
                 add_cut(b);
             }
         }

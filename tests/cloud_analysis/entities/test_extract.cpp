@@ -566,6 +566,48 @@ TEST_CASE("a parked row's walk of cuts starts at its first car, not at points sm
     }
 }
 
+TEST_CASE("a parked row's walk of cuts starts again where a wide gap in the row ends",
+          "[entities][split]") {
+    // Two pairs of cars 0.45 m apart, the pairs 3 m apart (a driveway) and joined by a trail
+    // of wrong matches; the first 2 m of the last car seen. A walk that steps one car length
+    // on from its cut in the driveway cuts the third car in its middle, and so does an even
+    // division of the row.
+    const std::vector<float> starts = {8.0f, 12.65f, 19.85f, 24.5f};
+    const std::vector<float> ends = {12.2f, 16.85f, 24.05f, 26.5f};
+    std::vector<Eigen::Vector3f> pts;
+    for (std::size_t k = 0; k < starts.size(); ++k) {
+        for (float y = 0.15f; y <= 1.65f; y += 0.05f) {
+            for (float z = starts[k]; z <= ends[k]; z += 0.05f) pts.emplace_back(-1.1f, y, z);
+        }
+    }
+    for (float z = 16.9f; z < 19.85f; z += 0.3f) pts.emplace_back(-1.1f, 0.5f, z);
+    instances::Indices idx(pts.size());
+    std::iota(idx.begin(), idx.end(), std::size_t{0});
+    OrientedBox box;
+    box.centre_m = Eigen::Vector3d(-1.1, 0.9, 17.25);
+    box.theta = -kPi / 2.0;  // along +z
+    box.L_m = 18.5;
+    box.W_m = 1.8;
+    box.H_m = 1.5;
+    const auto config = load_class_config(std::string(STEREOSCENE_SOURCE_DIR) +
+                                          "/assets/classes/entity_config.json");
+    const auto split = instances::split_oversized(pts, idx, box, config.find("car"), std::nullopt,
+                                                  ExtractOptions{});
+    std::vector<std::pair<float, float>> spans;  // 2-98 % of each piece along z
+    for (const auto& part : split.parts) {
+        std::vector<float> z;
+        for (std::size_t i : part) z.push_back(pts[i].z());
+        std::sort(z.begin(), z.end());
+        if (z.size() > 100) spans.emplace_back(z[z.size() / 50], z[z.size() - 1 - z.size() / 50]);
+    }
+    std::sort(spans.begin(), spans.end());
+    REQUIRE(spans.size() == 4);
+    for (std::size_t k = 0; k < 4; ++k) {
+        CHECK(spans[k].first == Approx(starts[k]).margin(0.2));
+        CHECK(spans[k].second == Approx(ends[k]).margin(0.2));
+    }
+}
+
 namespace {
 
 /// The right side of a thing heading along z from z0 to z1, seen from x = 0 at x = -1.1:
