@@ -52,6 +52,19 @@ PY
 "$analyse" batch --pairs "$d/drive/pairs.txt" --calib "$d/drive/calib/calib_cam_to_cam.txt" \
     --track --out-dir "$d/pairs-tracked" --quiet
 test "$(grep -c '"file"' "$d/pairs-tracked/sequence.json")" = "$frames"
+# The tracker's settings reach the tracker inside batch as they do `track`.
+"$analyse" track "$d/analysed" --out-dir "$d/tracked-open" --fps 10 --gate-chi2 0 \
+    --coast-min-hits 0 --coast 4 --quiet
+"$analyse" batch --kitti-root "$d/drive" --list "$d/frames.txt" --track --fps 10 --gate-chi2 0 \
+    --coast-min-hits 0 --coast 4 --out-dir "$d/batch-tracked-open" --quiet
+for f in "$d/tracked-open/"0*.json; do
+    python3 - "$f" "$d/batch-tracked-open/$(basename "$f")" <<'PY'
+import json, sys
+boxes = lambda p: sorted((e["id"], e.get("track_id", -1), round(e["x"], 6), round(e["z"], 6))
+                         for e in json.load(open(p))["entities"])
+assert boxes(sys.argv[1]) == boxes(sys.argv[2]), sys.argv[1:]
+PY
+done
 for bad in "--pairs $d/drive/pairs.txt" "--drive $raw --track --resume" "--drive $raw --evaluate" \
     "--kitti-root $d/drive --frames 0000000000 --semantic-dir $d"; do
     set +e

@@ -196,6 +196,13 @@ CLI::App* add_batch_command(CLI::App& app, BatchArgs& a) {
                     "--track: frames a confirmed track missed by the detector is still "
                     "reported, at its prediction")
         ->capture_default_str();
+    cmd->add_option("--coast-min-hits", a.track_options.tracker.coast_min_hits,
+                    "--track: only a track hit at least this often coasts")
+        ->capture_default_str();
+    cmd->add_option("--gate-chi2", a.track_options.tracker.gate_chi2,
+                    "--track: statistical gate, squared Mahalanobis distance from a track's "
+                    "prediction (0 = off; see `track`)")
+        ->capture_default_str();
     cmd->add_option("--out-dir", a.out_dir, "output folder: <frame>.json per frame")->required();
     cmd->add_option("--clouds", a.cloud_formats, "also write <frame>.<fmt> clouds: xyz pcd ply")
         ->check(CLI::IsMember({"xyz", "pcd", "ply"}));
