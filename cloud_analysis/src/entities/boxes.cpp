@@ -446,12 +446,6 @@ void BoxFitOptions::validate() const {
     }
 }
 
-double normalize_angle(double radians) {
-    double a = std::fmod(radians + kPi, 2.0 * kPi);
-    if (a < 0.0) a += 2.0 * kPi;
-    return a - kPi;
-}
-
 double lshape_yaw(const std::vector<Eigen::Vector2d>& xz_m, double angle_step_deg) {
     if (xz_m.size() < 2) return 0.0;
     const double a = best_lshape_angle(xz_m, angle_step_deg);

@@ -5,6 +5,7 @@
 #include <cmath>
 #include <limits>
 
+#include "cloud_analysis/support/angles.hpp"
 #include "cloud_analysis/support/select.hpp"
 
 namespace cloud_analysis::instances {
@@ -441,7 +442,7 @@ Split split_oversized(const std::vector<Eigen::Vector3f>& pts, const Indices& id
         front_on_row(pts, idx, box, s, *ground, options)) {
         // Side by side: cut along the box's length at the row's pitch; each piece heads across.
         Split split = split_along(pts, idx, c, -sn, box.L_m, s.prior_W_m + options.row_gap_m, true);
-        split.yaw_rad = normalize_angle(box.theta + kHalfPi);
+        split.yaw_rad = wrap_angle(box.theta + kHalfPi);
         split.at_gaps = true;  // a row of distinct things, whatever the density at the cuts
         return split;
     }

@@ -1,4 +1,5 @@
 #include "cloud_analysis/evaluation/kitti_labels.hpp"
+#include "cloud_analysis/support/angles.hpp"
 
 #include "stereoscene/support/atomic_file.hpp"
 #include "stereoscene/support/file_read.hpp"
@@ -14,17 +15,6 @@
 #include <Eigen/Core>
 
 namespace cloud_analysis {
-namespace {
-
-constexpr double kPi = 3.14159265358979323846;
-
-double wrap_pi(double a) {
-    a = std::fmod(a + kPi, 2.0 * kPi);
-    if (a < 0.0) a += 2.0 * kPi;
-    return a - kPi;
-}
-
-}  // namespace
 
 std::vector<KittiLabel> parse_kitti_labels(std::string_view text, const std::string& origin) {
     std::vector<KittiLabel> labels;
@@ -173,7 +163,7 @@ KittiLabel kitti_label_from_entity(const scene_schema::Entity& entity,
     l.y = entity.y + 0.5 * entity.H - frame.ty_m;
     l.z = entity.z - frame.tz_m;
     l.rotation_y = entity.theta;
-    l.alpha = wrap_pi(entity.theta - std::atan2(l.x, l.z));
+    l.alpha = wrap_angle(entity.theta - std::atan2(l.x, l.z));
     l.score = entity.confidence;
     if (camera == nullptr || camera->fx_px <= 0.0) return l;
 

@@ -8,6 +8,7 @@
 #include <stdexcept>
 
 #include "cloud_analysis/evaluation/kitti_labels.hpp"
+#include "cloud_analysis/support/angles.hpp"
 #include "cloud_analysis/tracking/assignment.hpp"
 
 namespace cloud_analysis {
@@ -16,8 +17,6 @@ namespace {
 
 constexpr double kPi = 3.14159265358979323846;
 constexpr std::size_t kAllBins = kDistanceBinEdges_m.size();
-
-double wrap(double a) { return std::remainder(a, 2.0 * kPi); }
 
 double bev_distance(const scene_schema::Entity& a, const scene_schema::Entity& b) {
     return std::hypot(a.x - b.x, a.z - b.z);
@@ -95,7 +94,7 @@ void track_shape(ClassState& s, std::int64_t frame, const TrackedObject& truth,
                  const TrackedObject& hyp, const TrackEvalOptions& options) {
     const auto& b = hyp.box;
     auto last = s.last_theta.find(hyp.track_id);
-    if (last != s.last_theta.end() && std::abs(wrap(b.theta - last->second)) > kPi / 2.0) {
+    if (last != s.last_theta.end() && std::abs(wrap_angle(b.theta - last->second)) > kPi / 2.0) {
         ++s.score.heading_flips;
         s.score.events.push_back(event(TrackEvent::Kind::kHeadingFlip, frame, &truth, &hyp));
     }

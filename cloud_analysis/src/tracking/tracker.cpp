@@ -4,6 +4,7 @@
 #include <cmath>
 #include <stdexcept>
 
+#include "cloud_analysis/support/angles.hpp"
 #include "cloud_analysis/tracking/assignment.hpp"
 
 namespace cloud_analysis::tracking {
@@ -12,17 +13,10 @@ namespace {
 
 constexpr double kPi = 3.14159265358979323846;
 
-/// Angle in (-pi, pi].
-double wrap(double a) {
-    a = std::fmod(a + kPi, 2.0 * kPi);
-    if (a <= 0.0) a += 2.0 * kPi;
-    return a - kPi;
-}
-
 /// a or a + pi, whichever is nearer to `reference` (a box's heading is only known modulo pi).
 double align_modulo_pi(double a, double reference) {
-    const double d = wrap(a - reference);
-    return std::abs(d) > kPi / 2.0 ? wrap(a + kPi) : wrap(a);
+    const double d = wrap_angle(a - reference);
+    return std::abs(d) > kPi / 2.0 ? wrap_angle(a + kPi) : wrap_angle(a);
 }
 
 bool in(const std::vector<std::string>& list, const std::string& name) {
@@ -139,12 +133,12 @@ bool absorb(Track& t, const scene_schema::Entity& e, const TrackerOptions& o) {
         const double motion = std::atan2(-t.motion.vz_mps(), t.motion.vx_mps());
         target = align_modulo_pi(target, motion);
         // A track born facing backwards turns round at once, not through a half turn.
-        if (std::abs(wrap(t.theta_rad - motion)) > kPi / 2.0) {
-            t.theta_rad = wrap(t.theta_rad + kPi);
+        if (std::abs(wrap_angle(t.theta_rad - motion)) > kPi / 2.0) {
+            t.theta_rad = wrap_angle(t.theta_rad + kPi);
             turned = true;
         }
     }
-    t.theta_rad = wrap(t.theta_rad + o.heading_gain * wrap(target - t.theta_rad));
+    t.theta_rad = wrap_angle(t.theta_rad + o.heading_gain * wrap_angle(target - t.theta_rad));
     t.sum_W += e.W;
     t.sum_H += e.H;
     t.sum_L += e.L;
@@ -171,7 +165,7 @@ bool absorb(Track& t, const scene_schema::Entity& e, const TrackerOptions& o) {
 Track born(const scene_schema::Entity& e, std::int64_t id, const TrackerOptions& o) {
     Track t{id, e.class_name, e.class_id, e.confidence, GroundKalman(e.x, e.z, o.kalman)};
     t.y_m = e.y;
-    t.theta_rad = wrap(e.theta);
+    t.theta_rad = wrap_angle(e.theta);
     t.W = t.sum_W = e.W;
     t.H = t.sum_H = e.H;
     t.L = t.sum_L = e.L;

@@ -6,6 +6,7 @@
 
 #include "cloud_analysis/entities/boxes.hpp"
 #include "cloud_analysis/entities/cluster.hpp"
+#include "cloud_analysis/support/angles.hpp"
 
 using namespace cloud_analysis;
 
@@ -168,10 +169,12 @@ TEST_CASE("the thesis extractors on a uniform box give its centre and size", "[b
     CHECK(c.W_m == 1.8);
 }
 
-TEST_CASE("angles are wrapped to [-pi, pi]", "[boxes]") {
-    CHECK(normalize_angle(3.0 * kPi / 2.0) == Approx(-kPi / 2.0));
-    CHECK(normalize_angle(-3.0 * kPi / 2.0) == Approx(kPi / 2.0));
-    CHECK(normalize_angle(0.5) == Approx(0.5));
+TEST_CASE("angles are wrapped to [-pi, pi)", "[boxes]") {
+    CHECK(wrap_angle(kPi) == Approx(-kPi));
+    CHECK(wrap_angle(-kPi) == Approx(-kPi));
+    CHECK(wrap_angle(3.0 * kPi / 2.0) == Approx(-kPi / 2.0));
+    CHECK(wrap_angle(-3.0 * kPi / 2.0) == Approx(kPi / 2.0));
+    CHECK(wrap_angle(0.5) == Approx(0.5));
 }
 
 TEST_CASE("an imposed heading replaces the L-shape search and is validated", "[boxes]") {
