@@ -47,7 +47,7 @@ TEST_CASE("image sizes and points are read from text, refusing anything else", "
     CHECK_THROWS_AS(parse_point_m("1,2,3,"), std::invalid_argument);
 }
 
-TEST_CASE("each view has its default image size; the camera view takes the file's camera",
+TEST_CASE("each view has its default image size and the camera view takes the file's camera",
           "[setup]") {
     scene_schema::EntityDocument doc;
     CHECK(default_image_size(ViewKind::camera, doc) == std::pair<int, int>{1242, 375});

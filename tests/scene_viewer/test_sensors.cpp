@@ -177,7 +177,7 @@ TEST_CASE("Two cars get distinct KITTI instance ids, stuff gets instance 0", "[s
     CHECK(f.instance.values[at(f.rig, 0, 0)] == 0);
 }
 
-TEST_CASE("A car half hidden behind another is about half visible; stuff has no record",
+TEST_CASE("A car half hidden behind another is about half visible and stuff has no record",
           "[sensors][gl]") {
     // car-near (1.8 x 1.5 m front face at 7.7 m) ends at u = 160 + 300 * 0.9 / 7.7 = 195;
     // car-far's front face (3.6 x 0.75 m at 15.7 m, x 0..3.6 m) spans u 160..229 and rows inside

@@ -169,7 +169,7 @@ TEST_CASE("the thesis extractors on a uniform box give its centre and size", "[b
     CHECK(c.W_m == 1.8);
 }
 
-TEST_CASE("angles are wrapped to [-pi, pi)", "[boxes]") {
+TEST_CASE("angles are wrapped to one turn from -pi up to but not including pi", "[boxes]") {
     CHECK(wrap_angle(kPi) == Approx(-kPi));
     CHECK(wrap_angle(-kPi) == Approx(-kPi));
     CHECK(wrap_angle(3.0 * kPi / 2.0) == Approx(-kPi / 2.0));

@@ -70,7 +70,7 @@ TEST_CASE("a track handed to another object counts one switch and lowers IDF1", 
     CHECK(e.of("car").idf1 == Approx(2.0 * 15.0 / 40.0));
 }
 
-TEST_CASE("a gap in a track is a miss and a fragmentation; a stray box a false positive",
+TEST_CASE("a gap in a track is a miss and a fragmentation and a stray box a false positive",
           "[track_eval]") {
     auto frames = drive();
     frames[4].hypotheses.erase(frames[4].hypotheses.begin());

@@ -63,7 +63,7 @@ TEST_CASE("shard reports merge: counts add, the run spans first start to last en
     CHECK(merged["per_shard"][2]["skipped"] == 4);
 }
 
-TEST_CASE("frames that warned add up across shards; older reports count none", "[report]") {
+TEST_CASE("frames that warned add up across shards and older reports count none", "[report]") {
     json a = shard_report(0, 2, 5, 0, 0, 0.0, 1.0);
     a["frames_with_warnings"] = 2;
     const json b = shard_report(1, 2, 5, 0, 0, 0.0, 1.0);  // written before the field existed
@@ -73,7 +73,7 @@ TEST_CASE("frames that warned add up across shards; older reports count none", "
     CHECK(merge_batch_reports({a, c}, 2)["frames_with_warnings"] == 5);
 }
 
-TEST_CASE("a missing shard is listed; a duplicate or foreign report is refused", "[report]") {
+TEST_CASE("a missing shard is listed and a duplicate or foreign report is refused", "[report]") {
     const json merged = merge_batch_reports(
         {shard_report(0, 4, 5, 0, 0, 0.0, 1.0), shard_report(3, 4, 5, 0, 0, 0.0, 2.0)}, 4);
     CHECK(merged["missing_shards"] == json::array({1, 2}));

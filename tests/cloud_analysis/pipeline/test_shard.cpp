@@ -58,7 +58,7 @@ TEST_CASE("a shard I/N parses, and bad values say what is wrong", "[shard]") {
     CHECK_THROWS_WITH(parse_shard("3/3"), Catch::Contains("0..2"));
 }
 
-TEST_CASE("a Slurm array task is a shard; without the variables the whole list", "[shard]") {
+TEST_CASE("a Slurm array task is a shard and without the variables the whole list", "[shard]") {
     const Shard whole = shard_from_slurm(nullptr, nullptr);
     CHECK(whole.index == 0);
     CHECK(whole.count == 1);

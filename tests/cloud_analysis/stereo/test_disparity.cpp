@@ -108,7 +108,7 @@ TEST_CASE("KITTI disparity PNGs round-trip at 1/256 px", "[disparity][io]") {
     }
 }
 
-TEST_CASE("left padding gives the border band its disparity; without it the band is empty",
+TEST_CASE("left padding gives the border band its disparity and without it the band is empty",
           "[disparity]") {
     auto [left, right] = random_dot_pair(160, 60, 12, 5);
     DisparityOptions options;
