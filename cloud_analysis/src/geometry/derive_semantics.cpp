@@ -445,7 +445,8 @@ Segment classify(SegmentStats& st, const Classes& cls, const GeometryOptions& o)
         } else {
             narrow&& seg.top_m >= 2.0 ? set(cls.pole, "pole") : set(cls.other, "static");
         }
-    } else if (top_spread < o.wall_top_spread_m && thickness < o.wall_max_thickness_m) {
+    } else if (top_spread < o.wall_top_spread_m && thickness < o.wall_max_thickness_m &&
+               seg.width_m > o.wall_min_width_m) {
         set(cls.wall, "wall");
     } else if (2 * st.occluded > st.pixels) {
         set(cls.other, "static");  // its top is hidden: no telling a car from a wall's foot

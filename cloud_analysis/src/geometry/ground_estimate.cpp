@@ -51,6 +51,7 @@ void GeometryOptions::validate() const {
     positive(pole_max_width_m, "geometry.pole_max_width_m");
     positive(wall_top_spread_m, "geometry.wall_top_spread_m");
     positive(wall_max_thickness_m, "geometry.wall_max_thickness_m");
+    positive(wall_min_width_m, "geometry.wall_min_width_m");
     positive(low_max_height_m, "geometry.low_max_height_m");
     if (!(min_cell_height_m >= 0.0)) {
         throw std::invalid_argument("geometry.min_cell_height_m: must be >= 0");

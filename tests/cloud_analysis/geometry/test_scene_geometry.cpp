@@ -136,26 +136,25 @@ TEST_CASE("a car under a tree's crown stays a car, a facade runs on above the ca
     }
 }
 
-TEST_CASE("columns keep a car parked against a wall a car; 3D clusters join it to the wall",
+TEST_CASE("a car parked against a wall keeps its back a car and the wall a building",
           "[geometry]") {
     const StereoCamera cam = kitti_rig();
     const auto palette = cloud_analysis::load_palette("cityscapes");
-    // The wall stands 0.3 m behind the car's cabin, across the whole view.
+    // The wall stands 0.3 m behind the car's cabin, across the whole view. The car's back, a
+    // flat top 1.7 m wide, is as thin and level as a wall's: too narrow for one.
     const std::vector<Box> boxes = {
         {-1.0, 0.8, 10.0, 1.0}, {-0.8, 0.6, 10.6, 1.5}, {-8.0, 8.0, 10.9, 4.0}};
-    GeometryOptions columns;
-    GeometryOptions clusters;
-    clusters.segmentation = "clusters";
     const auto [cu, cv] = pixel_of(cam, 0.0, 0.8, 10.0);
     const auto [wu, wv] = pixel_of(cam, 4.0, 3.0, 10.9);
-    const SceneGeometry a =
-        derive_semantics(render(cam, 1.65, boxes), cam, ImageU8{}, palette, columns);
-    CHECK(class_at(a, palette, cu, cv) == "car");
-    CHECK(class_at(a, palette, wu, wv) == "building");
-    const SceneGeometry b =
-        derive_semantics(render(cam, 1.65, boxes), cam, ImageU8{}, palette, clusters);
-    CHECK(class_at(b, palette, cu, cv) == "building");
-    CHECK(class_at(b, palette, wu, wv) == "building");
+    for (const char* segmentation : {"columns", "clusters"}) {
+        GeometryOptions o;
+        o.segmentation = segmentation;
+        const SceneGeometry g =
+            derive_semantics(render(cam, 1.65, boxes), cam, ImageU8{}, palette, o);
+        INFO(segmentation);
+        CHECK(class_at(g, palette, cu, cv) == "car");
+        CHECK(class_at(g, palette, wu, wv) == "building");
+    }
 }
 
 TEST_CASE("the green pixels of a car segment are vegetation, by their window's mean colour",

@@ -63,6 +63,8 @@ struct GeometryOptions {
     double wall_top_spread_m = 0.15;    ///< a thin segment whose tops (25th-97th percentile) vary
                                         ///< less than this is a wall or fence, metres
     double wall_max_thickness_m = 0.8;  ///< ... when its footprint is thinner than this, metres
+    double wall_min_width_m = 2.2;      ///< ... and longer than this (a car's back, its boot
+                                        ///< seen alone, is as flat and thin but narrower), m
     double pole_max_width_m = 0.6;      ///< tall objects narrower than this are poles, metres
     double low_max_height_m = 0.6;      ///< objects lower than this are kerbs or low plants, m
     double green_fraction = 0.45;       ///< objects with more green pixels are vegetation, (0,1]
