@@ -5,6 +5,7 @@
 
 #include <catch2/catch.hpp>
 
+#include "../kitti_rig.hpp"
 #include "cloud_analysis/cloud/semantic.hpp"
 #include "cloud_analysis/entities/extract.hpp"
 #include "cloud_analysis/entities/row_split.hpp"
@@ -302,6 +303,15 @@ void project_pixels(LabeledCloud& cloud) {
     }
 }
 
+/// split_oversized with the bundled car settings, the default options and no ground plane.
+instances::Split split_with_car_prior(const std::vector<Eigen::Vector3f>& pts,
+                                      const instances::Indices& idx, const OrientedBox& box) {
+    const auto config = load_class_config(std::string(STEREOSCENE_SOURCE_DIR) +
+                                          "/assets/classes/entity_config.json");
+    return instances::split_oversized(pts, idx, box, config.find("car"), std::nullopt,
+                                      ExtractOptions{});
+}
+
 int count_class(const scene_schema::EntityDocument& doc, const std::string& name) {
     int n = 0;
     for (const auto& e : doc.entities) n += e.class_name == name ? 1 : 0;
@@ -589,10 +599,7 @@ TEST_CASE("a parked row's walk of cuts starts again where a wide gap in the row 
     box.L_m = 18.5;
     box.W_m = 1.8;
     box.H_m = 1.5;
-    const auto config = load_class_config(std::string(STEREOSCENE_SOURCE_DIR) +
-                                          "/assets/classes/entity_config.json");
-    const auto split = instances::split_oversized(pts, idx, box, config.find("car"), std::nullopt,
-                                                  ExtractOptions{});
+    const auto split = split_with_car_prior(pts, idx, box);
     std::vector<std::pair<float, float>> spans;  // 2-98 % of each piece along z
     for (const auto& part : split.parts) {
         std::vector<float> z;
@@ -974,10 +981,7 @@ TEST_CASE("two cars side by side under a box at an angle are cut across the view
     box.L_m = 4.6;
     box.W_m = 3.4;
     box.H_m = 1.5;
-    const auto config = load_class_config(std::string(STEREOSCENE_SOURCE_DIR) +
-                                          "/assets/classes/entity_config.json");
-    const auto split = instances::split_oversized(pts, idx, box, config.find("car"), std::nullopt,
-                                                  ExtractOptions{});
+    const auto split = split_with_car_prior(pts, idx, box);
     REQUIRE(split.parts.size() == 2);
     for (const auto& part : split.parts) {
         const bool left = pts[part.front()].x() < 3.0f;
@@ -987,17 +991,7 @@ TEST_CASE("two cars side by side under a box at an angle are cut across the view
 
 namespace {
 
-/// A KITTI-like rig: f = 720 px, principal point (620, 190), 1242 x 375 px, baseline 0.54 m.
-StereoCamera kitti_like_rig() {
-    StereoCamera c;
-    c.width_px = 1242;
-    c.height_px = 375;
-    c.fx_px = c.fy_px = 720.0;
-    c.cx_px = c.cx_right_px = 620.0;
-    c.cy_px = 190.0;
-    c.baseline_m = 0.54;
-    return c;
-}
+using test_rigs::kitti_rig;
 
 /// The points of `cloud` the left camera of `c` sees and the matcher can match (column at
 /// least fx * B / z: the right view holds the match), with their pixels.
@@ -1019,7 +1013,7 @@ LabeledCloud matched_view(const LabeledCloud& cloud, const StereoCamera& c) {
 }
 
 /// The road, far sky, and the right sides (x = -3.95, 1.5 m high) of cars parked along z from
-/// each z0 to z1: cars beside the left edge of kitti_like_rig's view.
+/// each z0 to z1: cars beside the left edge of kitti_rig's view.
 LabeledCloud left_edge_scene(const std::vector<std::pair<float, float>>& sides) {
     LabeledCloud cloud;
     for (float x = -8.0f; x <= 6.0f; x += 0.25f) {
@@ -1052,8 +1046,8 @@ TEST_CASE(
     // A car 4.7 m long from z 3.06 to 7.76: its side shows from z 5.2 (the right view holds no
     // match of anything nearer at that column), far from the image's own first columns,
     // which the far sky reaches. Completed from the visible far end, not from the cut.
-    const LabeledCloud cloud = matched_view(left_edge_scene({{3.06f, 7.76f}}), kitti_like_rig());
-    const auto with_rig = car_centres_z(extract_entities(cloud, test_palette(), kitti_like_rig(),
+    const LabeledCloud cloud = matched_view(left_edge_scene({{3.06f, 7.76f}}), kitti_rig());
+    const auto with_rig = car_centres_z(extract_entities(cloud, test_palette(), kitti_rig(),
                                                          options_with_bundled_config("instances")));
     REQUIRE(with_rig.size() == 1);
     CHECK(with_rig[0] == Approx(7.76 - 2.1).margin(0.3));
@@ -1071,8 +1065,8 @@ TEST_CASE("a car cut by the matcher's left edge and the next car in its row are 
     // than the cut car can show.
     LabeledCloud scene = left_edge_scene({{3.06f, 7.76f}, {8.46f, 10.46f}});
     for (float z = 7.8f; z < 8.46f; z += 0.1f) add_point(scene, {-3.95f, 1.0f, z}, 2);
-    const LabeledCloud cloud = matched_view(scene, kitti_like_rig());
-    const auto centres = car_centres_z(extract_entities(cloud, test_palette(), kitti_like_rig(),
+    const LabeledCloud cloud = matched_view(scene, kitti_rig());
+    const auto centres = car_centres_z(extract_entities(cloud, test_palette(), kitti_rig(),
                                                         options_with_bundled_config("instances")));
     REQUIRE(centres.size() == 2);
     CHECK(centres[0] == Approx(7.76 - 2.1).margin(0.3));

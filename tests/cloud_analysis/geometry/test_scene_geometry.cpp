@@ -4,6 +4,7 @@
 
 #include <catch2/catch.hpp>
 
+#include "../kitti_rig.hpp"
 #include "cloud_analysis/cloud/semantic.hpp"
 #include "cloud_analysis/geometry/scene_geometry.hpp"
 
@@ -15,17 +16,7 @@ using namespace cloud_analysis::geometry;
 
 namespace {
 
-/// KITTI's rig at its size: fx = fy = 721.5 px, baseline 0.54 m.
-StereoCamera kitti_rig() {
-    StereoCamera c;
-    c.width_px = 1242;
-    c.height_px = 375;
-    c.fx_px = c.fy_px = 721.5;
-    c.cx_px = c.cx_right_px = 621.0;
-    c.cy_px = 187.5;
-    c.baseline_m = 0.54;
-    return c;
-}
+using test_rigs::kitti_rig;
 
 /// An upright box (x from x0 to x1, face at depth z, from bottom_m above the road up to top_m)
 /// in a scene.
