@@ -425,18 +425,24 @@ Split split_oversized(const std::vector<Eigen::Vector3f>& pts, const Indices& id
     const double min_width = kSideBySideWidth * s.prior_W_m;
     std::optional<Split> widest;
     int widest_bins = 0;
-    const auto consider = [&](double a, double min_extent) {
+    // The widest clear gap across the unit direction (dir_x, dir_z) so far.
+    const auto consider = [&](double dir_x, double dir_z, double min_extent,
+                              std::size_t min_piece = 0, double min_overlap = kSideBySideOverlap) {
         int bins = 0;
-        auto cut =
-            split_at_gap(pts, idx, std::sin(a), std::cos(a), kSideBySideGapBins, min_extent, &bins);
+        auto cut = split_at_gap(pts, idx, dir_x, dir_z, kSideBySideGapBins, min_extent, &bins,
+                                min_piece, min_overlap);
         if (cut && bins > widest_bins) {
             widest = std::move(cut);
             widest_bins = bins;
         }
     };
-    if (box.W_m > min_width) consider(box.theta, 0.0);
+    // Angle a from +z towards +x: the direction (sin a, cos a).
+    if (box.W_m > min_width) consider(std::sin(box.theta), std::cos(box.theta), 0.0);
     const double ray = std::atan2(box.centre_m.x(), box.centre_m.z());  // from +z towards +x
-    for (int k = -3; k <= 3; ++k) consider(ray + kHalfPi + k * kHalfPi / 9.0, min_width);
+    for (int k = -3; k <= 3; ++k) {
+        const double a = ray + kHalfPi + k * kHalfPi / 9.0;
+        consider(std::sin(a), std::cos(a), min_width);
+    }
     if (widest) return *widest;
     if (ground && options.row_low_fraction > 0.0 &&
         front_on_row(pts, idx, box, s, *ground, options)) {
@@ -465,14 +471,9 @@ Split split_oversized(const std::vector<Eigen::Vector3f>& pts, const Indices& id
         // (looked for within 20 degrees of the box's heading, which smear skews; the two in
         // line, their sides seen edge-on as thin as they are).
         for (int k = -4; k <= 4; ++k) {
-            const double a = box.theta + k * kHalfPi / 18.0;
-            int bins = 0;
-            auto cut = split_at_gap(pts, idx, std::cos(a), -std::sin(a), kSideBySideGapBins, 0.0,
-                                    &bins, static_cast<std::size_t>(s.min_points), kInLineOverlap);
-            if (cut && bins > widest_bins) {
-                widest = std::move(cut);
-                widest_bins = bins;
-            }
+            const double a = box.theta + k * kHalfPi / 18.0;  // a heading: along (cos, -sin)
+            consider(std::cos(a), -std::sin(a), 0.0, static_cast<std::size_t>(s.min_points),
+                     kInLineOverlap);
         }
         if (widest) return *widest;
     }

@@ -73,7 +73,6 @@ OrientedBox fit_upright_box_weighted(const std::vector<Eigen::Vector3f>& points_
 /// (x, z) plane; exposed for tests.
 double lshape_yaw(const std::vector<Eigen::Vector2d>& xz_m, double angle_step_deg);
 
-
 /// Thesis extractors (one box per class, theta 0).
 /// Centre of mass: the mean of the points, size given by the caller.
 OrientedBox centroid_box(const std::vector<Eigen::Vector3f>& points_m,
