@@ -1,6 +1,6 @@
 #include "cloud_analysis/evaluation/kitti_labels.hpp"
-#include "cloud_analysis/support/angles.hpp"
 
+#include "cloud_analysis/support/angles.hpp"
 #include "stereoscene/support/atomic_file.hpp"
 #include "stereoscene/support/file_read.hpp"
 
