@@ -1,7 +1,8 @@
 #!/usr/bin/env bash
 # Runs the whole evaluation of cloud-analysis (docs/evaluation.md) and prints the tables.
 # First the rendered scenes (tuning data): the committed samples/rendered scenes, easy and hard,
-# and more parking streets rendered at run time (scripts/make-parking-scene.py, label bleed),
+# and more parking streets rendered at run time (scripts/make-parking-scene.py, label bleed; some
+# with kerbside clutter where nobody parks),
 # each scored against its truth with the goal's bars and a reason for every miss and every
 # spurious box, then analysed again from the stereo pair alone (--semantics geometry) and
 # scored with the stereo-only bars. Then the KITTI frames (checks, never tuned on): disparity of the tuned defaults
@@ -9,7 +10,9 @@
 # ground plane, the thesis's one-per-class extractors, and the stereo-only path (--semantics
 # geometry: the semantic image ignored; docs/stereo-only.md) beside them.
 # usage: scripts/evaluate.sh [--no-build] [--build-dir DIR] [--kitti-root DIR] [--out DIR]
-#            [--parking-seeds "2 4 5 6 7 8 9 10 11 12"] [--class-config FILE] [frames...]
+#            [--parking-seeds "2 4 5 6 7 8 9 10 11 12"] [--kerbside-seeds "1 2 3 4 5 6 7 8"]
+#            [--class-config FILE] [frames...]
+#   --kerbside-seeds: streets with kerbside clutter (make-parking-scene.py --kerbside)
 #   --class-config: per-class extractor settings for every analysis (to compare settings)
 #   default frames: 000000_10 000001_10; default KITTI root: ../shared/data/kitti15
 set -euo pipefail
@@ -21,6 +24,7 @@ kitti_root="$STEREOSCENE_ROOT/../shared/data/kitti15"
 out_dir=""
 frames=()
 parking_seeds="2 4 5 6 7 8 9 10 11 12"
+kerbside_seeds="1 2 3 4 5 6 7 8"
 analysis_args=()
 while [ $# -gt 0 ]; do
     case "$1" in
@@ -29,8 +33,9 @@ while [ $# -gt 0 ]; do
         --kitti-root) kitti_root=$2; shift ;;
         --out) out_dir=$2; shift ;;
         --parking-seeds) parking_seeds=$2; shift ;;
+        --kerbside-seeds) kerbside_seeds=$2; shift ;;
         --class-config) analysis_args+=(--class-config "$2"); shift ;;
-        -h|--help) sed -n '2,13p' "$0"; exit 0 ;;
+        -h|--help) sed -n '2,15p' "$0"; exit 0 ;;
         *) frames+=("$1") ;;
     esac
     shift
@@ -59,14 +64,17 @@ for dir in "$STEREOSCENE_ROOT"/samples/rendered/*/; do
     [ -f "$STEREOSCENE_ROOT/samples/rendered/scenes/$name.json" ] && rendered+=("$name")
 done
 mkdir -p "$out_dir/rendered"
-for seed in $parking_seeds; do
-    name="parking-street-$seed"
-    scene="$out_dir/rendered/$name.json"
-    python3 "$STEREOSCENE_ROOT/scripts/make-parking-scene.py" --seed "$seed" -o "$scene"
+render_street() {  # name seed [make-parking-scene.py flags]
+    local name=$1 seed=$2
+    shift 2
+    local scene="$out_dir/rendered/$name.json"
+    python3 "$STEREOSCENE_ROOT/scripts/make-parking-scene.py" --seed "$seed" "$@" -o "$scene"
     "$build_dir/scene_viewer/scene-render" sensors "$scene" --out "$out_dir/rendered/$name" \
         --frame 000000 --seed "$seed" --label-bleed 3
     rendered+=("run:$name")
-done
+}
+for seed in $parking_seeds; do render_street "parking-street-$seed" "$seed"; done
+for seed in $kerbside_seeds; do render_street "kerbside-$seed" "$seed" --kerbside; done
 echo "=== rendered scenes (tuning data) ==="
 evals=()
 for r in "${rendered[@]}"; do
@@ -135,6 +143,10 @@ for title, paths in tables:
           f"{'met' if d['bars']['pass'] else 'missed'} |")
   if every:
     errors = [m["centre_error_m"] for m in every]
+    spurious = sum(json.load(open(a.rsplit("=", 1)[1]))["entities"]["classes"].get("car", {})
+                   .get("bins", {}).get(b, {}).get("spurious", 0)
+                   for a in paths for b in ("0-10", "10-20", "20-30"))
+    print(f"all {len(paths)} scenes: {len(every)} cars matched, {spurious} spurious cars <= 30 m")
     print(f"all {len(every)} matched cars: median centre error {statistics.median(errors):.3f} m, "
           f"mean {statistics.mean(errors):.3f} m, mean BEV IoU "
           f"{statistics.mean([m['bev_iou'] for m in every]):.3f}")

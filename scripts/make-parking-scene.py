@@ -36,7 +36,8 @@ VAN = FAMILIES[4]
 TRUCK = ("truck", "truck", 7.5, 2.40, 3.20)
 BUS = ("bus", "bus", 11.0, 2.55, 3.20)
 CLASS_IDS = {"car": 26, "truck": 27, "bus": 28, "vegetation": 21, "pole": 17, "road": 7,
-             "sidewalk": 8, "building": 11}
+             "sidewalk": 8, "building": 11, "wall": 12, "static": 4, "bicycle": 33}
+SIDEWALK_BACK_X = 9.0  # the sidewalk's far edge (the buildings' side), metres
 
 
 def stuff(eid, cls, x, y, z, L, W, H, theta=-math.pi / 2):
@@ -90,7 +91,55 @@ def place_van(rng, items, z_lo, z_hi):
         items[j] = (items[j][0], items[j][1], items[j][2] + grow)
 
 
-def build_scene(seed):
+def kerbside(rng, z_start, z_end):
+    """Kerbside clutter on the right sidewalk from z_start to z_end, where nobody parks: garden
+    walls with pillars (some with a pierced coping of short blocks), hedges, a post box among
+    bollards, bins, a parked bicycle. Returns (class, x, y, z, L, W, H) boxes, L along the street."""
+    items = []
+    z = z_start
+    while z < z_end:
+        kind = rng.choice(["wall", "wall", "hedge", "postbox", "bins", "bicycle"])
+        if kind == "wall":
+            length = rng.uniform(3.0, 7.0)
+            height = rng.uniform(0.8, 1.4)
+            x = SIDEWALK_BACK_X - 0.4
+            items.append(("wall", x, height / 2, z + length / 2, length, 0.3, height))
+            pillars = max(2, int(length / 2.5) + 1)
+            for k in range(pillars):
+                zp = z + 0.2 + k * (length - 0.4) / (pillars - 1)
+                items.append(("wall", x, (height + 0.3) / 2, zp, 0.45, 0.45, height + 0.3))
+            if rng.random() < 0.5:  # a pierced coping: short blocks with gaps on top
+                zc = z + 0.5
+                while zc < z + length - 0.5:
+                    items.append(("wall", x, height + 0.125, zc + 0.15, 0.3, 0.25, 0.25))
+                    zc += 0.45
+            z += length
+        elif kind == "hedge":
+            length = rng.uniform(2.0, 5.0)
+            height = rng.uniform(1.0, 1.5)
+            items.append(("vegetation", SIDEWALK_BACK_X - 0.6, height / 2, z + length / 2, length,
+                          1.0, height))
+            z += length
+        elif kind == "postbox":
+            items.append(("static", KERB_X + 0.6, 0.575, z + 1.5, 0.5, 0.5, 1.15))
+            for k in range(rng.randint(2, 4)):
+                items.append(("pole", KERB_X + 0.25, 0.45, z + 0.3 + 1.2 * k, 0.12, 0.12, 0.9))
+            z += 1.2 * 4
+        elif kind == "bins":
+            for k in range(2):
+                items.append(("static", KERB_X + 0.7, 0.6, z + 0.4 + 0.75 * k, 0.7, 0.6, 1.2))
+            z += 2.0
+        else:
+            items.append(("bicycle", KERB_X + 0.8, 0.525, z + 0.9, 1.75, 0.6, 1.05))
+            z += 2.0
+        z += rng.uniform(0.5, 2.5)
+    # Each item's third value is its centre's height above the sidewalk, whose top is 0.15 m
+    # above the road's; y is the box centre's (camera frame, y down).
+    return [(c, round(x, 3), round(ROAD_TOP_Y - 0.15 - h, 3), round(zc, 3), round(L, 3), W,
+             round(H, 3)) for c, x, h, zc, L, W, H in items]
+
+
+def build_scene(seed, with_kerbside=False):
     rng = random.Random(seed)
     ents = [
         stuff("road-1", "road", 0.0, 1.625, 30.0, 80.0, 12.0, 0.05),
@@ -108,6 +157,11 @@ def build_scene(seed):
     right = row(rng, +1, rng.uniform(2.5, 4.5), 38.0,
                 {rng.randint(1, 2): "tree"})
     place_van(rng, right, 15.0, 20.0)
+    clutter = []
+    if with_kerbside:
+        # Nobody parks on the right from about 12 m to 32 m: the kerbside shows.
+        right = [it for it in right if it[2] + (it[1][2] / 2 if it[1] else 0.8) < 12.0]
+        clutter = kerbside(rng, 12.5, 32.0)
     for k, it in enumerate(right):
         if it[0] == "vehicle" and it[2] > 25.0 and it[1][1] != "van":
             grow = TRUCK[2] - it[1][2]
@@ -146,9 +200,13 @@ def build_scene(seed):
         counts[cls] = counts.get(cls, 0) + 1
         ents.append(stuff(f"{cls}-{counts[cls]}", cls, round(x, 3), y, round(z, 3), L, W, H,
                           0.0))
+    for cls, x, y, z, L, W, H in clutter:
+        counts[cls] = counts.get(cls, 0) + 1
+        ents.append(stuff(f"{cls}-{counts[cls]}", cls, x, y, z, L, W, H))
+    name = f"kerbside-{seed}" if with_kerbside else f"parking-street-{seed}"
     return {
         "schema_version": "1.0.0",
-        "frame": {"id": f"parking-street-{seed}", "convention": "kitti_camera",
+        "frame": {"id": name, "convention": "kitti_camera",
                   "camera": {"width": 1242, "height": 375, "fx": 721.5377, "fy": 721.5377,
                              "cx": 609.5593, "cy": 172.854, "baseline_m": 0.54}},
         "source": {"tool": "scripts/make-parking-scene.py",
@@ -156,7 +214,10 @@ def build_scene(seed):
                                   "bumper (gaps 0.3-1.0 m) 3-40 m ahead, small cars to vans, "
                                   "a truck on the right and a bus on the left, a van 15-20 m "
                                   "ahead on the right seen from behind-left, street trees and "
-                                  "poles between the cars. Camera 1.65 m above the road."},
+                                  "poles between the cars. Camera 1.65 m above the road."
+                                  + (" Kerbside: nobody parks on the right from 12 m to 32 m; "
+                                     "walls, hedges, a post box, bollards, bins and a bicycle "
+                                     "stand on the sidewalk." if with_kerbside else "")},
         "entities": ents,
     }
 
@@ -164,11 +225,15 @@ def build_scene(seed):
 def main():
     p = argparse.ArgumentParser(description=__doc__.split("\n")[0])
     p.add_argument("--seed", type=int, required=True, help="seed of the street (>= 0)")
+    p.add_argument("--kerbside", action="store_true",
+                   help="nobody parks on the right from 12 m to 32 m: garden walls (some with "
+                        "pillars and a pierced coping), hedges, a post box among bollards, bins "
+                        "and a bicycle stand on the sidewalk instead")
     p.add_argument("-o", "--out", default="-", help="output entity file ('-' = stdout)")
     a = p.parse_args()
     if a.seed < 0:
         p.error("--seed must be >= 0")
-    text = json.dumps(build_scene(a.seed), indent=2, sort_keys=True) + "\n"
+    text = json.dumps(build_scene(a.seed, a.kerbside), indent=2, sort_keys=True) + "\n"
     if a.out == "-":
         sys.stdout.write(text)
     else:

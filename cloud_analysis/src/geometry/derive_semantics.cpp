@@ -445,9 +445,10 @@ Segment classify(SegmentStats& st, const Classes& cls, const GeometryOptions& o)
         } else {
             narrow&& seg.top_m >= 2.0 ? set(cls.pole, "pole") : set(cls.other, "static");
         }
-    } else if (top_spread < o.wall_top_spread_m && thickness < o.wall_max_thickness_m &&
-               seg.width_m > o.wall_min_width_m) {
-        set(cls.wall, "wall");
+    } else if (top_spread < o.wall_top_spread_m && seg.width_m > o.wall_min_width_m) {
+        // Level along more than a car's width: a wall when thin, else kerbside clutter (bins,
+        // a post box and bollards, a wall's foot behind them) seen together.
+        thickness < o.wall_max_thickness_m ? set(cls.wall, "wall") : set(cls.other, "static");
     } else if (2 * st.occluded > st.pixels) {
         set(cls.other, "static");  // its top is hidden: no telling a car from a wall's foot
     } else if (seg.top_m >= o.car_min_height_m && seg.top_m <= o.car_max_height_m &&

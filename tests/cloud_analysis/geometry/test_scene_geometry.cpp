@@ -148,6 +148,31 @@ TEST_CASE("a car parked against a wall keeps its back a car and the wall a build
     }
 }
 
+TEST_CASE("kerbside clutter level along more than a car's width is not a car, though deep",
+          "[geometry]") {
+    const StereoCamera cam = kitti_rig();
+    const auto palette = cloud_analysis::load_palette("cityscapes");
+    // Bins, a post box and a wall's foot on the sidewalk, one height (1.2 m), staggered over
+    // 1.4 m of depth: too deep across for a wall, as level as one, and longer than a car's
+    // back. A car's tops run from its boot to its roof.
+    std::vector<Box> boxes;
+    for (int k = 0; k < 9; ++k) {
+        boxes.push_back(
+            {3.5 + 0.45 * k, 3.95 + 0.45 * k, 15.0 + 0.35 * (4 - std::abs(k - 4)), 1.2});
+    }
+    boxes.push_back({-1.0, 0.8, 15.0, 1.0});  // a car's back
+    boxes.push_back({-0.8, 0.6, 15.6, 1.5});  // its cabin
+    const SceneGeometry g = derive_semantics(render(cam, 1.65, boxes), cam, ImageU8{}, palette, {});
+    REQUIRE(g.ground.found);
+    for (const auto& [x, z] : {std::pair{3.7, 15.0}, std::pair{5.5, 16.4}, std::pair{7.3, 15.0}}) {
+        const auto [u, v] = pixel_of(cam, x, 0.6, z);
+        INFO("x " << x);
+        CHECK(class_at(g, palette, u, v) == "static");
+    }
+    const auto [cu, cv] = pixel_of(cam, 0.0, 0.8, 15.0);
+    CHECK(class_at(g, palette, cu, cv) == "car");
+}
+
 TEST_CASE("the green pixels of a car segment are vegetation, by their window's mean colour",
           "[geometry]") {
     const StereoCamera cam = kitti_rig();

@@ -60,19 +60,21 @@ struct GeometryOptions {
                                            ///< a segment reaching it meets a surface above), m
     double car_min_width_m = 1.2;          ///< narrower objects are persons or poles, metres
     double building_min_height_m = 2.6;    ///< taller objects are buildings (or trees), metres
-    double wall_top_spread_m = 0.15;    ///< a thin segment whose tops (25th-97th percentile) vary
-                                        ///< less than this is a wall or fence, metres
-    double wall_max_thickness_m = 0.8;  ///< ... when its footprint is thinner than this, metres
-    double wall_min_width_m = 2.2;      ///< ... and longer than this (a car's back, its boot
-                                        ///< seen alone, is as flat and thin but narrower), m
-    double pole_max_width_m = 0.6;      ///< tall objects narrower than this are poles, metres
-    double low_max_height_m = 0.6;      ///< objects lower than this are kerbs or low plants, m
-    double green_fraction = 0.45;       ///< objects with more green pixels are vegetation, (0,1]
-    int green_window_px = 2;            ///< a pixel is green when the mean colour of the window
-                                        ///< this far around it is (leaves' shadows), px, >= 0
-    double min_face_share = 0.15;       ///< a thing entity seen over less than this share of
-                                        ///< its smallest prior face (W x H) is a fragment or
-                                        ///< clutter and is dropped, [0, 1), 0 = off
+    double wall_top_spread_m = 0.2;        ///< a segment whose tops (25th-97th percentile) vary
+                                           ///< less than this is no car (a car's run from its
+                                           ///< boot or bonnet to its roof: 0.25 m or more), m
+    double wall_max_thickness_m = 0.8;     ///< ... a wall or fence when its footprint is thinner
+                                           ///< than this, else static (kerbside clutter), metres
+    double wall_min_width_m = 2.2;         ///< ... when longer than this (a car's back, its boot
+                                           ///< seen alone, is as flat and thin but narrower), m
+    double pole_max_width_m = 0.6;         ///< tall objects narrower than this are poles, metres
+    double low_max_height_m = 0.6;         ///< objects lower than this are kerbs or low plants, m
+    double green_fraction = 0.45;          ///< objects with more green pixels are vegetation, (0,1]
+    int green_window_px = 2;               ///< a pixel is green when the mean colour of the window
+                                           ///< this far around it is (leaves' shadows), px, >= 0
+    double min_face_share = 0.15;          ///< a thing entity seen over less than this share of
+                                           ///< its smallest prior face (W x H) is a fragment or
+                                           ///< clutter and is dropped, [0, 1), 0 = off
     /// Throws std::invalid_argument naming the bad field.
     void validate() const;
 };
