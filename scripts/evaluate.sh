@@ -10,7 +10,7 @@
 # ground plane, the thesis's one-per-class extractors, and the stereo-only path (--semantics
 # geometry: the semantic image ignored; docs/stereo-only.md) beside them.
 # usage: scripts/evaluate.sh [--no-build] [--build-dir DIR] [--kitti-root DIR] [--out DIR]
-#            [--parking-seeds "2 4 5 6 7 8 9 10 11 12"] [--kerbside-seeds "1 2 3 4 5 6 7 8"]
+#            [--parking-seeds "2 4 5 6 7 8 9 10 11 12"] [--kerbside-seeds "2 3 4 5 6 7 8 9"]
 #            [--class-config FILE] [frames...]
 #   --kerbside-seeds: streets with kerbside clutter (make-parking-scene.py --kerbside)
 #   --class-config: per-class extractor settings for every analysis (to compare settings)
@@ -24,7 +24,7 @@ kitti_root="$STEREOSCENE_ROOT/../shared/data/kitti15"
 out_dir=""
 frames=()
 parking_seeds="2 4 5 6 7 8 9 10 11 12"
-kerbside_seeds="1 2 3 4 5 6 7 8"
+kerbside_seeds="2 3 4 5 6 7 8 9"
 analysis_args=()
 while [ $# -gt 0 ]; do
     case "$1" in
