@@ -93,8 +93,8 @@ def place_van(rng, items, z_lo, z_hi):
 
 def kerbside(rng, z_start, z_end):
     """Kerbside clutter on the right sidewalk from z_start to z_end, where nobody parks: garden
-    walls with pillars (some with a pierced coping of short blocks), hedges, a post box among
-    bollards, bins, a parked bicycle. Returns (class, x, y, z, L, W, H) boxes, L along the street."""
+    walls with pillars (some with a pierced coping of short blocks) before front gardens,
+    hedges, a post box among bollards, bins, a parked bicycle. Returns (class, x, y, z, L, W, H) boxes, L along the street."""
     items = []
     z = z_start
     while z < z_end:
@@ -162,6 +162,11 @@ def build_scene(seed, with_kerbside=False):
         # Nobody parks on the right from about 12 m to 32 m: the kerbside shows.
         right = [it for it in right if it[2] + (it[1][2] / 2 if it[1] else 0.8) < 12.0]
         clutter = kerbside(rng, 12.5, 32.0)
+        # Front gardens behind the walls: the right-hand buildings stand 2-5 m farther back.
+        setback = rng.uniform(2.0, 5.0)
+        for e in ents:
+            if e["id"] in ("building-3", "building-4"):
+                e["x"] = round(e["x"] + setback, 3)
     for k, it in enumerate(right):
         if it[0] == "vehicle" and it[2] > 25.0 and it[1][1] != "van":
             grow = TRUCK[2] - it[1][2]
@@ -226,9 +231,10 @@ def main():
     p = argparse.ArgumentParser(description=__doc__.split("\n")[0])
     p.add_argument("--seed", type=int, required=True, help="seed of the street (>= 0)")
     p.add_argument("--kerbside", action="store_true",
-                   help="nobody parks on the right from 12 m to 32 m: garden walls (some with "
-                        "pillars and a pierced coping), hedges, a post box among bollards, bins "
-                        "and a bicycle stand on the sidewalk instead")
+                   help="nobody parks on the right from 12 m to 32 m: garden walls (with "
+                        "pillars, some with a pierced coping), hedges, a post box among "
+                        "bollards, bins and a bicycle stand on the sidewalk instead, the "
+                        "buildings behind them 2-5 m back")
     p.add_argument("-o", "--out", default="-", help="output entity file ('-' = stdout)")
     a = p.parse_args()
     if a.seed < 0:
