@@ -11,6 +11,10 @@ gives the same file byte for byte. Render it with label bleed in the semantic im
     scripts/make-parking-scene.py --seed 1 -o parking.json
     scene-render sensors parking.json --out out --label-bleed 3 --seed 1
 
+With --kerbside nobody parks on the right from 12 m to 32 m: garden walls with pillars (some
+with a pierced coping) before front gardens, hedges, a post box among bollards, bins and a
+bicycle stand on the sidewalk there (docs/evaluation.md "Kerbside streets").
+
 Every car carries its size family in `subclass` (car, van); the truck and the bus are their
 own classes. docs/evaluation.md "Hard parking streets" describes how they are scored.
 """
@@ -94,7 +98,8 @@ def place_van(rng, items, z_lo, z_hi):
 def kerbside(rng, z_start, z_end):
     """Kerbside clutter on the right sidewalk from z_start to z_end, where nobody parks: garden
     walls with pillars (some with a pierced coping of short blocks) before front gardens,
-    hedges, a post box among bollards, bins, a parked bicycle. Returns (class, x, y, z, L, W, H) boxes, L along the street."""
+    hedges, a post box among bollards, bins, a parked bicycle. Returns (class, x, y, z, L, W, H)
+    boxes, L along the street."""
     items = []
     z = z_start
     while z < z_end:
