@@ -445,7 +445,9 @@ Segment classify(SegmentStats& st, const Classes& cls, const GeometryOptions& o)
         } else {
             narrow&& seg.top_m >= 2.0 ? set(cls.pole, "pole") : set(cls.other, "static");
         }
-    } else if (top_spread < o.wall_top_spread_m && seg.width_m > o.wall_min_width_m) {
+    } else if (top_spread < (seg.depth_m < o.wall_near_depth_m ? o.wall_top_spread_near_m
+                                                               : o.wall_top_spread_m) &&
+               seg.width_m > o.wall_min_width_m) {
         // Level along more than a car's width: a wall when thin, else kerbside clutter (bins,
         // a post box and bollards, a wall's foot behind them) seen together.
         thickness < o.wall_max_thickness_m ? set(cls.wall, "wall") : set(cls.other, "static");

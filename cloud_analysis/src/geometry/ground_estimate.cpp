@@ -50,6 +50,8 @@ void GeometryOptions::validate() const {
     positive(building_min_height_m, "geometry.building_min_height_m");
     positive(pole_max_width_m, "geometry.pole_max_width_m");
     positive(wall_top_spread_m, "geometry.wall_top_spread_m");
+    positive(wall_top_spread_near_m, "geometry.wall_top_spread_near_m");
+    positive(wall_near_depth_m, "geometry.wall_near_depth_m");
     positive(wall_max_thickness_m, "geometry.wall_max_thickness_m");
     positive(wall_min_width_m, "geometry.wall_min_width_m");
     positive(low_max_height_m, "geometry.low_max_height_m");

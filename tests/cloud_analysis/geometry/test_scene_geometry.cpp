@@ -173,6 +173,26 @@ TEST_CASE("kerbside clutter level along more than a car's width is not a car, th
     CHECK(class_at(g, palette, cu, cv) == "car");
 }
 
+TEST_CASE("a garden wall with pillars is a wall, not a car", "[geometry]") {
+    const StereoCamera cam = kitti_rig();
+    const auto palette = cloud_analysis::load_palette("cityscapes");
+    // A wall 1 m high and 3 m long at 15 m with three pillars 0.3 m higher: its tops vary by
+    // the pillars' 0.3 m, more than a plain wall's, less than a car's.
+    const std::vector<Box> boxes = {{4.0, 7.0, 15.0, 1.0},  {4.0, 4.45, 15.0, 1.3},
+                                    {5.3, 5.75, 15.0, 1.3}, {6.55, 7.0, 15.0, 1.3},
+                                    {-1.0, 0.8, 15.0, 1.0},   // a car's back
+                                    {-0.8, 0.6, 15.6, 1.5}};  // its cabin
+    const SceneGeometry g = derive_semantics(render(cam, 1.65, boxes), cam, ImageU8{}, palette, {});
+    REQUIRE(g.ground.found);
+    for (const double x : {4.9, 6.1}) {
+        const auto [u, v] = pixel_of(cam, x, 0.6, 15.0);
+        INFO("x " << x);
+        CHECK(class_at(g, palette, u, v) == "wall");
+    }
+    const auto [cu, cv] = pixel_of(cam, 0.0, 0.8, 15.0);
+    CHECK(class_at(g, palette, cu, cv) == "car");
+}
+
 TEST_CASE("the green pixels of a car segment are vegetation, by their window's mean colour",
           "[geometry]") {
     const StereoCamera cam = kitti_rig();

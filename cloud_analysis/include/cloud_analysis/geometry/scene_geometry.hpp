@@ -61,8 +61,13 @@ struct GeometryOptions {
     double car_min_width_m = 1.2;          ///< narrower objects are persons or poles, metres
     double building_min_height_m = 2.6;    ///< taller objects are buildings (or trees), metres
     double wall_top_spread_m = 0.2;        ///< a segment whose tops (25th-97th percentile) vary
-                                           ///< less than this is no car (a car's run from its
-                                           ///< boot or bonnet to its roof: 0.25 m or more), m
+                                           ///< less than this is no car: one upright face (a
+                                           ///< car's cells, at the depths of its bumper, sides,
+                                           ///< windows and roof, vary by 0.25 m or more), m
+    double wall_top_spread_near_m = 0.35;  ///< ... the same nearer than wall_near_depth_m, where
+                                           ///< a car's parts fall in cells of their own (0.43 m
+                                           ///< or more on the rendered scenes), metres
+    double wall_near_depth_m = 25.0;       ///< ... the depth that holds within, metres
     double wall_max_thickness_m = 0.8;     ///< ... a wall or fence when its footprint is thinner
                                            ///< than this, else static (kerbside clutter), metres
     double wall_min_width_m = 2.2;         ///< ... when longer than this (a car's back, its boot
