@@ -11,8 +11,10 @@
 # geometry: the semantic image ignored; docs/stereo-only.md) beside them.
 # usage: scripts/evaluate.sh [--no-build] [--build-dir DIR] [--kitti-root DIR] [--out DIR]
 #            [--parking-seeds "2 4 5 6 7 8 9 10 11 12"] [--kerbside-seeds "2 3 4 5 6 7 8 9"]
-#            [--class-config FILE] [frames...]
+#            [--held-out-seeds "13 14 15 16 17 18 19 20 21 22"] [--class-config FILE] [frames...]
 #   --kerbside-seeds: streets with kerbside clutter (make-parking-scene.py --kerbside)
+#   --held-out-seeds: a parking and a kerbside street each, never used to choose a parameter;
+#                     their totals are printed apart from the tuning scenes
 #   --class-config: per-class extractor settings for every analysis (to compare settings)
 #   default frames: 000000_10 000001_10; default KITTI root: ../shared/data/kitti15
 set -euo pipefail
@@ -25,6 +27,7 @@ out_dir=""
 frames=()
 parking_seeds="2 4 5 6 7 8 9 10 11 12"
 kerbside_seeds="2 3 4 5 6 7 8 9"
+held_out_seeds="13 14 15 16 17 18 19 20 21 22"
 analysis_args=()
 while [ $# -gt 0 ]; do
     case "$1" in
@@ -34,8 +37,9 @@ while [ $# -gt 0 ]; do
         --out) out_dir=$2; shift ;;
         --parking-seeds) parking_seeds=$2; shift ;;
         --kerbside-seeds) kerbside_seeds=$2; shift ;;
+        --held-out-seeds) held_out_seeds=$2; shift ;;
         --class-config) analysis_args+=(--class-config "$2"); shift ;;
-        -h|--help) sed -n '2,15p' "$0"; exit 0 ;;
+        -h|--help) sed -n '2,17p' "$0"; exit 0 ;;
         *) frames+=("$1") ;;
     esac
     shift
@@ -64,25 +68,30 @@ for dir in "$STEREOSCENE_ROOT"/samples/rendered/*/; do
     [ -f "$STEREOSCENE_ROOT/samples/rendered/scenes/$name.json" ] && rendered+=("$name")
 done
 mkdir -p "$out_dir/rendered"
-render_street() {  # name seed [make-parking-scene.py flags]
-    local name=$1 seed=$2
-    shift 2
+render_street() {  # kind name seed [make-parking-scene.py flags]; kind: run (tuning) or held
+    local kind=$1 name=$2 seed=$3
+    shift 3
     local scene="$out_dir/rendered/$name.json"
     python3 "$STEREOSCENE_ROOT/scripts/make-parking-scene.py" --seed "$seed" "$@" -o "$scene"
     "$build_dir/scene_viewer/scene-render" sensors "$scene" --out "$out_dir/rendered/$name" \
         --frame 000000 --seed "$seed" --label-bleed 3
-    rendered+=("run:$name")
+    rendered+=("$kind:$name")
 }
-for seed in $parking_seeds; do render_street "parking-street-$seed" "$seed"; done
-for seed in $kerbside_seeds; do render_street "kerbside-$seed" "$seed" --kerbside; done
-echo "=== rendered scenes (tuning data) ==="
+for seed in $parking_seeds; do render_street run "parking-street-$seed" "$seed"; done
+for seed in $kerbside_seeds; do render_street run "kerbside-$seed" "$seed" --kerbside; done
+for seed in $held_out_seeds; do
+    render_street held "parking-street-$seed" "$seed"
+    render_street held "kerbside-$seed" "$seed" --kerbside
+done
+echo "=== rendered scenes (tuning data, then the held-out streets) ==="
 evals=()
 for r in "${rendered[@]}"; do
-    if [ "${r#run:}" != "$r" ]; then
-        name=${r#run:}
+    if [ "${r#run:}" != "$r" ] || [ "${r#held:}" != "$r" ]; then
+        name=${r#*:}
         dir="$out_dir/rendered/$name"
         truth="$out_dir/rendered/$name.json"
         label="$name (seed, rendered now)"
+        [ "${r#held:}" = "$r" ] || label="$name (held out, rendered now)"
     else
         name=$r
         dir="$STEREOSCENE_ROOT/samples/rendered/$name"
@@ -123,8 +132,7 @@ for title, paths in tables:
   print("| scene | cars <= 30 m scored | found | spurious cars | precision | median centre m "
         "| median heading deg | BEV IoU >= 0.5 | goal |")
   print("|---|---|---|---|---|---|---|---|---|")
-  every = []  # the matched cars of every scene
-  spurious = 0
+  totals = {}  # tuning / held out: matched cars, owed, found, spurious, scenes, scenes met
   for arg in paths:
     label, path = arg.rsplit("=", 1)
     d = json.load(open(path))
@@ -134,20 +142,27 @@ for title, paths in tables:
     ref = sum(b.get("reference", 0) for b in near)
     hit = sum(b.get("matched", 0) for b in near)
     spur = sum(b.get("spurious", 0) for b in near)
-    spurious += spur
     good = sum(b.get("good_iou", 0) for b in near)
     cars = [m for m in e["matches"] if m["class"] == "car" and m["range_m"] < 30.0]
-    every += cars
+    t = totals.setdefault("held out" if "held out" in label else "tuning", [[], 0, 0, 0, 0, 0])
+    t[0] += cars
+    t[1] += ref
+    t[2] += hit
+    t[3] += spur
+    t[4] += 1
+    t[5] += 1 if d["bars"]["pass"] else 0
     centre = f"{statistics.median([m['centre_error_m'] for m in cars]):.2f}" if cars else "-"
     head = f"{statistics.median([m['heading_error_deg'] for m in cars]):.1f}" if cars else "-"
     prec = f"{hit / (hit + spur):.2f}" if hit + spur else "-"
     print(f"| {label} | {ref} | {hit} | {spur} | {prec} | {centre} | {head} | {good}/{ref} | "
           f"{'met' if d['bars']['pass'] else 'missed'} |")
-  if every:
+  for group, (every, ref, hit, spur, scenes, met) in totals.items():
+    if not every:
+      continue
     errors = [m["centre_error_m"] for m in every]
-    print(f"all {len(paths)} scenes: {len(every)} cars matched, {spurious} spurious cars <= 30 m")
-    print(f"all {len(every)} matched cars: median centre error {statistics.median(errors):.3f} m, "
-          f"mean {statistics.mean(errors):.3f} m, mean BEV IoU "
+    print(f"{group}, {scenes} scenes: {hit} of {ref} cars found, {spur} spurious cars <= 30 m, "
+          f"bars met on {met}; matched cars: median centre error "
+          f"{statistics.median(errors):.3f} m, mean {statistics.mean(errors):.3f} m, mean BEV IoU "
           f"{statistics.mean([m['bev_iou'] for m in every]):.3f}")
 PY
 
