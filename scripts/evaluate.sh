@@ -132,7 +132,7 @@ for title, paths in tables:
   print("| scene | cars <= 30 m scored | found | spurious cars | precision | median centre m "
         "| median heading deg | BEV IoU >= 0.5 | goal |")
   print("|---|---|---|---|---|---|---|---|---|")
-  totals = {}  # tuning / held out: matched cars, owed, found, spurious, scenes, scenes met
+  totals = {}  # per group (tuning, held out): its matched cars and counts
   for arg in paths:
     label, path = arg.rsplit("=", 1)
     d = json.load(open(path))
@@ -144,26 +144,25 @@ for title, paths in tables:
     spur = sum(b.get("spurious", 0) for b in near)
     good = sum(b.get("good_iou", 0) for b in near)
     cars = [m for m in e["matches"] if m["class"] == "car" and m["range_m"] < 30.0]
-    t = totals.setdefault("held out" if "held out" in label else "tuning", [[], 0, 0, 0, 0, 0])
-    t[0] += cars
-    t[1] += ref
-    t[2] += hit
-    t[3] += spur
-    t[4] += 1
-    t[5] += 1 if d["bars"]["pass"] else 0
+    t = totals.setdefault("held out" if "held out" in label else "tuning",
+                          {"cars": [], "ref": 0, "hit": 0, "spur": 0, "scenes": 0, "met": 0})
+    t["cars"] += cars
+    for key, n in (("ref", ref), ("hit", hit), ("spur", spur), ("scenes", 1),
+                   ("met", int(d["bars"]["pass"]))):
+      t[key] += n
     centre = f"{statistics.median([m['centre_error_m'] for m in cars]):.2f}" if cars else "-"
     head = f"{statistics.median([m['heading_error_deg'] for m in cars]):.1f}" if cars else "-"
     prec = f"{hit / (hit + spur):.2f}" if hit + spur else "-"
     print(f"| {label} | {ref} | {hit} | {spur} | {prec} | {centre} | {head} | {good}/{ref} | "
           f"{'met' if d['bars']['pass'] else 'missed'} |")
-  for group, (every, ref, hit, spur, scenes, met) in totals.items():
-    if not every:
+  for group, t in totals.items():
+    if not t["cars"]:
       continue
-    errors = [m["centre_error_m"] for m in every]
-    print(f"{group}, {scenes} scenes: {hit} of {ref} cars found, {spur} spurious cars <= 30 m, "
-          f"bars met on {met}; matched cars: median centre error "
+    errors = [m["centre_error_m"] for m in t["cars"]]
+    print(f"{group}, {t['scenes']} scenes: {t['hit']} of {t['ref']} cars found, {t['spur']} "
+          f"spurious cars <= 30 m, bars met on {t['met']}; matched cars: median centre error "
           f"{statistics.median(errors):.3f} m, mean {statistics.mean(errors):.3f} m, mean BEV IoU "
-          f"{statistics.mean([m['bev_iou'] for m in every]):.3f}")
+          f"{statistics.mean([m['bev_iou'] for m in t['cars']]):.3f}")
 PY
 
 if [ ! -d "$kitti_root/disp_occ_0" ] || [ ! -d "$kitti_root/instance" ]; then
