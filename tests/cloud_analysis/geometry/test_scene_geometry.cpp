@@ -1,6 +1,8 @@
 #include <algorithm>
 #include <cmath>
 #include <string>
+#include <utility>
+#include <vector>
 
 #include <catch2/catch.hpp>
 
@@ -24,6 +26,14 @@ struct Box {
     double x0, x1, z, top_m;
     double bottom_m = 0.0;
 };
+
+/// `boxes` and a car seen from behind, its back at depth z: the back up to the boot lid, the
+/// cabin 0.6 m farther up to the roof.
+std::vector<Box> with_car_from_behind(std::vector<Box> boxes, double z) {
+    boxes.push_back({-1.0, 0.8, z, 1.0});
+    boxes.push_back({-0.8, 0.6, z + 0.6, 1.5});
+    return boxes;
+}
 
 /// Ray casting of a flat road `height_m` below the camera (pitch 0) and upright boxes facing
 /// the camera; sky (no disparity) above the horizon where nothing is hit.
@@ -86,11 +96,10 @@ TEST_CASE("a car-shaped object on the road is car, a facade building, a pole pol
     const auto palette = cloud_analysis::load_palette("cityscapes");
     // A car seen from behind: its back up to the boot lid, the cabin 0.6 m farther up to the
     // roof (a flat board with one top is a wall or fence: last line).
-    const std::vector<Box> boxes = {{-1.0, 0.8, 10.0, 1.0},     // a car's back
-                                    {-0.8, 0.6, 10.6, 1.5},     // its cabin
-                                    {3.5, 12.0, 15.0, 8.0},     // a facade
-                                    {-4.0, -3.8, 8.0, 4.0},     // a pole
-                                    {-12.0, -6.0, 14.0, 1.2}};  // a garden wall
+    const std::vector<Box> boxes = with_car_from_behind({{3.5, 12.0, 15.0, 8.0},     // a facade
+                                                         {-4.0, -3.8, 8.0, 4.0},     // a pole
+                                                         {-12.0, -6.0, 14.0, 1.2}},  // a wall
+                                                        10.0);
     const SceneGeometry g = derive_semantics(render(cam, 1.65, boxes), cam, ImageU8{}, palette, {});
     REQUIRE(g.ground.found);
     const auto [cu, cv] = pixel_of(cam, 0.0, 0.8, 10.0);
@@ -111,10 +120,10 @@ TEST_CASE("a car under a tree's crown stays a car, a facade runs on above the ca
     const auto palette = cloud_analysis::load_palette("cityscapes");
     // The crown hangs 1.5 m above the roof at the car's own depth: one u-disparity cell holds
     // both, in different layers. The wall beside it (a facade's foot) is continuous.
-    const std::vector<Box> boxes = {{-1.0, 0.8, 12.0, 1.0},       // a car's back
-                                    {-0.8, 0.6, 12.6, 1.5},       // its cabin
-                                    {-2.5, 2.5, 12.3, 6.0, 3.0},  // a crown, 3 to 6 m up
-                                    {4.0, 12.0, 12.0, 6.0}};      // a facade
+    const std::vector<Box> boxes =
+        with_car_from_behind({{-2.5, 2.5, 12.3, 6.0, 3.0},  // a crown, 3 to 6 m up
+                              {4.0, 12.0, 12.0, 6.0}},      // a facade
+                             12.0);
     const SceneGeometry g = derive_semantics(render(cam, 1.65, boxes), cam, ImageU8{}, palette, {});
     REQUIRE(g.ground.found);
     const auto [cu, cv] = pixel_of(cam, 0.0, 0.8, 12.0);
@@ -133,8 +142,7 @@ TEST_CASE("a car parked against a wall keeps its back a car and the wall a build
     const auto palette = cloud_analysis::load_palette("cityscapes");
     // The wall stands 0.3 m behind the car's cabin, across the whole view. The car's back, a
     // flat top 1.7 m wide, is as thin and level as a wall's: too narrow for one.
-    const std::vector<Box> boxes = {
-        {-1.0, 0.8, 10.0, 1.0}, {-0.8, 0.6, 10.6, 1.5}, {-8.0, 8.0, 10.9, 4.0}};
+    const std::vector<Box> boxes = with_car_from_behind({{-8.0, 8.0, 10.9, 4.0}}, 10.0);
     const auto [cu, cv] = pixel_of(cam, 0.0, 0.8, 10.0);
     const auto [wu, wv] = pixel_of(cam, 4.0, 3.0, 10.9);
     for (const char* segmentation : {"columns", "clusters"}) {
@@ -160,8 +168,7 @@ TEST_CASE("kerbside clutter level along more than a car's width is not a car, th
         boxes.push_back(
             {3.5 + 0.45 * k, 3.95 + 0.45 * k, 15.0 + 0.35 * (4 - std::abs(k - 4)), 1.2});
     }
-    boxes.push_back({-1.0, 0.8, 15.0, 1.0});  // a car's back
-    boxes.push_back({-0.8, 0.6, 15.6, 1.5});  // its cabin
+    boxes = with_car_from_behind(std::move(boxes), 15.0);
     const SceneGeometry g = derive_semantics(render(cam, 1.65, boxes), cam, ImageU8{}, palette, {});
     REQUIRE(g.ground.found);
     for (const auto& [x, z] : {std::pair{3.7, 15.0}, std::pair{5.5, 16.4}, std::pair{7.3, 15.0}}) {
@@ -178,10 +185,11 @@ TEST_CASE("a garden wall with pillars is a wall, not a car", "[geometry]") {
     const auto palette = cloud_analysis::load_palette("cityscapes");
     // A wall 1 m high and 3 m long at 15 m with three pillars 0.3 m higher: its tops vary by
     // the pillars' 0.3 m, more than a plain wall's, less than a car's.
-    const std::vector<Box> boxes = {{4.0, 7.0, 15.0, 1.0},  {4.0, 4.45, 15.0, 1.3},
-                                    {5.3, 5.75, 15.0, 1.3}, {6.55, 7.0, 15.0, 1.3},
-                                    {-1.0, 0.8, 15.0, 1.0},   // a car's back
-                                    {-0.8, 0.6, 15.6, 1.5}};  // its cabin
+    const std::vector<Box> boxes = with_car_from_behind({{4.0, 7.0, 15.0, 1.0},
+                                                         {4.0, 4.45, 15.0, 1.3},
+                                                         {5.3, 5.75, 15.0, 1.3},
+                                                         {6.55, 7.0, 15.0, 1.3}},
+                                                        15.0);
     const SceneGeometry g = derive_semantics(render(cam, 1.65, boxes), cam, ImageU8{}, palette, {});
     REQUIRE(g.ground.found);
     for (const double x : {4.9, 6.1}) {
@@ -197,7 +205,7 @@ TEST_CASE("the green pixels of a car segment are vegetation, by their window's m
           "[geometry]") {
     const StereoCamera cam = kitti_rig();
     const auto palette = cloud_analysis::load_palette("cityscapes");
-    const std::vector<Box> boxes = {{-1.0, 0.8, 10.0, 1.0}, {-0.8, 0.6, 10.6, 1.5}};
+    const std::vector<Box> boxes = with_car_from_behind({}, 10.0);
     // A grey image with a bush over the car's left half: green leaves every other column, dark
     // shadows between them (not green one by one, green on average).
     ImageU8 left;
