@@ -576,6 +576,46 @@ TEST_CASE("without a semantic image the stereo pair alone gives cars, and the fi
     CHECK(run(tool() + street_pair() + " --semantics colour -o -", dir).code == 2);
 }
 
+TEST_CASE("the stereo-only segments are written as a table and an id image, or not at all",
+          "[cli][geometry]") {
+    const auto dir = scratch("segments_out");
+    const fs::path table = dir / "segments.json", ids = dir / "segments.png",
+                   out = dir / "entities.json";
+    const Run r = run(tool() + street_pair() + " -o " + quote(out.string()) + " --segments-out " +
+                          quote(table.string()) + " --segment-ids-out " + quote(ids.string()),
+                      dir);
+    REQUIRE(r.code == 0);
+    const auto doc = nlohmann::json::parse(slurp(table));
+    CHECK(doc["frame"] == "000000");
+    int cars = 0;
+    for (const auto& s : doc["segments"]) {
+        if (s["class"] == "car") ++cars;
+        CHECK(s["box_px"][0].get<int>() <= s["box_px"][2].get<int>());
+    }
+    CHECK(cars >= 3);
+    // A 16-bit grey PNG of the left image's size (its IHDR: width, height, depth, colour type).
+    const std::string png = slurp(ids);
+    REQUIRE(png.size() > 26);
+    const auto byte = [&](std::size_t k) { return static_cast<unsigned char>(png[k]); };
+    CHECK(png.compare(1, 3, "PNG") == 0);
+    CHECK((byte(18) << 8 | byte(19)) == 1242);
+    CHECK((byte(22) << 8 | byte(23)) == 375);
+    CHECK(byte(24) == 16);
+    CHECK(byte(25) == 0);
+    // The labelled path has no segments: an error naming the flag, and no file at all.
+    fs::remove(table);
+    fs::remove(out);
+    const Run labelled =
+        run(tool() + street_pair() + " --semantic " +
+                quote((kStreet / "semantic_rgb" / "000000.png").string()) + " -o " +
+                quote(out.string()) + " --segments-out " + quote(table.string()),
+            dir);
+    CHECK(labelled.code == 1);
+    CHECK(labelled.err.find("--segments-out") != std::string::npos);
+    CHECK_FALSE(fs::exists(table));
+    CHECK_FALSE(fs::exists(out));
+}
+
 TEST_CASE("a calibration whose baseline puts the road 10 m down warns, writes, and finds no car",
           "[cli][geometry]") {
     const auto dir = scratch("stereo_only_bad");

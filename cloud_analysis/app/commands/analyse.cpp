@@ -48,7 +48,9 @@ LoadedRun load_run(const AnalyseArgs& a) {
         {a.ply.string(), "--ply"},
         {a.disparity_png.string(), "--disparity-png"},
         {a.disparity_kitti.string(), "--disparity-kitti"},
-        {a.semantic_out.string(), "--semantic-out"}};
+        {a.semantic_out.string(), "--semantic-out"},
+        {a.segments_out.string(), "--segments-out"},
+        {a.segment_ids_out.string(), "--segment-ids-out"}};
     int to_stdout = 0;
     // Declared on a transaction only to refuse a directory, a missing folder or one file named
     // by two flags before any work; nothing is staged on it.
@@ -178,6 +180,28 @@ std::vector<PendingOutput> format_outputs(const LoadedRun& run,
         outputs.push_back(
             {a.semantic_out.string(), encode_semantic_png(r, in.palette), "--semantic-out"});
         timings.push_back({"encode semantic", ms_since(t)});
+    }
+    if (!a.segments_out.empty() || !a.segment_ids_out.empty()) {
+        if (!r.geometry) {
+            throw std::runtime_error(
+                std::string("no segments: the classes came from the semantic image; ") +
+                (a.segments_out.empty() ? "--segment-ids-out" : "--segments-out") +
+                " needs --semantics geometry");
+        }
+        t = Clock::now();
+        if (!a.segments_out.empty()) {
+            outputs.push_back(
+                {a.segments_out.string(),
+                 cloud_analysis::geometry::segments_json(*r.geometry, in.paths.frame_id),
+                 "--segments-out"});
+        }
+        if (!a.segment_ids_out.empty()) {
+            outputs.push_back({a.segment_ids_out.string(),
+                               cloud_analysis::encode_png_u16(cloud_analysis::geometry::segment_ids(
+                                   *r.geometry, r.camera.width_px, r.camera.height_px)),
+                               "--segment-ids-out"});
+        }
+        timings.push_back({"format segments", ms_since(t)});
     }
     return outputs;
 }

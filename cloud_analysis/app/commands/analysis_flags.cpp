@@ -223,6 +223,15 @@ void add_output_flags(CLI::App& cmd, AnalyseArgs& a) {
                    "PNG of the per-pixel classes used, in the palette's colours (with "
                    "--semantics geometry: what the geometry decided)")
         ->group(out);
+    cmd.add_option("--segments-out", a.segments_out,
+                   "JSON of the stereo-only path's obstacle segments: each one's class, what the "
+                   "rules measured of it and its image box (needs --semantics geometry or no "
+                   "semantic image)")
+        ->group(out);
+    cmd.add_option("--segment-ids-out", a.segment_ids_out,
+                   "16-bit PNG of the segments' pixels: index in --segments-out + 1, 0 = none "
+                   "(the stereo-only path)")
+        ->group(out);
     cmd.add_option("--gt-disparity", a.gt_disparity,
                    "KITTI GT disparity PNG: print D1-all, EPE and density to stderr")
         ->group(out);

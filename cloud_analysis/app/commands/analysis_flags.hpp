@@ -29,7 +29,9 @@ struct AnalyseArgs {
     std::filesystem::path class_config;
     std::string entities;
     std::filesystem::path xyz, pcd, ply, disparity_png, disparity_kitti, gt_disparity;
-    std::filesystem::path semantic_out;  ///< --semantic-out: the classes used, as a PNG
+    std::filesystem::path semantic_out;     ///< --semantic-out: the classes used, as a PNG
+    std::filesystem::path segments_out;     ///< --segments-out: the stereo-only segments, JSON
+    std::filesystem::path segment_ids_out;  ///< --segment-ids-out: their pixels, 16-bit PNG
     std::vector<std::string>
         drop_classes;       ///< --drop-classes (+ sky with --drop-sky): not in clouds
     bool drop_sky = false;  ///< --drop-sky

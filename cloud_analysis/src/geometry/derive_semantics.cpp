@@ -418,15 +418,22 @@ std::vector<SegmentStats> gather_segments(Grid& g, std::vector<int>& parent, con
 Segment classify(SegmentStats& st, const Classes& cls, const GeometryOptions& o) {
     Segment seg;
     seg.pixels = st.pixels;
+    seg.cells = st.tops.size();
     seg.top_m = quantile(st.tops, 0.97);
+    seg.top_q25_m = quantile(st.tops, 0.25);
     // A wall or fence keeps one height along its length; a car's tops range from its bonnet
     // or boot (0.8-1.1 m) to its roof.
-    const double top_spread = seg.top_m - quantile(st.tops, 0.25);
-    const double low = quantile(st.lows, 0.1);
-    double thickness = 0.0;
-    std::tie(seg.width_m, thickness) = footprint_extents(st.footprint);
+    const double top_spread = seg.top_m - seg.top_q25_m;
+    seg.low_m = quantile(st.lows, 0.1);
+    const double low = seg.low_m;
+    std::tie(seg.width_m, seg.thickness_m) = footprint_extents(st.footprint);
+    const double thickness = seg.thickness_m;
     seg.depth_m = quantile(st.depths, 0.5);
+    seg.near_m = quantile(st.depths, 0.05);
+    seg.far_m = quantile(st.depths, 0.95);
     seg.green = st.pixels ? static_cast<double>(st.green) / st.pixels : 0.0;
+    seg.occluded = st.pixels ? static_cast<double>(st.occluded) / st.pixels : 0.0;
+    seg.tall = st.tall;
     const auto set = [&](std::uint16_t c, const char* label) {
         seg.class_index = c;
         seg.label = label;
@@ -514,11 +521,24 @@ SceneGeometry derive_semantics(const DisparityMap& disparity, const StereoCamera
         out.segments.push_back(classify(stats[s], cls, o));
         segment_class[s] = out.segments.back().class_index;
     }
+    out.segment_of_pixel.assign(grid.pixel_cell.size(), -1);
     for (std::size_t p = 0; p < grid.pixel_cell.size(); ++p) {
         const std::int32_t cell = grid.pixel_cell[p];
         if (cell < 0) continue;
         const int s = grid.cells[static_cast<std::size_t>(cell)].segment;
         if (s >= 0) {
+            out.segment_of_pixel[p] = s;
+            Segment& seg = out.segments[static_cast<std::size_t>(s)];
+            const int u = static_cast<int>(p % static_cast<std::size_t>(w));
+            const int v = static_cast<int>(p / static_cast<std::size_t>(w));
+            if (seg.u1 < 0) {
+                seg.u0 = seg.u1 = u;
+                seg.v0 = seg.v1 = v;
+            }
+            seg.u0 = std::min(seg.u0, u);
+            seg.u1 = std::max(seg.u1, u);
+            seg.v0 = std::min(seg.v0, v);
+            seg.v1 = std::max(seg.v1, v);
             // Green pixels of a car segment are the hedge or bush it touches.
             const std::uint16_t c = segment_class[static_cast<std::size_t>(s)];
             out.classes.class_index[p] = c == cls.car && grid.pixel_green[p] ? cls.vegetation : c;
@@ -527,8 +547,23 @@ SceneGeometry derive_semantics(const DisparityMap& disparity, const StereoCamera
         }
     }
     label_sky(&grid, w, out.ground.horizon_v_px, cls.sky, out.classes);
-    std::stable_sort(out.segments.begin(), out.segments.end(),
-                     [](const Segment& a, const Segment& b) { return a.pixels > b.pixels; });
+    // Largest first; the pixels' indices follow.
+    std::vector<std::size_t> order(out.segments.size());
+    std::iota(order.begin(), order.end(), std::size_t{0});
+    std::stable_sort(order.begin(), order.end(), [&](std::size_t a, std::size_t b) {
+        return out.segments[a].pixels > out.segments[b].pixels;
+    });
+    std::vector<Segment> sorted;
+    sorted.reserve(order.size());
+    std::vector<std::int32_t> rank(order.size());
+    for (std::size_t k = 0; k < order.size(); ++k) {
+        rank[order[k]] = static_cast<std::int32_t>(k);
+        sorted.push_back(std::move(out.segments[order[k]]));
+    }
+    out.segments = std::move(sorted);
+    for (std::int32_t& s : out.segment_of_pixel) {
+        if (s >= 0) s = rank[static_cast<std::size_t>(s)];
+    }
     return out;
 }
 

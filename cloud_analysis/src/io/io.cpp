@@ -221,6 +221,17 @@ DisparityMap read_kitti_disparity(const std::filesystem::path& path) {
     return out;
 }
 
+std::string encode_png_u16(const ImageU16& image) {
+    if (image.values.size() != static_cast<std::size_t>(image.width_px) * image.height_px ||
+        image.width_px <= 0 || image.height_px <= 0) {
+        throw std::invalid_argument("encode_png_u16: image size does not match its samples");
+    }
+    // imencode reads the samples; the Mat only wraps them.
+    const cv::Mat m(image.height_px, image.width_px, CV_16UC1,
+                    const_cast<std::uint16_t*>(image.values.data()));
+    return encode(m);
+}
+
 std::string encode_kitti_disparity_png(const DisparityMap& disparity) {
     cv::Mat m(disparity.height_px, disparity.width_px, CV_16UC1);
     for (int v = 0; v < m.rows; ++v) {

@@ -5,6 +5,7 @@
 #include <vector>
 
 #include <catch2/catch.hpp>
+#include <nlohmann/json.hpp>
 
 #include "../kitti_rig.hpp"
 #include "cloud_analysis/cloud/semantic.hpp"
@@ -112,6 +113,67 @@ TEST_CASE("a car-shaped object on the road is car, a facade building, a pole pol
     CHECK(class_at(g, palette, ru, rv) == "road");
     const auto [wu, wv] = pixel_of(cam, -9.0, 0.8, 14.0);
     CHECK(class_at(g, palette, wu, wv) == "wall");
+}
+
+TEST_CASE("each segment lists what the rules measured, and its pixels point back to it",
+          "[geometry]") {
+    const StereoCamera cam = kitti_rig();
+    const auto palette = cloud_analysis::load_palette("cityscapes");
+    const std::vector<Box> boxes = with_car_from_behind({{3.5, 12.0, 15.0, 8.0}}, 10.0);
+    const SceneGeometry g = derive_semantics(render(cam, 1.65, boxes), cam, ImageU8{}, palette, {});
+    REQUIRE(g.ground.found);
+    REQUIRE(g.segment_of_pixel.size() ==
+            static_cast<std::size_t>(cam.width_px) * static_cast<std::size_t>(cam.height_px));
+    const auto segment_at = [&](int u, int v) {
+        return g.segment_of_pixel[static_cast<std::size_t>(v) * cam.width_px + u];
+    };
+    const auto [cu, cv] = pixel_of(cam, 0.0, 0.8, 10.0);
+    const int car = segment_at(cu, cv);
+    REQUIRE(car >= 0);
+    const Segment& s = g.segments[static_cast<std::size_t>(car)];
+    CHECK(s.label == "car");
+    CHECK(s.depth_m == Approx(10.3).margin(0.5));
+    CHECK(s.near_m <= s.depth_m);
+    CHECK(s.far_m >= s.depth_m);
+    CHECK(s.top_m == Approx(1.5).margin(0.1));
+    CHECK(s.top_q25_m < s.top_m);
+    CHECK(s.low_m < 0.6);
+    CHECK(s.width_m == Approx(1.8).margin(0.3));
+    CHECK_FALSE(s.tall);
+    CHECK(s.cells > 0);
+    // The image box holds every pixel of the segment and is tight.
+    int u0 = cam.width_px, v0 = cam.height_px, u1 = -1, v1 = -1;
+    for (int v = 0; v < cam.height_px; ++v) {
+        for (int u = 0; u < cam.width_px; ++u) {
+            if (segment_at(u, v) != car) continue;
+            u0 = std::min(u0, u);
+            v0 = std::min(v0, v);
+            u1 = std::max(u1, u);
+            v1 = std::max(v1, v);
+        }
+    }
+    CHECK(std::vector<int>{s.u0, s.v0, s.u1, s.v1} == std::vector<int>{u0, v0, u1, v1});
+    // Largest first; the facade is tall and a building.
+    for (std::size_t k = 1; k < g.segments.size(); ++k) {
+        CHECK(g.segments[k - 1].pixels >= g.segments[k].pixels);
+    }
+    const auto [bu, bv] = pixel_of(cam, 6.0, 2.0, 15.0);
+    const int facade = segment_at(bu, bv);
+    REQUIRE(facade >= 0);
+    CHECK(g.segments[static_cast<std::size_t>(facade)].label == "building");
+    CHECK(g.segments[static_cast<std::size_t>(facade)].tall);
+    // Written out: the table in the same order, the ids one above the indices.
+    const auto doc = nlohmann::json::parse(segments_json(g, "000042"));
+    CHECK(doc["frame"] == "000042");
+    CHECK(doc["ground"]["found"] == true);
+    REQUIRE(doc["segments"].size() == g.segments.size());
+    CHECK(doc["segments"][static_cast<std::size_t>(car)]["class"] == "car");
+    CHECK(doc["segments"][static_cast<std::size_t>(car)]["box_px"][2] == s.u1);
+    const cloud_analysis::ImageU16 ids = segment_ids(g, cam.width_px, cam.height_px);
+    CHECK(ids.values[static_cast<std::size_t>(cv) * cam.width_px + cu] == car + 1);
+    const auto [ru, rv] = pixel_of(cam, 0.0, 0.0, 8.0);
+    REQUIRE(class_at(g, palette, ru, rv) == "road");
+    CHECK(ids.values[static_cast<std::size_t>(rv) * cam.width_px + ru] == 0);  // road
 }
 
 TEST_CASE("a car under a tree's crown stays a car, a facade runs on above the car's layer",

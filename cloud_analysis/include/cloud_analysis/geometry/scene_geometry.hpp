@@ -95,23 +95,36 @@ struct GroundEstimate {
     std::string problem;           ///< why no road was accepted, empty when found
 };
 
-/// One obstacle segment and the class the rules gave it.
+/// One obstacle segment, what the rules measured of it and the class they gave it.
 struct Segment {
     std::uint16_t class_index = kVoidClass;  ///< palette class, kVoidClass when unmapped
     std::string label;                       ///< rule's class name, e.g. "car"
     std::size_t pixels = 0;                  ///< obstacle pixels
-    double top_m = 0.0;                      ///< robust top above the road, metres
+    std::size_t cells = 0;                   ///< u-disparity cells
+    double top_m = 0.0;                      ///< robust top above the road (97 % of its cells'
+                                             ///< tops), metres
+    double top_q25_m = 0.0;                  ///< 25 % of its cells' tops, metres
+    double low_m = 0.0;                      ///< 10 % of its cells' lowest heights, metres
     double width_m = 0.0;                    ///< footprint extent along its main axis, metres
-    double depth_m = 0.0;                    ///< median distance, metres
+    double thickness_m = 0.0;                ///< footprint extent across it, metres
+    double depth_m = 0.0;                    ///< median distance of its cells, metres
+    double near_m = 0.0;                     ///< 5 % of its cells' distances, metres
+    double far_m = 0.0;                      ///< 95 % of its cells' distances, metres
     double green = 0.0;                      ///< share of green pixels, [0, 1]
+    double occluded = 0.0;                   ///< share of pixels whose top a nearer surface hides
+    bool tall = false;                       ///< most pixels in cells of a surface reaching
+                                             ///< above layer_height_m
+    int u0 = 0, v0 = 0, u1 = -1, v1 = -1;    ///< image box of its pixels (inclusive), px
 };
 
 /// What the geometry decided.
 struct SceneGeometry {
-    ClassImage classes;                 ///< per-pixel palette class (void where undecided)
-    GroundEstimate ground;              ///< the road plane
-    std::vector<Segment> segments;      ///< obstacles, largest first
-    std::vector<std::string> warnings;  ///< one line each, for the user
+    ClassImage classes;                          ///< per-pixel palette class (void where undecided)
+    GroundEstimate ground;                       ///< the road plane
+    std::vector<Segment> segments;               ///< obstacles, largest first
+    std::vector<std::int32_t> segment_of_pixel;  ///< per pixel (v * width + u): index into
+                                                 ///< segments, -1 for none
+    std::vector<std::string> warnings;           ///< one line each, for the user
 };
 
 /// Derives a class image from a disparity map and its rig: road (plane within a depth-aware
@@ -126,6 +139,15 @@ SceneGeometry derive_semantics(const DisparityMap& disparity, const StereoCamera
 /// The road plane alone (RANSAC over the lower image's points, fit_ground_plane).
 GroundEstimate estimate_ground(const DisparityMap& disparity, const StereoCamera& camera,
                                const GeometryOptions& options);
+
+/// The segments of `g` as a JSON document (frame id, the road plane, one object per segment in
+/// the order of SceneGeometry::segments: the rules' class, their measurements, the image box),
+/// for `--segments-out` (docs/stereo-only.md, "Segments").
+std::string segments_json(const SceneGeometry& g, const std::string& frame_id);
+
+/// Per pixel, the index + 1 of its segment (0: none; indices above 65533 share the last
+/// value), for `--segment-ids-out`; all 0 when `g` has no per-pixel segments.
+ImageU16 segment_ids(const SceneGeometry& g, int width_px, int height_px);
 
 /// RGB image of a class image in the palette's colours (void black).
 ImageU8 colour_classes(const ClassImage& classes, const Palette& palette);

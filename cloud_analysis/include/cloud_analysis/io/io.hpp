@@ -58,6 +58,9 @@ DisparityMap read_kitti_disparity(const std::filesystem::path& path);
 /// missing, corrupt or of another type.
 ImageU16 read_png_u16(const std::filesystem::path& path);
 
+/// PNG bytes of a 16-bit single-channel image.
+std::string encode_png_u16(const ImageU16& image);
+
 /// KITTI 16-bit disparity PNG bytes: v = round(d * 256) clamped to 65535, 0 where missing.
 std::string encode_kitti_disparity_png(const DisparityMap& disparity);
 
