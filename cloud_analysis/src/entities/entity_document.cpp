@@ -1,6 +1,5 @@
 #include "cloud_analysis/entities/entity_document.hpp"
 
-#include <map>
 #include <string>
 
 #include <nlohmann/json.hpp>
@@ -9,33 +8,18 @@
 
 namespace cloud_analysis {
 
-void drop_faint_things(std::vector<scene_schema::Entity>& entities, const ClassConfig& classes,
-                       double fx_px, double fy_px, double min_face_share) {
-    if (!(min_face_share > 0.0) || !(fx_px > 0.0) || !(fy_px > 0.0)) return;
-    std::vector<scene_schema::Entity> kept;
-    std::map<std::string, int> numbers;
-    for (auto& e : entities) {
-        const ClassSettings c = classes.find(e.class_name);
-        const double seen_m2 = static_cast<double>(e.point_count) * (e.z / fx_px) * (e.z / fy_px);
-        if (c.thing && c.has_prior() && seen_m2 < min_face_share * c.prior_W_m * c.prior_H_m) {
-            continue;
-        }
-        e.id = e.class_name + "-" + std::to_string(++numbers[e.class_name]);
-        kept.push_back(std::move(e));
-    }
-    entities = std::move(kept);
-}
-
 scene_schema::EntityDocument entity_document(const LoadedInputs& in, const AnalyseResult& r,
                                              const ExtractOptions& extract,
                                              const RunSettings& run) {
+    // Fragments and smears too faint to be a thing are dropped, whatever made the class image.
+    ExtractOptions options = extract;
+    options.min_face_share = run.analyse.geometry.min_face_share;
+    options.fx_px = r.camera.fx_px;
+    options.fy_px = r.camera.fy_px;
     scene_schema::EntityDocument doc =
-        r.points.xyz_m.empty() ? extract_entities(r.cloud, in.palette, r.camera, extract)
-                               : extract_entities(r.points, in.palette, extract);
+        r.points.xyz_m.empty() ? extract_entities(r.cloud, in.palette, r.camera, options)
+                               : extract_entities(r.points, in.palette, options);
     doc.frame.id = in.paths.frame_id;
-    // Fragments and smears too faint to be a thing, whatever made the class image.
-    drop_faint_things(doc.entities, extract.classes, r.camera.fx_px, r.camera.fy_px,
-                      run.analyse.geometry.min_face_share);
     if (r.geometry) {
         // Classes from geometry are guesses the labelled path does not make: less confidence.
         for (auto& e : doc.entities) e.confidence *= geometry::kConfidenceScale;

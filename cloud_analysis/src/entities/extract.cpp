@@ -226,6 +226,12 @@ void ExtractOptions::validate() const {
     if (!(min_height_fraction >= 0.0 && min_height_fraction < 1.0)) {
         throw std::invalid_argument("min_height_fraction: must be in [0, 1)");
     }
+    if (!(min_face_share >= 0.0 && min_face_share < 1.0)) {
+        throw std::invalid_argument("min_face_share: must be in [0, 1)");
+    }
+    if (!(fx_px >= 0.0 && fy_px >= 0.0 && fx_px < 1e7 && fy_px < 1e7)) {
+        throw std::invalid_argument("fx_px, fy_px: must be >= 0");
+    }
     if (!(row_low_fraction >= 0.0 && row_low_fraction < 1.0)) {
         throw std::invalid_argument("row_low_fraction: must be in [0, 1)");
     }

@@ -273,10 +273,20 @@ std::vector<Candidate> candidates_of_cluster(const std::vector<Eigen::Vector3f>&
     return candidates;
 }
 
-/// The entities of a thing class from its clusters' candidates (in cluster order): shadows
-/// and nested fragments suppressed, the largest kept.
+/// Square metres of surface the points `members` cover, each (z / fx) (z / fy) at its own depth.
+double seen_area_m2(const std::vector<Eigen::Vector3f>& pts, const Indices& members, double fx_px,
+                    double fy_px) {
+    double sum = 0.0;
+    for (std::size_t i : members) sum += double{pts[i].z()} * double{pts[i].z()};
+    return sum / (fx_px * fy_px);
+}
+
+/// The entities of a thing class from its clusters' candidates (in cluster order): shadows,
+/// nested fragments and things seen over too little of their prior face suppressed, the largest
+/// kept.
 std::vector<scene_schema::Entity> things_of_class(const ClassInfo& info,
                                                   std::vector<Candidate> candidates,
+                                                  const std::vector<Eigen::Vector3f>& pts,
                                                   const std::vector<std::uint32_t>& pixels,
                                                   const PixelGrid& grid, const ClassSettings& s,
                                                   const ExtractOptions& options) {
@@ -289,6 +299,18 @@ std::vector<scene_schema::Entity> things_of_class(const ClassInfo& info,
                                       options.shadow_fraction, options.shadow_radius_px);
     }
     candidates = suppress_nested(std::move(candidates));
+    if (s.has_prior() && options.min_face_share > 0.0 && options.fx_px > 0.0 &&
+        options.fy_px > 0.0) {
+        // Seen area at the points' own depths: a box completed beyond the image's edge lies
+        // nearer than the points it holds, one completed away from the camera farther.
+        const double min_m2 = options.min_face_share * s.prior_W_m * s.prior_H_m;
+        candidates.erase(std::remove_if(candidates.begin(), candidates.end(),
+                                        [&](const Candidate& c) {
+                                            return seen_area_m2(pts, c.members, options.fx_px,
+                                                                options.fy_px) < min_m2;
+                                        }),
+                         candidates.end());
+    }
     std::vector<scene_schema::Entity> out;
     for (const auto& c : candidates) {
         out.push_back(make_entity(info, c.box, c.members.size(), confidence_of(c.members.size(), s),
@@ -318,13 +340,13 @@ void queue_things_of_class(TaskQueue& queue, const ClassInfo& info,
     job->fit = class_fit(settings);
     job->clusters = thing_clusters(pts, pixels, grid, settings, job->fit.cluster, options);
     job->candidates.resize(job->clusters.size());
-    const auto finish = [&info, &pixels, &grid, &options, &out](Job& j) {
+    const auto finish = [&info, &pts, &pixels, &grid, &options, &out](Job& j) {
         std::vector<Candidate> all;
         for (auto& c : j.candidates) {
             all.insert(all.end(), std::make_move_iterator(c.begin()),
                        std::make_move_iterator(c.end()));
         }
-        out = things_of_class(info, std::move(all), pixels, grid, j.s, options);
+        out = things_of_class(info, std::move(all), pts, pixels, grid, j.s, options);
     };
     // One task per cluster with enough points, the largest first.
     std::vector<std::size_t> fitted;

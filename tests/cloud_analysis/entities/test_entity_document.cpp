@@ -60,34 +60,3 @@ TEST_CASE("the entity document is the same from the cloud and from per-class poi
     REQUIRE_FALSE(from_points.points.xyz_m.empty());
     CHECK(entity_json(in, from_points, extract, run) == entity_json(in, from_cloud, extract, run));
 }
-
-TEST_CASE("things seen over too little of their smallest face are dropped, ids renumbered",
-          "[entity_document]") {
-    const ClassConfig classes = load_class_config(default_class_config_path());
-    const ClassSettings car = classes.find("car");
-    REQUIRE(car.has_prior());
-    const double face_m2 = car.prior_W_m * car.prior_H_m;
-    // At 20 m with f = 500 px each point covers (20 / 500)^2 = 0.0016 m^2.
-    const auto points_for = [](double m2) { return static_cast<std::int64_t>(m2 / 0.0016); };
-    std::vector<scene_schema::Entity> entities(4);
-    entities[0].class_name = "car";  // a roof fragment: 5 % of the face
-    entities[0].point_count = points_for(0.05 * face_m2);
-    entities[1].class_name = "car";  // a car seen over a fifth of its face
-    entities[1].point_count = points_for(0.2 * face_m2);
-    entities[2].class_name = "road";  // stuff keeps any support
-    entities[2].point_count = 3;
-    entities[3].class_name = "car";
-    entities[3].point_count = points_for(face_m2);
-    for (std::size_t i = 0; i < entities.size(); ++i) {
-        entities[i].z = 20.0;
-        entities[i].id = entities[i].class_name + "-" + std::to_string(i + 1);
-    }
-    drop_faint_things(entities, classes, 500.0, 500.0, 0.15);
-    REQUIRE(entities.size() == 3);
-    CHECK(entities[0].id == "car-1");
-    CHECK(entities[0].point_count == points_for(0.2 * face_m2));
-    CHECK(entities[1].id == "road-1");
-    CHECK(entities[2].id == "car-2");
-    drop_faint_things(entities, classes, 500.0, 500.0, 0.0);  // off
-    CHECK(entities.size() == 3);
-}

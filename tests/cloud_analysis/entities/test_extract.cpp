@@ -191,6 +191,44 @@ TEST_CASE("instances: two cars become two oriented car entities on the fitted ro
     CHECK_NOTHROW(scene_schema::check(full));
 }
 
+TEST_CASE("a thing seen over too little of its prior face is dropped, its area taken at its points",
+          "[entities]") {
+    // Two upright faces 5 m ahead on the road, their points 1 cm apart (one pixel each at
+    // f = 500 px): 0.6 x 0.6 m (0.36 m^2) and 0.8 x 0.7 m (0.56 m^2). 15 % of the car prior's
+    // 1.8 x 1.5 m face is 0.405 m^2. The boxes are completed away from the camera, their centres
+    // 2 m behind the faces: taken there, the smaller face would count twice its area.
+    LabeledCloud cloud;
+    add_road(cloud);
+    const auto add_face = [&](float x, float width, float height) {
+        for (float y = 1.55f - height; y <= 1.55f; y += 0.01f) {
+            for (float a = 0.0f; a <= width; a += 0.01f) add_point(cloud, {x + a, y, 5.0f}, 2);
+        }
+    };
+    add_face(-3.0f, 0.6f, 0.6f);
+    add_face(2.5f, 0.8f, 0.7f);
+    ExtractOptions options = options_with_bundled_config("instances");
+    const auto cars = [&](const ExtractOptions& o) {
+        std::vector<scene_schema::Entity> out;
+        for (const auto& e : extract_entities(cloud, test_palette(), StereoCamera{}, o).entities) {
+            if (e.class_name == "car") out.push_back(e);
+        }
+        return out;
+    };
+    REQUIRE(cars(options).size() == 2);  // off by default
+    options.min_face_share = 0.15;
+    options.fx_px = 500.0;
+    options.fy_px = 500.0;
+    const auto kept = cars(options);
+    REQUIRE(kept.size() == 1);
+    CHECK(kept[0].x > 2.0);
+    CHECK(kept[0].id == "car-1");
+    CHECK(kept[0].z > 6.0);  // the box lies behind the face it was seen over
+    options.fx_px = 0.0;     // no focal length: off
+    CHECK(cars(options).size() == 2);
+    options.min_face_share = 1.0;
+    CHECK_THROWS_WITH(options.validate(), Catch::Contains("min_face_share"));
+}
+
 TEST_CASE("a parked row merged into one blob is split into car-sized boxes", "[entities]") {
     LabeledCloud cloud;
     for (float x = -6.0f; x <= 6.0f; x += 0.25f) {

@@ -22,17 +22,11 @@ struct RunSettings {
     std::string tool_version;              ///< version of the tool that made the file
 };
 
-/// Drops the thing entities (classes with a size prior) seen over less than `min_face_share`
-/// of their smallest prior face, W x H (each point covers (z / fx) (z / fy) square metres at the
-/// box's depth): fragments of a roof or a row, the smear behind a car, and clutter. Both paths
-/// apply it (geometry::GeometryOptions::min_face_share). Each class's ids are numbered again
-/// from 1.
-void drop_faint_things(std::vector<scene_schema::Entity>& entities, const ClassConfig& classes,
-                       double fx_px, double fy_px, double min_face_share);
-
 /// The entities of analysis `r` of frame `in` (extract_entities on its per-class points when
-/// the analysis made no cloud, else on the cloud), with frame.id, frame.camera and source
-/// (describe_run plus extract.method and the class config) filled in.
+/// the analysis made no cloud, else on the cloud; things seen over less than
+/// geometry::GeometryOptions::min_face_share of their prior face dropped on both paths), with
+/// frame.id, frame.camera and source (describe_run plus extract.method and the class config)
+/// filled in.
 scene_schema::EntityDocument entity_document(const LoadedInputs& in, const AnalyseResult& r,
                                              const ExtractOptions& extract, const RunSettings& run);
 
