@@ -10,8 +10,9 @@
 # ground plane, the thesis's one-per-class extractors, and the stereo-only path (--semantics
 # geometry: the semantic image ignored; docs/stereo-only.md) beside them.
 # usage: scripts/evaluate.sh [--no-build] [--build-dir DIR] [--kitti-root DIR] [--out DIR]
-#            [--parking-seeds "2 4 5 6 7 8 9 10 11 12"] [--kerbside-seeds "2 3 4 5 6 7 8 9"]
+#            [--parking-seeds "2 4 5 ... 12 23 ... 32"] [--kerbside-seeds "2 ... 9 23 ... 32"]
 #            [--held-out-seeds "13 14 15 16 17 18 19 20 21 22"] [--class-config FILE] [frames...]
+#   --parking-seeds: parking streets (make-parking-scene.py), tuning data
 #   --kerbside-seeds: streets with kerbside clutter (make-parking-scene.py --kerbside)
 #   --held-out-seeds: a parking and a kerbside street each, never used to choose a parameter;
 #                     their totals are printed apart from the tuning scenes
@@ -25,8 +26,8 @@ build_dir="$STEREOSCENE_ROOT/build"
 kitti_root="$STEREOSCENE_ROOT/../shared/data/kitti15"
 out_dir=""
 frames=()
-parking_seeds="2 4 5 6 7 8 9 10 11 12"
-kerbside_seeds="2 3 4 5 6 7 8 9"
+parking_seeds="2 4 5 6 7 8 9 10 11 12 23 24 25 26 27 28 29 30 31 32"
+kerbside_seeds="2 3 4 5 6 7 8 9 23 24 25 26 27 28 29 30 31 32"
 held_out_seeds="13 14 15 16 17 18 19 20 21 22"
 analysis_args=()
 while [ $# -gt 0 ]; do

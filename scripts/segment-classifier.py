@@ -116,8 +116,9 @@ def main():
                     default=os.path.join(ROOT, "build", "cloud_analysis", "cloud-analysis"))
     ap.add_argument("--max-depth", type=float, default=30.0,
                     help="segments nearer than this (median depth), metres")
-    ap.add_argument("--parking-seeds", default="2 4 5 6 7 8 9 10 11 12")
-    ap.add_argument("--kerbside-seeds", default="2 3 4 5 6 7 8 9")
+    ap.add_argument("--parking-seeds",
+                    default="2 4 5 6 7 8 9 10 11 12 23 24 25 26 27 28 29 30 31 32")
+    ap.add_argument("--kerbside-seeds", default="2 3 4 5 6 7 8 9 23 24 25 26 27 28 29 30 31 32")
     ap.add_argument("--held-out-seeds", default="13 14 15 16 17 18 19 20 21 22")
     a = ap.parse_args()
     seeds = a.parking_seeds.split() + a.kerbside_seeds.split() + a.held_out_seeds.split()
