@@ -19,6 +19,9 @@ namespace {
 constexpr double kPi = 3.14159265358979323846;
 /// A straight face longer than this many prior widths cannot be a thing's front or rear.
 constexpr double kFaceWidths = 1.2;
+/// A face along the viewing ray counts when a pixel of disparity moves its far end by at most
+/// this share of its length.
+constexpr double kAlongRaySmearShare = 0.1;
 
 /// Orthonormal ground-aligned basis: up = plane normal, ex ~ camera x, ez ~ camera z.
 struct GroundFrame {
@@ -432,6 +435,9 @@ void BoxFitOptions::validate() const {
         throw std::invalid_argument("box.near_trim_fraction: must be in [trim_fraction, 0.2)");
     }
     if (!(face_tolerance_m > 0.0)) throw std::invalid_argument("box.face_tolerance_m: must be > 0");
+    if (!(disparity_fb_px_m >= 0.0 && disparity_fb_px_m < 1e9)) {
+        throw std::invalid_argument("box.disparity_fb_px_m: must be >= 0");
+    }
     if (!(face_share >= 0.0 && face_share <= 1.0)) {
         throw std::invalid_argument("box.face_share: must be in [0, 1]");
     }
@@ -545,9 +551,18 @@ OrientedBox fit_upright_box(const std::vector<Eigen::Vector3f>& points_m,
     if (!options.yaw_rad && options.face_share > 0.0 && options.prior_W_m > 0.0 &&
         options.prior_L_m > kFaceWidths * options.prior_W_m) {
         const auto face = dominant_face(ab, options.face_tolerance_m);
+        const auto sharp = [&](const Face& f) {
+            if (std::abs(f.direction.dot(f.centre.normalized())) < std::sqrt(0.5)) return true;
+            // Along the ray: a face only where a pixel of disparity error moves its far end by
+            // at most a tenth of its length and of the thing's prior length (a long row's side
+            // at 20 m is no one thing's face).
+            const double far = f.centre.norm() + f.length_m / 2.0;
+            return options.disparity_fb_px_m > 0.0 &&
+                   far * far / options.disparity_fb_px_m <=
+                       kAlongRaySmearShare * std::min(f.length_m, options.prior_L_m);
+        };
         if (face && face->share >= options.face_share &&
-            face->length_m >= kFaceWidths * options.prior_W_m &&
-            std::abs(face->direction.dot(face->centre.normalized())) < std::sqrt(0.5)) {
+            face->length_m >= kFaceWidths * options.prior_W_m && sharp(*face)) {
             angle = std::atan2(face->direction.y(), face->direction.x());
             face_is_length = true;
         }

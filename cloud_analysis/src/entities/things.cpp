@@ -184,6 +184,7 @@ std::vector<Candidate> candidates_of_cluster(const std::vector<Eigen::Vector3f>&
                                              const ExtractOptions& options) {
     std::vector<Candidate> candidates;
     BoxFitOptions fit = class_fit.box;
+    fit.disparity_fb_px_m = grid.border.fb_px_m;
     Indices behind;
     members = drop_outliers(pts, members, s, ground, options.outlier_margin_m, &behind);
     std::size_t next_group = (cluster + 1) << 32;

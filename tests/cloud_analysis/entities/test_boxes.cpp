@@ -1,6 +1,9 @@
 #include <algorithm>
 #include <cmath>
+#include <fstream>
 #include <random>
+#include <sstream>
+#include <string>
 
 #include <catch2/catch.hpp>
 
@@ -259,6 +262,48 @@ TEST_CASE("range smear lined up along the viewing ray is not taken for a long si
     // test off (taken for a face, it would turn the heading onto the band's principal axis).
     o.face_share = 0.0;
     CHECK(box.theta == Approx(fit_upright_box(pts, flat_ground(1.65), o).theta));
+}
+
+TEST_CASE("a near car's side along the viewing ray is its length where smear is small", "[boxes]") {
+    // A rendered car parked 5 m ahead on the right (centre x 5.0, z 5.4, heading along z), cut
+    // by the image's right edge (tests/data/near-car-side.xyz): its left side runs 35 degrees
+    // from the viewing ray, and the closeness criterion alone tilts the box by 15 degrees.
+    std::ifstream in(std::string(STEREOSCENE_TEST_DATA_DIR) + "/near-car-side.xyz");
+    std::vector<Eigen::Vector3f> pts;
+    std::string line;
+    while (std::getline(in, line)) {
+        if (line.empty() || line[0] == '#') continue;
+        std::istringstream fields(line);
+        float x = 0, y = 0, z = 0;
+        fields >> x >> y >> z;
+        pts.emplace_back(x, y, z);
+    }
+    REQUIRE(pts.size() > 1000);
+    BoxFitOptions o;
+    o.prior_L_m = 4.2;
+    o.prior_W_m = 1.8;
+    o.truncation_xz = Eigen::Vector2d(4.3, 4.9);  // the points in the image's last columns
+    const OrientedBox tilted = fit_upright_box(pts, flat_ground(1.65), o);
+    CHECK(yaw_error_mod_pi(tilted.theta, -kPi / 2.0) > 10.0 * kPi / 180.0);
+    // KITTI's rig: a pixel of disparity moves the side's far end (7.6 m) by 0.15 m, under a
+    // tenth of its length: the side is a face.
+    o.disparity_fb_px_m = 389.6;
+    const OrientedBox box = fit_upright_box(pts, flat_ground(1.65), o);
+    CHECK(yaw_error_mod_pi(box.theta, -kPi / 2.0) < 5.0 * kPi / 180.0);
+    CHECK(box.centre_m.x() == Approx(5.0).margin(0.1));
+    CHECK(box.centre_m.z() == Approx(5.4).margin(0.2));
+    // The same points 20 m farther: a pixel moves the far end by 2 m, no face, as without the
+    // rig.
+    std::vector<Eigen::Vector3f> far;
+    for (const auto& p : pts) far.emplace_back(p.x(), p.y(), p.z() + 20.0f);
+    BoxFitOptions unknown = o;
+    unknown.disparity_fb_px_m = 0.0;
+    unknown.truncation_xz.reset();
+    o.truncation_xz.reset();
+    CHECK(fit_upright_box(far, flat_ground(1.65), o).theta ==
+          Approx(fit_upright_box(far, flat_ground(1.65), unknown).theta));
+    o.disparity_fb_px_m = -1.0;
+    CHECK_THROWS_WITH(o.validate(), Catch::Contains("disparity_fb_px_m"));
 }
 
 TEST_CASE("a weighted fit to voxel centroids gives the box of the points", "[boxes]") {

@@ -40,6 +40,12 @@ struct BoxFitOptions {
     double face_share = 0.5;        ///< a straight face across the viewing ray holding this
                                     ///< share of the points and longer than 1.2 prior widths
                                     ///< is a long side, [0, 1] (0 = off)
+    /// Focal length times baseline of the rig (the disparity of depth z is fb / z), px m: a
+    /// face along the viewing ray also counts as a long side when one pixel of disparity moves
+    /// its far end by at most a tenth of its length and of prior_L_m (a near car's side: range
+    /// smear lines points up along rays only farther out); 0 = unknown, only faces across the
+    /// ray.
+    double disparity_fb_px_m = 0.0;
     std::optional<double> yaw_rad;  ///< heading imposed instead of the L-shape search, radians
                                     ///< (cars cut from a row seen front-on), finite
     /// Camera-frame (x, z) mean of the points in the image's outermost columns when the image's
