@@ -43,6 +43,7 @@ struct Cell {
     float top2 = -1e9f;     ///< second highest (robust top)
     float low = 1e9f;       ///< lowest height, metres
     int top_v = 1 << 30;    ///< row of its highest pixel (smallest v)
+    double d_sum = 0.0;     ///< sum of its pixels' disparities, px
     int top_u = 0;          ///< column of that pixel
     bool occluded = false;  ///< a nearer surface lies right above that pixel: top unknown
     int segment = -1;       ///< segment index once linked; -1: sparse (noise)
@@ -73,6 +74,7 @@ struct Grid {
     std::vector<std::int32_t> pixel_cell;  ///< per pixel: its cell, -1 when none
     std::vector<char> pixel_low;           ///< per pixel: below low_cut_m
     std::vector<char> pixel_green;         ///< per pixel: green (green_mask)
+    std::vector<float> pixel_height;       ///< per pixel in a cell: height above the road, m
 };
 
 int find_root(std::vector<int>& parent, int i) {
@@ -203,6 +205,7 @@ Grid fill_grid(const DisparityMap& disparity, const Rig& rig, const ImageU8& lef
     g.pixel_cell.assign(static_cast<std::size_t>(w) * h, -1);
     g.pixel_low.assign(g.pixel_cell.size(), 0);
     g.pixel_green.assign(g.pixel_cell.size(), 0);
+    g.pixel_height.assign(g.pixel_cell.size(), 0.0f);
     const Eigen::Vector3d n = ground.plane.normal;
     const double plane_d = ground.plane.d;
     const double min_d = rig.fb / o.max_depth_m;
@@ -241,16 +244,32 @@ Grid fill_grid(const DisparityMap& disparity, const Rig& rig, const ImageU8& lef
             }
             Cell& c = g.cells[static_cast<std::size_t>(cell)];
             ++c.count;
+            c.d_sum += d;
+            g.pixel_height[row + u] = hf;
             c.height_sum += hf;
             c.at_cut += std::abs(hf - tall_m) <= band_m ? 1 : 0;
             c.green += green ? 1 : 0;
+            c.low = std::min(c.low, hf);
+        }
+    }
+    // Tops second, from the pixels at the cell's depth: at range one disparity bin spans
+    // metres, and the surface just behind a thing (a bus's side above a car's roof, 1-2 px of
+    // disparity farther) shares its bins but not its top.
+    for (int v = 0; v < h; ++v) {
+        const std::size_t row = static_cast<std::size_t>(v) * w;
+        for (int u = 0; u < w; ++u) {
+            const std::int32_t cell = g.pixel_cell[row + u];
+            if (cell < 0 || g.pixel_low[row + u]) continue;
+            Cell& c = g.cells[static_cast<std::size_t>(cell)];
+            const double d = double{disparity.disparity_px[row + u]} - rig.offset;
+            if (d < c.d_sum / c.count - o.top_behind_px) continue;
+            const float hf = g.pixel_height[row + u];
             if (hf > c.top1) {
                 c.top2 = c.top1;
                 c.top1 = hf;
             } else if (hf > c.top2) {
                 c.top2 = hf;
             }
-            c.low = std::min(c.low, hf);
             if (v < c.top_v) {
                 c.top_v = v;
                 c.top_u = u;

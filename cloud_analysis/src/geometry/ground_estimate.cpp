@@ -42,6 +42,9 @@ void GeometryOptions::validate() const {
         throw std::invalid_argument("geometry.disparity_bin_share: must be in (0, 1)");
     }
     if (min_cell_pixels < 1) throw std::invalid_argument("geometry.min_cell_pixels: must be >= 1");
+    if (!(top_behind_px > 0.0 && top_behind_px < 1e6)) {
+        throw std::invalid_argument("geometry.top_behind_px: must be > 0");
+    }
     positive(car_min_height_m, "geometry.car_min_height_m");
     if (!(car_max_height_m > car_min_height_m)) {
         throw std::invalid_argument("geometry.car_max_height_m: must be > car_min_height_m");

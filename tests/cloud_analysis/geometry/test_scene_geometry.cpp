@@ -176,6 +176,28 @@ TEST_CASE("each segment lists what the rules measured, and its pixels point back
     CHECK(ids.values[static_cast<std::size_t>(rv) * cam.width_px + ru] == 0);  // road
 }
 
+TEST_CASE("a car 1 m before a bus at 28 m is a car: the bus above its roof is not its top",
+          "[geometry]") {
+    const StereoCamera cam = kitti_rig();
+    const auto palette = cloud_analysis::load_palette("cityscapes");
+    // The car's cabin at 28.6 m, the bus's back (3.2 m tall, from 0.3 m up) at 29.6 m: 0.46 px
+    // of disparity apart, in the same 1 px bins. Matching noise of +-0.3 px spreads both.
+    const std::vector<Box> boxes = with_car_from_behind({{-1.6, 1.4, 29.6, 3.2, 0.3}}, 28.0);
+    DisparityMap d = render(cam, 1.65, boxes);
+    std::size_t k = 0;
+    for (float& x : d.disparity_px) {
+        if (x > 0.0f) x += static_cast<float>(0.3 * std::sin(12.9898 * static_cast<double>(k++)));
+    }
+    const auto [cu, cv] = pixel_of(cam, 0.0, 0.6, 28.0);
+    GeometryOptions o;
+    CHECK(class_at(derive_semantics(d, cam, ImageU8{}, palette, o), palette, cu, cv) == "car");
+    // Tops from every pixel of a cell: the bus's side above the roof lifts it out of a car's.
+    o.top_behind_px = 1e5;
+    CHECK(class_at(derive_semantics(d, cam, ImageU8{}, palette, o), palette, cu, cv) != "car");
+    o.top_behind_px = 0.0;
+    CHECK_THROWS_WITH(o.validate(), Catch::Contains("top_behind_px"));
+}
+
 TEST_CASE("a car under a tree's crown stays a car, a facade runs on above the car's layer",
           "[geometry]") {
     const StereoCamera cam = kitti_rig();

@@ -44,6 +44,10 @@ struct GeometryOptions {
                                            ///< disparity wide, whichever is wider, (0, 1)
     double link_depth_m = 0.8;             ///< cells closer in depth than this join, metres
     int min_cell_pixels = 3;               ///< sparser u-disparity cells are noise, pixels, >= 1
+    double top_behind_px = 0.25;           ///< a cell's top is its pixels' at most this much
+                                           ///< disparity behind the cell's mean (a bus's side
+                                           ///< above a car's roof shares the car's bin at range,
+                                           ///< 1-2 px farther), px, > 0
     double min_cell_height_m = 0.2;        ///< ... and so are cells holding fewer pixels than a
                                            ///< surface this tall across the cell would, metres
     double low_cut_m = 0.35;               ///< pixels lower than this above the road take their
