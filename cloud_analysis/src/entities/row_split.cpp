@@ -295,6 +295,59 @@ std::vector<double> valley_cuts(const TopProfile& profile, double lo, double bin
     return cuts;
 }
 
+/// The cuts of a valley split (sorted along-coordinates of a profile starting at lo in bins of
+/// bin_m) moved off the dense run that a piece holds at one of its cuts when the rest of the
+/// piece is sparse: a piece that is mostly a gap (smear and label bleed at a tree or a pole
+/// between two parked cars, whose few high points make a hump of it) with the first or last
+/// metre of a car beside it. The run (the bins from the cut on holding at least a quarter of
+/// the densest within kSnapRunM of the cut, at most kSnapRunM long) joins the piece beyond the
+/// cut, which is where its car is, when every bin of the rest, kSnapGapM long or more, holds
+/// less than that quarter. The gap's piece keeps only its sparse points.
+void snap_cuts_off_runs(const TopProfile& profile, double lo, double bin_m,
+                        std::vector<double>& cuts) {
+    constexpr double kSnapRunM = 1.5;  // longest run moved: the end of a car, not a car
+    constexpr double kSnapGapM = 1.0;  // shortest sparse rest: a gap, not a sparse car end
+    const int bins = static_cast<int>(profile.count.size());
+    const int run_bins = static_cast<int>(kSnapRunM / bin_m);
+    const auto bin_of = [&](double a) {
+        return std::clamp(static_cast<int>((a - lo) / bin_m), 0, bins - 1);
+    };
+    const auto count = [&](int b) { return profile.count[static_cast<std::size_t>(b)]; };
+    for (std::size_t k = 0; k <= cuts.size(); ++k) {
+        const int b0 = k == 0 ? 0 : bin_of(cuts[k - 1]) + 1;
+        const int b1 = k == cuts.size() ? bins - 1 : bin_of(cuts[k]);
+        if (b1 - b0 < 2) continue;
+        const auto inside = [&](int b) { return b >= b0 && b <= b1; };
+        // Side 0: the run at the piece's far cut (cuts[k]); side 1: at its near cut (cuts[k-1]).
+        for (int side = 0; side < 2; ++side) {
+            if ((side == 0 && k == cuts.size()) || (side == 1 && k == 0)) continue;
+            const int end = side == 0 ? b1 : b0, step = side == 0 ? -1 : 1;
+            int peak = 0;
+            for (int j = 0; j < run_bins && inside(end + step * j); ++j) {
+                peak = std::max(peak, count(end + step * j));
+            }
+            const double floor = kGapFraction * peak;
+            int r = end;
+            while (inside(r + step) && count(r + step) >= floor) r += step;
+            int rest_max = 0, rest = 0;
+            for (int b = r + step; inside(b); b += step) {
+                rest_max = std::max(rest_max, count(b));
+                ++rest;
+            }
+            if (std::abs(r - end) + 1 <= run_bins && rest * bin_m >= kSnapGapM &&
+                rest_max < floor) {
+                if (side == 0) {
+                    cuts[k] = lo + r * bin_m;
+                } else {
+                    cuts[k - 1] = lo + (r + 1) * bin_m;
+                }
+                break;
+            }
+        }
+    }
+    std::sort(cuts.begin(), cuts.end());
+}
+
 /// Pieces of a blob cut along (dir_x, dir_z) at the valleys of its top profile (things parked
 /// end to end, their roofs higher than the ends where they meet); empty without a valley.
 std::vector<Indices> split_at_valleys(const std::vector<Eigen::Vector3f>& pts, const Indices& idx,
@@ -309,10 +362,11 @@ std::vector<Indices> split_at_valleys(const std::vector<Eigen::Vector3f>& pts, c
     const int closing = static_cast<int>(std::lround(options.row_valley_closing_m / bin));
     const TopProfile profile = top_profile(pts, idx, along, ground, bin, lo, hi, closing);
     const int reach = std::max(1, static_cast<int>(std::lround(0.5 * s.prior_L_m / bin)));
-    const std::vector<double> cuts = valley_cuts(
-        profile, lo, bin, reach, options.row_valley_depth_m,
-        options.row_valley_min_peak_fraction * s.prior_H_m, options.row_valley_min_piece_m);
+    std::vector<double> cuts = valley_cuts(profile, lo, bin, reach, options.row_valley_depth_m,
+                                           options.row_valley_min_peak_fraction * s.prior_H_m,
+                                           options.row_valley_min_piece_m);
     if (cuts.empty()) return {};
+    snap_cuts_off_runs(profile, lo, bin, cuts);
     std::vector<Indices> parts(cuts.size() + 1);
     for (std::size_t k = 0; k < idx.size(); ++k) {
         const auto part = static_cast<std::size_t>(

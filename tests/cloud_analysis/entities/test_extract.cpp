@@ -229,6 +229,44 @@ TEST_CASE("a thing seen over too little of its prior face is dropped, its area t
     CHECK_THROWS_WITH(options.validate(), Catch::Contains("min_face_share"));
 }
 
+TEST_CASE("a gap's few high points between two cars in a row make no car of the next car's end",
+          "[entities]") {
+    // Two cars' right sides (x = -1.1) end to end 2.4 m apart: the near one's roof, then its
+    // boot; in the gap, from 0.5 m on, 120 smeared points 1.7-1.9 m high (a tree's crown bled
+    // onto the mask); then the far one's bonnet and roof. The far car's blob, gap included, is
+    // cut at the valley of its bonnet: the piece before it is the gap and the bonnet's front,
+    // boxed as a third car (and the far car's box pushed 0.4 m on) unless the cut moves to the
+    // bonnet's front, leaving the gap's sparse points alone.
+    LabeledCloud cloud;
+    add_road(cloud);
+    const auto add_side = [&](float z0, float z1, float top) {
+        for (float y = 0.15f; y <= top + 1e-4f; y += 0.05f) {
+            for (float z = z0; z < z1; z += 0.025f) add_point(cloud, {-1.1f, 1.65f - y, z}, 2);
+        }
+    };
+    add_side(10.0f, 13.6f, 1.5f);  // near car: roof
+    add_side(13.6f, 14.2f, 1.0f);  //           boot
+    for (int k = 0; k < 120; ++k) {
+        const auto f = static_cast<float>(k);
+        add_point(cloud, {-1.1f, 1.65f - (1.7f + 0.0016f * f), 14.7f + 0.0147f * f}, 2);
+    }
+    for (int k = 0; k < 4; ++k) {  // the boot's smear just behind it, low
+        add_point(cloud, {-1.1f, 1.65f - 0.4f, 14.3f + 0.1f * static_cast<float>(k)}, 2);
+    }
+    add_side(16.6f, 17.4f, 1.0f);  // far car: bonnet
+    add_side(17.4f, 20.8f, 1.5f);  //          roof
+    std::vector<scene_schema::Entity> cars;
+    for (const auto& e : extract_entities(cloud, test_palette(), StereoCamera{},
+                                          options_with_bundled_config("instances"))
+                             .entities) {
+        if (e.class_name == "car") cars.push_back(e);
+    }
+    REQUIRE(cars.size() == 2);
+    std::sort(cars.begin(), cars.end(), [](const auto& a, const auto& b) { return a.z < b.z; });
+    CHECK(cars[0].z == Approx(12.1).margin(0.3));
+    CHECK(cars[1].z == Approx(18.7).margin(0.3));
+}
+
 TEST_CASE("a parked row merged into one blob is split into car-sized boxes", "[entities]") {
     LabeledCloud cloud;
     for (float x = -6.0f; x <= 6.0f; x += 0.25f) {
