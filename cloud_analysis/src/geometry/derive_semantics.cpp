@@ -37,13 +37,13 @@ struct Classes {
 struct Cell {
     int count = 0;          ///< obstacle pixels at or above low_cut_m
     float height_sum = 0;   ///< sum of their heights above the road, metres
+    double d_sum = 0.0;     ///< sum of their disparities, px
     int green = 0;          ///< of them green
     int at_cut = 0;         ///< of them within continuity_band_m of the layers' border
     float top1 = -1e9f;     ///< highest height above the road, metres
     float top2 = -1e9f;     ///< second highest (robust top)
     float low = 1e9f;       ///< lowest height, metres
     int top_v = 1 << 30;    ///< row of its highest pixel (smallest v)
-    double d_sum = 0.0;     ///< sum of its pixels' disparities, px
     int top_u = 0;          ///< column of that pixel
     bool occluded = false;  ///< a nearer surface lies right above that pixel: top unknown
     int segment = -1;       ///< segment index once linked; -1: sparse (noise)
@@ -444,9 +444,7 @@ Segment classify(SegmentStats& st, const Classes& cls, const GeometryOptions& o)
     // or boot (0.8-1.1 m) to its roof.
     const double top_spread = seg.top_m - seg.top_q25_m;
     seg.low_m = quantile(st.lows, 0.1);
-    const double low = seg.low_m;
     std::tie(seg.width_m, seg.thickness_m) = footprint_extents(st.footprint);
-    const double thickness = seg.thickness_m;
     seg.depth_m = quantile(st.depths, 0.5);
     seg.near_m = quantile(st.depths, 0.05);
     seg.far_m = quantile(st.depths, 0.95);
@@ -476,11 +474,11 @@ Segment classify(SegmentStats& st, const Classes& cls, const GeometryOptions& o)
                seg.width_m > o.wall_min_width_m) {
         // Level along more than a car's width: a wall when thin, else kerbside clutter (bins,
         // a post box and bollards, a wall's foot behind them) seen together.
-        thickness < o.wall_max_thickness_m ? set(cls.wall, "wall") : set(cls.other, "static");
+        seg.thickness_m < o.wall_max_thickness_m ? set(cls.wall, "wall") : set(cls.other, "static");
     } else if (2 * st.occluded > st.pixels) {
         set(cls.other, "static");  // its top is hidden: no telling a car from a wall's foot
     } else if (seg.top_m >= o.car_min_height_m && seg.top_m <= o.car_max_height_m &&
-               low < o.low_max_height_m) {
+               seg.low_m < o.low_max_height_m) {
         set(cls.car, "car");
     } else {
         set(cls.other, "static");
