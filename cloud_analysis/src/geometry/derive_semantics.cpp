@@ -398,12 +398,17 @@ std::vector<int> cluster_cells(Grid& g, const DisparityMap& disparity, const Rig
 struct SegmentStats {
     std::size_t pixels = 0, green = 0, occluded = 0, tall_pixels = 0;
     bool tall = false;
+    bool truncated = false;  ///< a cell at the image's right edge or the matcher's left border
     std::vector<float> tops, lows, depths;
     std::vector<Eigen::Vector3d> footprint;  ///< (x, z, pixels) of each cell
 };
 
 std::vector<SegmentStats> gather_segments(Grid& g, std::vector<int>& parent, const Rig& rig,
-                                          const GeometryOptions& o) {
+                                          int width_px, const GeometryOptions& o) {
+    // What stereo sees ends at the image's right edge and, on the left, at the column below
+    // which nothing at a cell's depth has a match in the right view (offset + d); the matcher
+    // leaves those borders ragged by a few columns.
+    constexpr double kEdgeColumns = 8.0;
     std::vector<int> root_segment(g.cells.size(), -1);
     std::vector<SegmentStats> stats;
     for (int i = 0; i < static_cast<int>(g.cells.size()); ++i) {
@@ -423,8 +428,14 @@ std::vector<SegmentStats> gather_segments(Grid& g, std::vector<int>& parent, con
         st.tops.push_back(c.count > 1 ? c.top2 : c.top1);
         st.lows.push_back(c.low);
         const int column_bin = i / kLayers;
-        const double z = rig.fb / g.bin_centre[static_cast<std::size_t>(column_bin % g.bins_d)];
+        const double d = g.bin_centre[static_cast<std::size_t>(column_bin % g.bins_d)];
+        const double z = rig.fb / d;
         const double u = ((column_bin / g.bins_d) + 0.5) * o.column_bin_px;
+        const double u_lo = (column_bin / g.bins_d) * o.column_bin_px;
+        if (u_lo <= rig.offset + d + kEdgeColumns ||
+            u_lo + o.column_bin_px - 1 >= width_px - 1 - kEdgeColumns) {
+            st.truncated = true;
+        }
         st.depths.push_back(static_cast<float>(z));
         st.footprint.emplace_back((u - rig.cx) * z / rig.fx, z, c.count);
     }
@@ -463,7 +474,8 @@ Segment classify(SegmentStats& st, const Classes& cls, const GeometryOptions& o)
         set(cls.vegetation, "vegetation");
     } else if (st.tall || seg.top_m >= o.building_min_height_m) {
         narrow ? set(cls.pole, "pole") : set(cls.building, "building");
-    } else if (seg.width_m < o.car_min_width_m) {
+    } else if (seg.width_m < o.car_min_width_m && !st.truncated) {
+        // (Cut by the edge of what stereo sees, its width is only what shows: no test of it.)
         if (seg.top_m >= 1.0 && seg.top_m <= 2.2 && !narrow) {
             set(cls.person, "person");
         } else {
@@ -532,7 +544,7 @@ SceneGeometry derive_semantics(const DisparityMap& disparity, const StereoCamera
     Grid grid = fill_grid(disparity, rig, left, out.ground, o, cls.road, out.classes);
     std::vector<int> parent = o.segmentation == "clusters" ? cluster_cells(grid, disparity, rig, o)
                                                            : link_cells(grid, disparity, rig, o);
-    std::vector<SegmentStats> stats = gather_segments(grid, parent, rig, o);
+    std::vector<SegmentStats> stats = gather_segments(grid, parent, rig, w, o);
     std::vector<std::uint16_t> segment_class(stats.size(), kVoidClass);
     for (std::size_t s = 0; s < stats.size(); ++s) {
         out.segments.push_back(classify(stats[s], cls, o));

@@ -198,6 +198,29 @@ TEST_CASE("a car 1 m before a bus at 28 m is a car: the bus above its roof is no
     CHECK_THROWS_WITH(o.validate(), Catch::Contains("top_behind_px"));
 }
 
+TEST_CASE("a car cut by the matcher's left border is a car, though narrower than one",
+          "[geometry]") {
+    const StereoCamera cam = kitti_rig();
+    const auto palette = cloud_analysis::load_palette("cityscapes");
+    // The back of a car 5 m ahead on the left (x -4.0 to -3.0, 1.45 m high) and a person-wide
+    // board of the same height in the open (x 1.0 to 1.8, 8 m). Nothing left of column d (its
+    // disparity) has a match in the right view: 0.68 m of the car's back shows.
+    const std::vector<Box> boxes = {{-4.0, -3.0, 5.0, 1.45}, {1.0, 1.8, 8.0, 1.45}};
+    DisparityMap d = render(cam, 1.65, boxes);
+    for (int v = 0; v < d.height_px; ++v) {
+        for (int u = 0; u < d.width_px; ++u) {
+            float& x = d.disparity_px[static_cast<std::size_t>(v) * d.width_px + u];
+            if (x > 0.0f && u < x) x = kNoDisparity;
+        }
+    }
+    const SceneGeometry g = derive_semantics(d, cam, ImageU8{}, palette, {});
+    REQUIRE(g.ground.found);
+    const auto [cu, cv] = pixel_of(cam, -3.3, 0.7, 5.0);
+    CHECK(class_at(g, palette, cu, cv) == "car");
+    const auto [pu, pv] = pixel_of(cam, 1.4, 0.7, 8.0);
+    CHECK(class_at(g, palette, pu, pv) == "person");
+}
+
 TEST_CASE("a car under a tree's crown stays a car, a facade runs on above the car's layer",
           "[geometry]") {
     const StereoCamera cam = kitti_rig();
