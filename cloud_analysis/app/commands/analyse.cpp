@@ -72,6 +72,13 @@ LoadedRun load_run(const AnalyseArgs& a) {
     }
     LoadedRun run{{}, extract_options(a), std::nullopt};
     run.inputs = cloud_analysis::load_inputs(a.paths, a.options);
+    if ((!a.segments_out.empty() || !a.segment_ids_out.empty()) &&
+        cloud_analysis::semantics_path(run.inputs, a.options) != "geometry") {
+        throw std::runtime_error(
+            std::string("no segments: the classes come from the semantic image; ") +
+            (a.segments_out.empty() ? "--segment-ids-out" : "--segments-out") +
+            " needs --semantics geometry");
+    }
     if (!a.gt_disparity.empty()) {
         run.gt_disparity = cloud_analysis::read_kitti_disparity(a.gt_disparity);
         const auto& gt = *run.gt_disparity;
@@ -181,13 +188,8 @@ std::vector<PendingOutput> format_outputs(const LoadedRun& run,
             {a.semantic_out.string(), encode_semantic_png(r, in.palette), "--semantic-out"});
         timings.push_back({"encode semantic", ms_since(t)});
     }
-    if (!a.segments_out.empty() || !a.segment_ids_out.empty()) {
-        if (!r.geometry) {
-            throw std::runtime_error(
-                std::string("no segments: the classes came from the semantic image; ") +
-                (a.segments_out.empty() ? "--segment-ids-out" : "--segments-out") +
-                " needs --semantics geometry");
-        }
+    // load_run refused these flags unless the geometry makes the classes.
+    if (r.geometry && (!a.segments_out.empty() || !a.segment_ids_out.empty())) {
         t = Clock::now();
         if (!a.segments_out.empty()) {
             outputs.push_back(
