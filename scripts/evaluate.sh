@@ -26,9 +26,7 @@ build_dir="$STEREOSCENE_ROOT/build"
 kitti_root="$STEREOSCENE_ROOT/../shared/data/kitti15"
 out_dir=""
 frames=()
-parking_seeds="2 4 5 6 7 8 9 10 11 12 23 24 25 26 27 28 29 30 31 32"
-kerbside_seeds="2 3 4 5 6 7 8 9 23 24 25 26 27 28 29 30 31 32"
-held_out_seeds="13 14 15 16 17 18 19 20 21 22"
+source "$STEREOSCENE_ROOT/scripts/street-seeds.sh"  # parking_seeds, kerbside_seeds, held_out_seeds
 analysis_args=()
 while [ $# -gt 0 ]; do
     case "$1" in

@@ -22,6 +22,7 @@ usage: scripts/segment-classifier.py --evaluate-dir DIR [--kitti DIR] [--frames 
 import argparse
 import json
 import os
+import re
 import subprocess
 import sys
 import tempfile
@@ -105,6 +106,17 @@ def counts(truth, guess):
             int(((guess == 1) & (truth == 0)).sum()), int(((guess == 0) & (truth == 1)).sum()))
 
 
+def street_seeds():
+    """The default seed lists, shared with evaluate.sh (scripts/street-seeds.sh)."""
+    seeds = {}
+    with open(os.path.join(ROOT, "scripts", "street-seeds.sh")) as f:
+        for line in f:
+            m = re.fullmatch(r'(\w+)="([\d ]*)"', line.strip())
+            if m:
+                seeds[m.group(1)] = m.group(2)
+    return seeds
+
+
 def main():
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     ap.add_argument("--evaluate-dir",
@@ -116,10 +128,10 @@ def main():
                     default=os.path.join(ROOT, "build", "cloud_analysis", "cloud-analysis"))
     ap.add_argument("--max-depth", type=float, default=30.0,
                     help="segments nearer than this (median depth), metres")
-    ap.add_argument("--parking-seeds",
-                    default="2 4 5 6 7 8 9 10 11 12 23 24 25 26 27 28 29 30 31 32")
-    ap.add_argument("--kerbside-seeds", default="2 3 4 5 6 7 8 9 23 24 25 26 27 28 29 30 31 32")
-    ap.add_argument("--held-out-seeds", default="13 14 15 16 17 18 19 20 21 22")
+    seeds = street_seeds()
+    ap.add_argument("--parking-seeds", default=seeds["parking_seeds"])
+    ap.add_argument("--kerbside-seeds", default=seeds["kerbside_seeds"])
+    ap.add_argument("--held-out-seeds", default=seeds["held_out_seeds"])
     a = ap.parse_args()
     seeds = a.parking_seeds.split() + a.kerbside_seeds.split() + a.held_out_seeds.split()
     if seeds and not a.evaluate_dir:
