@@ -172,6 +172,20 @@ std::pair<double, double> footprint_extents(const std::vector<Eigen::Vector3d>& 
     return {length, quantile(across, 0.98) - quantile(across, 0.02)};
 }
 
+/// Whether pixel (u, v) lies on the matcher's blend between a nearer surface above and a
+/// farther one below (a tree's crown in front of a bus's side): its disparity is below the
+/// column's `rows` rows above and above the column's `rows` rows below, each by more than
+/// `step_px`. Above the road such a ramp is no surface's own (a face is level in its column; a
+/// bonnet, a roof or the road below the camera run the other way), only under an overhang.
+bool on_blend(const DisparityMap& disparity, int u, int v, int rows, double step_px) {
+    const int w = disparity.width_px;
+    if (v < rows || v + rows >= disparity.height_px) return false;
+    const double above = disparity.disparity_px[static_cast<std::size_t>(v - rows) * w + u];
+    const double here = disparity.disparity_px[static_cast<std::size_t>(v) * w + u];
+    const double below = disparity.disparity_px[static_cast<std::size_t>(v + rows) * w + u];
+    return above > 0.0 && below > 0.0 && above - here > step_px && here - below > step_px;
+}
+
 /// Disparity bins 1 px wide, widening to `share` of the disparity near the camera (where 1 px
 /// is a few centimetres of depth and an oblique surface would scatter over many bins).
 void make_bins(double max_d, double share, Grid& g) {
@@ -254,7 +268,17 @@ Grid fill_grid(const DisparityMap& disparity, const Rig& rig, const ImageU8& lef
     }
     // Tops second, from the pixels at the cell's depth: at range one disparity bin spans
     // metres, and the surface just behind a thing (a bus's side above a car's roof, 1-2 px of
-    // disparity farther) shares its bins but not its top.
+    // disparity farther) shares its bins but not its top. Pixels on a blend (on_blend) count
+    // only in cells that have no other.
+    std::vector<float> blend_top(g.cells.size(), -1e9f), blend_second(g.cells.size(), -1e9f);
+    const auto raise = [](float hf, float& top, float& second) {
+        if (hf > top) {
+            second = top;
+            top = hf;
+        } else if (hf > second) {
+            second = hf;
+        }
+    };
     for (int v = 0; v < h; ++v) {
         const std::size_t row = static_cast<std::size_t>(v) * w;
         for (int u = 0; u < w; ++u) {
@@ -264,16 +288,23 @@ Grid fill_grid(const DisparityMap& disparity, const Rig& rig, const ImageU8& lef
             const double d = double{disparity.disparity_px[row + u]} - rig.offset;
             if (d < c.d_sum / c.count - o.top_behind_px) continue;
             const float hf = g.pixel_height[row + u];
-            if (hf > c.top1) {
-                c.top2 = c.top1;
-                c.top1 = hf;
-            } else if (hf > c.top2) {
-                c.top2 = hf;
+            if (on_blend(disparity, u, v, o.blend_rows, o.blend_step_px)) {
+                const auto i = static_cast<std::size_t>(cell);
+                raise(hf, blend_top[i], blend_second[i]);
+            } else {
+                raise(hf, c.top1, c.top2);
             }
             if (v < c.top_v) {
                 c.top_v = v;
                 c.top_u = u;
             }
+        }
+    }
+    for (std::size_t i = 0; i < g.cells.size(); ++i) {
+        Cell& c = g.cells[i];
+        if (c.top1 < -1e8f) {
+            c.top1 = blend_top[i];
+            c.top2 = blend_second[i];
         }
     }
     return g;

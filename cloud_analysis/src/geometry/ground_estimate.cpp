@@ -42,6 +42,12 @@ void GeometryOptions::validate() const {
         throw std::invalid_argument("geometry.disparity_bin_share: must be in (0, 1)");
     }
     if (min_cell_pixels < 1) throw std::invalid_argument("geometry.min_cell_pixels: must be >= 1");
+    if (blend_rows < 1 || blend_rows > 1000) {
+        throw std::invalid_argument("geometry.blend_rows: must be in [1, 1000]");
+    }
+    if (!(blend_step_px >= 0.0 && blend_step_px < 1e6)) {
+        throw std::invalid_argument("geometry.blend_step_px: must be >= 0");
+    }
     if (!(top_behind_px > 0.0 && top_behind_px < 1e6)) {
         throw std::invalid_argument("geometry.top_behind_px: must be > 0");
     }

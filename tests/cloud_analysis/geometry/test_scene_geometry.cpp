@@ -198,6 +198,43 @@ TEST_CASE("a car 1 m before a bus at 28 m is a car: the bus above its roof is no
     CHECK_THROWS_WITH(o.validate(), Catch::Contains("top_behind_px"));
 }
 
+TEST_CASE("a crown's blend into the bus behind is not the top of the car between them",
+          "[geometry]") {
+    const StereoCamera cam = kitti_rig();
+    const auto palette = cloud_analysis::load_palette("cityscapes");
+    // A car's back at 26 m, a bus's back at 29.5 m behind it, a tree's crown at 24 m hanging to
+    // 2.3 m above the road. The matcher blends the crown's disparity (16.2 px) into the bus's
+    // (13.2 px) over the 8 rows below the crown: those rows pass the car's 14-15 px at
+    // 2.2-2.25 m, in the car's cells.
+    const std::vector<Box> boxes =
+        with_car_from_behind({{-1.6, 1.4, 29.5, 3.2, 0.3}, {-2.5, 2.5, 24.0, 6.0, 2.3}}, 26.0);
+    DisparityMap d = render(cam, 1.65, boxes);
+    const double fb = cam.fx_px * cam.baseline_m, crown = fb / 24.0, bus = fb / 29.5;
+    for (int u = 0; u < d.width_px; ++u) {
+        for (int v = 1; v + 8 < d.height_px; ++v) {
+            const auto at = [&](int row) -> float& {
+                return d.disparity_px[static_cast<std::size_t>(row) * d.width_px + u];
+            };
+            if (std::abs(at(v - 1) - crown) > 0.01 || std::abs(at(v) - bus) > 0.01) continue;
+            for (int r = 0; r < 8; ++r) {
+                at(v + r) = static_cast<float>(crown + (bus - crown) * (r + 1) / 9.0);
+            }
+            break;
+        }
+    }
+    const auto [cu, cv] = pixel_of(cam, 0.0, 0.6, 26.0);
+    GeometryOptions o;
+    CHECK(class_at(derive_semantics(d, cam, ImageU8{}, palette, o), palette, cu, cv) == "car");
+    // Tops from the blended pixels too: the car is 2.2 m tall or more, no car.
+    o.blend_step_px = 1e5;
+    CHECK(class_at(derive_semantics(d, cam, ImageU8{}, palette, o), palette, cu, cv) != "car");
+    o.blend_rows = 0;
+    CHECK_THROWS_WITH(o.validate(), Catch::Contains("blend_rows"));
+    o = GeometryOptions{};
+    o.blend_step_px = -1.0;
+    CHECK_THROWS_WITH(o.validate(), Catch::Contains("blend_step_px"));
+}
+
 TEST_CASE("a car cut by the matcher's left border is a car, though narrower than one",
           "[geometry]") {
     const StereoCamera cam = kitti_rig();

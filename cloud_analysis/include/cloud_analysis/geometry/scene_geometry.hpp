@@ -44,12 +44,17 @@ struct GeometryOptions {
                                            ///< disparity wide, whichever is wider, (0, 1)
     double link_depth_m = 0.8;             ///< cells closer in depth than this join, metres
     int min_cell_pixels = 3;               ///< sparser u-disparity cells are noise, pixels, >= 1
+    double min_cell_height_m = 0.2;        ///< ... and so are cells holding fewer pixels than a
+                                           ///< surface this tall across the cell would, metres
     double top_behind_px = 0.25;           ///< a cell's top is its pixels' at most this much
                                            ///< disparity behind the cell's mean (a bus's side
                                            ///< above a car's roof shares the car's bin at range,
                                            ///< 1-2 px farther), px, > 0
-    double min_cell_height_m = 0.2;        ///< ... and so are cells holding fewer pixels than a
-                                           ///< surface this tall across the cell would, metres
+    int blend_rows = 4;                    ///< ... and not a pixel whose column is nearer this
+    double blend_step_px = 0.3;            ///< many rows above and farther as far below, each by
+                                           ///< more than this (the matcher's blend of a crown
+                                           ///< and the bus's side behind it, in a car's bins),
+                                           ///< unless the cell has no other; rows >= 1, px >= 0
     double low_cut_m = 0.35;               ///< pixels lower than this above the road take their
                                            ///< cell's class, or sidewalk/terrain alone, metres
     double layer_height_m = 2.3;           ///< cells hold the pixels below and above this height in
