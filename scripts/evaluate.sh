@@ -2,7 +2,7 @@
 # Runs the whole evaluation of cloud-analysis (docs/evaluation.md) and prints the tables.
 # First the rendered scenes (tuning data): the committed samples/rendered scenes, easy and hard,
 # and more parking streets rendered at run time (scripts/make-parking-scene.py, label bleed; some
-# with kerbside clutter where nobody parks),
+# with kerbside clutter where nobody parks, some with people standing there too),
 # each scored against its truth with the goal's bars and a reason for every miss and every
 # spurious box, then analysed again from the stereo pair alone (--semantics geometry) and
 # scored with the stereo-only bars. Then the KITTI frames (checks, never tuned on): disparity of the tuned defaults
@@ -11,11 +11,15 @@
 # geometry: the semantic image ignored; docs/stereo-only.md) beside them.
 # usage: scripts/evaluate.sh [--no-build] [--build-dir DIR] [--kitti-root DIR] [--out DIR]
 #            [--parking-seeds "2 4 5 ... 12 23 ... 32"] [--kerbside-seeds "2 ... 9 23 ... 32"]
-#            [--held-out-seeds "13 14 15 16 17 18 19 20 21 22"] [--class-config FILE] [frames...]
+#            [--pedestrian-seeds "2 ... 9"] [--held-out-seeds "13 14 15 16 17 18 19 20 21 22"]
+#            [--class-config FILE] [frames...]
 #   --parking-seeds: parking streets (make-parking-scene.py), tuning data
 #   --kerbside-seeds: streets with kerbside clutter (make-parking-scene.py --kerbside)
-#   --held-out-seeds: a parking and a kerbside street each, never used to choose a parameter;
-#                     their totals are printed apart from the tuning scenes
+#   --pedestrian-seeds: kerbside streets with groups of people on the sidewalk
+#                       (make-parking-scene.py --kerbside --pedestrians); their totals are
+#                       printed apart
+#   --held-out-seeds: a parking, a kerbside and a pedestrian street each, never used to choose
+#                     a parameter; their totals are printed apart from the tuning scenes
 #   --class-config: per-class extractor settings for every analysis (to compare settings)
 #   default frames: 000000_10 000001_10; default KITTI root: ../shared/data/kitti15
 set -euo pipefail
@@ -26,7 +30,8 @@ build_dir="$STEREOSCENE_ROOT/build"
 kitti_root="$STEREOSCENE_ROOT/../shared/data/kitti15"
 out_dir=""
 frames=()
-source "$STEREOSCENE_ROOT/scripts/street-seeds.sh"  # parking_seeds, kerbside_seeds, held_out_seeds
+# parking_seeds, kerbside_seeds, pedestrian_seeds, held_out_seeds
+source "$STEREOSCENE_ROOT/scripts/street-seeds.sh"
 analysis_args=()
 while [ $# -gt 0 ]; do
     case "$1" in
@@ -36,6 +41,7 @@ while [ $# -gt 0 ]; do
         --out) out_dir=$2; shift ;;
         --parking-seeds) parking_seeds=$2; shift ;;
         --kerbside-seeds) kerbside_seeds=$2; shift ;;
+        --pedestrian-seeds) pedestrian_seeds=$2; shift ;;
         --held-out-seeds) held_out_seeds=$2; shift ;;
         --class-config) analysis_args+=(--class-config "$2"); shift ;;
         -h|--help) sed -n '2,17p' "$0"; exit 0 ;;
@@ -78,9 +84,13 @@ render_street() {  # kind name seed [make-parking-scene.py flags]; kind: run (tu
 }
 for seed in $parking_seeds; do render_street run "parking-street-$seed" "$seed"; done
 for seed in $kerbside_seeds; do render_street run "kerbside-$seed" "$seed" --kerbside; done
+for seed in $pedestrian_seeds; do
+    render_street run "pedestrians-$seed" "$seed" --kerbside --pedestrians
+done
 for seed in $held_out_seeds; do
     render_street held "parking-street-$seed" "$seed"
     render_street held "kerbside-$seed" "$seed" --kerbside
+    render_street held "pedestrians-$seed" "$seed" --kerbside --pedestrians
 done
 echo "=== rendered scenes (tuning data, then the held-out streets) ==="
 evals=()
@@ -143,8 +153,15 @@ for title, paths in tables:
     spur = sum(b.get("spurious", 0) for b in near)
     good = sum(b.get("good_iou", 0) for b in near)
     cars = [m for m in e["matches"] if m["class"] == "car" and m["range_m"] < 30.0]
-    t = totals.setdefault("held out" if "held out" in label else "tuning",
-                          {"cars": [], "ref": 0, "hit": 0, "spur": 0, "scenes": 0, "met": 0})
+    group = "held out" if "held out" in label else "tuning"
+    if label.startswith("pedestrians-"):
+      group = "pedestrian streets, " + group  # apart: the other totals keep their scenes
+    t = totals.setdefault(group,
+                          {"cars": [], "ref": 0, "hit": 0, "spur": 0, "scenes": 0, "met": 0,
+                           "on_person": 0})
+    t["on_person"] += sum(1 for x in e.get("diagnosis", [])
+                          if x["id"].startswith("car-") and x["kind"] == "phantom"
+                          and "person" in x["reason"])
     t["cars"] += cars
     for key, n in (("ref", ref), ("hit", hit), ("spur", spur), ("scenes", 1),
                    ("met", int(d["bars"]["pass"]))):
@@ -161,7 +178,9 @@ for title, paths in tables:
     print(f"{group}, {t['scenes']} scenes: {t['hit']} of {t['ref']} cars found, {t['spur']} "
           f"spurious cars <= 30 m, bars met on {t['met']}; matched cars: median centre error "
           f"{statistics.median(errors):.3f} m, mean {statistics.mean(errors):.3f} m, mean BEV IoU "
-          f"{statistics.mean([m['bev_iou'] for m in t['cars']]):.3f}")
+          f"{statistics.mean([m['bev_iou'] for m in t['cars']]):.3f}"
+          + (f"; {t['on_person']} car boxes on or beside a person (any range)"
+             if group.startswith("pedestrian") else ""))
 PY
 
 if [ ! -d "$kitti_root/disp_occ_0" ] || [ ! -d "$kitti_root/instance" ]; then

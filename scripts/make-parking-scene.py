@@ -15,6 +15,11 @@ With --kerbside nobody parks on the right from 12 m to 32 m: garden walls with p
 with a pierced coping) before front gardens, hedges, a post box among bollards, bins and a
 bicycle stand on the sidewalk there (docs/evaluation.md "Kerbside streets").
 
+With --pedestrians as well (kerbside streets only), groups of one to three people stand
+together on that sidewalk, some beside a pole: people side by side are as wide and as tall as
+a car's back, which stereo alone must tell apart. The rest of the street is the same as with
+--kerbside alone.
+
 Every car carries its size family in `subclass` (car, van); the truck and the bus are their
 own classes. docs/evaluation.md "Hard parking streets" describes how they are scored.
 """
@@ -40,7 +45,8 @@ VAN = FAMILIES[4]
 TRUCK = ("truck", "truck", 7.5, 2.40, 3.20)
 BUS = ("bus", "bus", 11.0, 2.55, 3.20)
 CLASS_IDS = {"car": 26, "truck": 27, "bus": 28, "vegetation": 21, "pole": 17, "road": 7,
-             "sidewalk": 8, "building": 11, "wall": 12, "static": 4, "bicycle": 33}
+             "sidewalk": 8, "building": 11, "wall": 12, "static": 4, "bicycle": 33,
+             "person": 24}
 SIDEWALK_BACK_X = 9.0  # the sidewalk's far edge (the buildings' side), metres
 
 
@@ -144,7 +150,26 @@ def kerbside(rng, z_start, z_end):
              round(H, 3)) for c, x, h, zc, L, W, H in items]
 
 
-def build_scene(seed, with_kerbside=False):
+def pedestrians(rng, z_start, z_end):
+    """Groups of one to three people standing together on the right sidewalk between the
+    kerbside clutter and the walls, side by side along the street, a pole beside some groups.
+    Returns (class, x, y, z, L, W, H) boxes like kerbside()."""
+    items = []
+    z = z_start + rng.uniform(0.0, 3.0)
+    while z < z_end:
+        x = KERB_X + 1.45 + rng.uniform(-0.1, 0.1)
+        for k in range(rng.randint(1, 3)):
+            height = rng.uniform(1.6, 1.85)
+            items.append(("person", x + rng.uniform(-0.1, 0.1), ROAD_TOP_Y - 0.15 - height / 2,
+                          z + 0.6 * k, 0.3, 0.55, height))
+        if rng.random() < 0.5:
+            items.append(("pole", KERB_X + 0.3, ROAD_TOP_Y - 0.15 - 2.0, z - 0.6, 0.2, 0.2, 4.0))
+        z += rng.uniform(4.0, 8.0)
+    return [(c, round(x, 3), round(y, 3), round(zc, 3), L, W, round(H, 3))
+            for c, x, y, zc, L, W, H in items]
+
+
+def build_scene(seed, with_kerbside=False, with_pedestrians=False):
     rng = random.Random(seed)
     ents = [
         stuff("road-1", "road", 0.0, 1.625, 30.0, 80.0, 12.0, 0.05),
@@ -213,7 +238,15 @@ def build_scene(seed, with_kerbside=False):
     for cls, x, y, z, L, W, H in clutter:
         counts[cls] = counts.get(cls, 0) + 1
         ents.append(stuff(f"{cls}-{counts[cls]}", cls, x, y, z, L, W, H))
+    if with_pedestrians:
+        # A generator of their own: the street around them stays the kerbside street's.
+        for cls, x, y, z, L, W, H in pedestrians(random.Random(f"pedestrians-{seed}"), 12.5,
+                                                 30.0):
+            counts[cls] = counts.get(cls, 0) + 1
+            ents.append(stuff(f"{cls}-{counts[cls]}", cls, x, y, z, L, W, H, 0.0))
     name = f"kerbside-{seed}" if with_kerbside else f"parking-street-{seed}"
+    if with_pedestrians:
+        name = f"pedestrians-{seed}"
     return {
         "schema_version": "1.0.0",
         "frame": {"id": name, "convention": "kitti_camera",
@@ -227,7 +260,9 @@ def build_scene(seed, with_kerbside=False):
                                   "poles between the cars. Camera 1.65 m above the road."
                                   + (" Kerbside: nobody parks on the right from 12 m to 32 m; "
                                      "walls, hedges, a post box, bollards, bins and a bicycle "
-                                     "stand on the sidewalk." if with_kerbside else "")},
+                                     "stand on the sidewalk." if with_kerbside else "")
+                                  + (" Groups of one to three people stand on that sidewalk, "
+                                     "some beside a pole." if with_pedestrians else "")},
         "entities": ents,
     }
 
@@ -240,11 +275,17 @@ def main():
                         "pillars, some with a pierced coping), hedges, a post box among "
                         "bollards, bins and a bicycle stand on the sidewalk instead, the "
                         "buildings behind them 2-5 m back")
+    p.add_argument("--pedestrians", action="store_true",
+                   help="with --kerbside: groups of one to three people stand on that "
+                        "sidewalk, some beside a pole")
     p.add_argument("-o", "--out", default="-", help="output entity file ('-' = stdout)")
     a = p.parse_args()
     if a.seed < 0:
         p.error("--seed must be >= 0")
-    text = json.dumps(build_scene(a.seed, a.kerbside), indent=2, sort_keys=True) + "\n"
+    if a.pedestrians and not a.kerbside:
+        p.error("--pedestrians needs --kerbside (the people stand where nobody parks)")
+    text = json.dumps(build_scene(a.seed, a.kerbside, a.pedestrians), indent=2,
+                      sort_keys=True) + "\n"
     if a.out == "-":
         sys.stdout.write(text)
     else:

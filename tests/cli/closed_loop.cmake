@@ -61,6 +61,27 @@ foreach(_street IN ITEMS "parking-street-1|--seed|1" "parking-street-3|--seed|3"
             ${STEREOSCENE_PYTHON} ${PROJECT_SOURCE_DIR}/scripts/make-parking-scene.py
             ${PROJECT_SOURCE_DIR}/samples/rendered/scenes/${_scene}.json)
 endforeach()
+# --pedestrians adds people (and poles beside some) to the kerbside street and changes nothing
+# else; it needs --kerbside.
+add_test(NAME "make-parking-scene.py --kerbside --pedestrians adds people to the kerbside street only"
+    COMMAND ${STEREOSCENE_PYTHON} -c [=[
+import json, subprocess, sys
+def run(*flags):
+    out = subprocess.run([sys.executable, sys.argv[1], "--seed", "4", *flags],
+                         capture_output=True, text=True)
+    return out.returncode, out.stdout
+def boxes(text, skip=()):
+    return {(e["class"], e["x"], e["y"], e["z"], e["L"], e["W"], e["H"])
+            for e in json.loads(text)["entities"] if e["class"] not in skip}
+_, kerbside = run("--kerbside")
+code, people = run("--kerbside", "--pedestrians")
+assert code == 0 and json.loads(people)["frame"]["id"] == "pedestrians-4"
+added = boxes(people) - boxes(kerbside)
+assert boxes(kerbside) <= boxes(people), "a kerbside entity changed"
+assert {b[0] for b in added} == {"person", "pole"}, added
+assert sum(b[0] == "person" for b in added) >= 2, added
+assert run("--pedestrians")[0] == 2, "--pedestrians without --kerbside must fail"
+]=] ${PROJECT_SOURCE_DIR}/scripts/make-parking-scene.py)
 # Scenes whose hidden cars are found today too: a third test owes them every car within 30 m,
 # unfiltered, so the visibility rule cannot hide a regression there (parking-row: 4 of its 11
 # cars are less than a quarter visible, behind the cars beside them, and all are found).
