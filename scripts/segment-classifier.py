@@ -17,7 +17,8 @@ written but the table on stdout. Needs python3-opencv and numpy (scripts/install
 
 usage: scripts/segment-classifier.py --evaluate-dir DIR [--kitti DIR] [--frames F ...]
            [--cloud-analysis EXE] [--max-depth M] [--parking-seeds "2 4 ..."]
-           [--kerbside-seeds "2 3 ..."] [--held-out-seeds "13 14 ..."]
+           [--kerbside-seeds "2 3 ..."] [--pedestrian-seeds "2 3 ..."]
+           [--held-out-seeds "13 14 ..."]
 """
 import argparse
 import json
@@ -131,9 +132,11 @@ def main():
     seeds = street_seeds()
     ap.add_argument("--parking-seeds", default=seeds["parking_seeds"])
     ap.add_argument("--kerbside-seeds", default=seeds["kerbside_seeds"])
+    ap.add_argument("--pedestrian-seeds", default=seeds["pedestrian_seeds"])
     ap.add_argument("--held-out-seeds", default=seeds["held_out_seeds"])
     a = ap.parse_args()
-    seeds = a.parking_seeds.split() + a.kerbside_seeds.split() + a.held_out_seeds.split()
+    seeds = (a.parking_seeds.split() + a.kerbside_seeds.split() + a.pedestrian_seeds.split() +
+             a.held_out_seeds.split())
     if seeds and not a.evaluate_dir:
         ap.error("--evaluate-dir is needed for the seeds' streets (or give empty seed lists)")
     rendered = os.path.join(a.evaluate_dir or ".", "rendered")
@@ -144,8 +147,10 @@ def main():
                for s in a.parking_seeds.split()]
     tuning += [(f"kerbside-{s}", os.path.join(rendered, f"kerbside-{s}"), "000000")
                for s in a.kerbside_seeds.split()]
+    tuning += [(f"pedestrians-{s}", os.path.join(rendered, f"pedestrians-{s}"), "000000")
+               for s in a.pedestrian_seeds.split()]
     held = [(f"{k}-{s}", os.path.join(rendered, f"{k}-{s}"), "000000")
-            for s in a.held_out_seeds.split() for k in ("parking-street", "kerbside")]
+            for s in a.held_out_seeds.split() for k in ("parking-street", "kerbside", "pedestrians")]
     checks = [(f"KITTI {f}", a.kitti, f) for f in a.frames
               if os.path.exists(os.path.join(a.kitti, "instance", f + ".png"))]
     for name, root, _ in tuning + held:
