@@ -16,7 +16,7 @@ with a pierced coping) before front gardens, hedges, a post box among bollards, 
 bicycle stand on the sidewalk there (docs/evaluation.md "Kerbside streets").
 
 With --pedestrians as well (kerbside streets only), groups of one to three people stand
-together on that sidewalk, some beside a pole: people side by side are as wide and as tall as
+together on that sidewalk, some beside a pole, some under a street tree's crown: people side by side are as wide and as tall as
 a car's back, which stereo alone must tell apart. The rest of the street is the same as with
 --kerbside alone.
 
@@ -152,8 +152,9 @@ def kerbside(rng, z_start, z_end):
 
 def pedestrians(rng, z_start, z_end):
     """Groups of one to three people standing together on the right sidewalk between the
-    kerbside clutter and the walls, side by side along the street, a pole beside some groups.
-    Returns (class, x, y, z, L, W, H) boxes like kerbside()."""
+    kerbside clutter and the walls, side by side along the street, a pole beside some groups and
+    a street tree behind some, its crown over their heads. Returns (class, x, y, z, L, W, H)
+    boxes like kerbside()."""
     items = []
     z = z_start + rng.uniform(0.0, 3.0)
     while z < z_end:
@@ -164,6 +165,9 @@ def pedestrians(rng, z_start, z_end):
                           z + 0.6 * k, 0.3, 0.55, height))
         if rng.random() < 0.5:
             items.append(("pole", KERB_X + 0.3, ROAD_TOP_Y - 0.15 - 2.0, z - 0.6, 0.2, 0.2, 4.0))
+        if rng.random() < 0.5:  # a street tree behind them, its crown over their heads
+            items.append(("vegetation", KERB_X + 2.1, ROAD_TOP_Y - 0.15 - 2.8, z + 0.6, 2.6, 2.6,
+                          5.6))
         z += rng.uniform(4.0, 8.0)
     return [(c, round(x, 3), round(y, 3), round(zc, 3), L, W, round(H, 3))
             for c, x, y, zc, L, W, H in items]
@@ -262,7 +266,8 @@ def build_scene(seed, with_kerbside=False, with_pedestrians=False):
                                      "walls, hedges, a post box, bollards, bins and a bicycle "
                                      "stand on the sidewalk." if with_kerbside else "")
                                   + (" Groups of one to three people stand on that sidewalk, "
-                                     "some beside a pole." if with_pedestrians else "")},
+                                     "some beside a pole, some under a tree."
+                                     if with_pedestrians else "")},
         "entities": ents,
     }
 
@@ -277,7 +282,7 @@ def main():
                         "buildings behind them 2-5 m back")
     p.add_argument("--pedestrians", action="store_true",
                    help="with --kerbside: groups of one to three people stand on that "
-                        "sidewalk, some beside a pole")
+                        "sidewalk, some beside a pole, some under a tree")
     p.add_argument("-o", "--out", default="-", help="output entity file ('-' = stdout)")
     a = p.parse_args()
     if a.seed < 0:
