@@ -1,5 +1,6 @@
 #include <algorithm>
 #include <cmath>
+#include <functional>
 #include <string>
 #include <utility>
 #include <vector>
@@ -74,6 +75,19 @@ std::string class_at(const SceneGeometry& g, const cloud_analysis::Palette& p, i
 std::pair<int, int> pixel_of(const StereoCamera& c, double x, double up_m, double z) {
     return {static_cast<int>(c.cx_px + c.fx_px * x / z),
             static_cast<int>(c.cy_px + c.fy_px * (1.65 - up_m) / z)};
+}
+
+/// Pixel `px` of `d` is a car with the default options, and no car once `without` has turned
+/// a rule off: the rule is what makes it one.
+void check_car_only_with_rule(const DisparityMap& d, const StereoCamera& cam,
+                              const cloud_analysis::Palette& palette, std::pair<int, int> px,
+                              const std::function<void(GeometryOptions&)>& without) {
+    GeometryOptions o;
+    CHECK(class_at(derive_semantics(d, cam, ImageU8{}, palette, o), palette, px.first, px.second) ==
+          "car");
+    without(o);
+    CHECK(class_at(derive_semantics(d, cam, ImageU8{}, palette, o), palette, px.first, px.second) !=
+          "car");
 }
 
 }  // namespace
@@ -188,12 +202,10 @@ TEST_CASE("a car 1 m before a bus at 28 m is a car: the bus above its roof is no
     for (float& x : d.disparity_px) {
         if (x > 0.0f) x += static_cast<float>(0.3 * std::sin(12.9898 * static_cast<double>(k++)));
     }
-    const auto [cu, cv] = pixel_of(cam, 0.0, 0.6, 28.0);
-    GeometryOptions o;
-    CHECK(class_at(derive_semantics(d, cam, ImageU8{}, palette, o), palette, cu, cv) == "car");
     // Tops from every pixel of a cell: the bus's side above the roof lifts it out of a car's.
-    o.top_behind_px = 1e5;
-    CHECK(class_at(derive_semantics(d, cam, ImageU8{}, palette, o), palette, cu, cv) != "car");
+    check_car_only_with_rule(d, cam, palette, pixel_of(cam, 0.0, 0.6, 28.0),
+                             [](GeometryOptions& o) { o.top_behind_px = 1e5; });
+    GeometryOptions o;
     o.top_behind_px = 0.0;
     CHECK_THROWS_WITH(o.validate(), Catch::Contains("top_behind_px"));
 }
@@ -222,12 +234,10 @@ TEST_CASE("a crown's blend into the bus behind is not the top of the car between
             break;
         }
     }
-    const auto [cu, cv] = pixel_of(cam, 0.0, 0.6, 26.0);
-    GeometryOptions o;
-    CHECK(class_at(derive_semantics(d, cam, ImageU8{}, palette, o), palette, cu, cv) == "car");
     // Tops from the blended pixels too: the car is 2.2 m tall or more, no car.
-    o.blend_step_px = 1e5;
-    CHECK(class_at(derive_semantics(d, cam, ImageU8{}, palette, o), palette, cu, cv) != "car");
+    check_car_only_with_rule(d, cam, palette, pixel_of(cam, 0.0, 0.6, 26.0),
+                             [](GeometryOptions& o) { o.blend_step_px = 1e5; });
+    GeometryOptions o;
     o.blend_rows = 0;
     CHECK_THROWS_WITH(o.validate(), Catch::Contains("blend_rows"));
     o = GeometryOptions{};
