@@ -288,11 +288,13 @@ Grid fill_grid(const DisparityMap& disparity, const Rig& rig, const ImageU8& lef
             const double d = double{disparity.disparity_px[row + u]} - rig.offset;
             if (d < c.d_sum / c.count - o.top_behind_px) continue;
             const float hf = g.pixel_height[row + u];
-            if (on_blend(disparity, u, v, o.blend_rows, o.blend_step_px)) {
-                const auto i = static_cast<std::size_t>(cell);
-                raise(hf, blend_top[i], blend_second[i]);
-            } else {
-                raise(hf, c.top1, c.top2);
+            const auto i = static_cast<std::size_t>(cell);
+            if (hf > c.top2 || hf > blend_second[i]) {  // else neither top changes
+                if (on_blend(disparity, u, v, o.blend_rows, o.blend_step_px)) {
+                    raise(hf, blend_top[i], blend_second[i]);
+                } else {
+                    raise(hf, c.top1, c.top2);
+                }
             }
             if (v < c.top_v) {
                 c.top_v = v;
