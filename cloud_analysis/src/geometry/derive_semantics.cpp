@@ -42,6 +42,8 @@ struct Cell {
     int at_cut = 0;         ///< of them within continuity_band_m of the layers' border
     float top1 = -1e9f;     ///< highest height above the road, metres
     float top2 = -1e9f;     ///< second highest (robust top)
+    float blend1 = -1e9f;   ///< the same two over its pixels on a blend (on_blend), which
+    float blend2 = -1e9f;   ///< give its top only when it has no other
     float low = 1e9f;       ///< lowest height, metres
     int top_v = 1 << 30;    ///< row of its highest pixel (smallest v)
     int top_u = 0;          ///< column of that pixel
@@ -270,7 +272,6 @@ Grid fill_grid(const DisparityMap& disparity, const Rig& rig, const ImageU8& lef
     // metres, and the surface just behind a thing (a bus's side above a car's roof, 1-2 px of
     // disparity farther) shares its bins but not its top. Pixels on a blend (on_blend) count
     // only in cells that have no other.
-    std::vector<float> blend_top(g.cells.size(), -1e9f), blend_second(g.cells.size(), -1e9f);
     const auto raise = [](float hf, float& top, float& second) {
         if (hf > top) {
             second = top;
@@ -288,10 +289,9 @@ Grid fill_grid(const DisparityMap& disparity, const Rig& rig, const ImageU8& lef
             const double d = double{disparity.disparity_px[row + u]} - rig.offset;
             if (d < c.d_sum / c.count - o.top_behind_px) continue;
             const float hf = g.pixel_height[row + u];
-            const auto i = static_cast<std::size_t>(cell);
-            if (hf > c.top2 || hf > blend_second[i]) {  // else neither top changes
+            if (hf > c.top2 || hf > c.blend2) {  // else neither pair changes
                 if (on_blend(disparity, u, v, o.blend_rows, o.blend_step_px)) {
-                    raise(hf, blend_top[i], blend_second[i]);
+                    raise(hf, c.blend1, c.blend2);
                 } else {
                     raise(hf, c.top1, c.top2);
                 }
@@ -302,11 +302,10 @@ Grid fill_grid(const DisparityMap& disparity, const Rig& rig, const ImageU8& lef
             }
         }
     }
-    for (std::size_t i = 0; i < g.cells.size(); ++i) {
-        Cell& c = g.cells[i];
+    for (Cell& c : g.cells) {
         if (c.top1 < -1e8f) {
-            c.top1 = blend_top[i];
-            c.top2 = blend_second[i];
+            c.top1 = c.blend1;
+            c.top2 = c.blend2;
         }
     }
     return g;
