@@ -227,7 +227,10 @@ TEST_CASE("a crown's blend into the bus behind is not the top of the car between
             const auto at = [&](int row) -> float& {
                 return d.disparity_px[static_cast<std::size_t>(row) * d.width_px + u];
             };
-            if (std::abs(at(v - 1) - crown) > 0.01 || std::abs(at(v) - bus) > 0.01) continue;
+            if (std::abs(double{at(v - 1)} - crown) > 0.01 ||
+                std::abs(double{at(v)} - bus) > 0.01) {
+                continue;
+            }
             for (int r = 0; r < 8; ++r) {
                 at(v + r) = static_cast<float>(crown + (bus - crown) * (r + 1) / 9.0);
             }
