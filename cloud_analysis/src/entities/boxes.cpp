@@ -569,28 +569,43 @@ OrientedBox fit_upright_box(const std::vector<Eigen::Vector3f>& points_m,
     }
     Eigen::Vector2d e1(std::cos(angle), std::sin(angle));
     Eigen::Vector2d e2(-std::sin(angle), std::cos(angle));
-    std::vector<double> c1, c2;
+    // Coordinates along the axes, each standing for one point or, over seen surface, for its
+    // squared range (the surface a pixel spans there). A side runs at most the prior's length
+    // behind the thing's near end: points farther (range smear, the next thing of a row) weigh
+    // as one at that range, so that smear does not outweigh the thing.
+    double cap_m = 0.0;
+    if (options.area_weighted_extents) {
+        std::vector<double> range;
+        range.reserve(ab.size());
+        for (const auto& p : ab) range.push_back(p.norm());
+        cap_m =
+            quantile(range, options.trim_fraction) + std::max(options.prior_L_m, options.prior_W_m);
+    }
+    WeightedValues c1, c2;
     c1.reserve(ab.size());
     c2.reserve(ab.size());
     for (const auto& p : ab) {
-        c1.push_back(p.dot(e1));
-        c2.push_back(p.dot(e2));
+        const double r = std::min(p.norm(), cap_m);
+        const auto w =
+            options.area_weighted_extents ? static_cast<float>(std::max(r * r, 1e-6)) : 1.0f;
+        c1.emplace_back(p.dot(e1), w);
+        c2.emplace_back(p.dot(e2), w);
     }
     const double t = options.trim_fraction;
-    auto [lo1, hi1] = quantiles(c1, t, 1.0 - t);
-    auto [lo2, hi2] = quantiles(c2, t, 1.0 - t);
+    auto [lo1, hi1] = weighted_quantiles(c1, t, 1.0 - t);
+    auto [lo2, hi2] = weighted_quantiles(c2, t, 1.0 - t);
     if (options.near_trim_fraction > t) {
         // The end nearer the camera (coordinates are relative to it) of an axis along the
         // viewing ray: trimmed further, as the near face's points are spread in front of it.
         const Eigen::Vector2d ray =
             (((lo1 + hi1) / 2.0) * e1 + ((lo2 + hi2) / 2.0) * e2).normalized();
-        const auto trim_near = [&](std::vector<double>& c, double& lo, double& hi,
+        const auto trim_near = [&](WeightedValues& c, double& lo, double& hi,
                                    const Eigen::Vector2d& e) {
             if (std::abs(ray.dot(e)) < std::sqrt(0.5)) return;
             if (lo + hi >= 0.0) {
-                lo = quantiles(c, options.near_trim_fraction, 1.0 - t).first;
+                lo = weighted_quantiles(c, options.near_trim_fraction, 1.0 - t).first;
             } else {
-                hi = quantiles(c, t, 1.0 - options.near_trim_fraction).second;
+                hi = weighted_quantiles(c, t, 1.0 - options.near_trim_fraction).second;
             }
         };
         trim_near(c1, lo1, hi1, e1);

@@ -242,10 +242,13 @@ std::vector<Candidate> candidates_of_cluster(const std::vector<Eigen::Vector3f>&
         c.members = std::move(part);
         c.group = group;
         // The splits above read the box as fitted; the thing's own box trims its near end
-        // further along the viewing ray.
+        // further along the viewing ray and takes its extents over seen surface (a side seen
+        // along the ray holds few points per metre at its far end).
         BoxFitOptions final_fit = fit;
         final_fit.near_trim_fraction = std::max(fit.trim_fraction, options.near_trim_fraction);
-        if (final_fit.near_trim_fraction > fit.near_trim_fraction) {
+        final_fit.area_weighted_extents = options.area_weighted_extents;
+        if (final_fit.near_trim_fraction > fit.near_trim_fraction ||
+            final_fit.area_weighted_extents) {
             c.box = fit_upright_box(gather(pts, c.members), ground, final_fit);
         }
         if (!options.family_class.empty() && s.name == options.family_class) {

@@ -149,6 +149,40 @@ TEST_CASE("the near end along the ray trims more: the rear's smear in front of i
     CHECK_THROWS_WITH(o.validate(), Catch::Contains("near_trim_fraction"));
 }
 
+TEST_CASE("a side seen along the ray, thinning out with range, keeps its far end over seen surface",
+          "[boxes]") {
+    // A 4.8 m car parked on the left, 6-10.8 m ahead: its rear and its inner side sampled as a
+    // camera's pixels (f 700 px, one point per column and 5 cm of height), so the side's far
+    // metre holds a third of the points its near metre holds. Quantiles of points end the side
+    // short, and the 4.2 m prior then stands in for the measured length.
+    constexpr double f = 700.0, x_side = -3.9, x_kerb = -5.7, z_near = 6.0, z_far = 10.8;
+    std::vector<Eigen::Vector3f> pts;
+    const auto column = [&](double x, double z) {
+        for (double y = 1.65 - 0.3; y >= 1.65 - 1.4; y -= 0.05) {
+            pts.emplace_back(static_cast<float>(x), static_cast<float>(y), static_cast<float>(z));
+        }
+    };
+    for (double u = f * x_side / z_near; u <= f * x_side / z_far; u += 1.0)
+        column(x_side, f * x_side / u);
+    for (double u = f * x_kerb / z_near; u < f * x_side / z_near; u += 1.0)
+        column(u * z_near / f, z_near);
+    BoxFitOptions o;
+    o.prior_L_m = 4.2;
+    o.prior_W_m = 1.8;
+    const auto far_end = [](const OrientedBox& b) { return b.centre_m.z() + b.L_m / 2.0; };
+    const OrientedBox points = fit_upright_box(pts, flat_ground(1.65), o);
+    o.area_weighted_extents = true;
+    const OrientedBox surface = fit_upright_box(pts, flat_ground(1.65), o);
+    CHECK(far_end(points) < z_far - 0.3);
+    CHECK(far_end(surface) == Approx(z_far).margin(0.2));
+    CHECK(surface.L_m == Approx(z_far - z_near).margin(0.25));
+    // One column of range smear 25 m away: at its own range it would weigh 5 % of the surface
+    // and end the box there; weighed as at one prior length behind the near end, 1 %.
+    column(x_side, 25.0);
+    const OrientedBox smeared = fit_upright_box(pts, flat_ground(1.65), o);
+    CHECK(far_end(smeared) == Approx(far_end(surface)).margin(0.1));
+}
+
 TEST_CASE("the thesis extractors on a uniform box give its centre and size", "[boxes]") {
     std::vector<Eigen::Vector3f> pts;
     // Uniform grid over x in [0, 2], y in [1, 2], z in [1, 5]: centre (1, 1.5, 3), size 2 x 1 x 4.

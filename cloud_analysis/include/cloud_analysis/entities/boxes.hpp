@@ -35,6 +35,12 @@ struct BoxFitOptions {
     /// the viewing ray: stereo spreads a face along the ray both ways, so the nearest points
     /// of a near face lie in front of it, [trim_fraction, 0.2) (trim_fraction = no change).
     double near_trim_fraction = 0.02;
+    /// Footprint extents as quantiles of seen surface, not of points: each point weighs its
+    /// squared range from the camera's foot, so that a side seen along the viewing ray, whose
+    /// far metres hold few pixels, is trimmed by the same length at both ends. Ranges are
+    /// capped at the points' near end plus the longer prior (smear and the next thing of a row
+    /// beyond it weigh no more).
+    bool area_weighted_extents = false;
     bool rest_on_ground = true;     ///< bottom on the plane (else the lowest point)
     double face_tolerance_m = 0.2;  ///< distance of a point from a straight face, metres, > 0
     double face_share = 0.5;        ///< a straight face across the viewing ray holding this

@@ -29,6 +29,9 @@ struct ExtractOptions {
     double near_trim_fraction = 0.03;       ///< a thing's box trims this fraction of its points
                                             ///< at the end nearer the camera of an axis along
                                             ///< the viewing ray (BoxFitOptions), [0, 0.2)
+    bool area_weighted_extents = true;      ///< a thing's final box takes its footprint
+                                            ///< quantiles over seen surface, not points
+                                            ///< (BoxFitOptions::area_weighted_extents)
     double outlier_margin_m = 0.5;          ///< thing points farther than near + prior diagonal +
                                             ///< this (bird's-eye range) are stereo smear, metres
     double shadow_fraction = 0.5;           ///< a thing cluster with more of its pixels than this
