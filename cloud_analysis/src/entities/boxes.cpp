@@ -570,9 +570,12 @@ OrientedBox fit_upright_box(const std::vector<Eigen::Vector3f>& points_m,
     Eigen::Vector2d e1(std::cos(angle), std::sin(angle));
     Eigen::Vector2d e2(-std::sin(angle), std::cos(angle));
     // Coordinates along the axes, each standing for one point or, over seen surface, for its
-    // squared range (the surface a pixel spans there). A side runs at most the prior's length
-    // behind the thing's near end: points farther (range smear, the next thing of a row) weigh
-    // as one at that range, so that smear does not outweigh the thing.
+    // squared range (the surface a pixel spans there). Ranges are capped: a side runs at most
+    // the prior's length behind the thing's near end (range smear and the next thing of a row
+    // beyond weigh no more than a point there), and where one pixel of disparity moves a point
+    // along the ray by more than a tenth of the prior's length, smear, not the pixels' spacing,
+    // shapes the far end (the range at which the face rule above stops trusting faces along the
+    // ray).
     double cap_m = 0.0;
     if (options.area_weighted_extents) {
         std::vector<double> range;
@@ -580,6 +583,10 @@ OrientedBox fit_upright_box(const std::vector<Eigen::Vector3f>& points_m,
         for (const auto& p : ab) range.push_back(p.norm());
         cap_m =
             quantile(range, options.trim_fraction) + std::max(options.prior_L_m, options.prior_W_m);
+        if (options.disparity_fb_px_m > 0.0) {
+            cap_m = std::min(cap_m, std::sqrt(kAlongRaySmearShare * options.prior_L_m *
+                                              options.disparity_fb_px_m));
+        }
     }
     WeightedValues c1, c2;
     c1.reserve(ab.size());

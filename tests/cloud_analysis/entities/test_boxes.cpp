@@ -181,6 +181,13 @@ TEST_CASE("a side seen along the ray, thinning out with range, keeps its far end
     column(x_side, 25.0);
     const OrientedBox smeared = fit_upright_box(pts, flat_ground(1.65), o);
     CHECK(far_end(smeared) == Approx(far_end(surface)).margin(0.1));
+    // A rig on which one pixel of disparity spans a tenth of the prior from 6.5 m on (f·B 100
+    // px m): there smear, not pixel spacing, shapes the far end, and the points weigh alike.
+    o.disparity_fb_px_m = 100.0;
+    const OrientedBox coarse = fit_upright_box(pts, flat_ground(1.65), o);
+    o.area_weighted_extents = false;
+    CHECK(far_end(coarse) ==
+          Approx(far_end(fit_upright_box(pts, flat_ground(1.65), o))).margin(0.1));
 }
 
 TEST_CASE("the thesis extractors on a uniform box give its centre and size", "[boxes]") {

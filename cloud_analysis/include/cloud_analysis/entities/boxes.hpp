@@ -39,7 +39,8 @@ struct BoxFitOptions {
     /// squared range from the camera's foot, so that a side seen along the viewing ray, whose
     /// far metres hold few pixels, is trimmed by the same length at both ends. Ranges are
     /// capped at the points' near end plus the longer prior (smear and the next thing of a row
-    /// beyond it weigh no more).
+    /// beyond it weigh no more) and, with disparity_fb_px_m, at the range where one pixel of
+    /// disparity spans a tenth of prior_L_m (smear, not pixel spacing, shapes the far end there).
     bool area_weighted_extents = false;
     bool rest_on_ground = true;     ///< bottom on the plane (else the lowest point)
     double face_tolerance_m = 0.2;  ///< distance of a point from a straight face, metres, > 0
