@@ -22,6 +22,11 @@ constexpr double kFaceWidths = 1.2;
 /// A face along the viewing ray counts when a pixel of disparity moves its far end by at most
 /// this share of its length.
 constexpr double kAlongRaySmearShare = 0.1;
+/// An axis whose component of an image edge's outward normal is below this runs along the edge.
+constexpr double kEdgeAxisShare = 0.2;
+/// A thing cut by an image edge is not completed beyond it along an axis when this share of the
+/// part added or more lies in view.
+constexpr double kSeenAddedShare = 0.25;
 
 /// Orthonormal ground-aligned basis: up = plane normal, ex ~ camera x, ez ~ camera z.
 struct GroundFrame {
@@ -337,10 +342,10 @@ void complete_away(double& lo, double& hi, double size) {
 
 /// Interval [lo, hi] along an axis grown to `size` towards the image edge that cuts the object:
 /// `outward` is the axis's component of the edge's outward normal (the hidden part lies beyond
-/// the edge). An axis nearly parallel to the edge (|outward| < 0.2) is completed away from the
-/// camera as usual.
+/// the edge). An axis nearly parallel to the edge (|outward| < kEdgeAxisShare) is completed
+/// away from the camera as usual.
 void complete_beyond_edge(double& lo, double& hi, double size, double outward) {
-    if (std::abs(outward) < 0.2) {
+    if (std::abs(outward) < kEdgeAxisShare) {
         complete_away(lo, hi, size);
     } else if (hi - lo < size) {
         if (outward > 0.0) {
@@ -349,6 +354,23 @@ void complete_beyond_edge(double& lo, double& hi, double size, double outward) {
             lo = hi - size;
         }
     }
+}
+
+/// Share of the rectangle [a0, a1] along e by [b0, b1] along e_other (ground coordinates from
+/// the camera's foot) on the optical axis's side of an image edge's ray through the camera's
+/// foot, whose outward normal is `outward`: sampled on a 5 x 5 grid.
+double share_in_view(double a0, double a1, const Eigen::Vector2d& e, double b0, double b1,
+                     const Eigen::Vector2d& e_other, const Eigen::Vector2d& outward) {
+    constexpr int kSamples = 5;
+    int inside = 0;
+    for (int i = 0; i < kSamples; ++i) {
+        for (int j = 0; j < kSamples; ++j) {
+            const Eigen::Vector2d p = (a0 + (i + 0.5) / kSamples * (a1 - a0)) * e +
+                                      (b0 + (j + 0.5) / kSamples * (b1 - b0)) * e_other;
+            inside += outward.dot(p) < 0.0 ? 1 : 0;
+        }
+    }
+    return static_cast<double>(inside) / (kSamples * kSamples);
 }
 
 /// Extents of the points along the footprint axes and of their heights (trimmed quantiles).
@@ -393,10 +415,26 @@ OrientedBox assemble_box(const GroundFrame& frame, bool has_ground, const BoxFit
                                         .normalized();
         Eigen::Vector2d outward(-ray.y(), ray.x());
         if (outward.dot(frame.footprint(Eigen::Vector3d(0.0, 0.0, 1.0))) > 0.0) outward = -outward;
-        if (options.prior_L_m > 0.0)
-            complete_beyond_edge(lo1, hi1, options.prior_L_m, outward.dot(e1));
-        if (options.prior_W_m > 0.0)
-            complete_beyond_edge(lo2, hi2, options.prior_W_m, outward.dot(e2));
+        // Along each axis, beyond the edge unless a quarter or more of the part so added lies
+        // inside the field of view (on the optical axis's side of the edge's ray), where it
+        // would have been seen: the edge then cuts the thing's other side (a car ahead by the
+        // edge shows its whole rear or front, and only that face's far corner is cut).
+        const auto complete = [&](double& lo, double& hi, double size, const Eigen::Vector2d& e,
+                                  double other_lo, double other_hi,
+                                  const Eigen::Vector2d& e_other) {
+            double beyond_lo = lo, beyond_hi = hi;
+            complete_beyond_edge(beyond_lo, beyond_hi, size, outward.dot(e));
+            if (std::abs(outward.dot(e)) >= kEdgeAxisShare && beyond_hi - beyond_lo > hi - lo &&
+                share_in_view(beyond_lo < lo ? beyond_lo : hi, beyond_lo < lo ? lo : beyond_hi, e,
+                              other_lo, other_hi, e_other, outward) >= kSeenAddedShare) {
+                complete_away(lo, hi, size);
+            } else {
+                lo = beyond_lo;
+                hi = beyond_hi;
+            }
+        };
+        if (options.prior_L_m > 0.0) complete(lo1, hi1, options.prior_L_m, e1, lo2, hi2, e2);
+        if (options.prior_W_m > 0.0) complete(lo2, hi2, options.prior_W_m, e2, lo1, hi1, e1);
     } else {
         if (options.prior_L_m > 0.0) complete_away(lo1, hi1, options.prior_L_m);
         if (options.prior_W_m > 0.0) complete_away(lo2, hi2, options.prior_W_m);

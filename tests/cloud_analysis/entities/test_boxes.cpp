@@ -444,6 +444,29 @@ TEST_CASE("a dense noisy car over the angle search's point limit gives its headi
     }
 }
 
+TEST_CASE("a car ahead whose rear the image edge only clips is completed away from the camera",
+          "[boxes]") {
+    // Ahead on the right, heading +z, its rear at z 4.75 seen whole but for the far corner
+    // beyond the image's right edge (40 degrees off the axis), and 2 m of its left side (the
+    // rest hidden). Completed beyond the edge, its 4.5 m would run 2.5 m in front of the rear,
+    // over ground the camera sees: more than a quarter of that part lies in view.
+    const double t = -kPi / 2.0;
+    const double edge = std::tan(40.0 * kPi / 180.0);
+    std::vector<Eigen::Vector3f> seen;
+    for (const auto& p : box_faces(3.3, 7.0, t, 4.5, 1.8, 1.5, 1.65, true)) {
+        if (static_cast<double>(p.x() / p.z()) < edge && p.z() < 6.75f) seen.push_back(p);
+    }
+    REQUIRE(seen.size() > 100);
+    BoxFitOptions o;
+    o.prior_L_m = 4.5;
+    o.prior_W_m = 1.8;
+    o.truncation_xz = Eigen::Vector2d(3.95, 3.95 / edge);
+    const OrientedBox box = fit_upright_box(seen, flat_ground(1.65), o);
+    CHECK(yaw_error_mod_pi(box.theta, t) < 0.05);
+    CHECK(box.centre_m.z() == Approx(7.0).margin(0.2));
+    CHECK(box.centre_m.x() == Approx(3.3).margin(0.2));
+}
+
 TEST_CASE("a car cut by the image edge is completed beyond the edge, not along the edge's ray",
           "[boxes]") {
     // Parked on the right, heading +z, 5 m ahead: the image's right edge (40 degrees off the
