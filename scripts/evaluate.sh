@@ -157,13 +157,13 @@ for title, paths in tables:
     if label.startswith("pedestrians-"):
       group = "pedestrian streets, " + group  # apart: the other totals keep their scenes
     t = totals.setdefault(group,
-                          {"cars": [], "ref": 0, "hit": 0, "spur": 0, "scenes": 0, "met": 0,
-                           "on_person": 0})
+                          {"cars": [], "ref": 0, "hit": 0, "spur": 0, "good": 0, "scenes": 0,
+                           "met": 0, "on_person": 0})
     t["on_person"] += sum(1 for x in e.get("diagnosis", [])
                           if x["id"].startswith("car-") and x["kind"] == "phantom"
                           and "person" in x["reason"])
     t["cars"] += cars
-    for key, n in (("ref", ref), ("hit", hit), ("spur", spur), ("scenes", 1),
+    for key, n in (("ref", ref), ("hit", hit), ("spur", spur), ("good", good), ("scenes", 1),
                    ("met", int(d["bars"]["pass"]))):
       t[key] += n
     centre = f"{statistics.median([m['centre_error_m'] for m in cars]):.2f}" if cars else "-"
@@ -181,6 +181,12 @@ for title, paths in tables:
           f"{statistics.mean([m['bev_iou'] for m in t['cars']]):.3f}"
           + (f"; {t['on_person']} car boxes on or beside a person (any range)"
              if group.startswith("pedestrian") else ""))
+    # The same cars read as one set rather than street by street: precision, median heading
+    # error and the share of the scored cars with BEV IoU >= 0.5.
+    print(f"  {group}, as one set: precision {t['hit'] / max(t['hit'] + t['spur'], 1):.3f}, "
+          f"median heading error "
+          f"{statistics.median([m['heading_error_deg'] for m in t['cars']]):.1f} deg, "
+          f"BEV IoU >= 0.5 for {t['good']} of {t['ref']} ({t['good'] / max(t['ref'], 1):.2f})")
 PY
 
 if [ ! -d "$kitti_root/disp_occ_0" ] || [ ! -d "$kitti_root/instance" ]; then
