@@ -16,6 +16,8 @@ using namespace cloud_analysis;
 namespace {
 
 constexpr double kPi = 3.14159265358979323846;
+/// tan of the angle between the optical axis and the image's right edge in the edge tests.
+const double kRightEdge = std::tan(40.0 * kPi / 180.0);
 
 /// Points on the vertical faces of an upright box standing on y = ground_y, centre (x, z),
 /// yaw t (heading (cos t, 0, -sin t)); only faces turned to the camera when visible_only.
@@ -444,46 +446,54 @@ TEST_CASE("a dense noisy car over the angle search's point limit gives its headi
     }
 }
 
-TEST_CASE("a car ahead whose rear the image edge only clips is completed away from the camera",
-          "[boxes]") {
-    // Ahead on the right, heading +z, its rear at z 4.75 seen whole but for the far corner
-    // beyond the image's right edge (40 degrees off the axis), and 2 m of its left side (the
-    // rest hidden). Completed beyond the edge, its 4.5 m would run 2.5 m in front of the rear,
-    // over ground the camera sees: more than a quarter of that part lies in view.
-    const double t = -kPi / 2.0;
-    const double edge = std::tan(40.0 * kPi / 180.0);
+namespace {
+
+/// The faces turned to the camera of a 4.5 x 1.8 x 1.5 m car heading +z at (x, z), left of the
+/// image's right edge (40 degrees off the axis) and nearer than max_z.
+std::vector<Eigen::Vector3f> left_of_right_edge(double x, double z, double max_z) {
     std::vector<Eigen::Vector3f> seen;
-    for (const auto& p : box_faces(3.3, 7.0, t, 4.5, 1.8, 1.5, 1.65, true)) {
-        if (static_cast<double>(p.x() / p.z()) < edge && p.z() < 6.75f) seen.push_back(p);
+    for (const auto& p : box_faces(x, z, -kPi / 2.0, 4.5, 1.8, 1.5, 1.65, true)) {
+        if (static_cast<double>(p.x() / p.z()) < kRightEdge && double{p.z()} < max_z) {
+            seen.push_back(p);
+        }
     }
-    REQUIRE(seen.size() > 100);
+    return seen;
+}
+
+/// The car priors of those tests, cut by the right edge at lateral offset x_cut.
+BoxFitOptions cut_at_right_edge(double x_cut) {
     BoxFitOptions o;
     o.prior_L_m = 4.5;
     o.prior_W_m = 1.8;
-    o.truncation_xz = Eigen::Vector2d(3.95, 3.95 / edge);
-    const OrientedBox box = fit_upright_box(seen, flat_ground(1.65), o);
-    CHECK(yaw_error_mod_pi(box.theta, t) < 0.05);
+    o.truncation_xz = Eigen::Vector2d(x_cut, x_cut / kRightEdge);
+    return o;
+}
+
+}  // namespace
+
+TEST_CASE("a car ahead whose rear the image edge only clips is completed away from the camera",
+          "[boxes]") {
+    // Ahead on the right, heading +z, its rear at z 4.75 seen whole but for the far corner
+    // beyond the image's right edge, and 2 m of its left side (the rest hidden). Completed
+    // beyond the edge, its 4.5 m would run 2.5 m in front of the rear, over ground the camera
+    // sees: more than a quarter of that part lies in view.
+    const auto seen = left_of_right_edge(3.3, 7.0, 6.75);
+    REQUIRE(seen.size() > 100);
+    const OrientedBox box = fit_upright_box(seen, flat_ground(1.65), cut_at_right_edge(3.95));
+    CHECK(yaw_error_mod_pi(box.theta, -kPi / 2.0) < 0.05);
     CHECK(box.centre_m.z() == Approx(7.0).margin(0.2));
     CHECK(box.centre_m.x() == Approx(3.3).margin(0.2));
 }
 
 TEST_CASE("a car cut by the image edge is completed beyond the edge, not along the edge's ray",
           "[boxes]") {
-    // Parked on the right, heading +z, 5 m ahead: the image's right edge (40 degrees off the
-    // axis) cuts its left side at z 4.9, so only 2.4 m of that side is seen.
-    const double t = -kPi / 2.0;
-    const double edge = std::tan(40.0 * kPi / 180.0);
-    std::vector<Eigen::Vector3f> seen;
-    for (const auto& p : box_faces(5.0, 5.0, t, 4.5, 1.8, 1.5, 1.65, true)) {
-        if (static_cast<double>(p.x() / p.z()) < edge) seen.push_back(p);
-    }
+    // Parked on the right, heading +z, 5 m ahead: the image's right edge cuts its left side at
+    // z 4.9, so only 2.4 m of that side is seen.
+    const auto seen = left_of_right_edge(5.0, 5.0, 100.0);
     REQUIRE(seen.size() > 100);
-    BoxFitOptions o;
-    o.prior_L_m = 4.5;
-    o.prior_W_m = 1.8;
-    o.truncation_xz = Eigen::Vector2d(4.1, 4.1 / edge);
+    BoxFitOptions o = cut_at_right_edge(4.1);
     const OrientedBox box = fit_upright_box(seen, flat_ground(1.65), o);
-    CHECK(yaw_error_mod_pi(box.theta, t) < 0.05);
+    CHECK(yaw_error_mod_pi(box.theta, -kPi / 2.0) < 0.05);
     CHECK(box.centre_m.z() == Approx(5.0).margin(0.2));
     CHECK(box.centre_m.x() == Approx(5.0).margin(0.2));
     // Without the cut, the prior completes the seen side away from the camera.
