@@ -626,46 +626,51 @@ OrientedBox fit_upright_box(const std::vector<Eigen::Vector3f>& points_m,
                                               options.disparity_fb_px_m));
         }
     }
+    // The points' coordinates along the axes: plain, or with weights over seen surface.
     std::vector<double> c1, c2;
-    std::vector<float> weight;
-    c1.reserve(ab.size());
-    c2.reserve(ab.size());
+    WeightedValues w1, w2;
+    if (options.area_weighted_extents) {
+        w1.reserve(ab.size());
+        w2.reserve(ab.size());
+    } else {
+        c1.reserve(ab.size());
+        c2.reserve(ab.size());
+    }
     for (const auto& p : ab) {
-        c1.push_back(p.dot(e1));
-        c2.push_back(p.dot(e2));
         if (options.area_weighted_extents) {
             const double r = std::min(p.norm(), cap_m);
-            weight.push_back(static_cast<float>(std::max(r * r, 1e-6)));
+            const auto w = static_cast<float>(std::max(r * r, 1e-6));
+            w1.emplace_back(p.dot(e1), w);
+            w2.emplace_back(p.dot(e2), w);
+        } else {
+            c1.push_back(p.dot(e1));
+            c2.push_back(p.dot(e2));
         }
     }
-    // Quantiles of the coordinates c, over points (the linear selection, which reorders c) or
-    // over seen surface (c itself left in the weights' order).
-    const auto extent = [&weight](std::vector<double>& c, double q_lo, double q_hi) {
-        if (weight.empty()) return quantiles(c, q_lo, q_hi);
-        WeightedValues values;
-        values.reserve(c.size());
-        for (std::size_t i = 0; i < c.size(); ++i) values.emplace_back(c[i], weight[i]);
-        return weighted_quantiles(values, q_lo, q_hi);
+    // Quantiles along an axis: over seen surface when weighted, else over points (the linear
+    // selection). Either reorders its values.
+    const auto extent = [](std::vector<double>& c, WeightedValues& w, double q_lo, double q_hi) {
+        return w.empty() ? quantiles(c, q_lo, q_hi) : weighted_quantiles(w, q_lo, q_hi);
     };
     const double t = options.trim_fraction;
-    auto [lo1, hi1] = extent(c1, t, 1.0 - t);
-    auto [lo2, hi2] = extent(c2, t, 1.0 - t);
+    auto [lo1, hi1] = extent(c1, w1, t, 1.0 - t);
+    auto [lo2, hi2] = extent(c2, w2, t, 1.0 - t);
     if (options.near_trim_fraction > t) {
         // The end nearer the camera (coordinates are relative to it) of an axis along the
         // viewing ray: trimmed further, as the near face's points are spread in front of it.
         const Eigen::Vector2d ray =
             (((lo1 + hi1) / 2.0) * e1 + ((lo2 + hi2) / 2.0) * e2).normalized();
-        const auto trim_near = [&](std::vector<double>& c, double& lo, double& hi,
-                                   const Eigen::Vector2d& e) {
+        const auto trim_near = [&](std::vector<double>& c, WeightedValues& w, double& lo,
+                                   double& hi, const Eigen::Vector2d& e) {
             if (std::abs(ray.dot(e)) < std::sqrt(0.5)) return;
             if (lo + hi >= 0.0) {
-                lo = extent(c, options.near_trim_fraction, 1.0 - t).first;
+                lo = extent(c, w, options.near_trim_fraction, 1.0 - t).first;
             } else {
-                hi = extent(c, t, 1.0 - options.near_trim_fraction).second;
+                hi = extent(c, w, t, 1.0 - options.near_trim_fraction).second;
             }
         };
-        trim_near(c1, lo1, hi1, e1);
-        trim_near(c2, lo2, hi2, e2);
+        trim_near(c1, w1, lo1, hi1, e1);
+        trim_near(c2, w2, lo2, hi2, e2);
     }
 
     const auto [bottom_seen, top_seen] = quantiles(heights, t, 1.0 - t);
