@@ -373,6 +373,28 @@ double share_in_view(double a0, double a1, const Eigen::Vector2d& e, double b0, 
     return static_cast<double>(inside) / (kSamples * kSamples);
 }
 
+/// Interval [lo, hi] along axis e of a thing cut by an image edge (outward normal `outward`;
+/// [other_lo, other_hi] its extent along the other axis) grown to `size`: beyond the edge unless
+/// a quarter or more of the part so added lies inside the field of view, where it would have
+/// been seen. The edge then cuts the thing's other side (a car ahead by the edge shows its whole
+/// rear or front, and only that face's far corner is cut), and the interval grows away from the
+/// camera.
+void complete_at_edge(double& lo, double& hi, double size, const Eigen::Vector2d& e,
+                      double other_lo, double other_hi, const Eigen::Vector2d& e_other,
+                      const Eigen::Vector2d& outward) {
+    const double across = outward.dot(e);
+    double beyond_lo = lo, beyond_hi = hi;
+    complete_beyond_edge(beyond_lo, beyond_hi, size, across);
+    if (std::abs(across) >= kEdgeAxisShare && beyond_hi - beyond_lo > hi - lo &&
+        share_in_view(beyond_lo < lo ? beyond_lo : hi, beyond_lo < lo ? lo : beyond_hi, e, other_lo,
+                      other_hi, e_other, outward) >= kSeenAddedShare) {
+        complete_away(lo, hi, size);
+    } else {
+        lo = beyond_lo;
+        hi = beyond_hi;
+    }
+}
+
 /// Extents of the points along the footprint axes and of their heights (trimmed quantiles).
 struct Extents {
     double lo1, hi1;               ///< along e1, metres from the camera's foot
@@ -415,26 +437,12 @@ OrientedBox assemble_box(const GroundFrame& frame, bool has_ground, const BoxFit
                                         .normalized();
         Eigen::Vector2d outward(-ray.y(), ray.x());
         if (outward.dot(frame.footprint(Eigen::Vector3d(0.0, 0.0, 1.0))) > 0.0) outward = -outward;
-        // Along each axis, beyond the edge unless a quarter or more of the part so added lies
-        // inside the field of view (on the optical axis's side of the edge's ray), where it
-        // would have been seen: the edge then cuts the thing's other side (a car ahead by the
-        // edge shows its whole rear or front, and only that face's far corner is cut).
-        const auto complete = [&](double& lo, double& hi, double size, const Eigen::Vector2d& e,
-                                  double other_lo, double other_hi,
-                                  const Eigen::Vector2d& e_other) {
-            double beyond_lo = lo, beyond_hi = hi;
-            complete_beyond_edge(beyond_lo, beyond_hi, size, outward.dot(e));
-            if (std::abs(outward.dot(e)) >= kEdgeAxisShare && beyond_hi - beyond_lo > hi - lo &&
-                share_in_view(beyond_lo < lo ? beyond_lo : hi, beyond_lo < lo ? lo : beyond_hi, e,
-                              other_lo, other_hi, e_other, outward) >= kSeenAddedShare) {
-                complete_away(lo, hi, size);
-            } else {
-                lo = beyond_lo;
-                hi = beyond_hi;
-            }
-        };
-        if (options.prior_L_m > 0.0) complete(lo1, hi1, options.prior_L_m, e1, lo2, hi2, e2);
-        if (options.prior_W_m > 0.0) complete(lo2, hi2, options.prior_W_m, e2, lo1, hi1, e1);
+        if (options.prior_L_m > 0.0) {
+            complete_at_edge(lo1, hi1, options.prior_L_m, e1, lo2, hi2, e2, outward);
+        }
+        if (options.prior_W_m > 0.0) {
+            complete_at_edge(lo2, hi2, options.prior_W_m, e2, lo1, hi1, e1, outward);
+        }
     } else {
         if (options.prior_L_m > 0.0) complete_away(lo1, hi1, options.prior_L_m);
         if (options.prior_W_m > 0.0) complete_away(lo2, hi2, options.prior_W_m);
