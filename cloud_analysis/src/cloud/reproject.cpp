@@ -7,6 +7,7 @@
 #include <vector>
 
 #include <opencv2/core.hpp>
+#include <opencv2/imgproc.hpp>
 
 #include "cloud_analysis/stereo/calibration.hpp"
 
@@ -153,6 +154,41 @@ class RowReprojector {
 void ReprojectOptions::validate() const {
     if (!(max_range_m > 0.0)) throw std::invalid_argument("max_range_m: must be > 0");
     if (!(min_disparity_px >= 0.0)) throw std::invalid_argument("min_disparity_px: must be >= 0");
+    if (!(depth_edge_step_m >= 0.0) || !std::isfinite(depth_edge_step_m)) {
+        throw std::invalid_argument("depth_edge_step_m: must be >= 0");
+    }
+    if (depth_edge_rows < 0 || depth_edge_rows > 64) {
+        throw std::invalid_argument("depth_edge_rows: must be in [0, 64]");
+    }
+}
+
+std::vector<std::uint8_t> depth_edge_band(const DisparityMap& disparity, const MatchBorder& border,
+                                          double step_m, int rows) {
+    const int w = disparity.width_px, h = disparity.height_px;
+    const auto n = static_cast<std::size_t>(w) * static_cast<std::size_t>(h);
+    if (!(step_m > 0.0) || rows <= 0 || !(border.fb_px_m > 0.0) || w <= 0 || h <= 0 ||
+        disparity.disparity_px.size() != n) {
+        return {};
+    }
+    // The largest disparity (the nearest surface) within `rows` rows of each pixel.
+    const cv::Mat d(h, w, CV_32F, const_cast<float*>(disparity.disparity_px.data()));
+    cv::Mat nearest;
+    cv::dilate(d, nearest, cv::getStructuringElement(cv::MORPH_RECT, cv::Size(1, 2 * rows + 1)));
+    std::vector<std::uint8_t> band(n, 0);
+    const double fb = border.fb_px_m, off = border.offset_px;
+    cv::parallel_for_(cv::Range(0, h), [&](const cv::Range& range) {
+        for (int v = range.start; v < range.end; ++v) {
+            const float* dv = d.ptr<float>(v);
+            const float* nv = nearest.ptr<float>(v);
+            std::uint8_t* out =
+                band.data() + static_cast<std::size_t>(v) * static_cast<std::size_t>(w);
+            for (int u = 0; u < w; ++u) {
+                const double own = double{dv[u]} - off, near = double{nv[u]} - off;
+                if (own > 0.0 && near > own && fb / own - fb / near >= step_m) out[u] = 1;
+            }
+        }
+    });
+    return band;
 }
 
 LabeledCloud reproject(const DisparityMap& disparity, const StereoCamera& camera,
@@ -178,6 +214,8 @@ LabeledCloud reproject(const DisparityMap& disparity, const StereoCamera& camera
     cloud.width_px = rows.width();
     cloud.height_px = h;
     cloud.border = match_border(camera);
+    cloud.depth_edge = depth_edge_band(disparity, cloud.border, options.depth_edge_step_m,
+                                       options.depth_edge_rows);
     const std::size_t n = offset.back();
     cloud.xyz_m.resize(n);
     cloud.colour.resize(n);
@@ -260,6 +298,8 @@ ClassPoints reproject_by_class(const DisparityMap& disparity, const StereoCamera
     out.width_px = rows.width();
     out.height_px = h;
     out.border = match_border(camera);
+    out.depth_edge =
+        depth_edge_band(disparity, out.border, options.depth_edge_step_m, options.depth_edge_rows);
     out.xyz_m.resize(k_count);
     out.pixel.resize(k_count);
     out.weight.resize(k_count);

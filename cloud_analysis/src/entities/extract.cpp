@@ -337,6 +337,7 @@ ClassPoints points_by_class(const LabeledCloud& cloud, const ClassSelection& sel
         out.first_column = static_cast<int>(
             std::min(*std::min_element(first_col.begin(), first_col.end()), width - 1));
         out.last_column = static_cast<int>(*std::max_element(last_col.begin(), last_col.end()));
+        out.depth_edge = cloud.depth_edge;
     }
     // Sized for every point of the class, written by index, then cut to the points kept.
     for (std::size_t k = 0; k < classes; ++k) {
@@ -381,8 +382,13 @@ scene_schema::EntityDocument extract_entities(const ClassPoints& points, const P
     const auto& per_class = points.xyz_m;
     const auto& per_class_pixels = points.pixel;
     const auto& step = points.weight;
-    const PixelGrid grid{points.width_px, points.height_px, points.first_column, points.last_column,
-                         points.border};
+    PixelGrid grid{points.width_px, points.height_px, points.first_column, points.last_column,
+                   points.border};
+    if (options.depth_edge_points && grid.valid() &&
+        points.depth_edge.size() ==
+            static_cast<std::size_t>(grid.width_px) * static_cast<std::size_t>(grid.height_px)) {
+        grid.depth_edge = &points.depth_edge;
+    }
 
     // The ground plane is the first task, fitted beside the clustering of the classes (which
     // does not need it); a class waits for it once clustered. Thing points cost about four

@@ -124,6 +124,57 @@ Indices drop_outliers(const std::vector<Eigen::Vector3f>& pts, const Indices& id
     return kept;
 }
 
+/// The members whose pixels are not on the far side of a depth step (PixelGrid::depth_edge),
+/// when at least min_points of them remain (the others in `on_edge`); all of them otherwise (a
+/// thing seen only as a strip over a nearer one has nothing better).
+Indices off_depth_edges(const std::vector<std::uint32_t>& pixels, const PixelGrid& grid,
+                        Indices members, const ClassSettings& s, Indices* on_edge) {
+    if (grid.depth_edge == nullptr || pixels.empty()) return members;
+    const std::vector<std::uint8_t>& edge = *grid.depth_edge;
+    Indices kept, dropped;
+    kept.reserve(members.size());
+    for (std::size_t i : members) {
+        (edge[pixels[i]] == 0 ? kept : dropped).push_back(i);
+    }
+    if (kept.size() < static_cast<std::size_t>(s.min_points)) return members;
+    if (on_edge) *on_edge = std::move(dropped);
+    return kept;
+}
+
+/// The points on a depth edge that a cluster's boxes were fitted without, each given back to
+/// the candidate whose box footprint lies nearest it, within kEdgePointReach: they are seen
+/// surface of that thing, at a mixed depth, and count as such (point count, seen area, image
+/// extent) though they do not shape its box. Farther ones are dropped.
+void give_back_edge_points(const std::vector<Eigen::Vector3f>& pts, const Indices& on_edge,
+                           std::vector<Candidate>& candidates) {
+    constexpr double kEdgePointReach = 1.0;  // metres: beside the box, at most
+    if (on_edge.empty() || candidates.empty()) return;
+    std::vector<std::pair<double, double>> heading;  // cos, sin of each box's heading
+    heading.reserve(candidates.size());
+    for (const Candidate& c : candidates) {
+        heading.emplace_back(std::cos(c.box.theta), std::sin(c.box.theta));
+    }
+    for (std::size_t i : on_edge) {
+        const double x = pts[i].x(), z = pts[i].z();
+        double best = kEdgePointReach;
+        Candidate* to = nullptr;
+        for (std::size_t k = 0; k < candidates.size(); ++k) {
+            const OrientedBox& b = candidates[k].box;
+            const auto [ct, st] = heading[k];
+            const double dx = x - b.centre_m.x(), dz = z - b.centre_m.z();
+            const double along = std::max(std::abs(dx * ct - dz * st) - 0.5 * b.L_m, 0.0);
+            const double across = std::max(std::abs(dx * st + dz * ct) - 0.5 * b.W_m, 0.0);
+            const double d = std::hypot(along, across);
+            if (d < best) {
+                best = d;
+                to = &candidates[k];
+            }
+        }
+        if (to) to->members.push_back(i);
+    }
+    for (Candidate& c : candidates) std::sort(c.members.begin(), c.members.end());
+}
+
 /// The clusters of a thing class (point indices in point order).
 std::vector<Indices> thing_clusters(const std::vector<Eigen::Vector3f>& pts,
                                     const std::vector<std::uint32_t>& pixels, const PixelGrid& grid,
@@ -186,6 +237,8 @@ std::vector<Candidate> candidates_of_cluster(const std::vector<Eigen::Vector3f>&
     BoxFitOptions fit = class_fit.box;
     fit.disparity_fb_px_m = grid.border.fb_px_m;
     Indices behind;
+    Indices on_edge;
+    members = off_depth_edges(pixels, grid, std::move(members), s, &on_edge);
     members = drop_outliers(pts, members, s, ground, options.outlier_margin_m, &behind);
     std::size_t next_group = (cluster + 1) << 32;
     // Work items: points, split depth, shadow group, imposed heading.
@@ -274,6 +327,7 @@ std::vector<Candidate> candidates_of_cluster(const std::vector<Eigen::Vector3f>&
         c.range_m /= static_cast<double>(c.members.size());
         candidates.push_back(std::move(c));
     }
+    give_back_edge_points(pts, on_edge, candidates);
     return candidates;
 }
 

@@ -271,7 +271,9 @@ nlohmann::json describe_run(const LoadedInputs& in, const AnalyseOptions& o,
                       {"downscale", d.downscale}};
     j["reproject"] = {{"max_range_m", o.reproject.max_range_m},
                       {"min_disparity_px", o.reproject.min_disparity_px},
-                      {"keep_void", o.reproject.keep_void}};
+                      {"keep_void", o.reproject.keep_void},
+                      {"depth_edge_step_m", o.reproject.depth_edge_step_m},
+                      {"depth_edge_rows", o.reproject.depth_edge_rows}};
     return j;
 }
 

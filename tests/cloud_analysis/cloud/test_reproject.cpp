@@ -189,3 +189,82 @@ TEST_CASE("reprojecting by class gives the split of the reprojected cloud, witho
     CHECK_THROWS_WITH(reproject_by_class(map, cam, classes, options, bad),
                       Catch::Contains("keep_pixels"));
 }
+
+TEST_CASE("the depth edge band holds the far pixels within a few rows of a nearer surface",
+          "[reproject]") {
+    // 40 x 30 px, fb = 400 px m: a far wall at 20 m (d = 20) over rows 0-14, a near car at 10 m
+    // (d = 40) over rows 15-29 of columns 10-29. Columns 0-9 hold a side seen along the ray (d
+    // from 30 down to 21 across them, the same on every row), column 35 a step of 0.5 m
+    // (20 m over 20.5 m); column 25 has no disparity on row 14.
+    const MatchBorder border{400.0, 0.0};
+    DisparityMap map;
+    map.width_px = 40;
+    map.height_px = 30;
+    map.disparity_px.assign(40 * 30, 20.0f);
+    const auto at = [&](int u, int v) -> float& {
+        return map.disparity_px[static_cast<std::size_t>(v) * 40 + static_cast<std::size_t>(u)];
+    };
+    for (int v = 0; v < 30; ++v) {
+        for (int u = 0; u < 10; ++u) at(u, v) = 30.0f - static_cast<float>(u);
+        if (v >= 15) {
+            for (int u = 10; u < 30; ++u) at(u, v) = 40.0f;
+            at(35, v) = 400.0f / 20.0f;
+        } else {
+            at(35, v) = 400.0f / 20.5f;
+        }
+    }
+    at(25, 14) = kNoDisparity;
+    const std::vector<std::uint8_t> band = depth_edge_band(map, border, 0.8, 4);
+    REQUIRE(band.size() == map.disparity_px.size());
+    const auto flagged = [&](int u, int v) {
+        return band[static_cast<std::size_t>(v) * 40 + static_cast<std::size_t>(u)] != 0;
+    };
+    for (int v = 0; v < 30; ++v) {
+        CAPTURE(v);
+        CHECK(flagged(20, v) == (v >= 11 && v <= 14));  // the wall's 4 rows above the car
+        CHECK_FALSE(flagged(5, v));                     // a side: depth changes across columns
+        CHECK_FALSE(flagged(35, v));                    // 0.5 m: under the step
+    }
+    CHECK_FALSE(flagged(25, 14));  // no disparity, no flag
+    CHECK(flagged(25, 13));
+    // Half the rows: only the wall's 2 rows above the car.
+    const std::vector<std::uint8_t> narrow = depth_edge_band(map, border, 0.8, 2);
+    CHECK(narrow[10 * 40 + 20] == 0);
+    CHECK(narrow[13 * 40 + 20] == 1);
+    // No step, no rows or no rig: no band.
+    CHECK(depth_edge_band(map, border, 0.0, 4).empty());
+    CHECK(depth_edge_band(map, border, 0.8, 0).empty());
+    CHECK(depth_edge_band(map, MatchBorder{}, 0.8, 4).empty());
+    ReprojectOptions o;
+    o.depth_edge_step_m = -1.0;
+    CHECK_THROWS_WITH(o.validate(), Catch::Contains("depth_edge_step_m"));
+    o.depth_edge_step_m = 0.8;
+    o.depth_edge_rows = -1;
+    CHECK_THROWS_WITH(o.validate(), Catch::Contains("depth_edge_rows"));
+}
+
+TEST_CASE("the reprojections carry the depth edge band of their disparity", "[reproject]") {
+    const StereoCamera cam = kitti_like_camera(8, 12);
+    DisparityMap map;
+    map.width_px = 8;
+    map.height_px = 12;
+    map.disparity_px.assign(8 * 12, 20.0f);
+    for (std::size_t i = 6 * 8; i < map.disparity_px.size(); ++i) map.disparity_px[i] = 60.0f;
+    ImageU8 grey;
+    grey.width_px = 8;
+    grey.height_px = 12;
+    grey.channels = 1;
+    grey.data.assign(8 * 12, 128);
+    ReprojectOptions o;
+    const LabeledCloud cloud = reproject(map, cam, grey, ClassImage{}, o);
+    const std::vector<std::uint8_t> band = depth_edge_band(map, match_border(cam), 0.8, 4);
+    CHECK(cloud.depth_edge == band);
+    ClassSelection selection;
+    selection.column_mask = {0};
+    selection.keep_pixels = {1};
+    CHECK(reproject_by_class(map, cam, ClassImage{}, o, selection).depth_edge == band);
+    CHECK(band[5 * 8] == 1);
+    CHECK(band[1 * 8] == 0);
+    o.depth_edge_step_m = 0.0;
+    CHECK(reproject(map, cam, grey, ClassImage{}, o).depth_edge.empty());
+}

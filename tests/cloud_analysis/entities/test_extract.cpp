@@ -473,6 +473,52 @@ TEST_CASE("a car partly hidden by a nearer one, seen right beside it, is kept",
     CHECK(count_class(extract_entities(cloud, test_palette(), StereoCamera{}, o), "car") == 1);
 }
 
+TEST_CASE("a car's points on a depth edge count as its points but do not lengthen its box",
+          "[entities]") {
+    // A car's right side (x = -1.1) from z 10 to 14.2, 0.15-1.5 m high, and beyond its far end,
+    // up to z 15.0, the upper half of the next car's rear face as the matcher places it where
+    // it shows over the first car's roof: between the two. Flagged as a depth edge, those points
+    // leave the box as the side alone makes it and still count as the car's.
+    LabeledCloud cloud;
+    add_road(cloud);
+    for (float y = 0.15f; y <= 1.5f + 1e-4f; y += 0.05f) {
+        for (float z = 10.0f; z < 14.2f; z += 0.05f) add_point(cloud, {-1.1f, 1.65f - y, z}, 2);
+    }
+    LabeledCloud alone = cloud;
+    project_pixels(alone);
+    const std::size_t first_edge = cloud.size();
+    for (float y = 0.9f; y <= 1.5f + 1e-4f; y += 0.05f) {
+        for (float z = 14.2f; z < 15.0f; z += 0.05f) add_point(cloud, {-1.1f, 1.65f - y, z}, 2);
+    }
+    project_pixels(cloud);
+    const auto car_of = [&](const LabeledCloud& c) {
+        std::vector<scene_schema::Entity> cars;
+        for (const auto& e : extract_entities(c, test_palette(), StereoCamera{},
+                                              options_with_bundled_config("instances"))
+                                 .entities) {
+            if (e.class_name == "car") cars.push_back(e);
+        }
+        REQUIRE(cars.size() == 1);
+        return cars[0];
+    };
+    const scene_schema::Entity own = car_of(alone);
+    const scene_schema::Entity smeared = car_of(cloud);
+    CHECK(smeared.L > own.L + 0.4);  // without the band, the box reaches over the edge's points
+    cloud.depth_edge.assign(2000 * 2000, 0);
+    for (std::size_t i = first_edge; i < cloud.size(); ++i) cloud.depth_edge[cloud.pixel[i]] = 1;
+    const scene_schema::Entity car = car_of(cloud);
+    CHECK(car.z == Approx(own.z).margin(0.01));
+    CHECK(car.L == Approx(own.L).margin(0.01));
+    CHECK(car.point_count == smeared.point_count);
+    CHECK(car.point_count > own.point_count);
+    // Turned off, the band is ignored.
+    ExtractOptions o = options_with_bundled_config("instances");
+    o.depth_edge_points = false;
+    for (const auto& e : extract_entities(cloud, test_palette(), StereoCamera{}, o).entities) {
+        if (e.class_name == "car") CHECK(e.z == Approx(smeared.z).margin(1e-6));
+    }
+}
+
 TEST_CASE("a thin strip of roof-line smear just above a nearer car is not a car",
           "[entities][shadow]") {
     LabeledCloud cloud;

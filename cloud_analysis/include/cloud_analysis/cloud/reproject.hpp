@@ -14,9 +14,23 @@ struct ReprojectOptions {
     double max_range_m = 80.0;      ///< points farther than this from the camera are dropped, m
     double min_disparity_px = 0.0;  ///< disparities at or below this are dropped, px
     bool keep_void = true;          ///< keep points whose pixel has no palette class
+    /// depth_edge_band's step: a pixel with one at least this much nearer within
+    /// depth_edge_rows rows above or below is on a depth edge, metres; 0 = no band.
+    double depth_edge_step_m = 0.8;
+    int depth_edge_rows = 4;  ///< depth_edge_band's reach, rows: half the matching window
     /// Throws std::invalid_argument naming the first bad field.
     void validate() const;
 };
+
+/// The far side of depth steps across image rows: per pixel (v * width + u), 1 where a pixel of
+/// the same column within `rows` rows above or below lies at least `step_m` nearer (depths
+/// fb / (d - offset) of `border`), else 0. There the matching window straddles the two
+/// surfaces and the disparity mixes them: the strip of a parked car that shows over the roof
+/// of the nearer car before it is placed between the two. A surface seen along the viewing
+/// ray changes depth across columns, not rows, so a side of a car is not on such an edge.
+/// Empty when step_m <= 0 or rows <= 0.
+std::vector<std::uint8_t> depth_edge_band(const DisparityMap& disparity, const MatchBorder& border,
+                                          double step_m, int rows);
 
 /// Which points of each palette class the entity extractor takes (see ClassPoints).
 struct ClassSelection {

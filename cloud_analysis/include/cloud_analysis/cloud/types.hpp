@@ -70,6 +70,9 @@ struct LabeledCloud {
     std::vector<std::uint16_t> class_index;  ///< index into Palette::classes, or kVoidClass
     std::vector<std::uint32_t> pixel;        ///< v * width_px + u of the source pixel
     MatchBorder border;                      ///< the rig's left matching border
+    /// Per pixel (v * width_px + u): 1 on the far side of a depth step, where the disparity
+    /// mixes two surfaces (depth_edge_band in reproject.hpp); empty when not computed.
+    std::vector<std::uint8_t> depth_edge;
     std::size_t size() const { return xyz_m.size(); }
 };
 
@@ -89,6 +92,9 @@ struct ClassPoints {
     int last_column = 0;
     MatchBorder border;            ///< the rig's left matching border (depth-dependent)
     std::size_t cloud_points = 0;  ///< points of the whole cloud (every class and void)
+    /// Per pixel of the grid: 1 on the far side of a depth step (LabeledCloud::depth_edge);
+    /// empty when not computed.
+    std::vector<std::uint8_t> depth_edge;
 };
 
 }  // namespace cloud_analysis

@@ -33,6 +33,9 @@ struct PixelGrid {
     int first_column = 0;  ///< leftmost column holding a point (the edge of what stereo sees)
     int last_column = 0;   ///< rightmost column holding a point
     MatchBorder border;    ///< the matcher's left border at each depth
+    /// Per pixel, 1 on the far side of a depth step (ClassPoints::depth_edge); null when unknown
+    /// or not used.
+    const std::vector<std::uint8_t>* depth_edge = nullptr;
     bool valid() const { return width_px > 0 && height_px > 0; }
 };
 
