@@ -160,3 +160,23 @@ TEST_CASE("images are read as they are: grey PNGs grey, colour PNGs RGB, 16-bit 
     CHECK(read_image(rgb_png, ImageMode::kGrey).channels == 1);
     std::filesystem::remove_all(dir);
 }
+
+TEST_CASE("the depth edge band is on for classes from geometry and off for labels unless set",
+          "[pipeline]") {
+    AnalyseOptions o;
+    CHECK(reproject_options("geometry", o).depth_edge_step_m == 0.8);
+    CHECK(reproject_options("labels", o).depth_edge_step_m == 0.0);
+    CHECK(reproject_options("none", o).depth_edge_step_m == 0.0);
+    o.geometry.depth_edge_step_m = 1.5;
+    CHECK(reproject_options("geometry", o).depth_edge_step_m == 1.5);
+    o.depth_edge_step_m = 0.6;
+    CHECK(reproject_options("geometry", o).depth_edge_step_m == 0.6);
+    CHECK(reproject_options("labels", o).depth_edge_step_m == 0.6);
+    o.reproject.max_range_m = 40.0;
+    CHECK(reproject_options("labels", o).max_range_m == 40.0);
+    o.depth_edge_step_m = -1.0;
+    CHECK_THROWS_WITH(o.validate(), Catch::Contains("depth_edge_step_m"));
+    o.depth_edge_step_m.reset();
+    o.geometry.depth_edge_step_m = -1.0;
+    CHECK_THROWS_WITH(o.validate(), Catch::Contains("geometry.depth_edge_step_m"));
+}
