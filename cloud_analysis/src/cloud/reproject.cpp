@@ -175,16 +175,18 @@ std::vector<std::uint8_t> depth_edge_band(const DisparityMap& disparity, const M
     cv::Mat nearest;
     cv::dilate(d, nearest, cv::getStructuringElement(cv::MORPH_RECT, cv::Size(1, 2 * rows + 1)));
     std::vector<std::uint8_t> band(n, 0);
-    const double fb = border.fb_px_m, off = border.offset_px;
+    const auto fb = static_cast<float>(border.fb_px_m), off = static_cast<float>(border.offset_px);
+    const auto step = static_cast<float>(step_m);
     cv::parallel_for_(cv::Range(0, h), [&](const cv::Range& range) {
         for (int v = range.start; v < range.end; ++v) {
             const float* dv = d.ptr<float>(v);
             const float* nv = nearest.ptr<float>(v);
             std::uint8_t* out =
                 band.data() + static_cast<std::size_t>(v) * static_cast<std::size_t>(w);
+            // fb / own - fb / near >= step  <=>  fb (near - own) >= step own near, own > 0.
             for (int u = 0; u < w; ++u) {
-                const double own = double{dv[u]} - off, near = double{nv[u]} - off;
-                if (own > 0.0 && near > own && fb / own - fb / near >= step_m) out[u] = 1;
+                const float own = dv[u] - off, near = nv[u] - off;
+                out[u] = own > 0.0f && fb * (near - own) >= step * own * near ? 1 : 0;
             }
         }
     });
