@@ -78,6 +78,17 @@ ExtractOptions options_with_bundled_config(const std::string& method) {
     return o;
 }
 
+/// The car entities of a cloud, with the bundled class settings.
+std::vector<scene_schema::Entity> cars_of(const LabeledCloud& cloud) {
+    std::vector<scene_schema::Entity> cars;
+    for (const auto& e : extract_entities(cloud, test_palette(), StereoCamera{},
+                                          options_with_bundled_config("instances"))
+                             .entities) {
+        if (e.class_name == "car") cars.push_back(e);
+    }
+    return cars;
+}
+
 }  // namespace
 
 TEST_CASE("the bundled class config loads with the documented car prior", "[entities]") {
@@ -255,12 +266,7 @@ TEST_CASE("a gap's few high points between two cars in a row make no car of the 
     }
     add_side(16.6f, 17.4f, 1.0f);  // far car: bonnet
     add_side(17.4f, 20.8f, 1.5f);  //          roof
-    std::vector<scene_schema::Entity> cars;
-    for (const auto& e : extract_entities(cloud, test_palette(), StereoCamera{},
-                                          options_with_bundled_config("instances"))
-                             .entities) {
-        if (e.class_name == "car") cars.push_back(e);
-    }
+    std::vector<scene_schema::Entity> cars = cars_of(cloud);
     REQUIRE(cars.size() == 2);
     std::sort(cars.begin(), cars.end(), [](const auto& a, const auto& b) { return a.z < b.z; });
     CHECK(cars[0].z == Approx(12.1).margin(0.3));
@@ -491,13 +497,8 @@ TEST_CASE("a car's points on a depth edge count as its points but do not lengthe
         for (float z = 14.2f; z < 15.0f; z += 0.05f) add_point(cloud, {-1.1f, 1.65f - y, z}, 2);
     }
     project_pixels(cloud);
-    const auto car_of = [&](const LabeledCloud& c) {
-        std::vector<scene_schema::Entity> cars;
-        for (const auto& e : extract_entities(c, test_palette(), StereoCamera{},
-                                              options_with_bundled_config("instances"))
-                                 .entities) {
-            if (e.class_name == "car") cars.push_back(e);
-        }
+    const auto car_of = [](const LabeledCloud& c) {
+        const std::vector<scene_schema::Entity> cars = cars_of(c);
         REQUIRE(cars.size() == 1);
         return cars[0];
     };
