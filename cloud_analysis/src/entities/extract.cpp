@@ -384,9 +384,8 @@ scene_schema::EntityDocument extract_entities(const ClassPoints& points, const P
     const auto& step = points.weight;
     PixelGrid grid{points.width_px, points.height_px, points.first_column, points.last_column,
                    points.border};
-    if (options.depth_edge_points && grid.valid() &&
-        points.depth_edge.size() ==
-            static_cast<std::size_t>(grid.width_px) * static_cast<std::size_t>(grid.height_px)) {
+    if (grid.valid() && points.depth_edge.size() == static_cast<std::size_t>(grid.width_px) *
+                                                        static_cast<std::size_t>(grid.height_px)) {
         grid.depth_edge = &points.depth_edge;
     }
 

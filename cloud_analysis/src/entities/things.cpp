@@ -128,7 +128,7 @@ Indices drop_outliers(const std::vector<Eigen::Vector3f>& pts, const Indices& id
 /// when at least min_points of them remain (the others in `on_edge`); all of them otherwise (a
 /// thing seen only as a strip over a nearer one has nothing better).
 Indices off_depth_edges(const std::vector<std::uint32_t>& pixels, const PixelGrid& grid,
-                        Indices members, const ClassSettings& s, Indices* on_edge) {
+                        Indices members, const ClassSettings& s, Indices& on_edge) {
     if (grid.depth_edge == nullptr || pixels.empty()) return members;
     const std::vector<std::uint8_t>& edge = *grid.depth_edge;
     Indices kept, dropped;
@@ -137,7 +137,7 @@ Indices off_depth_edges(const std::vector<std::uint32_t>& pixels, const PixelGri
         (edge[pixels[i]] == 0 ? kept : dropped).push_back(i);
     }
     if (kept.size() < static_cast<std::size_t>(s.min_points)) return members;
-    if (on_edge) *on_edge = std::move(dropped);
+    on_edge = std::move(dropped);
     return kept;
 }
 
@@ -154,10 +154,11 @@ void give_back_edge_points(const std::vector<Eigen::Vector3f>& pts, const Indice
     for (const Candidate& c : candidates) {
         heading.emplace_back(std::cos(c.box.theta), std::sin(c.box.theta));
     }
+    std::vector<char> grown(candidates.size(), 0);
     for (std::size_t i : on_edge) {
         const double x = pts[i].x(), z = pts[i].z();
         double best = kEdgePointReach;
-        Candidate* to = nullptr;
+        std::size_t to = candidates.size();
         for (std::size_t k = 0; k < candidates.size(); ++k) {
             const OrientedBox& b = candidates[k].box;
             const auto [ct, st] = heading[k];
@@ -167,12 +168,16 @@ void give_back_edge_points(const std::vector<Eigen::Vector3f>& pts, const Indice
             const double d = std::hypot(along, across);
             if (d < best) {
                 best = d;
-                to = &candidates[k];
+                to = k;
             }
         }
-        if (to) to->members.push_back(i);
+        if (to == candidates.size()) continue;
+        candidates[to].members.push_back(i);
+        grown[to] = 1;
     }
-    for (Candidate& c : candidates) std::sort(c.members.begin(), c.members.end());
+    for (std::size_t k = 0; k < candidates.size(); ++k) {
+        if (grown[k]) std::sort(candidates[k].members.begin(), candidates[k].members.end());
+    }
 }
 
 /// The clusters of a thing class (point indices in point order).
@@ -238,7 +243,7 @@ std::vector<Candidate> candidates_of_cluster(const std::vector<Eigen::Vector3f>&
     fit.disparity_fb_px_m = grid.border.fb_px_m;
     Indices behind;
     Indices on_edge;
-    members = off_depth_edges(pixels, grid, std::move(members), s, &on_edge);
+    members = off_depth_edges(pixels, grid, std::move(members), s, on_edge);
     members = drop_outliers(pts, members, s, ground, options.outlier_margin_m, &behind);
     std::size_t next_group = (cluster + 1) << 32;
     // Work items: points, split depth, shadow group, imposed heading.

@@ -512,12 +512,6 @@ TEST_CASE("a car's points on a depth edge count as its points but do not lengthe
     CHECK(car.L == Approx(own.L).margin(0.01));
     CHECK(car.point_count == smeared.point_count);
     CHECK(car.point_count > own.point_count);
-    // Turned off, the band is ignored.
-    ExtractOptions o = options_with_bundled_config("instances");
-    o.depth_edge_points = false;
-    for (const auto& e : extract_entities(cloud, test_palette(), StereoCamera{}, o).entities) {
-        if (e.class_name == "car") CHECK(e.z == Approx(smeared.z).margin(1e-6));
-    }
 }
 
 TEST_CASE("a thin strip of roof-line smear just above a nearer car is not a car",

@@ -32,10 +32,6 @@ struct ExtractOptions {
     bool area_weighted_extents = true;      ///< a thing's final box takes its footprint
                                             ///< quantiles over seen surface, not points
                                             ///< (BoxFitOptions::area_weighted_extents)
-    bool depth_edge_points = true;          ///< a thing cluster leaves out its points on the far
-                                            ///< side of a depth step (ClassPoints::depth_edge)
-                                            ///< when min_points remain: their disparity mixes
-                                            ///< the two surfaces
     double outlier_margin_m = 0.5;          ///< thing points farther than near + prior diagonal +
                                             ///< this (bird's-eye range) are stereo smear, metres
     double shadow_fraction = 0.5;           ///< a thing cluster with more of its pixels than this
