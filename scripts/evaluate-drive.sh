@@ -6,6 +6,7 @@
 # usage: scripts/evaluate-drive.sh [--no-build] [--build-dir DIR] [--out DIR]
 #        [--scene FILE] [--frames N] [--reuse]   (--reuse: keep a render already in --out)
 #        [--class-config FILE]   (per-class extractor settings for the batch)
+#        [--analysis "FLAGS"]    (more analysis flags for the batch, e.g. "--semantics geometry")
 #        [--events]   (list every miss, false positive, ID switch and heading flip)
 #        [-- extra `track` flags...]
 set -euo pipefail
@@ -30,8 +31,9 @@ while [ $# -gt 0 ]; do
         --reuse) reuse=1 ;;
         --events) eval_args+=(--events) ;;
         --class-config) batch_args+=(--class-config "$2"); shift ;;
+        --analysis) read -r -a more <<<"$2"; batch_args+=("${more[@]}"); shift ;;
         --) shift; track_args=("$@"); break ;;
-        -h|--help) sed -n '2,10p' "$0"; exit 0 ;;
+        -h|--help) sed -n '2,11p' "$0"; exit 0 ;;
         *) echo "evaluate-drive.sh: error: unknown argument: $1 (see --help)" >&2; exit 2 ;;
     esac
     shift
