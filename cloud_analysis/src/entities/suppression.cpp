@@ -84,6 +84,18 @@ std::vector<Candidate> suppress_nested(std::vector<Candidate> candidates) {
     return kept;
 }
 
+double Footprint::distance_m(double px, double pz) const {
+    const double dx = px - x, dz = pz - z;
+    const double along = std::max(std::abs(dx * c - dz * s) - half_L, 0.0);
+    const double across = std::max(std::abs(dx * s + dz * c) - half_W, 0.0);
+    return std::hypot(along, across);
+}
+
+Footprint footprint_of(const OrientedBox& box) {
+    return {box.centre_m.x(),    box.centre_m.z(), std::cos(box.theta),
+            std::sin(box.theta), box.L_m / 2.0,    box.W_m / 2.0};
+}
+
 std::vector<Footprint> footprints_of(const std::vector<scene_schema::Entity>& things) {
     std::vector<Footprint> out;
     out.reserve(things.size());

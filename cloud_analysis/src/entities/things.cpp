@@ -149,23 +149,15 @@ void give_back_edge_points(const std::vector<Eigen::Vector3f>& pts, const Indice
                            std::vector<Candidate>& candidates) {
     constexpr double kEdgePointReach = 1.0;  // metres: beside the box, at most
     if (on_edge.empty() || candidates.empty()) return;
-    std::vector<std::pair<double, double>> heading;  // cos, sin of each box's heading
-    heading.reserve(candidates.size());
-    for (const Candidate& c : candidates) {
-        heading.emplace_back(std::cos(c.box.theta), std::sin(c.box.theta));
-    }
+    std::vector<Footprint> footprints;
+    footprints.reserve(candidates.size());
+    for (const Candidate& c : candidates) footprints.push_back(footprint_of(c.box));
     std::vector<char> grown(candidates.size(), 0);
     for (std::size_t i : on_edge) {
-        const double x = pts[i].x(), z = pts[i].z();
         double best = kEdgePointReach;
         std::size_t to = candidates.size();
         for (std::size_t k = 0; k < candidates.size(); ++k) {
-            const OrientedBox& b = candidates[k].box;
-            const auto [ct, st] = heading[k];
-            const double dx = x - b.centre_m.x(), dz = z - b.centre_m.z();
-            const double along = std::max(std::abs(dx * ct - dz * st) - 0.5 * b.L_m, 0.0);
-            const double across = std::max(std::abs(dx * st + dz * ct) - 0.5 * b.W_m, 0.0);
-            const double d = std::hypot(along, across);
+            const double d = footprints[k].distance_m(pts[i].x(), pts[i].z());
             if (d < best) {
                 best = d;
                 to = k;

@@ -63,7 +63,12 @@ std::vector<Candidate> suppress_nested(std::vector<Candidate> candidates);
 /// A thing's bird's-eye footprint: centre, heading's cosine and sine, half length and width.
 struct Footprint {
     double x, z, c, s, half_L, half_W;
+    /// Bird's-eye distance of the point (x, z) from the footprint, metres; 0 inside.
+    double distance_m(double px, double pz) const;
 };
+
+/// The footprint of a box.
+Footprint footprint_of(const OrientedBox& box);
 
 /// The footprints of thing entities.
 std::vector<Footprint> footprints_of(const std::vector<scene_schema::Entity>& things);
