@@ -686,6 +686,54 @@ OrientedBox fit_upright_box(const std::vector<Eigen::Vector3f>& points_m,
                         {lo1, hi1, lo2, hi2, bottom_seen, top_seen});
 }
 
+OrientedBox extend_far_end_to_columns(const OrientedBox& box,
+                                      const std::vector<Eigen::Vector3f>& points_m,
+                                      double max_length_m) {
+    constexpr std::size_t kMinPoints = 20;
+    // At a grazing angle a the side's position error moves the far end by that error / tan a:
+    // at 10 degrees, 5.7 times (5 cm of stereo error across the side, 0.3 m along it).
+    constexpr double kMinGrazingSin = 0.1736;  // sin 10 degrees
+    if (points_m.size() < kMinPoints || !(max_length_m > box.L_m)) return box;
+    const Eigen::Vector2d c(box.centre_m.x(), box.centre_m.z());
+    if (c.norm() < 1e-6) return box;
+    const Eigen::Vector2d e1(std::cos(box.theta), -std::sin(box.theta));  // heading, (x, z)
+    const Eigen::Vector2d e2(std::sin(box.theta), std::cos(box.theta));
+    const double along_ray = e1.dot(c.normalized());
+    if (std::abs(along_ray) < std::sqrt(0.5)) return box;
+    const double far = along_ray > 0.0 ? 1.0 : -1.0;  // the far end's direction along e1
+    // The long side facing the camera: its outward normal points back at the camera.
+    const Eigen::Vector2d side = c + (e2.dot(c) > 0.0 ? -0.5 : 0.5) * box.W_m * e2;
+    std::vector<double> slope;
+    slope.reserve(points_m.size());
+    double farthest = -std::numeric_limits<double>::infinity();  // points' extent, far way
+    for (const auto& p : points_m) {
+        if (!(p.z() > 0.0f)) continue;
+        slope.push_back(double{p.x()} / double{p.z()});
+        farthest = std::max(farthest, far * (Eigen::Vector2d(p.x(), p.z()) - c).dot(e1));
+    }
+    if (slope.size() < kMinPoints) return box;
+    const std::size_t k = std::max<std::size_t>(10, slope.size() / 500);
+    double best = -std::numeric_limits<double>::infinity();
+    for (const std::size_t rank : {k, slope.size() - 1 - k}) {
+        std::nth_element(slope.begin(), slope.begin() + static_cast<std::ptrdiff_t>(rank),
+                         slope.end());
+        const Eigen::Vector2d ray = Eigen::Vector2d(slope[rank], 1.0).normalized();
+        const double cross = ray.x() * e1.y() - ray.y() * e1.x();
+        if (std::abs(cross) < kMinGrazingSin) continue;
+        // side + a e1 on the ray: (side + a e1) x ray = 0, and cross = ray x e1.
+        const double a = (side.x() * ray.y() - side.y() * ray.x()) / cross;
+        best = std::max(best, far * a);
+    }
+    const double reach = std::min(best, farthest) - 0.5 * box.L_m;
+    if (!(reach > 0.0)) return box;
+    OrientedBox out = box;
+    out.L_m = std::min(box.L_m + reach, max_length_m);
+    const Eigen::Vector2d shift = (far * 0.5 * (out.L_m - box.L_m)) * e1;
+    out.centre_m.x() += shift.x();
+    out.centre_m.z() += shift.y();
+    return out;
+}
+
 OrientedBox fit_upright_box_weighted(const std::vector<Eigen::Vector3f>& points_m,
                                      const std::vector<float>& weights,
                                      const std::optional<GroundPlane>& ground,

@@ -312,6 +312,13 @@ std::vector<Candidate> candidates_of_cluster(const std::vector<Eigen::Vector3f>&
                 c.subclass = "van";
             }
         }
+        if (s.name == options.family_class && options.far_column_length_fraction > 0.0) {
+            // A side seen along the viewing ray: its far end where its pixels end in the image.
+            const double prior = c.subclass == "van" ? options.van_prior_L_m : s.prior_L_m;
+            c.box = extend_far_end_to_columns(
+                c.box, gather(pts, c.members),
+                std::max(c.box.L_m, options.far_column_length_fraction * prior));
+        }
         if (s.has_prior()) {
             c.fragment = c.members.size() < static_cast<std::size_t>(s.min_points) ||
                          height_spread(pts, c.members, ground) <

@@ -192,6 +192,68 @@ TEST_CASE("a side seen along the ray, thinning out with range, keeps its far end
           Approx(far_end(fit_upright_box(pts, flat_ground(1.65), o))).margin(0.1));
 }
 
+TEST_CASE("a side seen along the ray ends where its pixel columns end, not where its points thin",
+          "[boxes]") {
+    // A 4.7 m car parked on the left, 9-13.7 m ahead: its rear and its inner side sampled as a
+    // camera's pixels (f 721 px, one point per column and 5 cm of height). Its box ends 0.5 m
+    // short of the side's far end, as quantiles of a far end seen sparsely leave it.
+    constexpr double f = 721.0, x_side = -3.9, x_kerb = -5.8, z_near = 9.0, z_far = 13.7;
+    std::vector<Eigen::Vector3f> pts;
+    const auto column = [&](double x, double z) {
+        for (double y = 1.65 - 0.3; y >= 1.65 - 1.4; y -= 0.05) {
+            pts.emplace_back(static_cast<float>(x), static_cast<float>(y), static_cast<float>(z));
+        }
+    };
+    const auto side_to = [&](double z_end) {
+        for (double u = f * x_side / z_near; u <= f * x_side / z_end; u += 1.0)
+            column(x_side, f * x_side / u);
+    };
+    for (double u = f * x_kerb / z_near; u < f * x_side / z_near; u += 1.0)
+        column(u * z_near / f, z_near);
+    side_to(z_far);
+    OrientedBox box;
+    box.theta = -kPi / 2.0;  // heading +z, away from the camera
+    box.L_m = 4.2;
+    box.W_m = 1.9;
+    box.H_m = 1.4;
+    box.centre_m = Eigen::Vector3d(x_side - 0.95, 0.95, z_near + 2.1);
+    const auto far_end = [](const OrientedBox& b) { return b.centre_m.z() + b.L_m / 2.0; };
+    const auto near_end = [](const OrientedBox& b) { return b.centre_m.z() - b.L_m / 2.0; };
+    const OrientedBox out = extend_far_end_to_columns(box, pts, 6.0);
+    CHECK(far_end(out) == Approx(z_far).margin(0.1));
+    CHECK(near_end(out) == Approx(z_near).margin(1e-9));
+    CHECK(out.centre_m.x() == Approx(box.centre_m.x()).margin(1e-9));
+    CHECK(out.theta == box.theta);
+    // At most max_length_m long.
+    CHECK(extend_far_end_to_columns(box, pts, 4.5).L_m == Approx(4.5).margin(1e-9));
+    // A few stray points at a farther column (smear, label bleed) do not move it.
+    for (int k = 0; k < 5; ++k) {
+        pts.emplace_back(static_cast<float>(x_side), 1.0f, static_cast<float>(z_far + 2.0));
+    }
+    CHECK(far_end(extend_far_end_to_columns(box, pts, 6.0)) == Approx(z_far).margin(0.1));
+    // Never beyond the points: a side that ends where the box does leaves it as it is.
+    pts.clear();
+    side_to(far_end(box));
+    const OrientedBox short_side = extend_far_end_to_columns(box, pts, 6.0);
+    CHECK(short_side.L_m == Approx(box.L_m).margin(0.05));
+    // A length across the viewing ray (a car crossing ahead) is left alone.
+    OrientedBox across = box;
+    across.theta = 0.0;
+    across.centre_m = Eigen::Vector3d(0.0, 0.95, 11.0);
+    CHECK(
+        extend_far_end_to_columns(across, box_faces(0.0, 11.0, 0.0, 4.7, 1.8, 1.4, 1.65, true), 6.0)
+            .L_m == across.L_m);
+    // The same car 16 m farther: its side's far end seen at 7.5 degrees from the side, where
+    // 5 cm of stereo error across the side moves the end by 0.4 m: left as it is.
+    OrientedBox far_box = box;
+    far_box.centre_m.z() += 16.0;
+    CHECK(extend_far_end_to_columns(
+              far_box,
+              box_faces(x_side - 0.95, z_near + 16.0 + 2.35, -kPi / 2.0, 4.7, 1.9, 1.4, 1.65, true),
+              6.0)
+              .L_m == far_box.L_m);
+}
+
 TEST_CASE("the thesis extractors on a uniform box give its centre and size", "[boxes]") {
     std::vector<Eigen::Vector3f> pts;
     // Uniform grid over x in [0, 2], y in [1, 2], z in [1, 5]: centre (1, 1.5, 3), size 2 x 1 x 4.

@@ -1,5 +1,6 @@
 #include <algorithm>
 #include <cmath>
+#include <limits>
 #include <numeric>
 #include <vector>
 
@@ -1191,4 +1192,17 @@ TEST_CASE("a car cut by the matcher's left edge and the next car in its row are 
     REQUIRE(centres.size() == 2);
     CHECK(centres[0] == Approx(7.76 - 2.1).margin(0.3));
     CHECK(centres[1] == Approx(8.46 + 2.1).margin(0.3));
+}
+
+TEST_CASE("the far end from pixel columns is off at 0 and at least one prior long otherwise",
+          "[extract]") {
+    ExtractOptions o;
+    CHECK(o.far_column_length_fraction == 1.25);
+    CHECK_NOTHROW(o.validate());
+    o.far_column_length_fraction = 0.0;
+    CHECK_NOTHROW(o.validate());
+    for (const double bad : {0.5, 3.5, -1.0, std::numeric_limits<double>::quiet_NaN()}) {
+        o.far_column_length_fraction = bad;
+        CHECK_THROWS_WITH(o.validate(), Catch::Contains("far_column_length_fraction"));
+    }
 }

@@ -82,6 +82,19 @@ OrientedBox fit_upright_box_weighted(const std::vector<Eigen::Vector3f>& points_
                                      const std::optional<GroundPlane>& ground,
                                      const BoxFitOptions& options);
 
+/// The box with the far end of its length moved out to where the outermost pixel column of
+/// its points (the ray of slope x / z that a point's own column gives) meets its long side
+/// facing the camera: a side seen along the viewing ray ends sharply in the image (about 15
+/// columns per metre at 14 m, 4 m aside) while its range is smeared by a metre there, so its
+/// far metre holds too few points for the box's quantiles. Moved only outwards, never beyond
+/// the points' own farthest extent along the length, to a length of at most max_length_m; the
+/// box unchanged when its length runs across the viewing ray (more than 45 degrees from it),
+/// when the outermost ray meets the side at less than 10 degrees, or with fewer than 20 points.
+/// The outermost column is the max(10, n / 500)-th point from the edge (stray points).
+OrientedBox extend_far_end_to_columns(const OrientedBox& box,
+                                      const std::vector<Eigen::Vector3f>& points_m,
+                                      double max_length_m);
+
 /// Heading yaw (radians, [-pi, 0]) of the best L-shape footprint of points given in the
 /// (x, z) plane; exposed for tests.
 double lshape_yaw(const std::vector<Eigen::Vector2d>& xz_m, double angle_step_deg);

@@ -78,23 +78,28 @@ struct ExtractOptions {
                                       ///< metres, >= 0, 0 = off
     double row_valley_min_length_fraction = 1.1;  ///< that length, times prior_L_m, > 0
     double row_valley_min_peak_fraction = 0.7;    ///< both tops reach this * prior_H_m, [0, 2]
-    double row_valley_min_piece_m = 1.0;   ///< no cut closer than this to an end or another cut,
-                                           ///< metres, > 0
-    double row_valley_bin_m = 0.15;        ///< bin of the top profile along the length, metres,
-                                           ///< [0.01, 10]
-    double row_valley_closing_m = 0.3;     ///< dips of the top profile narrower than twice
-                                           ///< this are noise (each bin takes the highest top
-                                           ///< within this), metres, [0, 10]
-    std::string family_class = "car";      ///< class whose boxes get a size family (car / van) in
-                                           ///< the entity's `subclass`, "" = none
-    double van_min_height_m = 1.82;        ///< a box of that class at least this tall is a van
-                                           ///< (cars 1.4-1.5 m, SUVs 1.7 m, vans 1.9-2.1 m), metres
-    double van_prior_L_m = 5.2;            ///< a van's length prior (completes what is hidden), m
-    double van_prior_W_m = 2.0;            ///< a van's width prior, metres
-    double stuff_on_thing_fraction = 0.5;  ///< a stuff entity with more than this share of its
-                                           ///< footprint inside thing boxes is dropped (stuff
-                                           ///< smeared onto a thing's silhouette), (0, 1],
-                                           ///< 1 = off
+    double row_valley_min_piece_m = 1.0;  ///< no cut closer than this to an end or another cut,
+                                          ///< metres, > 0
+    double row_valley_bin_m = 0.15;       ///< bin of the top profile along the length, metres,
+                                          ///< [0.01, 10]
+    double row_valley_closing_m = 0.3;    ///< dips of the top profile narrower than twice
+                                          ///< this are noise (each bin takes the highest top
+                                          ///< within this), metres, [0, 10]
+    std::string family_class = "car";     ///< class whose boxes get a size family (car / van) in
+                                          ///< the entity's `subclass`, "" = none
+    double van_min_height_m = 1.82;       ///< a box of that class at least this tall is a van
+                                          ///< (cars 1.4-1.5 m, SUVs 1.7 m, vans 1.9-2.1 m), metres
+    double van_prior_L_m = 5.2;           ///< a van's length prior (completes what is hidden), m
+    double van_prior_W_m = 2.0;           ///< a van's width prior, metres
+    double far_column_length_fraction = 1.25;  ///< a box of that class takes the far end of
+                                               ///< its side from its outermost pixel column
+                                               ///< (extend_far_end_to_columns), to at most
+                                               ///< this * its prior length (car or van),
+                                               ///< [1, 3], 0 = off
+    double stuff_on_thing_fraction = 0.5;      ///< a stuff entity with more than this share of its
+                                               ///< footprint inside thing boxes is dropped (stuff
+                                               ///< smeared onto a thing's silhouette), (0, 1],
+                                               ///< 1 = off
     /// Threads: the classes and a thing class's clusters are shared among this many (and a
     /// cloud's split by class among as many chunks); the result does not depend on it, >= 1
     int threads = 2;
