@@ -177,8 +177,8 @@ void add_cloud_flags(CLI::App& cmd, AnalyseArgs& a) {
     cmd.add_option("--depth-edge-step", a.options.depth_edge_step_m,
                    "a thing's points with a point this much nearer within 4 rows above or below "
                    "(a depth step, where the disparity mixes two surfaces) do not shape its box, "
-                   "m; 0 = off; default 0.8 with --semantics geometry, 0 with labels "
-                   "(docs/entities.md)")
+                   "m; 0 = off (docs/entities.md)")
+        ->capture_default_str()
         ->group(cl);
     cmd.add_flag("!--drop-void", a.options.reproject.keep_void,
                  "drop points whose semantic colour is not in the palette")

@@ -211,6 +211,9 @@ void ExtractOptions::validate() const {
           van_prior_W_m < 100.0)) {
         throw std::invalid_argument("van_prior_L_m, van_prior_W_m: must be in (0, 100) metres");
     }
+    if (!(van_max_L_m >= van_prior_L_m && van_max_L_m < 100.0)) {
+        throw std::invalid_argument("van_max_L_m: must be in [van_prior_L_m, 100) metres");
+    }
     if (!(far_column_length_fraction == 0.0 ||
           (far_column_length_fraction >= 1.0 && far_column_length_fraction <= 3.0))) {
         throw std::invalid_argument("far_column_length_fraction: must be 0 or in [1, 3]");

@@ -4,6 +4,7 @@
 #include <array>
 #include <cmath>
 #include <limits>
+#include <numeric>
 
 #include "cloud_analysis/support/angles.hpp"
 #include "cloud_analysis/support/select.hpp"
@@ -121,17 +122,60 @@ Split split_along(const std::vector<Eigen::Vector3f>& pts, const Indices& idx, d
     return split;
 }
 
+/// How far, from the camera's side, the tops (95 % height per 0.1 m bin across, bins of at
+/// least 5 points) of the points `members` (indices into across / heights) stay below
+/// low_fraction * their highest top, metres; -1 when fewer than 3 bins are known.
+double low_extent_m(const std::vector<std::size_t>& members, const std::vector<double>& across,
+                    const std::vector<double>& heights, double lo, double hi, bool near_is_lo,
+                    double low_fraction) {
+    constexpr double kBin = 0.1;
+    constexpr std::size_t kMinBinPoints = 5;
+    const int bins = static_cast<int>((hi - lo) / kBin) + 1;
+    if (bins < 3) return -1.0;
+    std::vector<std::vector<double>> in_bin(static_cast<std::size_t>(bins));
+    for (std::size_t k : members) {
+        const int b = static_cast<int>((across[k] - lo) / kBin);
+        if (b < 0 || b >= bins) continue;
+        in_bin[static_cast<std::size_t>(b)].push_back(heights[k]);
+    }
+    std::vector<double> top(static_cast<std::size_t>(bins), -1.0);
+    double highest = 0.0;
+    int known = 0;
+    for (int b = 0; b < bins; ++b) {
+        auto& h = in_bin[static_cast<std::size_t>(b)];
+        if (h.size() < kMinBinPoints) continue;
+        top[static_cast<std::size_t>(b)] = quantile(h, 0.95);
+        highest = std::max(highest, top[static_cast<std::size_t>(b)]);
+        ++known;
+    }
+    if (highest <= 0.0 || known < 3) return -1.0;
+    double low = 0.0;
+    int first = -1;  // the first known bin from the near side: the extent starts there
+    for (int k = 0; k < bins; ++k) {
+        const double t = top[static_cast<std::size_t>(near_is_lo ? k : bins - 1 - k)];
+        if (t < 0.0) continue;
+        if (first < 0) first = k;
+        if (t >= low_fraction * highest) break;
+        low = (k - first + 1) * kBin;
+    }
+    return low;
+}
+
 /// Whether a long blob is a row of things side by side seen front-on (or from behind) rather
 /// than one thing seen side-on: its length along the box heading spans at least two prior
 /// widths, and across the heading, from the camera's side, its top stays below
 /// low_fraction * its highest top for at least low_extent_m (the bonnets in front of the
-/// windscreens). A thing seen side-on shows its roof line over its whole visible width.
+/// windscreens), over the whole blob and in most slices one prior width long along it (each
+/// thing of the row has its bonnet: a thing seen side-on under a heading a little off its own
+/// shows its low end across the near side of the blob, but not slice by slice, where its side
+/// shows its roof line).
 bool front_on_row(const std::vector<Eigen::Vector3f>& pts, const Indices& idx,
                   const OrientedBox& box, const ClassSettings& s, const GroundPlane& ground,
                   const ExtractOptions& options) {
+    constexpr std::size_t kMinSlicePoints = 50;
     if (idx.size() < 20) return false;
     const double c = std::cos(box.theta), sn = std::sin(box.theta);
-    std::vector<double> along, across;
+    std::vector<double> along, across, heights;
     along.reserve(idx.size());
     across.reserve(idx.size());
     double min_along = std::numeric_limits<double>::infinity(), max_along = -min_along;
@@ -143,40 +187,37 @@ bool front_on_row(const std::vector<Eigen::Vector3f>& pts, const Indices& idx,
     }
     // The whole extent bounds the 2-98 % one: most blobs (single things) stop here.
     if (max_along - min_along < 2.0 * s.prior_W_m) return false;
-    const auto [along_lo, along_hi] = quantiles(along, 0.02, 0.98);
-    const double length = along_hi - along_lo;
-    if (length < 2.0 * s.prior_W_m) return false;
-    std::vector<double> sorted = across;
+    std::vector<double> sorted = along;
+    const auto [along_lo, along_hi] = quantiles(sorted, 0.02, 0.98);
+    if (along_hi - along_lo < 2.0 * s.prior_W_m) return false;
+    sorted = across;
     const auto [lo, hi] = quantiles(sorted, 0.02, 0.98);
-    // Top (95 % height) per 0.1 m bin across, walked from the end nearer the camera.
-    constexpr double kBin = 0.1;
-    const int bins = static_cast<int>((hi - lo) / kBin) + 1;
-    if (bins < 3) return false;
-    std::vector<std::vector<double>> heights(static_cast<std::size_t>(bins));
-    for (std::size_t k = 0; k < idx.size(); ++k) {
-        const int b = static_cast<int>((across[k] - lo) / kBin);
-        if (b < 0 || b >= bins) continue;
-        heights[static_cast<std::size_t>(b)].push_back(ground.height(pts[idx[k]].cast<double>()));
-    }
-    constexpr std::size_t kMinBinPoints = 5;
-    std::vector<double> top(static_cast<std::size_t>(bins), -1.0);
-    double highest = 0.0;
-    for (int b = 0; b < bins; ++b) {
-        auto& h = heights[static_cast<std::size_t>(b)];
-        if (h.size() < kMinBinPoints) continue;
-        top[static_cast<std::size_t>(b)] = quantile(h, 0.95);
-        highest = std::max(highest, top[static_cast<std::size_t>(b)]);
-    }
-    if (highest <= 0.0) return false;
     const bool near_is_lo = std::abs(lo) <= std::abs(hi);
-    double low_extent = 0.0;
-    for (int k = 0; k < bins; ++k) {
-        const double t = top[static_cast<std::size_t>(near_is_lo ? k : bins - 1 - k)];
-        if (t < 0.0) continue;
-        if (t >= options.row_low_fraction * highest) break;
-        low_extent = (k + 1) * kBin;
+    heights.reserve(idx.size());
+    for (std::size_t i : idx) heights.push_back(ground.height(pts[i].cast<double>()));
+    std::vector<std::size_t> all(idx.size());
+    std::iota(all.begin(), all.end(), std::size_t{0});
+    if (low_extent_m(all, across, heights, lo, hi, near_is_lo, options.row_low_fraction) <
+        options.row_low_extent_m) {
+        return false;
     }
-    return low_extent >= options.row_low_extent_m;
+    const int slices = std::max(1, static_cast<int>((along_hi - along_lo) / s.prior_W_m));
+    const double slice_m = (along_hi - along_lo) / slices;
+    std::vector<std::vector<std::size_t>> in_slice(static_cast<std::size_t>(slices));
+    for (std::size_t k = 0; k < along.size(); ++k) {
+        const int j = static_cast<int>((along[k] - along_lo) / slice_m);
+        if (j >= 0 && j < slices) in_slice[static_cast<std::size_t>(j)].push_back(k);
+    }
+    int seen = 0, low = 0;
+    for (const auto& members : in_slice) {
+        if (members.size() < kMinSlicePoints) continue;
+        const double e =
+            low_extent_m(members, across, heights, lo, hi, near_is_lo, options.row_low_fraction);
+        if (e < 0.0) continue;
+        ++seen;
+        if (e >= options.row_low_extent_m) ++low;
+    }
+    return 2 * low >= seen;
 }
 
 /// The top profile of a blob along its length, in bins from the lowest along-coordinate.

@@ -172,6 +172,18 @@ void give_back_edge_points(const std::vector<Eigen::Vector3f>& pts, const Indice
     }
 }
 
+/// The box shortened to length_m along its heading, its end farther from the camera kept.
+OrientedBox keep_far_end(OrientedBox box, double length_m) {
+    const Eigen::Vector2d heading(std::cos(box.theta), -std::sin(box.theta));  // (x, z)
+    const double far =
+        heading.dot(Eigen::Vector2d(box.centre_m.x(), box.centre_m.z())) >= 0.0 ? 1.0 : -1.0;
+    const Eigen::Vector2d shift = (far * 0.5 * (box.L_m - length_m)) * heading;
+    box.centre_m.x() += shift.x();
+    box.centre_m.z() += shift.y();
+    box.L_m = length_m;
+    return box;
+}
+
 /// The clusters of a thing class (point indices in point order).
 std::vector<Indices> thing_clusters(const std::vector<Eigen::Vector3f>& pts,
                                     const std::vector<std::uint32_t>& pixels, const PixelGrid& grid,
@@ -301,6 +313,19 @@ std::vector<Candidate> candidates_of_cluster(const std::vector<Eigen::Vector3f>&
             final_fit.area_weighted_extents) {
             c.box = fit_upright_box(gather(pts, c.members), ground, final_fit);
         }
+        if (depth < 4 && !yaw && s.has_prior() && c.box.L_m > s.split_factor * s.prior_L_m) {
+            // The thing's own box can come out longer than the box the splits read (its near
+            // end trimmed along the ray, its extents over seen surface): still more than one.
+            Split split = split_oversized(pts, c.members, c.box, s, ground, options,
+                                          fit.truncation_xz.has_value());
+            if (split.parts.size() > 1) {
+                for (auto& piece : split.parts) {
+                    work.emplace_back(std::move(piece), depth + 1,
+                                      split.at_gaps ? group : next_group++, split.yaw_rad);
+                }
+                continue;
+            }
+        }
         if (!options.family_class.empty() && s.name == options.family_class) {
             // A van shows its height: its hidden length is a van's, not a car's.
             c.subclass = "car";
@@ -318,6 +343,12 @@ std::vector<Candidate> candidates_of_cluster(const std::vector<Eigen::Vector3f>&
             c.box = extend_far_end_to_columns(
                 c.box, gather(pts, c.members),
                 std::max(c.box.L_m, options.far_column_length_fraction * prior));
+        }
+        if (c.subclass == "van" && c.box.L_m > options.van_max_L_m) {
+            // Longer than any van: the piece holds the end of the thing before it in its row
+            // too (a row's cut at a van's windscreen foot, where the glass matches sparsely,
+            // leaves the van's front to the piece beyond). The van keeps its far end.
+            c.box = keep_far_end(c.box, options.van_prior_L_m);
         }
         if (s.has_prior()) {
             c.fragment = c.members.size() < static_cast<std::size_t>(s.min_points) ||

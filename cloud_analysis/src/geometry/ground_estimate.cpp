@@ -87,9 +87,6 @@ void GeometryOptions::validate() const {
     if (!(min_face_share >= 0.0 && min_face_share < 1.0)) {
         throw std::invalid_argument("geometry.min_face_share: must be in [0, 1)");
     }
-    if (!(depth_edge_step_m >= 0.0) || !std::isfinite(depth_edge_step_m)) {
-        throw std::invalid_argument("geometry.depth_edge_step_m: must be >= 0");
-    }
     if (!(green_fraction > 0.0 && green_fraction <= 1.0)) {
         throw std::invalid_argument("geometry.green_fraction: must be in (0, 1]");
     }

@@ -58,7 +58,7 @@ void AnalyseOptions::validate() const {
     calibration.validate();
     disparity.validate();
     reproject.validate();
-    if (depth_edge_step_m && !(*depth_edge_step_m >= 0.0 && std::isfinite(*depth_edge_step_m))) {
+    if (!(depth_edge_step_m >= 0.0 && std::isfinite(depth_edge_step_m))) {
         throw std::invalid_argument("depth_edge_step_m: must be >= 0");
     }
 }
@@ -187,7 +187,7 @@ AnalyseResult analyse(const LoadedInputs& in, const AnalyseOptions& options,
         r.geometry->classes = ClassImage{};
         watch.lap("geometry");
     }
-    const ReprojectOptions reprojection = reproject_options(r.semantics, options);
+    const ReprojectOptions reprojection = reproject_options(options);
     if (options.class_points_only) {
         r.points = reproject_by_class(r.disparity, r.camera, r.classes, reprojection,
                                       *options.class_points_only);
@@ -220,10 +220,9 @@ std::vector<std::string> analysis_warnings(const LoadedInputs& in, const Analyse
     return out;
 }
 
-ReprojectOptions reproject_options(const std::string& semantics, const AnalyseOptions& o) {
+ReprojectOptions reproject_options(const AnalyseOptions& o) {
     ReprojectOptions r = o.reproject;
-    r.depth_edge_step_m =
-        o.depth_edge_step_m.value_or(semantics == "geometry" ? o.geometry.depth_edge_step_m : 0.0);
+    r.depth_edge_step_m = o.depth_edge_step_m;
     return r;
 }
 
@@ -281,12 +280,11 @@ nlohmann::json describe_run(const LoadedInputs& in, const AnalyseOptions& o,
                       {"wls_lambda", d.wls_lambda},
                       {"wls_sigma_colour", d.wls_sigma_colour},
                       {"downscale", d.downscale}};
-    j["reproject"] = {
-        {"max_range_m", o.reproject.max_range_m},
-        {"min_disparity_px", o.reproject.min_disparity_px},
-        {"keep_void", o.reproject.keep_void},
-        {"depth_edge_step_m", reproject_options(semantics_path(in, o), o).depth_edge_step_m},
-        {"depth_edge_rows", o.reproject.depth_edge_rows}};
+    j["reproject"] = {{"max_range_m", o.reproject.max_range_m},
+                      {"min_disparity_px", o.reproject.min_disparity_px},
+                      {"keep_void", o.reproject.keep_void},
+                      {"depth_edge_step_m", reproject_options(o).depth_edge_step_m},
+                      {"depth_edge_rows", o.reproject.depth_edge_rows}};
     return j;
 }
 

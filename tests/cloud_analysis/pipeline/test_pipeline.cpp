@@ -2,6 +2,7 @@
 
 #include <filesystem>
 #include <fstream>
+#include <limits>
 
 #include "../sample_inputs.hpp"
 #include "cloud_analysis/pipeline/pipeline.hpp"
@@ -161,22 +162,19 @@ TEST_CASE("images are read as they are: grey PNGs grey, colour PNGs RGB, 16-bit 
     std::filesystem::remove_all(dir);
 }
 
-TEST_CASE("the depth edge band is on for classes from geometry and off for labels unless set",
-          "[pipeline]") {
+TEST_CASE("the depth edge band is on by default whichever path makes the classes", "[pipeline]") {
     AnalyseOptions o;
-    CHECK(reproject_options("geometry", o).depth_edge_step_m == 0.8);
-    CHECK(reproject_options("labels", o).depth_edge_step_m == 0.0);
-    CHECK(reproject_options("none", o).depth_edge_step_m == 0.0);
-    o.geometry.depth_edge_step_m = 1.5;
-    CHECK(reproject_options("geometry", o).depth_edge_step_m == 1.5);
+    CHECK(reproject_options(o).depth_edge_step_m == 0.8);
+    CHECK(o.reproject.depth_edge_step_m == 0.0);  // the library's own default: no band
+    o.depth_edge_step_m = 0.0;
+    CHECK(reproject_options(o).depth_edge_step_m == 0.0);
     o.depth_edge_step_m = 0.6;
-    CHECK(reproject_options("geometry", o).depth_edge_step_m == 0.6);
-    CHECK(reproject_options("labels", o).depth_edge_step_m == 0.6);
     o.reproject.max_range_m = 40.0;
-    CHECK(reproject_options("labels", o).max_range_m == 40.0);
-    o.depth_edge_step_m = -1.0;
-    CHECK_THROWS_WITH(o.validate(), Catch::Contains("depth_edge_step_m"));
-    o.depth_edge_step_m.reset();
-    o.geometry.depth_edge_step_m = -1.0;
-    CHECK_THROWS_WITH(o.validate(), Catch::Contains("geometry.depth_edge_step_m"));
+    CHECK(reproject_options(o).depth_edge_step_m == 0.6);
+    CHECK(reproject_options(o).max_range_m == 40.0);
+    CHECK_NOTHROW(o.validate());
+    for (const double bad : {-1.0, std::numeric_limits<double>::infinity()}) {
+        o.depth_edge_step_m = bad;
+        CHECK_THROWS_WITH(o.validate(), Catch::Contains("depth_edge_step_m"));
+    }
 }

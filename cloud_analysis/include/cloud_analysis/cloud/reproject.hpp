@@ -16,7 +16,7 @@ struct ReprojectOptions {
     bool keep_void = true;          ///< keep points whose pixel has no palette class
     /// depth_edge_band's step: a pixel with one at least this much nearer within
     /// depth_edge_rows rows above or below is on a depth edge, metres; 0 = no band (analyse
-    /// sets it per path: AnalyseOptions::depth_edge_step_m).
+    /// sets it from AnalyseOptions::depth_edge_step_m, 0.8).
     double depth_edge_step_m = 0.0;
     int depth_edge_rows = 4;  ///< depth_edge_band's reach, rows: half the matching window
     /// Throws std::invalid_argument naming the first bad field.

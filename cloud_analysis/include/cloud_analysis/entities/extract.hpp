@@ -91,6 +91,8 @@ struct ExtractOptions {
                                           ///< (cars 1.4-1.5 m, SUVs 1.7 m, vans 1.9-2.1 m), metres
     double van_prior_L_m = 5.2;           ///< a van's length prior (completes what is hidden), m
     double van_prior_W_m = 2.0;           ///< a van's width prior, metres
+    double van_max_L_m = 6.0;  ///< a van box longer than this holds the end of the thing before
+                               ///< it too: it keeps its far end and the van prior's length, m
     double far_column_length_fraction = 1.25;  ///< a box of that class takes the far end of
                                                ///< its side from its outermost pixel column
                                                ///< (extend_far_end_to_columns), to at most

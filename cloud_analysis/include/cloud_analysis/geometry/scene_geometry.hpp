@@ -89,8 +89,6 @@ struct GeometryOptions {
     double min_face_share = 0.15;          ///< a thing entity seen over less than this share of
                                            ///< its smallest prior face (W x H) is a fragment or
                                            ///< clutter and is dropped, [0, 1), 0 = off
-    double depth_edge_step_m = 0.8;        ///< the depth edge band's step on this path
-                                           ///< (ReprojectOptions::depth_edge_step_m), m, >= 0
     /// Throws std::invalid_argument naming the bad field.
     void validate() const;
 };

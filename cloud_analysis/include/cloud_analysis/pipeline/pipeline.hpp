@@ -45,9 +45,9 @@ struct AnalyseOptions {
     /// stereo pair alone, docs/stereo-only.md) or "auto" (labels when a semantic image is given).
     std::string semantics = "auto";
     geometry::GeometryOptions geometry;  ///< the stereo-only path's settings
-    /// The depth edge band's step (ReprojectOptions::depth_edge_step_m); unset: the stereo-only
-    /// path's (GeometryOptions::depth_edge_step_m) with classes from geometry, none with labels.
-    std::optional<double> depth_edge_step_m;
+    /// The depth edge band's step (ReprojectOptions::depth_edge_step_m), metres, >= 0 (0 = off),
+    /// whichever path makes the classes.
+    double depth_edge_step_m = 0.8;
     /// When set, analyse builds no cloud: it reprojects straight into the entity extractor's
     /// per-class points (AnalyseResult::points, see reproject_by_class), for runs whose only
     /// output is entities. Unset: the labelled cloud (AnalyseResult::cloud).
@@ -109,9 +109,9 @@ AnalyseResult analyse(const LoadedInputs& inputs, const AnalyseOptions& options,
 /// ("labels" asked for without a semantic image).
 std::string semantics_path(const LoadedInputs& inputs, const AnalyseOptions& options);
 
-/// The reprojection settings of a run whose classes come from `semantics` (semantics_path):
-/// options.reproject with the depth edge band's step of AnalyseOptions::depth_edge_step_m.
-ReprojectOptions reproject_options(const std::string& semantics, const AnalyseOptions& options);
+/// The reprojection settings of a run: options.reproject with the depth edge band's step of
+/// AnalyseOptions::depth_edge_step_m.
+ReprojectOptions reproject_options(const AnalyseOptions& options);
 
 /// What the user should know about an analysed frame, one line each: the stereo-only path's
 /// warnings, no semantic image (every point void), semantic colours not in the palette (the
