@@ -47,6 +47,14 @@ std::vector<Eigen::Vector3f> box_faces(double x, double z, double t, double L, d
     return pts;
 }
 
+/// A camera's pixel column on a surface at (x, z): points every 5 cm of height from 0.3 m to
+/// 1.4 m above a road at y = 1.65.
+void add_column(std::vector<Eigen::Vector3f>& pts, double x, double z) {
+    for (double y = 1.65 - 0.3; y >= 1.65 - 1.4; y -= 0.05) {
+        pts.emplace_back(static_cast<float>(x), static_cast<float>(y), static_cast<float>(z));
+    }
+}
+
 /// Difference of two yaws modulo pi (front and back of a box look alike).
 double yaw_error_mod_pi(double a, double b) {
     double d = std::fmod(std::abs(a - b), kPi);
@@ -159,11 +167,7 @@ TEST_CASE("a side seen along the ray, thinning out with range, keeps its far end
     // short, and the 4.2 m prior then stands in for the measured length.
     constexpr double f = 700.0, x_side = -3.9, x_kerb = -5.7, z_near = 6.0, z_far = 10.8;
     std::vector<Eigen::Vector3f> pts;
-    const auto column = [&](double x, double z) {
-        for (double y = 1.65 - 0.3; y >= 1.65 - 1.4; y -= 0.05) {
-            pts.emplace_back(static_cast<float>(x), static_cast<float>(y), static_cast<float>(z));
-        }
-    };
+    const auto column = [&](double x, double z) { add_column(pts, x, z); };
     for (double u = f * x_side / z_near; u <= f * x_side / z_far; u += 1.0)
         column(x_side, f * x_side / u);
     for (double u = f * x_kerb / z_near; u < f * x_side / z_near; u += 1.0)
@@ -199,11 +203,7 @@ TEST_CASE("a side seen along the ray ends where its pixel columns end, not where
     // short of the side's far end, as quantiles of a far end seen sparsely leave it.
     constexpr double f = 721.0, x_side = -3.9, x_kerb = -5.8, z_near = 9.0, z_far = 13.7;
     std::vector<Eigen::Vector3f> pts;
-    const auto column = [&](double x, double z) {
-        for (double y = 1.65 - 0.3; y >= 1.65 - 1.4; y -= 0.05) {
-            pts.emplace_back(static_cast<float>(x), static_cast<float>(y), static_cast<float>(z));
-        }
-    };
+    const auto column = [&](double x, double z) { add_column(pts, x, z); };
     const auto side_to = [&](double z_end) {
         for (double u = f * x_side / z_near; u <= f * x_side / z_end; u += 1.0)
             column(x_side, f * x_side / u);

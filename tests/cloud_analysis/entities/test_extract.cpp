@@ -565,7 +565,8 @@ TEST_CASE("a parked row cut at clear gaps keeps every car although each hides th
     }
     std::sort(centres.begin(), centres.end());
     REQUIRE(centres.size() == 3);
-    for (std::size_t k = 0; k < 3; ++k) CHECK(centres[k] == Approx(starts[k] + 2.1).margin(0.3));
+    for (std::size_t k = 0; k < 3; ++k)
+        CHECK(centres[k] == Approx(double{starts[k]} + 2.1).margin(0.3));
 }
 
 namespace {
@@ -588,14 +589,33 @@ void add_car_front_on(LabeledCloud& cloud, float x_nose, float z_centre) {
     }
 }
 
-}  // namespace
+/// The camera-facing part of a car heading along z from z0 to z1, its left side at x = 4.35
+/// seen: door (up to 1 m), 0.2 m of window rising to the roof (1.45 m) across the rest of the
+/// width (to x = 5.9), on the road at y = 1.65.
+void add_car_side_on(LabeledCloud& cloud, float z0, float z1) {
+    for (float z = z0; z <= z1; z += 0.05f) {
+        for (float h = 0.3f; h <= 1.0f; h += 0.05f) add_point(cloud, {4.35f, 1.65f - h, z}, 2);
+        for (float x = 4.35f; x <= 4.55f; x += 0.05f) {
+            add_point(cloud, {x, 1.65f - (1.0f + 2.0f * (x - 4.35f)), z}, 2);
+        }
+        for (float x = 4.55f; x <= 5.9f; x += 0.05f) add_point(cloud, {x, 1.65f - 1.45f, z}, 2);
+    }
+}
 
-TEST_CASE("two cars side by side seen front-on become two cars heading across the blob",
-          "[entities][split]") {
+/// Road points (class 0) on y = 1.65 over x in [-6, 10], z in [3, 40], every 0.25 m.
+LabeledCloud road_cloud() {
     LabeledCloud cloud;
     for (float x = -6.0f; x <= 10.0f; x += 0.25f) {
         for (float z = 3.0f; z <= 40.0f; z += 0.25f) add_point(cloud, {x, 1.65f, z}, 0);
     }
+    return cloud;
+}
+
+}  // namespace
+
+TEST_CASE("two cars side by side seen front-on become two cars heading across the blob",
+          "[entities][split]") {
+    LabeledCloud cloud = road_cloud();
     // Noses at x = 4.35 (centres at x = 6.5 for 4.3 m cars), 0.3 m apart: one blob 3.9 m long
     // along z, as long as one car seen side-on, but with bonnets in front of the roofs.
     add_car_front_on(cloud, 4.35f, 7.0f);
@@ -619,21 +639,12 @@ TEST_CASE("two cars side by side seen front-on become two cars heading across th
 
 TEST_CASE("a vehicle seen side-on with something low before one end is not a row front-on",
           "[entities][split]") {
-    LabeledCloud cloud;
-    for (float x = -6.0f; x <= 10.0f; x += 0.25f) {
-        for (float z = 3.0f; z <= 40.0f; z += 0.25f) add_point(cloud, {x, 1.65f, z}, 0);
-    }
+    LabeledCloud cloud = road_cloud();
     // A 6 m vehicle heading along z, its side at x = 4.35 seen as in the test below, and the
     // back of something low (0.3-0.7 m, like the boot of a car beyond the blob's end) 0.1-0.9 m
     // nearer the camera beside its last metre. Over the whole blob the side nearer the camera
     // is low for 0.8 m, as a front-on row's bonnets are; slice by slice only the last is.
-    for (float z = 12.0f; z <= 18.0f; z += 0.05f) {
-        for (float h = 0.3f; h <= 1.0f; h += 0.05f) add_point(cloud, {4.35f, 1.65f - h, z}, 2);
-        for (float x = 4.35f; x <= 4.55f; x += 0.05f) {
-            add_point(cloud, {x, 1.65f - (1.0f + 2.0f * (x - 4.35f)), z}, 2);
-        }
-        for (float x = 4.55f; x <= 5.9f; x += 0.05f) add_point(cloud, {x, 1.65f - 1.45f, z}, 2);
-    }
+    add_car_side_on(cloud, 12.0f, 18.0f);
     for (float z = 17.0f; z <= 18.0f; z += 0.05f) {
         for (float x = 3.45f; x <= 4.25f; x += 0.05f) {
             for (float h = 0.3f; h <= 0.7f; h += 0.05f) add_point(cloud, {x, 1.65f - h, z}, 2);
@@ -651,19 +662,10 @@ TEST_CASE("a vehicle seen side-on with something low before one end is not a row
 
 TEST_CASE("a car seen side-on, its roof right behind the door line, is not cut across",
           "[entities][split]") {
-    LabeledCloud cloud;
-    for (float x = -6.0f; x <= 10.0f; x += 0.25f) {
-        for (float z = 3.0f; z <= 40.0f; z += 0.25f) add_point(cloud, {x, 1.65f, z}, 0);
-    }
+    LabeledCloud cloud = road_cloud();
     // Heading along z, left side at x = 4.35 seen: door (up to 1 m), 0.2 m of window rising
     // to the roof (1.45 m) across the rest of the width. Low only over 0.2 m from the camera.
-    for (float z = 12.0f; z <= 16.2f; z += 0.05f) {
-        for (float h = 0.3f; h <= 1.0f; h += 0.05f) add_point(cloud, {4.35f, 1.65f - h, z}, 2);
-        for (float x = 4.35f; x <= 4.55f; x += 0.05f) {
-            add_point(cloud, {x, 1.65f - (1.0f + 2.0f * (x - 4.35f)), z}, 2);
-        }
-        for (float x = 4.55f; x <= 5.9f; x += 0.05f) add_point(cloud, {x, 1.65f - 1.45f, z}, 2);
-    }
+    add_car_side_on(cloud, 12.0f, 16.2f);
     ExtractOptions o = options_with_bundled_config("instances");
     const auto doc = extract_entities(cloud, test_palette(), StereoCamera{}, o);
     REQUIRE(count_class(doc, "car") == 1);
@@ -723,7 +725,7 @@ TEST_CASE("a parked row's walk of cuts starts at its first car, not at points sm
     REQUIRE(spans.size() == 3);
     for (int k = 0; k < 3; ++k) {
         CHECK(spans[k].first == Approx(starts[k]).margin(0.3));
-        CHECK(spans[k].second == Approx(starts[k] + 4.2).margin(0.3));
+        CHECK(spans[k].second == Approx(double{starts[k]} + 4.2).margin(0.3));
     }
 }
 
@@ -984,7 +986,9 @@ TEST_CASE("column_step must be 1, 2, 4 or 8, and 1 for a thing", "[entities]") {
 TEST_CASE("a thing a few pixels wide in the image is a strip of label bleed and is dropped",
           "[extract][suppression]") {
     using namespace cloud_analysis::instances;
-    const PixelGrid grid{100, 80};
+    PixelGrid grid;
+    grid.width_px = 100;
+    grid.height_px = 80;
     std::vector<std::uint32_t> pixels;
     Candidate strip, car;
     // A 3 px wide, 40 px tall strip and a 30 x 20 px block.
@@ -1011,7 +1015,9 @@ TEST_CASE("a thing a few pixels wide in the image is a strip of label bleed and 
 TEST_CASE("a strip along a larger car at another range is dropped, a narrow car on its own kept",
           "[extract][suppression]") {
     using namespace cloud_analysis::instances;
-    const PixelGrid grid{100, 80};
+    PixelGrid grid;
+    grid.width_px = 100;
+    grid.height_px = 80;
     std::vector<std::uint32_t> pixels;
     Candidate strip, car, far_car;
     const auto add = [&](Candidate& c, std::uint32_t u0, std::uint32_t u1, std::uint32_t v0,
@@ -1154,13 +1160,13 @@ LabeledCloud matched_view(const LabeledCloud& cloud, const StereoCamera& c) {
     out.width_px = c.width_px;
     out.height_px = c.height_px;
     for (std::size_t i = 0; i < cloud.size(); ++i) {
-        const Eigen::Vector3f& p = cloud.xyz_m[i];
+        const Eigen::Vector3d p = cloud.xyz_m[i].cast<double>();
         const long u = std::lround(c.fx_px * p.x() / p.z() + c.cx_px);
         const long v = std::lround(c.fy_px * p.y() / p.z() + c.cy_px);
         if (u < c.fx_px * c.baseline_m / p.z() || u >= c.width_px || v < 0 || v >= c.height_px) {
             continue;
         }
-        add_point(out, p, cloud.class_index[i]);
+        add_point(out, cloud.xyz_m[i], cloud.class_index[i]);
         out.pixel.back() = static_cast<std::uint32_t>(v * c.width_px + u);
     }
     return out;
@@ -1242,10 +1248,7 @@ TEST_CASE("the far end from pixel columns is off at 0 and at least one prior lon
 
 TEST_CASE("a van box longer than any van keeps its far end and a van's length",
           "[entities][split]") {
-    LabeledCloud cloud;
-    for (float x = -6.0f; x <= 10.0f; x += 0.25f) {
-        for (float z = 3.0f; z <= 40.0f; z += 0.25f) add_point(cloud, {x, 1.65f, z}, 0);
-    }
+    LabeledCloud cloud = road_cloud();
     // A 2 m tall van heading along z, 20-25.2 m ahead, its side at x = 4.35 and its roof seen,
     // and joined to its near end the front of the vehicle before it (a 1 m high bonnet,
     // 18.6-19.9 m): a row cut at that vehicle's windscreen foot leaves its front to the van.
