@@ -686,6 +686,21 @@ OrientedBox fit_upright_box(const std::vector<Eigen::Vector3f>& points_m,
                         {lo1, hi1, lo2, hi2, bottom_seen, top_seen});
 }
 
+OrientedBox with_length(const OrientedBox& box, double length_m, bool keep_far_end) {
+    const Eigen::Vector2d heading(std::cos(box.theta), -std::sin(box.theta));  // (x, z)
+    const double far =
+        heading.dot(Eigen::Vector2d(box.centre_m.x(), box.centre_m.z())) >= 0.0 ? 1.0 : -1.0;
+    // The centre moves half the change, towards the end that moves.
+    const double towards_far =
+        keep_far_end ? -0.5 * (length_m - box.L_m) : 0.5 * (length_m - box.L_m);
+    const Eigen::Vector2d shift = (far * towards_far) * heading;
+    OrientedBox out = box;
+    out.centre_m.x() += shift.x();
+    out.centre_m.z() += shift.y();
+    out.L_m = length_m;
+    return out;
+}
+
 OrientedBox extend_far_end_to_columns(const OrientedBox& box,
                                       const std::vector<Eigen::Vector3f>& points_m,
                                       double max_length_m) {
@@ -726,12 +741,7 @@ OrientedBox extend_far_end_to_columns(const OrientedBox& box,
     }
     const double reach = std::min(best, farthest) - 0.5 * box.L_m;
     if (!(reach > 0.0)) return box;
-    OrientedBox out = box;
-    out.L_m = std::min(box.L_m + reach, max_length_m);
-    const Eigen::Vector2d shift = (far * 0.5 * (out.L_m - box.L_m)) * e1;
-    out.centre_m.x() += shift.x();
-    out.centre_m.z() += shift.y();
-    return out;
+    return with_length(box, std::min(box.L_m + reach, max_length_m), false);
 }
 
 OrientedBox fit_upright_box_weighted(const std::vector<Eigen::Vector3f>& points_m,

@@ -172,18 +172,6 @@ void give_back_edge_points(const std::vector<Eigen::Vector3f>& pts, const Indice
     }
 }
 
-/// The box shortened to length_m along its heading, its end farther from the camera kept.
-OrientedBox keep_far_end(OrientedBox box, double length_m) {
-    const Eigen::Vector2d heading(std::cos(box.theta), -std::sin(box.theta));  // (x, z)
-    const double far =
-        heading.dot(Eigen::Vector2d(box.centre_m.x(), box.centre_m.z())) >= 0.0 ? 1.0 : -1.0;
-    const Eigen::Vector2d shift = (far * 0.5 * (box.L_m - length_m)) * heading;
-    box.centre_m.x() += shift.x();
-    box.centre_m.z() += shift.y();
-    box.L_m = length_m;
-    return box;
-}
-
 /// The clusters of a thing class (point indices in point order).
 std::vector<Indices> thing_clusters(const std::vector<Eigen::Vector3f>& pts,
                                     const std::vector<std::uint32_t>& pixels, const PixelGrid& grid,
@@ -272,6 +260,15 @@ std::vector<Candidate> candidates_of_cluster(const std::vector<Eigen::Vector3f>&
             work.emplace_back(std::move(piece), 0, next_group++, std::nullopt);
         }
     }
+    // Queues the pieces of a split one level deeper; false when it did not split.
+    const auto queue_pieces = [&work, &next_group](Split split, int depth, std::size_t group) {
+        if (split.parts.size() < 2) return false;
+        for (auto& piece : split.parts) {
+            work.emplace_back(std::move(piece), depth + 1, split.at_gaps ? group : next_group++,
+                              split.yaw_rad);
+        }
+        return true;
+    };
     while (!work.empty()) {
         auto [part, depth, group, yaw] = std::move(work.back());
         work.pop_back();
@@ -284,16 +281,11 @@ std::vector<Candidate> candidates_of_cluster(const std::vector<Eigen::Vector3f>&
         fit.yaw_rad = yaw;
         fit.truncation_xz = truncation_point(pts, pixels, grid, part);
         const OrientedBox box = fit_upright_box(gather(pts, part), ground, fit);
-        if (depth < 3 && !yaw) {
-            Split split =
-                split_oversized(pts, part, box, s, ground, options, fit.truncation_xz.has_value());
-            if (split.parts.size() > 1) {
-                for (auto& piece : split.parts) {
-                    work.emplace_back(std::move(piece), depth + 1,
-                                      split.at_gaps ? group : next_group++, split.yaw_rad);
-                }
-                continue;
-            }
+        if (depth < 3 && !yaw &&
+            queue_pieces(
+                split_oversized(pts, part, box, s, ground, options, fit.truncation_xz.has_value()),
+                depth, group)) {
+            continue;
         }
         // A thing whose points all lie near the ground is mislabelled road, not an object.
         if (s.prior_H_m > 0.0 && ground && box.H_m < options.min_height_fraction * s.prior_H_m) {
@@ -309,22 +301,18 @@ std::vector<Candidate> candidates_of_cluster(const std::vector<Eigen::Vector3f>&
         BoxFitOptions final_fit = fit;
         final_fit.near_trim_fraction = std::max(fit.trim_fraction, options.near_trim_fraction);
         final_fit.area_weighted_extents = options.area_weighted_extents;
+        const std::vector<Eigen::Vector3f> member_pts = gather(pts, c.members);
         if (final_fit.near_trim_fraction > fit.near_trim_fraction ||
             final_fit.area_weighted_extents) {
-            c.box = fit_upright_box(gather(pts, c.members), ground, final_fit);
+            c.box = fit_upright_box(member_pts, ground, final_fit);
         }
-        if (depth < 4 && !yaw && s.has_prior() && c.box.L_m > s.split_factor * s.prior_L_m) {
-            // The thing's own box can come out longer than the box the splits read (its near
-            // end trimmed along the ray, its extents over seen surface): still more than one.
-            Split split = split_oversized(pts, c.members, c.box, s, ground, options,
-                                          fit.truncation_xz.has_value());
-            if (split.parts.size() > 1) {
-                for (auto& piece : split.parts) {
-                    work.emplace_back(std::move(piece), depth + 1,
-                                      split.at_gaps ? group : next_group++, split.yaw_rad);
-                }
-                continue;
-            }
+        // The thing's own box can come out longer than the box the splits read (its near end
+        // trimmed along the ray, its extents over seen surface): still more than one.
+        if (depth < 4 && !yaw && s.has_prior() && c.box.L_m > s.split_factor * s.prior_L_m &&
+            queue_pieces(split_oversized(pts, c.members, c.box, s, ground, options,
+                                         fit.truncation_xz.has_value()),
+                         depth, group)) {
+            continue;
         }
         if (!options.family_class.empty() && s.name == options.family_class) {
             // A van shows its height: its hidden length is a van's, not a car's.
@@ -333,7 +321,7 @@ std::vector<Candidate> candidates_of_cluster(const std::vector<Eigen::Vector3f>&
                 BoxFitOptions van = final_fit;
                 van.prior_L_m = options.van_prior_L_m;
                 van.prior_W_m = options.van_prior_W_m;
-                c.box = fit_upright_box(gather(pts, c.members), ground, van);
+                c.box = fit_upright_box(member_pts, ground, van);
                 c.subclass = "van";
             }
         }
@@ -341,14 +329,13 @@ std::vector<Candidate> candidates_of_cluster(const std::vector<Eigen::Vector3f>&
             // A side seen along the viewing ray: its far end where its pixels end in the image.
             const double prior = c.subclass == "van" ? options.van_prior_L_m : s.prior_L_m;
             c.box = extend_far_end_to_columns(
-                c.box, gather(pts, c.members),
-                std::max(c.box.L_m, options.far_column_length_fraction * prior));
+                c.box, member_pts, std::max(c.box.L_m, options.far_column_length_fraction * prior));
         }
         if (c.subclass == "van" && c.box.L_m > options.van_max_L_m) {
             // Longer than any van: the piece holds the end of the thing before it in its row
             // too (a row's cut at a van's windscreen foot, where the glass matches sparsely,
             // leaves the van's front to the piece beyond). The van keeps its far end.
-            c.box = keep_far_end(c.box, options.van_prior_L_m);
+            c.box = with_length(c.box, options.van_prior_L_m, true);
         }
         if (s.has_prior()) {
             c.fragment = c.members.size() < static_cast<std::size_t>(s.min_points) ||

@@ -562,3 +562,22 @@ TEST_CASE("a car cut by the image edge is completed beyond the edge, not along t
     o.truncation_xz.reset();
     CHECK(fit_upright_box(seen, flat_ground(1.65), o).centre_m.z() > 6.5);
 }
+
+TEST_CASE("with_length keeps the end nearer the camera or the farther one in place", "[boxes]") {
+    OrientedBox box;
+    box.theta = -kPi / 2.0;  // heading +z
+    box.L_m = 6.0;
+    box.W_m = 2.0;
+    box.centre_m = Eigen::Vector3d(-4.0, 0.9, 20.0);  // ends at z 17 and 23
+    const OrientedBox near_kept = with_length(box, 5.2, false);
+    CHECK(near_kept.L_m == 5.2);
+    CHECK(near_kept.centre_m.z() - near_kept.L_m / 2.0 == Approx(17.0).margin(1e-9));
+    CHECK(near_kept.centre_m.x() == Approx(-4.0).margin(1e-9));
+    const OrientedBox far_kept = with_length(box, 5.2, true);
+    CHECK(far_kept.centre_m.z() + far_kept.L_m / 2.0 == Approx(23.0).margin(1e-9));
+    // The same box heading the other way (towards the camera) keeps the same ends.
+    box.theta = kPi / 2.0;
+    CHECK(with_length(box, 5.2, true).centre_m.z() == Approx(far_kept.centre_m.z()).margin(1e-9));
+    CHECK(with_length(box, 7.0, false).centre_m.z() == Approx(20.5).margin(1e-9));
+    CHECK(with_length(box, 6.0, true).centre_m == box.centre_m);
+}

@@ -82,6 +82,10 @@ OrientedBox fit_upright_box_weighted(const std::vector<Eigen::Vector3f>& points_
                                      const std::optional<GroundPlane>& ground,
                                      const BoxFitOptions& options);
 
+/// The box at length_m along its heading, its end nearer the camera kept in place, or its end
+/// farther from it when keep_far_end.
+OrientedBox with_length(const OrientedBox& box, double length_m, bool keep_far_end);
+
 /// The box with the far end of its length moved out to where the outermost pixel column of
 /// its points (the ray of slope x / z that a point's own column gives) meets its long side
 /// facing the camera: a side seen along the viewing ray ends sharply in the image (about 15
