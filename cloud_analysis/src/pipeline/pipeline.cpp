@@ -1,7 +1,6 @@
 #include "cloud_analysis/pipeline/pipeline.hpp"
 
 #include <chrono>
-#include <cmath>
 #include <future>
 #include <stdexcept>
 
@@ -57,10 +56,7 @@ void AnalyseOptions::validate() const {
     geometry.validate();
     calibration.validate();
     disparity.validate();
-    reproject.validate();
-    if (!(depth_edge_step_m >= 0.0 && std::isfinite(depth_edge_step_m))) {
-        throw std::invalid_argument("depth_edge_step_m: must be >= 0");
-    }
+    reproject_options(*this).validate();  // the reprojection as analyse runs it, band included
 }
 
 LoadedInputs load_inputs(const InputPaths& paths, const AnalyseOptions& options) {
