@@ -4,6 +4,7 @@
 #include <numeric>
 #include <stdexcept>
 #include <tuple>
+#include <unordered_map>
 #include <utility>
 #include <vector>
 
@@ -42,8 +43,9 @@ struct Cell {
     int at_cut = 0;         ///< of them within continuity_band_m of the layers' border
     float top1 = -1e9f;     ///< highest height above the road, metres
     float top2 = -1e9f;     ///< second highest (robust top)
-    float blend1 = -1e9f;   ///< the same two over its pixels on a blend (on_blend), which
-    float blend2 = -1e9f;   ///< give its top only when it has no other
+    float blend1 = -1e9f;   ///< the same two over its pixels on a blend (on_blend) or ahead of
+    float blend2 = -1e9f;   ///< its mean (top_ahead_px), which give its top only when it has
+                            ///< no other
     float low = 1e9f;       ///< lowest height, metres
     int top_v = 1 << 30;    ///< row of its highest pixel (smallest v)
     int top_u = 0;          ///< column of that pixel
@@ -270,8 +272,9 @@ Grid fill_grid(const DisparityMap& disparity, const Rig& rig, const ImageU8& lef
     }
     // Tops second, from the pixels at the cell's depth: at range one disparity bin spans
     // metres, and the surface just behind a thing (a bus's side above a car's roof, 1-2 px of
-    // disparity farther) shares its bins but not its top. Pixels on a blend (on_blend) count
-    // only in cells that have no other.
+    // disparity farther) or just in front of it (the lower edge of a tree's crown a metre
+    // nearer than a car's end) shares its bins but not its top. Pixels on a blend (on_blend)
+    // or ahead of the cell's mean count only in cells that have no other.
     const auto raise = [](float hf, float& top, float& second) {
         if (hf > top) {
             second = top;
@@ -287,10 +290,12 @@ Grid fill_grid(const DisparityMap& disparity, const Rig& rig, const ImageU8& lef
             if (cell < 0 || g.pixel_low[row + u]) continue;
             Cell& c = g.cells[static_cast<std::size_t>(cell)];
             const double d = double{disparity.disparity_px[row + u]} - rig.offset;
-            if (d < c.d_sum / c.count - o.top_behind_px) continue;
+            const double mean_d = c.d_sum / c.count;
+            if (d < mean_d - o.top_behind_px) continue;
             const float hf = g.pixel_height[row + u];
             if (hf > c.top2 || hf > c.blend2) {  // else neither pair changes
-                if (on_blend(disparity, u, v, o.blend_rows, o.blend_step_px)) {
+                if (d > mean_d + o.top_ahead_px ||
+                    on_blend(disparity, u, v, o.blend_rows, o.blend_step_px)) {
                     raise(hf, c.blend1, c.blend2);
                 } else {
                     raise(hf, c.top1, c.top2);
@@ -432,6 +437,8 @@ struct SegmentStats {
     bool tall = false;
     bool truncated = false;  ///< a cell at the image's right edge or the matcher's left border
     std::vector<float> tops, lows, depths;
+    std::vector<float> tops_behind;  ///< tops of lower cells far behind the segment's nearest
+                                     ///< cell of their column band (behind_gap_m)
     std::vector<Eigen::Vector3d> footprint;  ///< (x, z, pixels) of each cell
 };
 
@@ -457,7 +464,6 @@ std::vector<SegmentStats> gather_segments(Grid& g, std::vector<int>& parent, con
         st.tall_pixels += c.is_tall ? static_cast<std::size_t>(c.count) : 0;
         st.green += static_cast<std::size_t>(c.green);
         st.occluded += c.occluded ? static_cast<std::size_t>(c.count) : 0;
-        st.tops.push_back(c.count > 1 ? c.top2 : c.top1);
         st.lows.push_back(c.low);
         const int column_bin = i / kLayers;
         const double d = g.bin_centre[static_cast<std::size_t>(column_bin % g.bins_d)];
@@ -471,6 +477,30 @@ std::vector<SegmentStats> gather_segments(Grid& g, std::vector<int>& parent, con
         st.depths.push_back(static_cast<float>(z));
         st.footprint.emplace_back((u - rig.cx) * z / rig.fx, z, c.count);
     }
+    // Tops last: a lower cell farther than behind_gap_m beyond the segment's nearest lower
+    // cell in its column band is a surface seen above or beside the nearer thing (the back of
+    // a bus a metre or two beyond a row's last car at 30 m, between the car's roof and a crown:
+    // one disparity bin there spans 2 m), not the thing's own top.
+    const auto band_key = [&](int i) {
+        return static_cast<std::int64_t>(g.cells[static_cast<std::size_t>(i)].segment) * g.bins_u +
+               (i / kLayers) / g.bins_d;
+    };
+    const auto cell_depth = [&](const Cell& c) { return rig.fb * c.count / c.d_sum; };
+    std::unordered_map<std::int64_t, double> nearest;  // per (segment, column band), metres
+    for (int i = 0; i < static_cast<int>(g.cells.size()); i += kLayers) {
+        const Cell& c = g.cells[static_cast<std::size_t>(i)];
+        if (c.segment < 0) continue;
+        const auto [it, added] = nearest.try_emplace(band_key(i), cell_depth(c));
+        if (!added) it->second = std::min(it->second, cell_depth(c));
+    }
+    for (int i = 0; i < static_cast<int>(g.cells.size()); ++i) {
+        const Cell& c = g.cells[static_cast<std::size_t>(i)];
+        if (c.segment < 0) continue;
+        SegmentStats& st = stats[static_cast<std::size_t>(c.segment)];
+        const bool behind = i % kLayers == 0 && o.behind_gap_m > 0.0 &&
+                            cell_depth(c) > nearest.at(band_key(i)) + o.behind_gap_m;
+        (behind ? st.tops_behind : st.tops).push_back(c.count > 1 ? c.top2 : c.top1);
+    }
     // Cells of one kind make a linked segment; a cluster is tall when most of its pixels are.
     for (SegmentStats& st : stats) st.tall = 2 * st.tall_pixels > st.pixels;
     return stats;
@@ -480,12 +510,17 @@ std::vector<SegmentStats> gather_segments(Grid& g, std::vector<int>& parent, con
 Segment classify(SegmentStats& st, const Classes& cls, const GeometryOptions& o) {
     Segment seg;
     seg.pixels = st.pixels;
+    // The top is the segment's own cells' (unless it is tall, or most cells lie far behind);
+    // the spread below reads every cell.
+    std::vector<float> own = st.tops;
+    st.tops.insert(st.tops.end(), st.tops_behind.begin(), st.tops_behind.end());
+    if (st.tall || own.size() < st.tops_behind.size()) own = st.tops;
     seg.cells = st.tops.size();
-    seg.top_m = quantile(st.tops, 0.97);
+    seg.top_m = quantile(own, 0.97);
     seg.top_q25_m = quantile(st.tops, 0.25);
     // A wall or fence keeps one height along its length; a car's tops range from its bonnet
     // or boot (0.8-1.1 m) to its roof.
-    const double top_spread = seg.top_m - seg.top_q25_m;
+    const double top_spread = quantile(st.tops, 0.97) - seg.top_q25_m;
     seg.low_m = quantile(st.lows, 0.1);
     std::tie(seg.width_m, seg.thickness_m) = footprint_extents(st.footprint);
     seg.depth_m = quantile(st.depths, 0.5);

@@ -50,6 +50,16 @@ struct GeometryOptions {
                                            ///< disparity behind the cell's mean (a bus's side
                                            ///< above a car's roof shares the car's bin at range,
                                            ///< 1-2 px farther), px, > 0
+    double top_ahead_px = 0.5;             ///< ... and, unless the cell has no other, not
+                                           ///< more than this ahead of it (the lower edge of a
+                                           ///< tree's crown a metre in front of a car's end
+                                           ///< shares its bin at range), px, > 0
+    double behind_gap_m = 2.0;             ///< a lower cell farther than this beyond the
+                                           ///< segment's nearest lower cell in its column band
+                                           ///< is a surface seen above or beside the nearer
+                                           ///< thing (a bus's back beyond a row's last car):
+                                           ///< its top is not the segment's, while such cells
+                                           ///< are fewer than the rest, metres, >= 0, 0 = off
     int blend_rows = 4;                    ///< ... and not a pixel whose column is nearer this
     double blend_step_px = 0.3;            ///< many rows above and farther as far below, each by
                                            ///< more than this (the matcher's blend of a crown
@@ -110,8 +120,8 @@ struct Segment {
     std::string label;                       ///< rule's class name, e.g. "car"
     std::size_t pixels = 0;                  ///< obstacle pixels
     std::size_t cells = 0;                   ///< u-disparity cells
-    double top_m = 0.0;                      ///< robust top above the road (97 % of its cells'
-                                             ///< tops), metres
+    double top_m = 0.0;                      ///< robust top above the road (97 % of its own
+                                             ///< cells' tops, behind_gap_m), metres
     double top_q25_m = 0.0;                  ///< 25 % of its cells' tops, metres
     double low_m = 0.0;                      ///< 10 % of its cells' lowest heights, metres
     double width_m = 0.0;                    ///< footprint extent along its main axis, metres
