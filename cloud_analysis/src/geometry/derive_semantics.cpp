@@ -43,9 +43,8 @@ struct Cell {
     int at_cut = 0;         ///< of them within continuity_band_m of the layers' border
     float top1 = -1e9f;     ///< highest height above the road, metres
     float top2 = -1e9f;     ///< second highest (robust top)
-    float blend1 = -1e9f;   ///< the same two over its pixels on a blend (on_blend) or ahead of
-    float blend2 = -1e9f;   ///< its mean (top_ahead_px), which give its top only when it has
-                            ///< no other
+    float blend1 = -1e9f;   ///< the same two over its pixels on a blend (on_blend), which
+    float blend2 = -1e9f;   ///< give its top only when it has no other
     float low = 1e9f;       ///< lowest height, metres
     int top_v = 1 << 30;    ///< row of its highest pixel (smallest v)
     int top_u = 0;          ///< column of that pixel
@@ -272,9 +271,8 @@ Grid fill_grid(const DisparityMap& disparity, const Rig& rig, const ImageU8& lef
     }
     // Tops second, from the pixels at the cell's depth: at range one disparity bin spans
     // metres, and the surface just behind a thing (a bus's side above a car's roof, 1-2 px of
-    // disparity farther) or just in front of it (the lower edge of a tree's crown a metre
-    // nearer than a car's end) shares its bins but not its top. Pixels on a blend (on_blend)
-    // or ahead of the cell's mean count only in cells that have no other.
+    // disparity farther) shares its bins but not its top. Pixels on a blend (on_blend) count
+    // only in cells that have no other.
     const auto raise = [](float hf, float& top, float& second) {
         if (hf > top) {
             second = top;
@@ -290,12 +288,10 @@ Grid fill_grid(const DisparityMap& disparity, const Rig& rig, const ImageU8& lef
             if (cell < 0 || g.pixel_low[row + u]) continue;
             Cell& c = g.cells[static_cast<std::size_t>(cell)];
             const double d = double{disparity.disparity_px[row + u]} - rig.offset;
-            const double mean_d = c.d_sum / c.count;
-            if (d < mean_d - o.top_behind_px) continue;
+            if (d < c.d_sum / c.count - o.top_behind_px) continue;
             const float hf = g.pixel_height[row + u];
             if (hf > c.top2 || hf > c.blend2) {  // else neither pair changes
-                if (d > mean_d + o.top_ahead_px ||
-                    on_blend(disparity, u, v, o.blend_rows, o.blend_step_px)) {
+                if (on_blend(disparity, u, v, o.blend_rows, o.blend_step_px)) {
                     raise(hf, c.blend1, c.blend2);
                 } else {
                     raise(hf, c.top1, c.top2);

@@ -51,9 +51,6 @@ void GeometryOptions::validate() const {
     if (!(top_behind_px > 0.0 && top_behind_px < 1e6)) {
         throw std::invalid_argument("geometry.top_behind_px: must be > 0");
     }
-    if (!(top_ahead_px > 0.0 && top_ahead_px < 1e6)) {
-        throw std::invalid_argument("geometry.top_ahead_px: must be > 0");
-    }
     if (!(behind_gap_m >= 0.0 && behind_gap_m < 1e6)) {
         throw std::invalid_argument("geometry.behind_gap_m: must be >= 0");
     }
