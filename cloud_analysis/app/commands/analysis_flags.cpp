@@ -174,7 +174,7 @@ void add_cloud_flags(CLI::App& cmd, AnalyseArgs& a) {
                    "drop points farther than this from the camera, m")
         ->capture_default_str()
         ->group(cl);
-    cmd.add_option("--depth-edge-step", a.options.depth_edge_step_m,
+    cmd.add_option("--depth-edge-step", a.options.reproject.depth_edge_step_m,
                    "a thing's points with a point this much nearer within 4 rows above or below "
                    "(a depth step, where the disparity mixes two surfaces) do not shape its box, "
                    "m; 0 = off (docs/entities.md)")

@@ -56,7 +56,7 @@ void AnalyseOptions::validate() const {
     geometry.validate();
     calibration.validate();
     disparity.validate();
-    reproject_options(*this).validate();  // the reprojection as analyse runs it, band included
+    reproject.validate();
 }
 
 LoadedInputs load_inputs(const InputPaths& paths, const AnalyseOptions& options) {
@@ -183,13 +183,12 @@ AnalyseResult analyse(const LoadedInputs& in, const AnalyseOptions& options,
         r.geometry->classes = ClassImage{};
         watch.lap("geometry");
     }
-    const ReprojectOptions reprojection = reproject_options(options);
     if (options.class_points_only) {
-        r.points = reproject_by_class(r.disparity, r.camera, r.classes, reprojection,
+        r.points = reproject_by_class(r.disparity, r.camera, r.classes, options.reproject,
                                       *options.class_points_only);
         r.cloud_points = r.points.cloud_points;
     } else {
-        r.cloud = reproject(r.disparity, r.camera, *left, r.classes, reprojection);
+        r.cloud = reproject(r.disparity, r.camera, *left, r.classes, options.reproject);
         r.cloud_points = r.cloud.size();
     }
     watch.lap("reproject");
@@ -214,12 +213,6 @@ std::vector<std::string> analysis_warnings(const LoadedInputs& in, const Analyse
                       "' and count as void (" + in.paths.semantic.string() + ")");
     }
     return out;
-}
-
-ReprojectOptions reproject_options(const AnalyseOptions& o) {
-    ReprojectOptions r = o.reproject;
-    r.depth_edge_step_m = o.depth_edge_step_m;
-    return r;
 }
 
 std::string semantics_path(const LoadedInputs& in, const AnalyseOptions& o) {
@@ -279,7 +272,7 @@ nlohmann::json describe_run(const LoadedInputs& in, const AnalyseOptions& o,
     j["reproject"] = {{"max_range_m", o.reproject.max_range_m},
                       {"min_disparity_px", o.reproject.min_disparity_px},
                       {"keep_void", o.reproject.keep_void},
-                      {"depth_edge_step_m", reproject_options(o).depth_edge_step_m},
+                      {"depth_edge_step_m", o.reproject.depth_edge_step_m},
                       {"depth_edge_rows", o.reproject.depth_edge_rows}};
     return j;
 }

@@ -256,8 +256,7 @@ TEST_CASE("the reprojections carry the depth edge band of their disparity", "[re
     grey.channels = 1;
     grey.data.assign(8 * 12, 128);
     ReprojectOptions o;
-    CHECK(reproject(map, cam, grey, ClassImage{}, o).depth_edge.empty());  // off by default
-    o.depth_edge_step_m = 0.8;
+    CHECK(o.depth_edge_step_m == 0.8);  // on by default
     const LabeledCloud cloud = reproject(map, cam, grey, ClassImage{}, o);
     const std::vector<std::uint8_t> band = depth_edge_band(map, match_border(cam), 0.8, 4);
     CHECK(cloud.depth_edge == band);

@@ -164,17 +164,12 @@ TEST_CASE("images are read as they are: grey PNGs grey, colour PNGs RGB, 16-bit 
 
 TEST_CASE("the depth edge band is on by default whichever path makes the classes", "[pipeline]") {
     AnalyseOptions o;
-    CHECK(reproject_options(o).depth_edge_step_m == 0.8);
-    CHECK(o.reproject.depth_edge_step_m == 0.0);  // the library's own default: no band
-    o.depth_edge_step_m = 0.0;
-    CHECK(reproject_options(o).depth_edge_step_m == 0.0);
-    o.depth_edge_step_m = 0.6;
-    o.reproject.max_range_m = 40.0;
-    CHECK(reproject_options(o).depth_edge_step_m == 0.6);
-    CHECK(reproject_options(o).max_range_m == 40.0);
+    CHECK(o.reproject.depth_edge_step_m == 0.8);
+    CHECK(o.semantics == "auto");  // labels when a semantic image is given, else geometry
+    o.reproject.depth_edge_step_m = 0.0;
     CHECK_NOTHROW(o.validate());
     for (const double bad : {-1.0, std::numeric_limits<double>::infinity()}) {
-        o.depth_edge_step_m = bad;
+        o.reproject.depth_edge_step_m = bad;
         CHECK_THROWS_WITH(o.validate(), Catch::Contains("depth_edge_step_m"));
     }
 }

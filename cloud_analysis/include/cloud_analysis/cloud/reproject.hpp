@@ -15,9 +15,8 @@ struct ReprojectOptions {
     double min_disparity_px = 0.0;  ///< disparities at or below this are dropped, px
     bool keep_void = true;          ///< keep points whose pixel has no palette class
     /// depth_edge_band's step: a pixel with one at least this much nearer within
-    /// depth_edge_rows rows above or below is on a depth edge, metres; 0 = no band (analyse
-    /// sets it from AnalyseOptions::depth_edge_step_m, 0.8).
-    double depth_edge_step_m = 0.0;
+    /// depth_edge_rows rows above or below is on a depth edge, metres; 0 = no band.
+    double depth_edge_step_m = 0.8;
     int depth_edge_rows = 4;  ///< depth_edge_band's reach, rows: half the matching window
     /// Throws std::invalid_argument naming the first bad field.
     void validate() const;

@@ -40,14 +40,12 @@ struct AnalyseOptions {
     CalibrationOptions calibration;      ///< KITTI camera indices
     bool raw = false;                    ///< inputs are unrectified: undistort + rectify first
     DisparityOptions disparity;          ///< SGBM and post-filters
-    ReprojectOptions reproject;          ///< range limits
+    ReprojectOptions reproject;          ///< range limits and the depth edge band, whichever
+                                         ///< path makes the classes
     /// Where the per-pixel classes come from: "labels" (the semantic image), "geometry" (the
     /// stereo pair alone, docs/stereo-only.md) or "auto" (labels when a semantic image is given).
     std::string semantics = "auto";
     geometry::GeometryOptions geometry;  ///< the stereo-only path's settings
-    /// The depth edge band's step (ReprojectOptions::depth_edge_step_m), metres, >= 0 (0 = off),
-    /// whichever path makes the classes.
-    double depth_edge_step_m = 0.8;
     /// When set, analyse builds no cloud: it reprojects straight into the entity extractor's
     /// per-class points (AnalyseResult::points, see reproject_by_class), for runs whose only
     /// output is entities. Unset: the labelled cloud (AnalyseResult::cloud).
@@ -108,10 +106,6 @@ AnalyseResult analyse(const LoadedInputs& inputs, const AnalyseOptions& options,
 /// Which path makes the classes of `inputs` under `options`: "labels", "geometry" or "none"
 /// ("labels" asked for without a semantic image).
 std::string semantics_path(const LoadedInputs& inputs, const AnalyseOptions& options);
-
-/// The reprojection settings of a run: options.reproject with the depth edge band's step of
-/// AnalyseOptions::depth_edge_step_m.
-ReprojectOptions reproject_options(const AnalyseOptions& options);
 
 /// What the user should know about an analysed frame, one line each: the stereo-only path's
 /// warnings, no semantic image (every point void), semantic colours not in the palette (the
