@@ -43,8 +43,9 @@ struct Cell {
     int at_cut = 0;         ///< of them within continuity_band_m of the layers' border
     float top1 = -1e9f;     ///< highest height above the road, metres
     float top2 = -1e9f;     ///< second highest (robust top)
-    float blend1 = -1e9f;   ///< the same two over its pixels on a blend (on_blend), which
-    float blend2 = -1e9f;   ///< give its top only when it has no other
+    float blend1 = -1e9f;   ///< the same two over its pixels on a blend (on_blend) or at the
+    float blend2 = -1e9f;   ///< foot of a surface above (foot_of_surface_above), which give
+                            ///< its top only when it has no other
     float low = 1e9f;       ///< lowest height, metres
     int top_v = 1 << 30;    ///< row of its highest pixel (smallest v)
     int top_u = 0;          ///< column of that pixel
@@ -189,6 +190,23 @@ bool on_blend(const DisparityMap& disparity, int u, int v, int rows, double step
     return above > 0.0 && below > 0.0 && above - here > step_px && here - below > step_px;
 }
 
+/// Whether lower-layer pixel (u, v), of disparity d, is the foot of a surface in the upper
+/// layer: its column runs up into that layer within `rows` rows, each step of disparity smaller
+/// than `step_px` (the lowest rows of a tree's crown hanging just under the layers' border).
+bool foot_of_surface_above(const DisparityMap& disparity, const std::vector<std::int32_t>& cell_of,
+                           double offset, int u, int v, double d, int rows, double step_px) {
+    const int w = disparity.width_px;
+    double previous = d;
+    for (int k = 1; k <= rows && v - k >= 0; ++k) {
+        const std::size_t q = static_cast<std::size_t>(v - k) * w + u;
+        const double above = double{disparity.disparity_px[q]} - offset;
+        if (!(above > 0.0) || std::abs(above - previous) >= step_px) return false;
+        if (cell_of[q] >= 0 && cell_of[q] % kLayers == 1) return true;
+        previous = above;
+    }
+    return false;
+}
+
 /// Disparity bins 1 px wide, widening to `share` of the disparity near the camera (where 1 px
 /// is a few centimetres of depth and an oblique surface would scatter over many bins).
 void make_bins(double max_d, double share, Grid& g) {
@@ -271,7 +289,9 @@ Grid fill_grid(const DisparityMap& disparity, const Rig& rig, const ImageU8& lef
     }
     // Tops second, from the pixels at the cell's depth: at range one disparity bin spans
     // metres, and the surface just behind a thing (a bus's side above a car's roof, 1-2 px of
-    // disparity farther) shares its bins but not its top. Pixels on a blend (on_blend) count
+    // disparity farther) shares its bins but not its top, nor does the lowest edge of a tree's
+    // crown a metre in front of a car's end, which runs on up into the upper layer. Pixels on
+    // a blend (on_blend) or at the foot of a surface above, ahead of the cell's mean, count
     // only in cells that have no other.
     const auto raise = [](float hf, float& top, float& second) {
         if (hf > top) {
@@ -288,10 +308,14 @@ Grid fill_grid(const DisparityMap& disparity, const Rig& rig, const ImageU8& lef
             if (cell < 0 || g.pixel_low[row + u]) continue;
             Cell& c = g.cells[static_cast<std::size_t>(cell)];
             const double d = double{disparity.disparity_px[row + u]} - rig.offset;
-            if (d < c.d_sum / c.count - o.top_behind_px) continue;
+            const double mean_d = c.d_sum / c.count;
+            if (d < mean_d - o.top_behind_px) continue;
             const float hf = g.pixel_height[row + u];
             if (hf > c.top2 || hf > c.blend2) {  // else neither pair changes
-                if (on_blend(disparity, u, v, o.blend_rows, o.blend_step_px)) {
+                if (on_blend(disparity, u, v, o.blend_rows, o.blend_step_px) ||
+                    (d > mean_d + o.foot_ahead_px &&
+                     foot_of_surface_above(disparity, g.pixel_cell, rig.offset, u, v, d,
+                                           o.blend_rows, o.blend_step_px))) {
                     raise(hf, c.blend1, c.blend2);
                 } else {
                     raise(hf, c.top1, c.top2);

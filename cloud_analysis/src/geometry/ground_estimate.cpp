@@ -51,6 +51,9 @@ void GeometryOptions::validate() const {
     if (!(top_behind_px > 0.0 && top_behind_px < 1e6)) {
         throw std::invalid_argument("geometry.top_behind_px: must be > 0");
     }
+    if (!(foot_ahead_px > 0.0 && foot_ahead_px < 1e6)) {
+        throw std::invalid_argument("geometry.foot_ahead_px: must be > 0");
+    }
     if (!(behind_gap_m >= 0.0 && behind_gap_m < 1e6)) {
         throw std::invalid_argument("geometry.behind_gap_m: must be >= 0");
     }

@@ -264,6 +264,22 @@ TEST_CASE("a surface 2.5 m behind a car, seen only above its roof, is not the ca
     CHECK_THROWS_WITH(o.validate(), Catch::Contains("behind_gap_m"));
 }
 
+TEST_CASE("the lowest edge of a crown a metre before a car, in the car's cells, is not its top",
+          "[geometry]") {
+    const StereoCamera cam = kitti_rig();
+    const auto palette = cloud_analysis::load_palette("cityscapes");
+    // A car's back at 27.7 m (14.05 px) under a crown at 26.2 m (14.9 px) hanging to 2.27 m:
+    // the crown's lowest row falls in the cells of the car's back, 0.8 px ahead of their mean,
+    // and its column runs on up into the crown above the layers' border.
+    const std::vector<Box> boxes = with_car_from_behind({{-2.5, 2.5, 26.2, 6.0, 2.27}}, 27.7);
+    const DisparityMap d = render(cam, 1.65, boxes);
+    check_car_only_with_rule(d, cam, palette, pixel_of(cam, 0.0, 0.6, 27.7),
+                             [](GeometryOptions& o) { o.foot_ahead_px = 1e5; });
+    GeometryOptions o;
+    o.foot_ahead_px = 0.0;
+    CHECK_THROWS_WITH(o.validate(), Catch::Contains("foot_ahead_px"));
+}
+
 TEST_CASE("a car cut by the matcher's left border is a car, though narrower than one",
           "[geometry]") {
     const StereoCamera cam = kitti_rig();

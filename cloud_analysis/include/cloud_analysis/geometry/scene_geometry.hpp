@@ -50,6 +50,12 @@ struct GeometryOptions {
                                            ///< disparity behind the cell's mean (a bus's side
                                            ///< above a car's roof shares the car's bin at range,
                                            ///< 1-2 px farther), px, > 0
+    double foot_ahead_px = 0.5;            ///< ... and, unless the cell has no other, not a
+                                           ///< pixel more than this ahead of the cell's mean
+                                           ///< whose column runs on up into the upper layer
+                                           ///< (blend_rows rows, steps under blend_step_px):
+                                           ///< the lowest edge of a crown a metre before a
+                                           ///< car's end shares its bin at range, px, > 0
     double behind_gap_m = 2.0;             ///< a lower cell farther than this beyond the
                                            ///< segment's nearest lower cell in its column band
                                            ///< is a surface seen above or beside the nearer
