@@ -532,15 +532,15 @@ Segment classify(SegmentStats& st, const Classes& cls, const GeometryOptions& o)
     seg.pixels = st.pixels;
     // The top is the segment's own cells' (unless it is tall, or most cells lie far behind);
     // the spread below reads every cell.
-    std::vector<float> own = st.tops;
-    st.tops.insert(st.tops.end(), st.tops_behind.begin(), st.tops_behind.end());
-    if (st.tall || own.size() < st.tops_behind.size()) own = st.tops;
-    seg.cells = st.tops.size();
+    std::vector<float> all = st.tops;
+    all.insert(all.end(), st.tops_behind.begin(), st.tops_behind.end());
+    std::vector<float>& own = st.tall || st.tops.size() < st.tops_behind.size() ? all : st.tops;
+    seg.cells = all.size();
     seg.top_m = quantile(own, 0.97);
-    seg.top_q25_m = quantile(st.tops, 0.25);
+    seg.top_q25_m = quantile(all, 0.25);
     // A wall or fence keeps one height along its length; a car's tops range from its bonnet
     // or boot (0.8-1.1 m) to its roof.
-    const double top_spread = quantile(st.tops, 0.97) - seg.top_q25_m;
+    const double top_spread = quantile(all, 0.97) - seg.top_q25_m;
     seg.low_m = quantile(st.lows, 0.1);
     std::tie(seg.width_m, seg.thickness_m) = footprint_extents(st.footprint);
     seg.depth_m = quantile(st.depths, 0.5);
