@@ -24,6 +24,8 @@ constexpr double kSideBySideOverlap = 0.5;
 constexpr double kInLineOverlap = -0.1;
 /// The share of a row's points, at its near end, that a walk of cuts starts after.
 constexpr double kWalkStartQuantile = 0.01;
+/// The narrowest clear gap (0.1 m bins) that a walk of cuts takes one prior pitch on.
+constexpr int kClearGapBins = 2;
 constexpr double kHalfPi = 1.57079632679489661923;
 
 /// The points' coordinates along the unit direction (dir_x, dir_z) and their range.
@@ -44,13 +46,23 @@ Projection project(const std::vector<Eigen::Vector3f>& pts, const Indices& idx, 
     return p;
 }
 
+/// A longer pitch for the tall things of a row walked from its near end (vans among cars).
+struct TallPitch {
+    std::vector<double> heights;  ///< per point of the blob, above the ground, metres
+    double min_height_m = 0.0;    ///< a thing whose top (98 % height) reaches this is tall
+    double pitch_m = 0.0;         ///< a tall thing's pitch (its length and the row's gap)
+};
+
 /// Splits the points of a merged blob along the unit direction (dir_x, dir_z) into pieces of
 /// about `prior_m`, cutting at the emptiest place near each even cut (touching parked cars).
 /// With `from_near_end`, the cuts are walked from the end nearer the camera instead, each at
 /// the emptiest place about `prior_m` beyond the previous one: the far end of a long row is
-/// seen sparsely, so its extent (and an even division of it) is unreliable.
+/// seen sparsely, so its extent (and an even division of it) is unreliable. With `tall`, a
+/// thing whose points within `prior_m` of the walk's last cut reach its height has its pitch
+/// instead (a van's length, not a car's: a cut one car length on falls inside the van).
 Split split_along(const std::vector<Eigen::Vector3f>& pts, const Indices& idx, double dir_x,
-                  double dir_z, double extent_m, double prior_m, bool from_near_end = false) {
+                  double dir_z, double extent_m, double prior_m, bool from_near_end = false,
+                  const TallPitch* tall = nullptr) {
     const int pieces = std::max(2, static_cast<int>(std::lround(extent_m / prior_m)));
     const Projection p = project(pts, idx, dir_x, dir_z);
     const std::vector<double>& along = p.along;
@@ -70,9 +82,10 @@ Split split_along(const std::vector<Eigen::Vector3f>& pts, const Indices& idx, d
     split.at_gaps = true;
     std::vector<double> cuts;
     const int reach = static_cast<int>(0.25 * prior_m / bin);
-    const auto emptiest = [&](int centre) {
+    // The emptiest bin within r bins of centre.
+    const auto emptiest = [&](int centre, int r) {
         int best = std::clamp(centre, 0, bins - 1);
-        for (int b = std::max(0, centre - reach); b <= std::min(bins - 1, centre + reach); ++b) {
+        for (int b = std::max(0, centre - r); b <= std::min(bins - 1, centre + r); ++b) {
             if (hist[static_cast<std::size_t>(b)] < hist[static_cast<std::size_t>(best)]) best = b;
         }
         return best;
@@ -94,23 +107,46 @@ Split split_along(const std::vector<Eigen::Vector3f>& pts, const Indices& idx, d
                 b += dir;
             return b;
         };
+        // The next cut from the bin `from` in the direction dir: about one pitch on. When no
+        // clear gap (kClearGapBins gap bins in a row) lies within reach of one prior pitch on
+        // and the points within that pitch are tall, one tall thing's pitch on instead.
+        const int tall_step = tall ? static_cast<int>(std::lround(tall->pitch_m / bin)) : step;
+        const auto next_cut = [&](int from, int dir) {
+            const int centre = from + dir * step;
+            if (!tall || tall_step <= step) return emptiest(centre, reach);
+            int run = 0;
+            for (int b = std::max(0, centre - reach); b <= std::min(bins - 1, centre + reach);
+                 ++b) {
+                run = hist[static_cast<std::size_t>(b)] <= gap_count ? run + 1 : 0;
+                if (run >= kClearGapBins) return emptiest(centre, reach);
+            }
+            std::vector<double> h;
+            for (std::size_t k = 0; k < along.size(); ++k) {
+                const int b = static_cast<int>((along[k] - lo) / bin);
+                if ((b - from) * dir >= 0 && (b - from) * dir <= step) {
+                    h.push_back(tall->heights[k]);
+                }
+            }
+            if (h.empty() || quantile(h, 0.98) < tall->min_height_m) {
+                return emptiest(centre, reach);
+            }
+            return emptiest(from + dir * tall_step, static_cast<int>(0.25 * tall->pitch_m / bin));
+        };
         if (std::abs(hi) < std::abs(lo)) {
             const int start = static_cast<int>((q_hi - lo) / bin);
-            for (int b = emptiest(start - step); b >= step / 4;
-                 b = emptiest(gap_end(b, -1) - step)) {
+            for (int b = next_cut(start, -1); b >= step / 4; b = next_cut(gap_end(b, -1), -1)) {
                 add_cut(b);
             }
         } else {
             const int start = static_cast<int>((q_lo - lo) / bin);
-            for (int b = emptiest(start + step); b < bins - step / 4;
-                 b = emptiest(gap_end(b, 1) + step)) {
+            for (int b = next_cut(start, 1); b < bins - step / 4; b = next_cut(gap_end(b, 1), 1)) {
                 add_cut(b);
             }
         }
     }
     const double piece = (hi - lo) / pieces;
     for (int k = 1; k < pieces && !from_near_end; ++k) {
-        add_cut(emptiest(static_cast<int>(k * piece / bin)));
+        add_cut(emptiest(static_cast<int>(k * piece / bin), reach));
     }
     std::sort(cuts.begin(), cuts.end());
     split.parts.resize(cuts.size() + 1);
@@ -556,7 +592,17 @@ Split split_oversized(const std::vector<Eigen::Vector3f>& pts, const Indices& id
     if (box.L_m > s.split_factor * s.prior_L_m) {
         // Parked end to end: walk the gaps from the near end when there are gaps (the far end
         // is seen sparsely, so its extent is unreliable); touching things are cut evenly.
-        Split walk = split_along(pts, idx, c, -sn, box.L_m, s.prior_L_m + options.row_gap_m, true);
+        std::optional<TallPitch> tall;
+        if (ground && s.name == options.family_class) {
+            tall.emplace();
+            tall->heights.reserve(idx.size());
+            for (std::size_t i : idx)
+                tall->heights.push_back(ground->height(pts[i].cast<double>()));
+            tall->min_height_m = options.van_min_height_m;
+            tall->pitch_m = options.van_prior_L_m + options.row_gap_m;
+        }
+        Split walk = split_along(pts, idx, c, -sn, box.L_m, s.prior_L_m + options.row_gap_m, true,
+                                 tall ? &*tall : nullptr);
         if (walk.at_gaps && walk.parts.size() > 1) return walk;
         return split_along(pts, idx, c, -sn, box.L_m, s.prior_L_m);
     }

@@ -768,6 +768,52 @@ TEST_CASE("a parked row's walk of cuts starts again where a wide gap in the row 
     }
 }
 
+TEST_CASE("a parked row's walk of cuts steps a van's length over a van when a car's finds no gap",
+          "[entities][split]") {
+    // The end of a car the row's first cut left in (1 m, 1 m high, touching), a van 2 m high,
+    // a car, the first 2 m of another, 0.45 m apart. One car's pitch from the row's start
+    // falls inside the van, with no gap within reach of it; the van's pitch reaches its end.
+    const std::vector<float> starts = {6.8f, 7.8f, 13.45f, 18.1f};
+    const std::vector<float> ends = {7.8f, 13.0f, 17.65f, 20.1f};
+    const std::vector<float> tops = {1.0f, 2.0f, 1.5f, 1.5f};
+    std::vector<Eigen::Vector3f> pts;
+    for (std::size_t k = 0; k < starts.size(); ++k) {
+        for (float h = 0.3f; h <= tops[k]; h += 0.05f) {
+            for (float z = starts[k]; z <= ends[k]; z += 0.05f) {
+                pts.emplace_back(-1.1f, 1.65f - h, z);
+            }
+        }
+    }
+    instances::Indices idx(pts.size());
+    std::iota(idx.begin(), idx.end(), std::size_t{0});
+    OrientedBox box;
+    box.centre_m = Eigen::Vector3d(-1.1, 0.65, 13.45);
+    box.theta = -kPi / 2.0;  // along +z
+    box.L_m = 13.3;
+    box.W_m = 1.8;
+    box.H_m = 2.0;
+    const auto config = load_class_config(std::string(STEREOSCENE_SOURCE_DIR) +
+                                          "/assets/classes/entity_config.json");
+    const auto split = instances::split_oversized(pts, idx, box, config.find("car"), GroundPlane{},
+                                                  ExtractOptions{});
+    std::vector<std::pair<float, float>> spans;  // each piece along z
+    for (const auto& part : split.parts) {
+        float lo = std::numeric_limits<float>::max(), hi = -lo;
+        for (std::size_t i : part) {
+            lo = std::min(lo, pts[i].z());
+            hi = std::max(hi, pts[i].z());
+        }
+        spans.emplace_back(lo, hi);
+    }
+    std::sort(spans.begin(), spans.end());
+    REQUIRE(spans.size() == 3);
+    CHECK(spans[0].first == Approx(6.8f).margin(0.1));
+    CHECK(spans[0].second == Approx(13.0f).margin(0.1));  // the van whole, with the car's end
+    CHECK(spans[1].first == Approx(13.45f).margin(0.1));
+    CHECK(spans[1].second == Approx(17.65f).margin(0.1));
+    CHECK(spans[2].first == Approx(18.1f).margin(0.1));
+}
+
 namespace {
 
 /// The right side of a thing heading along z from z0 to z1, seen from x = 0 at x = -1.1:
