@@ -39,11 +39,13 @@ endforeach()
 # Two parking streets rendered at test time (scripts/make-parking-scene.py and scene-render
 # sensors, as scripts/evaluate.sh renders them): the last car of the left row stands 0.5-1.7 m
 # before the bus at 29-30 m, where one disparity pixel spans 2 m, under a tree's crown. Its top
-# must be its own, not the bus's back seen above its roof (parking-street-27: every car found)
-# nor the crown's lowest rows in its cells (parking-street-29: the stereo-only bars met).
+# must be its own, not the bus's back seen above its roof (parking-street-27) nor the crown's
+# lowest rows in its cells (parking-street-29). On parking-street-27 the right row's walk of
+# cuts also steps a van's length over its van, or the cars beyond it are boxed 0.5-1.3 m
+# nearer than they are. Both meet the stereo-only bars.
 if(TARGET scene-render)
     file(MAKE_DIRECTORY ${_so_out}/rendered)
-    foreach(_street IN ITEMS "parking-street-27|27|--bar-class|car|--bar-range|30|--require-recall|1.0"
+    foreach(_street IN ITEMS "parking-street-27|27|${STEREOSCENE_STEREO_ONLY_BARS}"
             "parking-street-29|29|${STEREOSCENE_STEREO_ONLY_BARS}")
         string(REPLACE "|" ";" _street "${_street}")
         list(POP_FRONT _street _scene _seed)
