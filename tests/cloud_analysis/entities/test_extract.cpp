@@ -389,11 +389,22 @@ void project_pixels(LabeledCloud& cloud) {
 
 /// split_oversized with the bundled car settings, the default options and no ground plane.
 instances::Split split_with_car_prior(const std::vector<Eigen::Vector3f>& pts,
-                                      const instances::Indices& idx, const OrientedBox& box) {
+                                      const instances::Indices& idx, const OrientedBox& box,
+                                      const std::optional<GroundPlane>& ground = std::nullopt) {
     const auto config = load_class_config(std::string(STEREOSCENE_SOURCE_DIR) +
                                           "/assets/classes/entity_config.json");
-    return instances::split_oversized(pts, idx, box, config.find("car"), std::nullopt,
-                                      ExtractOptions{});
+    return instances::split_oversized(pts, idx, box, config.find("car"), ground, ExtractOptions{});
+}
+
+/// The 1.8 m wide box of a row at x = -1.1 along +z, centred at (y, z).
+OrientedBox row_box_along_z(double y, double z, double length_m, double height_m) {
+    OrientedBox box;
+    box.centre_m = Eigen::Vector3d(-1.1, y, z);
+    box.theta = -kPi / 2.0;  // along +z
+    box.L_m = length_m;
+    box.W_m = 1.8;
+    box.H_m = height_m;
+    return box;
 }
 
 int count_class(const scene_schema::EntityDocument& doc, const std::string& name) {
@@ -746,13 +757,7 @@ TEST_CASE("a parked row's walk of cuts starts again where a wide gap in the row 
     for (float z = 16.9f; z < 19.85f; z += 0.3f) pts.emplace_back(-1.1f, 0.5f, z);
     instances::Indices idx(pts.size());
     std::iota(idx.begin(), idx.end(), std::size_t{0});
-    OrientedBox box;
-    box.centre_m = Eigen::Vector3d(-1.1, 0.9, 17.25);
-    box.theta = -kPi / 2.0;  // along +z
-    box.L_m = 18.5;
-    box.W_m = 1.8;
-    box.H_m = 1.5;
-    const auto split = split_with_car_prior(pts, idx, box);
+    const auto split = split_with_car_prior(pts, idx, row_box_along_z(0.9, 17.25, 18.5, 1.5));
     std::vector<std::pair<float, float>> spans;  // 2-98 % of each piece along z
     for (const auto& part : split.parts) {
         std::vector<float> z;
@@ -786,16 +791,8 @@ TEST_CASE("a parked row's walk of cuts steps a van's length over a van when a ca
     }
     instances::Indices idx(pts.size());
     std::iota(idx.begin(), idx.end(), std::size_t{0});
-    OrientedBox box;
-    box.centre_m = Eigen::Vector3d(-1.1, 0.65, 13.45);
-    box.theta = -kPi / 2.0;  // along +z
-    box.L_m = 13.3;
-    box.W_m = 1.8;
-    box.H_m = 2.0;
-    const auto config = load_class_config(std::string(STEREOSCENE_SOURCE_DIR) +
-                                          "/assets/classes/entity_config.json");
-    const auto split = instances::split_oversized(pts, idx, box, config.find("car"), GroundPlane{},
-                                                  ExtractOptions{});
+    const auto split =
+        split_with_car_prior(pts, idx, row_box_along_z(0.65, 13.45, 13.3, 2.0), GroundPlane{});
     std::vector<std::pair<float, float>> spans;  // each piece along z
     for (const auto& part : split.parts) {
         float lo = std::numeric_limits<float>::max(), hi = -lo;
