@@ -57,9 +57,10 @@ struct TallPitch {
 /// about `prior_m`, cutting at the emptiest place near each even cut (touching parked cars).
 /// With `from_near_end`, the cuts are walked from the end nearer the camera instead, each at
 /// the emptiest place about `prior_m` beyond the previous one: the far end of a long row is
-/// seen sparsely, so its extent (and an even division of it) is unreliable. With `tall`, a
-/// thing whose points within `prior_m` of the walk's last cut reach its height has its pitch
-/// instead (a van's length, not a car's: a cut one car length on falls inside the van).
+/// seen sparsely, so its extent (and an even division of it) is unreliable. With `tall`, where
+/// no clear gap lies within reach of one `prior_m` on, a thing whose points within `prior_m`
+/// of the walk's last cut reach its height has its pitch instead (a van's length, not a car's:
+/// a cut one car length on falls inside the van).
 Split split_along(const std::vector<Eigen::Vector3f>& pts, const Indices& idx, double dir_x,
                   double dir_z, double extent_m, double prior_m, bool from_near_end = false,
                   const TallPitch* tall = nullptr) {
