@@ -48,9 +48,9 @@ Projection project(const std::vector<Eigen::Vector3f>& pts, const Indices& idx, 
 
 /// A longer pitch for the tall things of a row walked from its near end (vans among cars).
 struct TallPitch {
-    std::vector<double> heights;  ///< per point of the blob, above the ground, metres
-    double min_height_m = 0.0;    ///< a thing whose top (98 % height) reaches this is tall
-    double pitch_m = 0.0;         ///< a tall thing's pitch (its length and the row's gap)
+    GroundPlane ground;         ///< heights are above it
+    double min_height_m = 0.0;  ///< a thing whose top (98 % height) reaches this is tall
+    double pitch_m = 0.0;       ///< a tall thing's pitch (its length and the row's gap)
 };
 
 /// Splits the points of a merged blob along the unit direction (dir_x, dir_z) into pieces of
@@ -73,12 +73,19 @@ Split split_along(const std::vector<Eigen::Vector3f>& pts, const Indices& idx, d
     const int bins = std::max(1, static_cast<int>(std::ceil((hi - lo) / bin)) + 1);
     std::vector<int> hist(static_cast<std::size_t>(bins), 0);
     for (double a : along) ++hist[static_cast<std::size_t>((a - lo) / bin)];
+    // Heights above the ground per bin, read only by a walk with a tall pitch.
+    std::vector<std::vector<double>> heights(tall && from_near_end ? hist.size() : 0);
+    for (std::size_t k = 0; k < along.size() && !heights.empty(); ++k) {
+        heights[static_cast<std::size_t>((along[k] - lo) / bin)].push_back(
+            tall->ground.height(pts[idx[k]].cast<double>()));
+    }
     std::vector<int> occupied;
     for (int h : hist) {
         if (h > 0) occupied.push_back(h);
     }
     std::nth_element(occupied.begin(), occupied.begin() + occupied.size() / 2, occupied.end());
     const double gap_count = kGapFraction * occupied[occupied.size() / 2];
+    const auto is_gap = [&](int b) { return hist[static_cast<std::size_t>(b)] <= gap_count; };
     Split split;
     split.at_gaps = true;
     std::vector<double> cuts;
@@ -94,7 +101,7 @@ Split split_along(const std::vector<Eigen::Vector3f>& pts, const Indices& idx, d
     const int step = static_cast<int>(std::lround(prior_m / bin));
     const auto add_cut = [&](int best) {
         cuts.push_back(lo + (best + 0.5) * bin);
-        if (hist[static_cast<std::size_t>(best)] > gap_count) split.at_gaps = false;
+        if (!is_gap(best)) split.at_gaps = false;
     };
     if (from_near_end) {
         // The walk starts where the bulk of the points starts, not at a stray point smeared
@@ -103,9 +110,7 @@ Split split_along(const std::vector<Eigen::Vector3f>& pts, const Indices& idx, d
         const auto [q_lo, q_hi] = quantiles(sorted, kWalkStartQuantile, 1.0 - kWalkStartQuantile);
         // A cut in a gap wider than the cut: the next thing starts where the gap ends.
         const auto gap_end = [&](int b, int dir) {
-            while (b + dir >= 0 && b + dir < bins &&
-                   hist[static_cast<std::size_t>(b + dir)] <= gap_count)
-                b += dir;
+            while (b + dir >= 0 && b + dir < bins && is_gap(b + dir)) b += dir;
             return b;
         };
         // The next cut from the bin `from` in the direction dir: about one pitch on. When no
@@ -118,15 +123,14 @@ Split split_along(const std::vector<Eigen::Vector3f>& pts, const Indices& idx, d
             int run = 0;
             for (int b = std::max(0, centre - reach); b <= std::min(bins - 1, centre + reach);
                  ++b) {
-                run = hist[static_cast<std::size_t>(b)] <= gap_count ? run + 1 : 0;
+                run = is_gap(b) ? run + 1 : 0;
                 if (run >= kClearGapBins) return emptiest(centre, reach);
             }
             std::vector<double> h;
-            for (std::size_t k = 0; k < along.size(); ++k) {
-                const int b = static_cast<int>((along[k] - lo) / bin);
-                if ((b - from) * dir >= 0 && (b - from) * dir <= step) {
-                    h.push_back(tall->heights[k]);
-                }
+            for (int b = std::max(0, std::min(from, from + dir * step));
+                 b <= std::min(bins - 1, std::max(from, from + dir * step)); ++b) {
+                const auto& in_bin = heights[static_cast<std::size_t>(b)];
+                h.insert(h.end(), in_bin.begin(), in_bin.end());
             }
             if (h.empty() || quantile(h, 0.98) < tall->min_height_m) {
                 return emptiest(centre, reach);
@@ -595,12 +599,8 @@ Split split_oversized(const std::vector<Eigen::Vector3f>& pts, const Indices& id
         // is seen sparsely, so its extent is unreliable); touching things are cut evenly.
         std::optional<TallPitch> tall;
         if (ground && s.name == options.family_class) {
-            tall.emplace();
-            tall->heights.reserve(idx.size());
-            for (std::size_t i : idx)
-                tall->heights.push_back(ground->height(pts[i].cast<double>()));
-            tall->min_height_m = options.van_min_height_m;
-            tall->pitch_m = options.van_prior_L_m + options.row_gap_m;
+            tall = TallPitch{*ground, options.van_min_height_m,
+                             options.van_prior_L_m + options.row_gap_m};
         }
         Split walk = split_along(pts, idx, c, -sn, box.L_m, s.prior_L_m + options.row_gap_m, true,
                                  tall ? &*tall : nullptr);
