@@ -36,22 +36,30 @@ foreach(_calib IN LISTS _so_calibs)
         PROPERTIES FIXTURES_REQUIRED "stereo_only_${_scene}" LABELS closed_loop)
 endforeach()
 
-# Two parking streets rendered at test time (scripts/make-parking-scene.py and scene-render
-# sensors, as scripts/evaluate.sh renders them): the last car of the left row stands 0.5-1.7 m
-# before the bus at 29-30 m, where one disparity pixel spans 2 m, under a tree's crown. Its top
-# must be its own, not the bus's back seen above its roof (parking-street-27) nor the crown's
-# lowest rows in its cells (parking-street-29). On parking-street-27 the right row's walk of
-# cuts also steps a van's length over its van, or the cars beyond it are boxed 0.5-1.3 m
-# nearer than they are. Both meet the stereo-only bars.
+# Parking streets rendered at test time (scripts/make-parking-scene.py and scene-render sensors,
+# as scripts/evaluate.sh renders them). On parking-street-27 and -29 the last car of the left
+# row stands 0.5-1.7 m before the bus at 29-30 m, where one disparity pixel spans 2 m, under a
+# tree's crown. Its top must be its own, not the bus's back seen above its roof (-27) nor the
+# crown's lowest rows in its cells (-29). On parking-street-27 the right row's walk of cuts also
+# steps a van's length over its van, or the cars beyond it are boxed 0.5-1.3 m nearer than they
+# are. On parking-street-51 a small car and the van beyond it make one box 6.7 m long, too low
+# for a van and too short for a row's walk, cut at the clear gap between the van's height and
+# the car's. All meet the stereo-only bars.
 if(TARGET scene-render)
     file(MAKE_DIRECTORY ${_so_out}/rendered)
-    foreach(_street IN ITEMS "parking-street-27|27|${STEREOSCENE_STEREO_ONLY_BARS}"
-            "parking-street-29|29|${STEREOSCENE_STEREO_ONLY_BARS}")
+    # parking-street-51 shows two false cars (a second box on a car, a phantom on the bus).
+    set(_so_street_bars ${STEREOSCENE_STEREO_ONLY_BARS})
+    list(REMOVE_AT _so_street_bars -1)
+    list(APPEND _so_street_bars 2)
+    foreach(_street IN ITEMS
+            "parking-street-27|27|the car before the bus|${STEREOSCENE_STEREO_ONLY_BARS}"
+            "parking-street-29|29|the car before the bus|${STEREOSCENE_STEREO_ONLY_BARS}"
+            "parking-street-51|51|a small car and the van beyond it|${_so_street_bars}")
         string(REPLACE "|" ";" _street "${_street}")
-        list(POP_FRONT _street _scene _seed)
+        list(POP_FRONT _street _scene _seed _what)
         set(_dir ${_so_out}/rendered/${_scene})
         set(_truth ${_so_out}/rendered/${_scene}.json)
-        set(_name "stereo-only closed loop ${_scene} (the car before the bus)")
+        set(_name "stereo-only closed loop ${_scene} (${_what})")
         add_test(NAME "${_name}: the street is generated and rendered"
             COMMAND bash -c "set -euo pipefail; \"$0\" \"$1\" --seed $4 -o \"$2\" && \"$3\" sensors \"$2\" --out \"$5\" --frame 000000 --seed $4 --label-bleed 3 >/dev/null"
                 ${STEREOSCENE_PYTHON} ${PROJECT_SOURCE_DIR}/scripts/make-parking-scene.py

@@ -594,13 +594,42 @@ Split split_oversized(const std::vector<Eigen::Vector3f>& pts, const Indices& id
         std::vector<Indices> parts = split_at_valleys(pts, idx, c, -sn, s, *ground, options);
         if (parts.size() > 1) return {std::move(parts), false, std::nullopt};
     }
+    // Things in line: the widest clear gap within 20 degrees of the box's heading (which smear
+    // skews), each piece holding at least a thing's minimum of points.
+    const auto consider_in_line = [&] {
+        for (int k = -4; k <= 4; ++k) {
+            const double a = box.theta + k * kHalfPi / 18.0;  // a heading: along (cos, -sin)
+            consider(std::cos(a), -std::sin(a), 0.0, static_cast<std::size_t>(s.min_points),
+                     kInLineOverlap);
+        }
+    };
+    const double van_pitch = options.van_prior_L_m + options.row_gap_m;
+    if (ground && s.name == options.family_class && box.L_m > van_pitch &&
+        box.L_m <= s.split_factor * s.prior_L_m) {
+        // Longer than a van and its gap, too short for a row's walk: a van and the car before or
+        // after it (a small car's low end keeps the two under a van's height and their valley
+        // too shallow), or a van holding the end of the next car. A clear gap between a piece
+        // of a van's height and one lower parts them; two cars' pieces stay whole (one car
+        // seen long by smear has holes of the disparity's sub-pixel steps, not gaps).
+        consider_in_line();
+        if (widest) {
+            int tall_pieces = 0;
+            for (const Indices& part : widest->parts) {
+                std::vector<double> h;
+                h.reserve(part.size());
+                for (const auto k : part) h.push_back(ground->height(pts[k].cast<double>()));
+                if (!h.empty() && quantile(h, 0.98) >= options.van_min_height_m) ++tall_pieces;
+            }
+            if (tall_pieces == 1) return *widest;
+            widest.reset();
+        }
+    }
     if (box.L_m > s.split_factor * s.prior_L_m) {
         // Parked end to end: walk the gaps from the near end when there are gaps (the far end
         // is seen sparsely, so its extent is unreliable); touching things are cut evenly.
         std::optional<TallPitch> tall;
         if (ground && s.name == options.family_class) {
-            tall = TallPitch{*ground, options.van_min_height_m,
-                             options.van_prior_L_m + options.row_gap_m};
+            tall = TallPitch{*ground, options.van_min_height_m, van_pitch};
         }
         Split walk = split_along(pts, idx, c, -sn, box.L_m, s.prior_L_m + options.row_gap_m, true,
                                  tall ? &*tall : nullptr);
@@ -610,13 +639,8 @@ Split split_oversized(const std::vector<Eigen::Vector3f>& pts, const Indices& id
     if (truncated && box.L_m > options.row_valley_min_length_fraction * s.prior_L_m) {
         // The image's edge cuts the thing: what shows of it is at most its own length, so a
         // longer blob holds a second thing beyond it, parted by a clear gap along the row
-        // (looked for within 20 degrees of the box's heading, which smear skews; the two in
-        // line, their sides seen edge-on as thin as they are).
-        for (int k = -4; k <= 4; ++k) {
-            const double a = box.theta + k * kHalfPi / 18.0;  // a heading: along (cos, -sin)
-            consider(std::cos(a), -std::sin(a), 0.0, static_cast<std::size_t>(s.min_points),
-                     kInLineOverlap);
-        }
+        // (the two in line, their sides seen edge-on as thin as they are).
+        consider_in_line();
         if (widest) return *widest;
     }
     // Across the heading only for a clear double width: smear and oblique views widen single cars.

@@ -811,6 +811,44 @@ TEST_CASE("a parked row's walk of cuts steps a van's length over a van when a ca
     CHECK(spans[2].first == Approx(18.1f).margin(0.1));
 }
 
+TEST_CASE("a car box longer than a van is cut at a clear gap between a van and a lower car",
+          "[entities][split]") {
+    // The last 2.2 m of a small car (roof 1.35 m, boot 1.0 m), 0.6 m apart from a van whose
+    // bonnet (1.1 m) and first 2.6 m of roof (2.0 m) show: 6.4 m, over a van's pitch and under
+    // a row's walk (1.6 car lengths), the valley between the roofs too shallow to cut.
+    const auto side = [](std::vector<Eigen::Vector3f>& pts, float z0, float z1, float top) {
+        for (float z = z0; z <= z1; z += 0.05f) {
+            for (float h = 0.3f; h <= top; h += 0.05f) pts.emplace_back(-1.1f, 1.65f - h, z);
+        }
+    };
+    std::vector<Eigen::Vector3f> pts;
+    side(pts, 10.0f, 11.2f, 1.35f);
+    side(pts, 11.25f, 12.2f, 1.0f);
+    side(pts, 12.8f, 13.8f, 1.1f);
+    side(pts, 13.85f, 16.4f, 2.0f);
+    instances::Indices idx(pts.size());
+    std::iota(idx.begin(), idx.end(), std::size_t{0});
+    const auto split =
+        split_with_car_prior(pts, idx, row_box_along_z(0.65, 13.2, 6.4, 2.0), GroundPlane{});
+    REQUIRE(split.parts.size() == 2);
+    for (const auto& part : split.parts) {
+        float lo = std::numeric_limits<float>::max(), hi = -lo;
+        for (std::size_t i : part) {
+            lo = std::min(lo, pts[i].z());
+            hi = std::max(hi, pts[i].z());
+        }
+        CHECK((hi <= 12.2f || lo >= 12.8f));  // each piece on one side of the gap
+    }
+    // One car seen 6.4 m long, the same gap in it: no piece reaches a van's height.
+    pts.clear();
+    side(pts, 10.0f, 12.2f, 1.35f);
+    side(pts, 12.8f, 16.4f, 1.45f);
+    idx.resize(pts.size());
+    std::iota(idx.begin(), idx.end(), std::size_t{0});
+    CHECK(split_with_car_prior(pts, idx, row_box_along_z(0.65, 13.2, 6.4, 1.45), GroundPlane{})
+              .parts.size() == 1);
+}
+
 namespace {
 
 /// The right side of a thing heading along z from z0 to z1, seen from x = 0 at x = -1.1:
