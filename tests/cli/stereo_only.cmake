@@ -44,7 +44,9 @@ endforeach()
 # steps a van's length over its van, or the cars beyond it are boxed 0.5-1.3 m nearer than they
 # are. On parking-street-51 a small car and the van beyond it make one box 6.7 m long, too low
 # for a van and too short for a row's walk, cut at the clear gap between the van's height and
-# the car's. All meet the stereo-only bars.
+# the car's. On parking-street-48 a car 28 % visible behind a van is cut in two by the row's
+# cuts, its first metre with the van; its two faint pieces are joined. All meet the
+# stereo-only bars.
 if(TARGET scene-render)
     file(MAKE_DIRECTORY ${_so_out}/rendered)
     # parking-street-51 shows two false cars (a second box on a car, a phantom on the bus).
@@ -54,6 +56,7 @@ if(TARGET scene-render)
     foreach(_street IN ITEMS
             "parking-street-27|27|the car before the bus|${STEREOSCENE_STEREO_ONLY_BARS}"
             "parking-street-29|29|the car before the bus|${STEREOSCENE_STEREO_ONLY_BARS}"
+            "parking-street-48|48|a car behind a van|${STEREOSCENE_STEREO_ONLY_BARS}"
             "parking-street-51|51|a small car and the van beyond it|${_so_street_bars}")
         string(REPLACE "|" ";" _street "${_street}")
         list(POP_FRONT _street _scene _seed _what)

@@ -41,6 +41,13 @@ scene_schema::Entity make_entity(const ClassInfo& info, const OrientedBox& box,
     return e;
 }
 
+double seen_area_m2(const std::vector<Eigen::Vector3f>& pts, const Indices& members, double fx_px,
+                    double fy_px) {
+    double sum = 0.0;
+    for (std::size_t i : members) sum += double{pts[i].z()} * double{pts[i].z()};
+    return sum / (fx_px * fy_px);
+}
+
 double confidence_of(std::size_t n, const ClassSettings& s) {
     const double dn = static_cast<double>(n);
     return dn / (dn + 2.0 * s.min_points);

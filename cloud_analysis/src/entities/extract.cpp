@@ -268,6 +268,14 @@ void ExtractOptions::validate() const {
     }
 }
 
+double min_seen_area_m2(const ClassSettings& s, const ExtractOptions& options) {
+    if (!s.has_prior() || !(options.min_face_share > 0.0) || !(options.fx_px > 0.0) ||
+        !(options.fy_px > 0.0)) {
+        return 0.0;
+    }
+    return options.min_face_share * s.prior_W_m * s.prior_H_m;
+}
+
 ClassSelection class_selection(const Palette& palette, const ExtractOptions& options) {
     ClassSelection selection;
     selection.max_depth_m = options.max_range_m;

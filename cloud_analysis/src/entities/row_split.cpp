@@ -650,4 +650,67 @@ Split split_oversized(const std::vector<Eigen::Vector3f>& pts, const Indices& id
     return {{idx}, false, std::nullopt};
 }
 
+std::vector<Indices> join_faint_pieces(const std::vector<Eigen::Vector3f>& pts,
+                                       std::vector<Candidate>& candidates, const ClassSettings& s,
+                                       const ExtractOptions& options) {
+    const double min_m2 = min_seen_area_m2(s, options);
+    if (!(min_m2 > 0.0) || candidates.size() < 2) return {};
+    const auto area = [&](const Indices& m) {
+        return seen_area_m2(pts, m, options.fx_px, options.fy_px);
+    };
+    std::vector<char> faint(candidates.size()), joined(candidates.size(), 0);
+    for (std::size_t i = 0; i < candidates.size(); ++i) {
+        faint[i] = area(candidates[i].members) < min_m2 ? 1 : 0;
+    }
+    // 2-98 % extent of a piece along the unit direction (ax, az), and its median across.
+    struct Extent {
+        double lo, hi, across;
+    };
+    const auto extent = [&](const Indices& m, double ax, double az) {
+        std::vector<double> along, across;
+        along.reserve(m.size());
+        across.reserve(m.size());
+        for (std::size_t k : m) {
+            along.push_back(double{pts[k].x()} * ax + double{pts[k].z()} * az);
+            across.push_back(double{pts[k].x()} * az - double{pts[k].z()} * ax);
+        }
+        const auto [lo, hi] = quantiles(along, 0.02, 0.98);
+        return Extent{lo, hi, quantile(across, 0.5)};
+    };
+    std::vector<Indices> out;
+    for (std::size_t i = 0; i < candidates.size(); ++i) {
+        if (!faint[i] || joined[i]) continue;
+        const double ax = std::cos(candidates[i].box.theta),
+                     az = -std::sin(candidates[i].box.theta);
+        const Extent a = extent(candidates[i].members, ax, az);
+        std::size_t best = candidates.size();
+        double best_gap = std::numeric_limits<double>::max();
+        for (std::size_t j = 0; j < candidates.size(); ++j) {
+            if (j == i || !faint[j] || joined[j]) continue;
+            const Extent b = extent(candidates[j].members, ax, az);
+            const double gap = std::max(b.lo - a.hi, a.lo - b.hi);
+            if (gap > options.row_gap_m || gap >= best_gap ||
+                std::abs(a.across - b.across) > 0.5 * s.prior_W_m ||
+                std::max(a.hi, b.hi) - std::min(a.lo, b.lo) > s.prior_L_m ||
+                area(candidates[i].members) + area(candidates[j].members) < min_m2) {
+                continue;
+            }
+            best = j;
+            best_gap = gap;
+        }
+        if (best == candidates.size()) continue;
+        joined[i] = joined[best] = 1;
+        Indices both = candidates[i].members;
+        both.insert(both.end(), candidates[best].members.begin(), candidates[best].members.end());
+        out.push_back(std::move(both));
+    }
+    if (out.empty()) return out;
+    std::vector<Candidate> kept;
+    for (std::size_t i = 0; i < candidates.size(); ++i) {
+        if (!joined[i]) kept.push_back(std::move(candidates[i]));
+    }
+    candidates = std::move(kept);
+    return out;
+}
+
 }  // namespace cloud_analysis::instances

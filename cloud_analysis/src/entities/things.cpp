@@ -269,96 +269,100 @@ std::vector<Candidate> candidates_of_cluster(const std::vector<Eigen::Vector3f>&
         }
         return true;
     };
-    while (!work.empty()) {
-        auto [part, depth, group, yaw] = std::move(work.back());
-        work.pop_back();
-        // A piece of a row (cut at clear gaps or at a front-on row's pitch) is a thing
-        // because the row is: half the minimum suffices for its sparse far end.
-        const bool row_piece = depth > 0 && group == cluster;
-        const auto min_points =
-            static_cast<std::size_t>(row_piece ? s.min_points / 2 : s.min_points);
-        if (part.size() < std::max<std::size_t>(min_points, 1)) continue;
-        fit.yaw_rad = yaw;
-        fit.truncation_xz = truncation_point(pts, pixels, grid, part);
-        const OrientedBox box = fit_upright_box(gather(pts, part), ground, fit);
-        if (depth < 3 && !yaw &&
-            queue_pieces(
-                split_oversized(pts, part, box, s, ground, options, fit.truncation_xz.has_value()),
-                depth, group)) {
-            continue;
-        }
-        // A thing whose points all lie near the ground is mislabelled road, not an object.
-        if (s.prior_H_m > 0.0 && ground && box.H_m < options.min_height_fraction * s.prior_H_m) {
-            continue;
-        }
-        Candidate c;
-        c.box = box;
-        c.members = std::move(part);
-        c.group = group;
-        // The splits above read the box as fitted; the thing's own box trims its near end
-        // further along the viewing ray and takes its extents over seen surface (a side seen
-        // along the ray holds few points per metre at its far end).
-        BoxFitOptions final_fit = fit;
-        final_fit.near_trim_fraction = std::max(fit.trim_fraction, options.near_trim_fraction);
-        final_fit.area_weighted_extents = options.area_weighted_extents;
-        const std::vector<Eigen::Vector3f> member_pts = gather(pts, c.members);
-        if (final_fit.near_trim_fraction > fit.near_trim_fraction ||
-            final_fit.area_weighted_extents) {
-            c.box = fit_upright_box(member_pts, ground, final_fit);
-        }
-        // The thing's own box can come out longer than the box the splits read (its near end
-        // trimmed along the ray, its extents over seen surface): still more than one.
-        if (depth < 4 && !yaw && s.has_prior() && c.box.L_m > s.split_factor * s.prior_L_m &&
-            queue_pieces(split_oversized(pts, c.members, c.box, s, ground, options,
-                                         fit.truncation_xz.has_value()),
-                         depth, group)) {
-            continue;
-        }
-        if (!options.family_class.empty() && s.name == options.family_class) {
-            // A van shows its height: its hidden length is a van's, not a car's.
-            c.subclass = "car";
-            if (box.H_m >= options.van_min_height_m) {
-                BoxFitOptions van = final_fit;
-                van.prior_L_m = options.van_prior_L_m;
-                van.prior_W_m = options.van_prior_W_m;
-                c.box = fit_upright_box(member_pts, ground, van);
-                c.subclass = "van";
+    const auto fit_pieces = [&] {
+        while (!work.empty()) {
+            auto [part, depth, group, yaw] = std::move(work.back());
+            work.pop_back();
+            // A piece of a row (cut at clear gaps or at a front-on row's pitch) is a thing
+            // because the row is: half the minimum suffices for its sparse far end.
+            const bool row_piece = depth > 0 && group == cluster;
+            const auto min_points =
+                static_cast<std::size_t>(row_piece ? s.min_points / 2 : s.min_points);
+            if (part.size() < std::max<std::size_t>(min_points, 1)) continue;
+            fit.yaw_rad = yaw;
+            fit.truncation_xz = truncation_point(pts, pixels, grid, part);
+            const OrientedBox box = fit_upright_box(gather(pts, part), ground, fit);
+            if (depth < 3 && !yaw &&
+                queue_pieces(split_oversized(pts, part, box, s, ground, options,
+                                             fit.truncation_xz.has_value()),
+                             depth, group)) {
+                continue;
             }
+            // A thing whose points all lie near the ground is mislabelled road, not an object.
+            if (s.prior_H_m > 0.0 && ground &&
+                box.H_m < options.min_height_fraction * s.prior_H_m) {
+                continue;
+            }
+            Candidate c;
+            c.box = box;
+            c.members = std::move(part);
+            c.group = group;
+            // The splits above read the box as fitted; the thing's own box trims its near end
+            // further along the viewing ray and takes its extents over seen surface (a side seen
+            // along the ray holds few points per metre at its far end).
+            BoxFitOptions final_fit = fit;
+            final_fit.near_trim_fraction = std::max(fit.trim_fraction, options.near_trim_fraction);
+            final_fit.area_weighted_extents = options.area_weighted_extents;
+            const std::vector<Eigen::Vector3f> member_pts = gather(pts, c.members);
+            if (final_fit.near_trim_fraction > fit.near_trim_fraction ||
+                final_fit.area_weighted_extents) {
+                c.box = fit_upright_box(member_pts, ground, final_fit);
+            }
+            // The thing's own box can come out longer than the box the splits read (its near end
+            // trimmed along the ray, its extents over seen surface): still more than one.
+            if (depth < 4 && !yaw && s.has_prior() && c.box.L_m > s.split_factor * s.prior_L_m &&
+                queue_pieces(split_oversized(pts, c.members, c.box, s, ground, options,
+                                             fit.truncation_xz.has_value()),
+                             depth, group)) {
+                continue;
+            }
+            if (!options.family_class.empty() && s.name == options.family_class) {
+                // A van shows its height: its hidden length is a van's, not a car's.
+                c.subclass = "car";
+                if (box.H_m >= options.van_min_height_m) {
+                    BoxFitOptions van = final_fit;
+                    van.prior_L_m = options.van_prior_L_m;
+                    van.prior_W_m = options.van_prior_W_m;
+                    c.box = fit_upright_box(member_pts, ground, van);
+                    c.subclass = "van";
+                }
+            }
+            if (s.name == options.family_class && options.far_column_length_fraction > 0.0) {
+                // A side seen along the viewing ray: its far end where its pixels end in the image.
+                const double prior = c.subclass == "van" ? options.van_prior_L_m : s.prior_L_m;
+                c.box = extend_far_end_to_columns(
+                    c.box, member_pts,
+                    std::max(c.box.L_m, options.far_column_length_fraction * prior));
+            }
+            if (c.subclass == "van" && c.box.L_m > options.van_max_L_m) {
+                // Longer than any van: the piece holds the end of the thing before it in its row
+                // too (a row's cut at a van's windscreen foot, where the glass matches sparsely,
+                // leaves the van's front to the piece beyond). The van keeps its far end.
+                c.box = with_length(c.box, options.van_prior_L_m, true);
+            }
+            if (s.has_prior()) {
+                c.fragment = c.members.size() < static_cast<std::size_t>(s.min_points) ||
+                             height_spread(pts, c.members, ground) <
+                                 options.fragment_height_fraction * s.prior_H_m;
+            }
+            for (std::size_t i : c.members) {
+                const double x = pts[i].x(), z = pts[i].z();
+                c.range_m += std::sqrt(x * x + z * z);
+            }
+            c.range_m /= static_cast<double>(c.members.size());
+            candidates.push_back(std::move(c));
         }
-        if (s.name == options.family_class && options.far_column_length_fraction > 0.0) {
-            // A side seen along the viewing ray: its far end where its pixels end in the image.
-            const double prior = c.subclass == "van" ? options.van_prior_L_m : s.prior_L_m;
-            c.box = extend_far_end_to_columns(
-                c.box, member_pts, std::max(c.box.L_m, options.far_column_length_fraction * prior));
-        }
-        if (c.subclass == "van" && c.box.L_m > options.van_max_L_m) {
-            // Longer than any van: the piece holds the end of the thing before it in its row
-            // too (a row's cut at a van's windscreen foot, where the glass matches sparsely,
-            // leaves the van's front to the piece beyond). The van keeps its far end.
-            c.box = with_length(c.box, options.van_prior_L_m, true);
-        }
-        if (s.has_prior()) {
-            c.fragment = c.members.size() < static_cast<std::size_t>(s.min_points) ||
-                         height_spread(pts, c.members, ground) <
-                             options.fragment_height_fraction * s.prior_H_m;
-        }
-        for (std::size_t i : c.members) {
-            const double x = pts[i].x(), z = pts[i].z();
-            c.range_m += std::sqrt(x * x + z * z);
-        }
-        c.range_m /= static_cast<double>(c.members.size());
-        candidates.push_back(std::move(c));
-    }
+    };
+    fit_pieces();
     give_back_edge_points(pts, on_edge, candidates);
+    // Two faint pieces of a row end to end are one thing cut in two (a car behind a van, its
+    // first metre left to the van's piece); joined, they are fitted as one, not split again.
+    std::vector<Indices> joined = join_faint_pieces(pts, candidates, s, options);
+    if (!joined.empty()) {
+        for (Indices& part : joined) work.emplace_back(std::move(part), 4, cluster, std::nullopt);
+        fit_pieces();
+    }
     return candidates;
-}
-
-/// Square metres of surface the points `members` cover, each (z / fx) (z / fy) at its own depth.
-double seen_area_m2(const std::vector<Eigen::Vector3f>& pts, const Indices& members, double fx_px,
-                    double fy_px) {
-    double sum = 0.0;
-    for (std::size_t i : members) sum += double{pts[i].z()} * double{pts[i].z()};
-    return sum / (fx_px * fy_px);
 }
 
 /// The entities of a thing class from its clusters' candidates (in cluster order): shadows,
@@ -379,11 +383,9 @@ std::vector<scene_schema::Entity> things_of_class(const ClassInfo& info,
                                       options.shadow_fraction, options.shadow_radius_px);
     }
     candidates = suppress_nested(std::move(candidates));
-    if (s.has_prior() && options.min_face_share > 0.0 && options.fx_px > 0.0 &&
-        options.fy_px > 0.0) {
+    if (const double min_m2 = min_seen_area_m2(s, options); min_m2 > 0.0) {
         // Seen area at the points' own depths: a box completed beyond the image's edge lies
         // nearer than the points it holds, one completed away from the camera farther.
-        const double min_m2 = options.min_face_share * s.prior_W_m * s.prior_H_m;
         candidates.erase(std::remove_if(candidates.begin(), candidates.end(),
                                         [&](const Candidate& c) {
                                             return seen_area_m2(pts, c.members, options.fx_px,

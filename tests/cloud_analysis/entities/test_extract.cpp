@@ -849,6 +849,56 @@ TEST_CASE("a car box longer than a van is cut at a clear gap between a van and a
               .parts.size() == 1);
 }
 
+TEST_CASE("two faint pieces of a row end to end are joined into one thing", "[entities][split]") {
+    const auto config = load_class_config(std::string(STEREOSCENE_SOURCE_DIR) +
+                                          "/assets/classes/entity_config.json");
+    const ClassSettings& car = config.find("car");
+    ExtractOptions options;
+    options.min_face_share = 0.15;  // 0.405 m2 of a car's 1.8 x 1.5 m face
+    options.fx_px = options.fy_px = 721.0;
+    // A side at x = -4.8 along z, 25 m away: each point covers (25 / 721)^2 = 0.0012 m2.
+    std::vector<Eigen::Vector3f> pts;
+    const auto piece = [&](float z0, float z1, int rows) {
+        instances::Candidate c;
+        c.box.theta = -kPi / 2.0;  // along +z
+        const float step = (z1 - z0) / 24.0f;
+        for (int k = 0; k < 25; ++k) {
+            for (int r = 0; r < rows; ++r) {
+                c.members.push_back(pts.size());
+                pts.emplace_back(-4.8f, 1.5f - 0.1f * r, z0 + step * k);
+            }
+        }
+        return c;
+    };
+    const auto area = [&](const instances::Candidate& c) {
+        return instances::seen_area_m2(pts, c.members, options.fx_px, options.fy_px);
+    };
+    // The first metre of a car (150 points, 0.18 m2) and the rest of what shows of it
+    // (250 points, 0.30 m2), 0.3 m apart: neither is a thing, together they are.
+    std::vector<instances::Candidate> candidates = {piece(23.0f, 24.0f, 6),
+                                                    piece(24.3f, 26.0f, 10)};
+    REQUIRE(area(candidates[0]) < min_seen_area_m2(car, options));
+    REQUIRE(area(candidates[1]) < min_seen_area_m2(car, options));
+    auto joined = instances::join_faint_pieces(pts, candidates, car, options);
+    REQUIRE(joined.size() == 1);
+    CHECK(joined[0].size() == 400);
+    CHECK(candidates.empty());
+    // 1 m apart (more than a row's gap): two things, or smear, not one cut in two.
+    pts.clear();
+    candidates = {piece(22.3f, 23.3f, 6), piece(24.3f, 26.0f, 10)};
+    CHECK(instances::join_faint_pieces(pts, candidates, car, options).empty());
+    CHECK(candidates.size() == 2);
+    // Together still faint: fragments, left to be dropped.
+    pts.clear();
+    candidates = {piece(23.0f, 24.0f, 4), piece(24.3f, 26.0f, 4)};
+    CHECK(instances::join_faint_pieces(pts, candidates, car, options).empty());
+    // A faint piece beside a thing is the thing's business (shadows, strips), not a join.
+    pts.clear();
+    candidates = {piece(23.0f, 24.0f, 6), piece(24.3f, 26.0f, 20)};
+    REQUIRE(area(candidates[1]) >= min_seen_area_m2(car, options));
+    CHECK(instances::join_faint_pieces(pts, candidates, car, options).empty());
+}
+
 namespace {
 
 /// The right side of a thing heading along z from z0 to z1, seen from x = 0 at x = -1.1:

@@ -63,6 +63,10 @@ scene_schema::Entity make_entity(const ClassInfo& info, const OrientedBox& box,
                                  std::size_t point_count, double confidence,
                                  const std::string& method);
 
+/// Square metres of surface the points `members` cover, each (z / fx) (z / fy) at its own depth.
+double seen_area_m2(const std::vector<Eigen::Vector3f>& pts, const Indices& members, double fx_px,
+                    double fy_px);
+
 /// confidence = n / (n + 2 * min_points): 1/3 at the minimum, -> 1 with many points.
 double confidence_of(std::size_t n, const ClassSettings& s);
 

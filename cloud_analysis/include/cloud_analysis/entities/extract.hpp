@@ -109,6 +109,11 @@ struct ExtractOptions {
     void validate() const;
 };
 
+/// The seen area (square metres) under which a thing of class `s` is too faint to be one:
+/// `min_face_share` of its smallest prior face; 0 when the rule is off (no prior, no share, or
+/// no focal lengths).
+double min_seen_area_m2(const ClassSettings& s, const ExtractOptions& options);
+
 /// Which points of each palette class the extractor takes: stuff on every column_step-th pixel
 /// column, pixels for things, depth within options.max_range_m.
 ClassSelection class_selection(const Palette& palette, const ExtractOptions& options);

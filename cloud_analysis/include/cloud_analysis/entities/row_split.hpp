@@ -28,6 +28,17 @@ Split split_oversized(const std::vector<Eigen::Vector3f>& pts, const Indices& id
                       const std::optional<GroundPlane>& ground, const ExtractOptions& options,
                       bool truncated = false);
 
+/// Pairs of pieces of one cluster each too faint to be a thing (seen over less than
+/// min_seen_area_m2) that lie end to end along the first one's heading (at most
+/// `row_gap_m` apart between their 2-98 % extents, their medians across it within half the
+/// prior width, both within one prior length) and together are not faint: a thing the row's
+/// cuts left in two, such as a car 28 % visible behind a van whose first metre went with the
+/// van's piece. Each piece joins at most once, with the nearest such piece. Returns the joined
+/// points, and removes the pieces joined from `candidates`.
+std::vector<Indices> join_faint_pieces(const std::vector<Eigen::Vector3f>& pts,
+                                       std::vector<Candidate>& candidates, const ClassSettings& s,
+                                       const ExtractOptions& options);
+
 /// Vertical extent of points (2 % to 98 % height quantiles above the ground, or along -y
 /// without a ground plane), metres.
 double height_spread(const std::vector<Eigen::Vector3f>& pts, const Indices& idx,
