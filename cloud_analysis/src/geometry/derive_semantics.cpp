@@ -454,6 +454,8 @@ std::vector<int> cluster_cells(Grid& g, const DisparityMap& disparity, const Rig
 /// Statistics of one linked segment, gathered from its cells.
 struct SegmentStats {
     std::size_t pixels = 0, green = 0, occluded = 0, tall_pixels = 0;
+    std::size_t border_pixels = 0;  ///< in cells within kEdgeColumns of the matcher's left
+                                    ///< border at their depth, or left of it
     bool tall = false;
     bool truncated = false;  ///< a cell at the image's right edge or the matcher's left border
     std::vector<float> tops, lows, depths;
@@ -493,6 +495,9 @@ std::vector<SegmentStats> gather_segments(Grid& g, std::vector<int>& parent, con
         if (u_lo <= rig.offset + d + kEdgeColumns ||
             u_lo + o.column_bin_px - 1 >= width_px - 1 - kEdgeColumns) {
             st.truncated = true;
+        }
+        if (u_lo <= rig.offset + d + kEdgeColumns) {
+            st.border_pixels += static_cast<std::size_t>(c.count);
         }
         st.depths.push_back(static_cast<float>(z));
         st.footprint.emplace_back((u - rig.cx) * z / rig.fx, z, c.count);
@@ -576,6 +581,11 @@ Segment classify(SegmentStats& st, const Classes& cls, const GeometryOptions& o)
         seg.thickness_m < o.wall_max_thickness_m ? set(cls.wall, "wall") : set(cls.other, "static");
     } else if (2 * st.occluded > st.pixels) {
         set(cls.other, "static");  // its top is hidden: no telling a car from a wall's foot
+    } else if (2 * st.border_pixels > st.pixels) {
+        // Mostly at or beyond the matcher's left border at its own depth, where the right view
+        // shows nothing at that depth: the matcher's guesses for a surface it cannot see (a
+        // facade by the image's left edge, matched metres behind itself), or a sliver.
+        set(cls.other, "static");
     } else if (seg.top_m >= o.car_min_height_m && seg.top_m <= o.car_max_height_m &&
                seg.low_m < o.low_max_height_m) {
         set(cls.car, "car");

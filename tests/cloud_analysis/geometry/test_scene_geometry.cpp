@@ -303,6 +303,28 @@ TEST_CASE("a car cut by the matcher's left border is a car, though narrower than
     CHECK(class_at(g, palette, pu, pv) == "person");
 }
 
+TEST_CASE("a car-sized surface within the matcher's left border band at its depth is no car",
+          "[geometry]") {
+    const StereoCamera cam = kitti_rig();
+    const auto palette = cloud_analysis::load_palette("cityscapes");
+    // A board 1.45 m high at 14.4 m (27 px of disparity) by the image's left edge, as the
+    // matcher's guesses for a facade the right camera cannot see there put it: its columns end
+    // 35 px in, all within 8 columns of the border at its depth (offset + d). The same board
+    // 80 px farther right is a car's back, the board's height and tops alike.
+    const double z = 14.4;
+    const double x_at_35 = (35.0 - cam.cx_px) * z / cam.fx_px;
+    const double x_at_115 = (115.0 - cam.cx_px) * z / cam.fx_px;
+    const auto classed = [&](double x1) {
+        const DisparityMap d = render(cam, 1.65, {{x1 - 1.8, x1, z, 1.45}});
+        const SceneGeometry g = derive_semantics(d, cam, ImageU8{}, palette, {});
+        REQUIRE(g.ground.found);
+        const auto [u, v] = pixel_of(cam, x1 - 0.3, 0.9, z);
+        return class_at(g, palette, u, v);
+    };
+    CHECK(classed(x_at_35) != "car");
+    CHECK(classed(x_at_115) == "car");
+}
+
 TEST_CASE("a car under a tree's crown stays a car, a facade runs on above the car's layer",
           "[geometry]") {
     const StereoCamera cam = kitti_rig();
