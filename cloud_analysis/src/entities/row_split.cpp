@@ -655,13 +655,12 @@ std::vector<Indices> join_faint_pieces(const std::vector<Eigen::Vector3f>& pts,
                                        const ExtractOptions& options) {
     const double min_m2 = min_seen_area_m2(s, options);
     if (!(min_m2 > 0.0) || candidates.size() < 2) return {};
-    const auto area = [&](const Indices& m) {
-        return seen_area_m2(pts, m, options.fx_px, options.fy_px);
-    };
-    std::vector<char> faint(candidates.size()), joined(candidates.size(), 0);
+    std::vector<double> area(candidates.size());
+    std::vector<char> joined(candidates.size(), 0);
     for (std::size_t i = 0; i < candidates.size(); ++i) {
-        faint[i] = area(candidates[i].members) < min_m2 ? 1 : 0;
+        area[i] = seen_area_m2(pts, candidates[i].members, options.fx_px, options.fy_px);
     }
+    const auto faint = [&](std::size_t i) { return area[i] < min_m2 && !joined[i]; };
     // 2-98 % extent of a piece along the unit direction (ax, az), and its median across.
     struct Extent {
         double lo, hi, across;
@@ -679,20 +678,19 @@ std::vector<Indices> join_faint_pieces(const std::vector<Eigen::Vector3f>& pts,
     };
     std::vector<Indices> out;
     for (std::size_t i = 0; i < candidates.size(); ++i) {
-        if (!faint[i] || joined[i]) continue;
+        if (!faint(i)) continue;
         const double ax = std::cos(candidates[i].box.theta),
                      az = -std::sin(candidates[i].box.theta);
         const Extent a = extent(candidates[i].members, ax, az);
         std::size_t best = candidates.size();
         double best_gap = std::numeric_limits<double>::max();
         for (std::size_t j = 0; j < candidates.size(); ++j) {
-            if (j == i || !faint[j] || joined[j]) continue;
+            if (j == i || !faint(j) || area[i] + area[j] < min_m2) continue;
             const Extent b = extent(candidates[j].members, ax, az);
             const double gap = std::max(b.lo - a.hi, a.lo - b.hi);
             if (gap > options.row_gap_m || gap >= best_gap ||
                 std::abs(a.across - b.across) > 0.5 * s.prior_W_m ||
-                std::max(a.hi, b.hi) - std::min(a.lo, b.lo) > s.prior_L_m ||
-                area(candidates[i].members) + area(candidates[j].members) < min_m2) {
+                std::max(a.hi, b.hi) - std::min(a.lo, b.lo) > s.prior_L_m) {
                 continue;
             }
             best = j;
