@@ -595,13 +595,18 @@ Split split_oversized(const std::vector<Eigen::Vector3f>& pts, const Indices& id
         if (parts.size() > 1) return {std::move(parts), false, std::nullopt};
     }
     // Things in line: the widest clear gap within 20 degrees of the box's heading (which smear
-    // skews), each piece holding at least a thing's minimum of points.
-    const auto consider_in_line = [&] {
-        for (int k = -4; k <= 4; ++k) {
-            const double a = box.theta + k * kHalfPi / 18.0;  // a heading: along (cos, -sin)
-            consider(std::cos(a), -std::sin(a), 0.0, static_cast<std::size_t>(s.min_points),
-                     kInLineOverlap);
+    // skews), each piece holding at least a thing's minimum of points; looked for once.
+    std::optional<std::optional<Split>> in_line_cut;
+    const auto in_line = [&]() -> const std::optional<Split>& {
+        if (!in_line_cut) {
+            for (int k = -4; k <= 4; ++k) {
+                const double a = box.theta + k * kHalfPi / 18.0;  // a heading: along (cos, -sin)
+                consider(std::cos(a), -std::sin(a), 0.0, static_cast<std::size_t>(s.min_points),
+                         kInLineOverlap);
+            }
+            in_line_cut = std::move(widest);
         }
+        return *in_line_cut;
     };
     const double van_pitch = options.van_prior_L_m + options.row_gap_m;
     if (ground && s.name == options.family_class && box.L_m > van_pitch &&
@@ -611,17 +616,15 @@ Split split_oversized(const std::vector<Eigen::Vector3f>& pts, const Indices& id
         // too shallow), or a van holding the end of the next car. A clear gap between a piece
         // of a van's height and one lower parts them; two cars' pieces stay whole (one car
         // seen long by smear has holes of the disparity's sub-pixel steps, not gaps).
-        consider_in_line();
-        if (widest) {
+        if (const std::optional<Split>& cut = in_line()) {
             int tall_pieces = 0;
-            for (const Indices& part : widest->parts) {
+            for (const Indices& part : cut->parts) {
                 std::vector<double> h;
                 h.reserve(part.size());
                 for (const auto k : part) h.push_back(ground->height(pts[k].cast<double>()));
                 if (!h.empty() && quantile(h, 0.98) >= options.van_min_height_m) ++tall_pieces;
             }
-            if (tall_pieces == 1) return *widest;
-            widest.reset();
+            if (tall_pieces == 1) return *cut;
         }
     }
     if (box.L_m > s.split_factor * s.prior_L_m) {
@@ -640,8 +643,7 @@ Split split_oversized(const std::vector<Eigen::Vector3f>& pts, const Indices& id
         // The image's edge cuts the thing: what shows of it is at most its own length, so a
         // longer blob holds a second thing beyond it, parted by a clear gap along the row
         // (the two in line, their sides seen edge-on as thin as they are).
-        consider_in_line();
-        if (widest) return *widest;
+        if (const std::optional<Split>& cut = in_line()) return *cut;
     }
     // Across the heading only for a clear double width: smear and oblique views widen single cars.
     if (box.W_m > std::max(s.split_factor, 1.9) * s.prior_W_m) {
