@@ -26,6 +26,9 @@ constexpr double kInLineOverlap = -0.1;
 constexpr double kWalkStartQuantile = 0.01;
 /// The narrowest clear gap (0.1 m bins) that a walk of cuts takes one prior pitch on.
 constexpr int kClearGapBins = 2;
+/// The longest run of occupied 0.1 m bins inside a gap that a walk of cuts crosses (stray points
+/// smeared into the gap off the thing before it).
+constexpr int kGapIslandBins = 3;
 constexpr double kHalfPi = 1.57079632679489661923;
 
 /// The points' coordinates along the unit direction (dir_x, dir_z) and their range.
@@ -108,10 +111,20 @@ Split split_along(const std::vector<Eigen::Vector3f>& pts, const Indices& idx, d
         // towards the camera: a cut one car length from such a point falls inside the first car.
         std::vector<double> sorted = along;
         const auto [q_lo, q_hi] = quantiles(sorted, kWalkStartQuantile, 1.0 - kWalkStartQuantile);
-        // A cut in a gap wider than the cut: the next thing starts where the gap ends.
+        // A cut in a gap wider than the cut: the next thing starts where the gap ends. A few
+        // stray points in the gap (smear off the thing before it) do not end it: a run of at
+        // most kGapIslandBins bins with a clear gap beyond it is crossed.
+        const auto inside = [&](int b) { return b >= 0 && b < bins; };
         const auto gap_end = [&](int b, int dir) {
-            while (b + dir >= 0 && b + dir < bins && is_gap(b + dir)) b += dir;
-            return b;
+            for (;;) {
+                while (inside(b + dir) && is_gap(b + dir)) b += dir;
+                int e = b + dir;
+                for (int n = 0; n < kGapIslandBins && inside(e) && !is_gap(e); ++n) e += dir;
+                int run = 0;
+                for (int f = e; run < kClearGapBins && inside(f) && is_gap(f); f += dir) ++run;
+                if (e == b + dir || run < kClearGapBins) return b;
+                b = e;
+            }
         };
         // The next cut from the bin `from` in the direction dir: about one pitch on. When no
         // clear gap (kClearGapBins gap bins in a row) lies within reach of one prior pitch on
@@ -613,18 +626,33 @@ Split split_oversized(const std::vector<Eigen::Vector3f>& pts, const Indices& id
         box.L_m <= s.split_factor * s.prior_L_m) {
         // Longer than a van and its gap, too short for a row's walk: a van and the car before or
         // after it (a small car's low end keeps the two under a van's height and their valley
-        // too shallow), or a van holding the end of the next car. A clear gap between a piece
-        // of a van's height and one lower parts them; two cars' pieces stay whole (one car
-        // seen long by smear has holes of the disparity's sub-pixel steps, not gaps).
+        // too shallow), or a van holding the end of the next car; or two small cars end to end,
+        // smear filling the valley between their roofs. A clear gap parts a piece of a van's
+        // height from one lower, or two lower pieces that each hold a roof: a top at the
+        // valley cut's peak height over half a car's length. One car seen long by smear has
+        // holes of the disparity's sub-pixel steps too, but they leave a short or low piece
+        // (its bonnet or its boot) beyond them.
         if (const std::optional<Split>& cut = in_line()) {
-            int tall_pieces = 0;
+            int tall_pieces = 0, roofed_pieces = 0;
             for (const Indices& part : cut->parts) {
-                std::vector<double> h;
+                if (part.empty()) continue;
+                std::vector<double> h, along;
                 h.reserve(part.size());
-                for (const auto k : part) h.push_back(ground->height(pts[k].cast<double>()));
-                if (!h.empty() && quantile(h, 0.98) >= options.van_min_height_m) ++tall_pieces;
+                along.reserve(part.size());
+                for (const auto k : part) {
+                    h.push_back(ground->height(pts[k].cast<double>()));
+                    along.push_back(double{pts[k].x()} * c - double{pts[k].z()} * sn);
+                }
+                const double top = quantile(h, 0.98);
+                const auto [first, last] = quantiles(along, 0.02, 0.98);
+                if (top >= options.van_min_height_m) ++tall_pieces;
+                if (top >= options.row_valley_min_peak_fraction * s.prior_H_m &&
+                    last - first >= 0.5 * s.prior_L_m) {
+                    ++roofed_pieces;
+                }
             }
             if (tall_pieces == 1) return *cut;
+            if (tall_pieces == 0 && roofed_pieces == 2) return *cut;
         }
     }
     if (box.L_m > s.split_factor * s.prior_L_m) {
