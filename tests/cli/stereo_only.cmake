@@ -45,28 +45,39 @@ endforeach()
 # are. On parking-street-51 a small car and the van beyond it make one box 6.7 m long, too low
 # for a van and too short for a row's walk, cut at the clear gap between the van's height and
 # the car's. On parking-street-48 a car 28 % visible behind a van is cut in two by the row's
-# cuts, its first metre with the van; its two faint pieces are joined. All meet the
-# stereo-only bars.
+# cuts, its first metre with the van; its two faint pieces are joined. On parking-street-68 two
+# small cars 0.6 m apart at 25-30 m make one box 6.2 m long, cut at the gap between their roofs.
+# On kerbside-70 0.2 m of a van's smear lies in the 2.5 m gap behind it, which the row's walk of
+# cuts crosses to the small car beyond. All meet the stereo-only bars.
 if(TARGET scene-render)
     file(MAKE_DIRECTORY ${_so_out}/rendered)
-    # parking-street-51 shows two false cars (a second box on a car, a phantom on the bus).
+    # parking-street-51 shows two false cars (a second box on a car, a phantom on the bus),
+    # kerbside-70 three (kerbside clutter: walls, a hedge).
     set(_so_street_bars ${STEREOSCENE_STEREO_ONLY_BARS})
     list(REMOVE_AT _so_street_bars -1)
+    set(_so_kerbside_bars ${_so_street_bars})
     list(APPEND _so_street_bars 2)
+    list(APPEND _so_kerbside_bars 3)
     foreach(_street IN ITEMS
             "parking-street-27|27|the car before the bus|${STEREOSCENE_STEREO_ONLY_BARS}"
             "parking-street-29|29|the car before the bus|${STEREOSCENE_STEREO_ONLY_BARS}"
             "parking-street-48|48|a car behind a van|${STEREOSCENE_STEREO_ONLY_BARS}"
-            "parking-street-51|51|a small car and the van beyond it|${_so_street_bars}")
+            "parking-street-51|51|a small car and the van beyond it|${_so_street_bars}"
+            "parking-street-68|68|two small cars end to end|${STEREOSCENE_STEREO_ONLY_BARS}"
+            "kerbside-70|70|a small car past a van's smear|${_so_kerbside_bars}")
         string(REPLACE "|" ";" _street "${_street}")
         list(POP_FRONT _street _scene _seed _what)
         set(_dir ${_so_out}/rendered/${_scene})
         set(_truth ${_so_out}/rendered/${_scene}.json)
         set(_name "stereo-only closed loop ${_scene} (${_what})")
+        set(_kind "")
+        if(_scene MATCHES "^kerbside-")
+            set(_kind "--kerbside")
+        endif()
         add_test(NAME "${_name}: the street is generated and rendered"
-            COMMAND bash -c "set -euo pipefail; \"$0\" \"$1\" --seed $4 -o \"$2\" && \"$3\" sensors \"$2\" --out \"$5\" --frame 000000 --seed $4 --label-bleed 3 >/dev/null"
+            COMMAND bash -c "set -euo pipefail; \"$0\" \"$1\" --seed $4 $6 -o \"$2\" && \"$3\" sensors \"$2\" --out \"$5\" --frame 000000 --seed $4 --label-bleed 3 >/dev/null"
                 ${STEREOSCENE_PYTHON} ${PROJECT_SOURCE_DIR}/scripts/make-parking-scene.py
-                ${_truth} $<TARGET_FILE:scene-render> ${_seed} ${_dir})
+                ${_truth} $<TARGET_FILE:scene-render> ${_seed} ${_dir} "${_kind}")
         set_tests_properties("${_name}: the street is generated and rendered"
             PROPERTIES FIXTURES_SETUP "stereo_only_${_scene}_render" LABELS closed_loop)
         add_test(NAME "${_name}: cloud-analysis --semantics geometry reconstructs the scene"
