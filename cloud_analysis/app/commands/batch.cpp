@@ -199,6 +199,10 @@ CLI::App* add_batch_command(CLI::App& app, BatchArgs& a) {
     cmd->add_option("--coast-min-hits", a.track_options.tracker.coast_min_hits,
                     "--track: only a track hit at least this often coasts")
         ->capture_default_str();
+    cmd->add_option("--support", a.track_options.tracker.support_frames,
+                    "--track: frames a still track missed by the detector is still reported "
+                    "while a piece of something lies on its footprint (0 = off; see `track`)")
+        ->capture_default_str();
     cmd->add_option("--gate-chi2", a.track_options.tracker.gate_chi2,
                     "--track: statistical gate, squared Mahalanobis distance from a track's "
                     "prediction (0 = off; see `track`)")

@@ -40,6 +40,10 @@ CLI::App* add_track_command(CLI::App& app, TrackArgs& a) {
     cmd->add_option("--coast-min-hits", o.tracker.coast_min_hits,
                     "only a track hit at least this often coasts")
         ->capture_default_str();
+    cmd->add_option("--support", o.tracker.support_frames,
+                    "frames a still track missed by the detector is still reported while a "
+                    "piece of something lies on its footprint (0 = off)")
+        ->capture_default_str();
     cmd->add_option("--lag", o.lag_frames,
                     "frames held before writing, so a track whose motion shows it was reported "
                     "facing backwards is turned round in them too")

@@ -42,6 +42,11 @@ void TrackerOptions::validate() const {
     require(std::isfinite(max_gap_s) && max_gap_s > 0.0, "max_gap_s", "must be > 0");
     require(coast_frames >= 0 && coast_frames <= 100, "coast_frames", "must be in 0..100");
     require(coast_min_hits >= 0, "coast_min_hits", "must be >= 0");
+    require(support_frames >= 0 && support_frames <= 1000, "support_frames", "must be in 0..1000");
+    require(std::isfinite(still_max_speed_mps) && still_max_speed_mps >= 0.0, "still_max_speed_mps",
+            "must be >= 0");
+    require(std::isfinite(support_margin_m) && support_margin_m >= 0.0, "support_margin_m",
+            "must be >= 0");
     require(heading_gain > 0.0 && heading_gain <= 1.0, "heading_gain", "must be in (0, 1]");
     require(height_gain > 0.0 && height_gain <= 1.0, "height_gain", "must be in (0, 1]");
     require(std::isfinite(heading_from_motion_mps) && heading_from_motion_mps >= 0.0,
@@ -206,11 +211,46 @@ scene_schema::Entity predicted(const Track& t, const TrackerOptions& o,
     }
     e.class_name = t.class_name;
     e.class_id = t.class_id;
-    e.confidence = t.confidence * std::pow(0.5, t.misses);
+    e.confidence = t.confidence * std::pow(0.5, t.misses + (t.seen_in_part > 0 ? 1 : 0));
     e.point_count = 0;
     e.method = "track prediction";
     report(t, o, e);
     return e;
+}
+
+/// Whether a still track missed in `frame` is seen in part there (TrackerOptions::
+/// support_frames): an entity of a support class, not matched to a track of the track's class
+/// (a car passing over a parked car's place is no piece of it), has its centre on the track's
+/// footprint grown by the margin.
+bool seen_in_part(const Track& t, const TrackerOptions& o,
+                  const scene_schema::EntityDocument& frame, const std::vector<int>& track_of,
+                  const std::vector<Track>& tracks) {
+    if (o.support_frames <= 0 || !t.confirmed || t.hits < o.coast_min_hits ||
+        t.seen_in_part >= o.support_frames) {
+        return false;
+    }
+    const auto& P = t.motion.covariance();
+    const double v2 = o.max_velocity_sigma_mps * o.max_velocity_sigma_mps;
+    if (!(P(2, 2) <= v2 && P(3, 3) <= v2) ||
+        std::hypot(t.motion.vx_mps(), t.motion.vz_mps()) > o.still_max_speed_mps) {
+        return false;
+    }
+    const double c = std::cos(t.theta_rad), sn = std::sin(t.theta_rad);
+    for (std::size_t i = 0; i < frame.entities.size(); ++i) {
+        const auto& e = frame.entities[i];
+        if (!in(o.support_classes, e.class_name) ||
+            (track_of[i] >= 0 &&
+             tracks[static_cast<std::size_t>(track_of[i])].class_name == t.class_name)) {
+            continue;
+        }
+        const double dx = e.x - t.motion.x_m(), dz = e.z - t.motion.z_m();
+        const double along = dx * c - dz * sn, across = dx * sn + dz * c;  // heading (cos, -sin)
+        if (std::abs(along) <= 0.5 * t.L + o.support_margin_m &&
+            std::abs(across) <= 0.5 * t.W + o.support_margin_m) {
+            return true;
+        }
+    }
+    return false;
 }
 
 }  // namespace
@@ -248,6 +288,7 @@ scene_schema::EntityDocument Tracker::update(const scene_schema::EntityDocument&
             t.confidence = e.confidence;
             ++t.hits;
             t.misses = 0;
+            t.seen_in_part = 0;
             hit[track_of[i]] = 1;
             ++s.matched;
         } else {
@@ -277,13 +318,19 @@ scene_schema::EntityDocument Tracker::update(const scene_schema::EntityDocument&
     alive.reserve(tracks_.size());
     for (std::size_t k = 0; k < tracks_.size(); ++k) {
         Track& t = tracks_[k];
-        if (!hit[k]) ++t.misses;
+        const bool in_part = !hit[k] && seen_in_part(t, options_, frame, track_of, tracks_);
+        if (in_part) {
+            ++t.seen_in_part;
+        } else if (!hit[k]) {
+            ++t.misses;
+        }
         const bool dead = t.misses > 0 && (!t.confirmed || t.misses >= options_.max_misses);
         if (dead) {
             ++s.died;
             continue;
         }
-        if (!hit[k] && t.misses <= options_.coast_frames && t.hits >= options_.coast_min_hits) {
+        if (!hit[k] && (in_part || t.misses <= options_.coast_frames) &&
+            t.hits >= options_.coast_min_hits) {
             out.entities.push_back(predicted(t, options_, out));
             ++s.reported;
             ++s.coasted;

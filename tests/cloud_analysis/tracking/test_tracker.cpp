@@ -350,6 +350,58 @@ TEST_CASE("a track lost right after its confirmation does not coast", "[tracking
     CHECK_THROWS_WITH(options.validate(), "coast_min_hits must be >= 0");
 }
 
+TEST_CASE("a parked car seen in part through passing traffic is reported for support_frames",
+          "[tracking]") {
+    TrackerOptions options;
+    options.support_frames = 10;
+    options.coast_frames = 2;
+    // A parked car along the street (heading +z) tracked for a second, then only a sliver of it
+    // shows past a passing car, which the stereo-only rules call a person: 0.6 m across and
+    // 1.5 m along from its centre, on its footprint.
+    const auto sliver = [](double x, double z) {
+        Entity e = car(x, z, 0.0, 0.5);
+        e.id = "person";
+        e.class_name = "person";
+        e.class_id = 24;
+        e.W = 0.5;
+        return e;
+    };
+    const auto reported_cars = [](const EntityDocument& doc) {
+        int n = 0;
+        for (const Entity& e : doc.entities) n += e.class_name == "car" && e.track_id ? 1 : 0;
+        return n;
+    };
+    const auto parked = [&](double dx, double dz) {
+        Tracker tracker(options);
+        int i = 0;
+        for (; i < 10; ++i) tracker.update(frame_of({car(-4.0, 22.0, kPi / 2)}), 0.1 * i);
+        std::vector<int> seen;
+        for (; i < 24; ++i) {
+            seen.push_back(
+                reported_cars(tracker.update(frame_of({sliver(-4.0 + dx, 22.0 + dz)}), 0.1 * i)));
+        }
+        return seen;
+    };
+    // On its footprint: ten frames at its prediction, then the two frames any miss coasts.
+    std::vector<int> expected(14, 0);
+    std::fill(expected.begin(), expected.begin() + 12, 1);
+    CHECK(parked(-0.6, -1.5) == expected);
+    // 2.5 m beside it (a person on the sidewalk): a miss like any other, two frames of coasting.
+    std::fill(expected.begin() + 2, expected.end(), 0);
+    CHECK(parked(-2.5, 0.0) == expected);
+    // A car driving on at 5 m/s is no still track: the same two frames.
+    Tracker moving(options);
+    int i = 0;
+    for (; i < 10; ++i) moving.update(frame_of({car(1.0, 10.0 + 0.5 * i, kPi / 2)}), 0.1 * i);
+    std::vector<int> seen;
+    for (; i < 24; ++i) {
+        seen.push_back(reported_cars(moving.update(frame_of({sliver(1.3, 15.0)}), 0.1 * i)));
+    }
+    CHECK(seen == expected);
+    options.support_frames = -1;
+    CHECK_THROWS_WITH(options.validate(), "support_frames must be in 0..1000");
+}
+
 TEST_CASE("a confirmed track's size is fixed by default", "[tracking]") {
     Tracker tracker;
     std::vector<EntityDocument> out;

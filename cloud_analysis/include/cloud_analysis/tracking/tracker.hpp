@@ -46,6 +46,18 @@ struct TrackerOptions {
     /// lost at once is more likely a stray than a car the detector missed. 0 coasts every
     /// confirmed track.
     int coast_min_hits = 6;
+    /// A still track (confirmed, hit at least coast_min_hits times, its velocity known and
+    /// under still_max_speed_mps) missed in a frame while an entity of a support class has its
+    /// centre on the track's footprint (its box grown by support_margin_m on every side) is seen
+    /// in part there, not missed: a parked car behind a passing one shows through the gaps as
+    /// pieces the stereo-only rules call static, wall or person. It is reported at its
+    /// prediction for up to support_frames such frames in a row; 0 turns this off.
+    int support_frames = 10;
+    double still_max_speed_mps = 0.5;  ///< see support_frames, m/s
+    double support_margin_m = 0.5;     ///< see support_frames, metres
+    std::vector<std::string> support_classes{"car",   "truck",   "bus",        "person",
+                                             "rider", "bicycle", "motorcycle", "static",
+                                             "wall",  "fence",   "pole"};
     double heading_gain = 0.3;  ///< weight of a new heading in the smoothed one, 0..1
     double height_gain = 0.3;   ///< weight of a new box centre height (y), 0..1
     /// Above this speed the heading follows the velocity's direction (resolving the box's
@@ -95,6 +107,7 @@ struct Track {
     int hits_since_lock = 0;                       ///< hits since the size was first held
     int hits = 0;                                  ///< frames with a detection
     int misses = 0;                                ///< consecutive frames without one
+    int seen_in_part = 0;    ///< consecutive frames missed but seen in part (support_frames)
     bool confirmed = false;  ///< reached min_hits (or was born in the first frames)
 };
 
