@@ -407,6 +407,35 @@ OrientedBox row_box_along_z(double y, double z, double length_m, double height_m
     return box;
 }
 
+/// A row's side face at x = -1.1 from z0 to z1 along z, from 0.3 m up to `top` above a road
+/// 1.65 m below the camera, a point every 5 cm.
+void add_side(std::vector<Eigen::Vector3f>& pts, float z0, float z1, float top) {
+    for (float z = z0; z <= z1; z += 0.05f) {
+        for (float h = 0.3f; h <= top; h += 0.05f) pts.emplace_back(-1.1f, 1.65f - h, z);
+    }
+}
+
+/// Every index of pts, in order.
+instances::Indices all_of(const std::vector<Eigen::Vector3f>& pts) {
+    instances::Indices idx(pts.size());
+    std::iota(idx.begin(), idx.end(), std::size_t{0});
+    return idx;
+}
+
+/// Whether each piece of the split lies wholly before z = gap_lo or wholly after z = gap_hi.
+bool parted_at(const std::vector<Eigen::Vector3f>& pts, const instances::Split& split, float gap_lo,
+               float gap_hi) {
+    for (const auto& part : split.parts) {
+        float lo = std::numeric_limits<float>::max(), hi = -lo;
+        for (std::size_t i : part) {
+            lo = std::min(lo, pts[i].z());
+            hi = std::max(hi, pts[i].z());
+        }
+        if (!(hi <= gap_lo || lo >= gap_hi)) return false;
+    }
+    return true;
+}
+
 int count_class(const scene_schema::EntityDocument& doc, const std::string& name) {
     int n = 0;
     for (const auto& e : doc.entities) n += e.class_name == name ? 1 : 0;
@@ -816,37 +845,22 @@ TEST_CASE("a car box longer than a van is cut at a clear gap between a van and a
     // The last 2.2 m of a small car (roof 1.35 m, boot 1.0 m), 0.6 m apart from a van whose
     // bonnet (1.1 m) and first 2.6 m of roof (2.0 m) show: 6.4 m, over a van's pitch and under
     // a row's walk (1.6 car lengths), the valley between the roofs too shallow to cut.
-    const auto side = [](std::vector<Eigen::Vector3f>& pts, float z0, float z1, float top) {
-        for (float z = z0; z <= z1; z += 0.05f) {
-            for (float h = 0.3f; h <= top; h += 0.05f) pts.emplace_back(-1.1f, 1.65f - h, z);
-        }
-    };
     std::vector<Eigen::Vector3f> pts;
-    side(pts, 10.0f, 11.2f, 1.35f);
-    side(pts, 11.25f, 12.2f, 1.0f);
-    side(pts, 12.8f, 13.8f, 1.1f);
-    side(pts, 13.85f, 16.4f, 2.0f);
-    instances::Indices idx(pts.size());
-    std::iota(idx.begin(), idx.end(), std::size_t{0});
-    const auto split =
-        split_with_car_prior(pts, idx, row_box_along_z(0.65, 13.2, 6.4, 2.0), GroundPlane{});
+    add_side(pts, 10.0f, 11.2f, 1.35f);
+    add_side(pts, 11.25f, 12.2f, 1.0f);
+    add_side(pts, 12.8f, 13.8f, 1.1f);
+    add_side(pts, 13.85f, 16.4f, 2.0f);
+    const auto split = split_with_car_prior(pts, all_of(pts), row_box_along_z(0.65, 13.2, 6.4, 2.0),
+                                            GroundPlane{});
     REQUIRE(split.parts.size() == 2);
-    for (const auto& part : split.parts) {
-        float lo = std::numeric_limits<float>::max(), hi = -lo;
-        for (std::size_t i : part) {
-            lo = std::min(lo, pts[i].z());
-            hi = std::max(hi, pts[i].z());
-        }
-        CHECK((hi <= 12.2f || lo >= 12.8f));  // each piece on one side of the gap
-    }
+    CHECK(parted_at(pts, split, 12.2f, 12.8f));
     // One car seen 6.4 m long, a gap before its bonnet's smear (2.2 m at 0.9 m): no piece
     // reaches a van's height, and the bonnet is no roof.
     pts.clear();
-    side(pts, 10.0f, 13.6f, 1.45f);
-    side(pts, 14.2f, 16.4f, 0.9f);
-    idx.resize(pts.size());
-    std::iota(idx.begin(), idx.end(), std::size_t{0});
-    CHECK(split_with_car_prior(pts, idx, row_box_along_z(0.65, 13.2, 6.4, 1.45), GroundPlane{})
+    add_side(pts, 10.0f, 13.6f, 1.45f);
+    add_side(pts, 14.2f, 16.4f, 0.9f);
+    CHECK(split_with_car_prior(pts, all_of(pts), row_box_along_z(0.65, 13.2, 6.4, 1.45),
+                               GroundPlane{})
               .parts.size() == 1);
 }
 
@@ -854,34 +868,19 @@ TEST_CASE("two small cars end to end boxed longer than a van are cut at the gap 
           "[entities][split]") {
     // What shows of two small cars 0.6 m apart at 25-30 m, smear filling the valley between
     // their roofs: 2.2 m (roof 1.35 m) and 3.6 m (roof 1.45 m), 6.4 m in all.
-    const auto side = [](std::vector<Eigen::Vector3f>& pts, float z0, float z1, float top) {
-        for (float z = z0; z <= z1; z += 0.05f) {
-            for (float h = 0.3f; h <= top; h += 0.05f) pts.emplace_back(-1.1f, 1.65f - h, z);
-        }
-    };
     std::vector<Eigen::Vector3f> pts;
-    side(pts, 10.0f, 12.2f, 1.35f);
-    side(pts, 12.8f, 16.4f, 1.45f);
-    instances::Indices idx(pts.size());
-    std::iota(idx.begin(), idx.end(), std::size_t{0});
-    const auto split =
-        split_with_car_prior(pts, idx, row_box_along_z(0.65, 13.2, 6.4, 1.45), GroundPlane{});
+    add_side(pts, 10.0f, 12.2f, 1.35f);
+    add_side(pts, 12.8f, 16.4f, 1.45f);
+    const auto split = split_with_car_prior(pts, all_of(pts),
+                                            row_box_along_z(0.65, 13.2, 6.4, 1.45), GroundPlane{});
     REQUIRE(split.parts.size() == 2);
-    for (const auto& part : split.parts) {
-        float lo = std::numeric_limits<float>::max(), hi = -lo;
-        for (std::size_t i : part) {
-            lo = std::min(lo, pts[i].z());
-            hi = std::max(hi, pts[i].z());
-        }
-        CHECK((hi <= 12.2f || lo >= 12.8f));
-    }
+    CHECK(parted_at(pts, split, 12.2f, 12.8f));
     // The near piece only 1.5 m long (a car's end, no roof of its own): one thing.
     pts.clear();
-    side(pts, 10.0f, 11.5f, 1.35f);
-    side(pts, 12.1f, 16.4f, 1.45f);
-    idx.resize(pts.size());
-    std::iota(idx.begin(), idx.end(), std::size_t{0});
-    CHECK(split_with_car_prior(pts, idx, row_box_along_z(0.65, 13.2, 6.4, 1.45), GroundPlane{})
+    add_side(pts, 10.0f, 11.5f, 1.35f);
+    add_side(pts, 12.1f, 16.4f, 1.45f);
+    CHECK(split_with_car_prior(pts, all_of(pts), row_box_along_z(0.65, 13.2, 6.4, 1.45),
+                               GroundPlane{})
               .parts.size() == 1);
 }
 
@@ -890,20 +889,13 @@ TEST_CASE("a walk of cuts crosses stray points smeared into the gap behind a van
     // A van (10-15.2 m, roof 2.0 m), 0.2 m of its smear at 15.5 m, a 2.3 m gap, then two cars
     // 0.4 m apart (18-21.6 m and 22-26.5 m): the next car starts where the gap ends, not
     // where the smear does.
-    const auto side = [](std::vector<Eigen::Vector3f>& pts, float z0, float z1, float top) {
-        for (float z = z0; z <= z1; z += 0.05f) {
-            for (float h = 0.3f; h <= top; h += 0.05f) pts.emplace_back(-1.1f, 1.65f - h, z);
-        }
-    };
     std::vector<Eigen::Vector3f> pts;
-    side(pts, 10.0f, 15.2f, 2.0f);
-    side(pts, 15.5f, 15.7f, 1.0f);
-    side(pts, 18.0f, 21.6f, 1.45f);
-    side(pts, 22.0f, 26.5f, 1.45f);
-    instances::Indices idx(pts.size());
-    std::iota(idx.begin(), idx.end(), std::size_t{0});
-    const auto split =
-        split_with_car_prior(pts, idx, row_box_along_z(0.65, 18.25, 16.5, 2.0), GroundPlane{});
+    add_side(pts, 10.0f, 15.2f, 2.0f);
+    add_side(pts, 15.5f, 15.7f, 1.0f);
+    add_side(pts, 18.0f, 21.6f, 1.45f);
+    add_side(pts, 22.0f, 26.5f, 1.45f);
+    const auto split = split_with_car_prior(pts, all_of(pts),
+                                            row_box_along_z(0.65, 18.25, 16.5, 2.0), GroundPlane{});
     REQUIRE(split.parts.size() == 3);
     for (const auto& part : split.parts) {
         bool first_car = false, second_car = false, van = false;
