@@ -122,6 +122,14 @@ void Tracker::associate(const scene_schema::EntityDocument& frame, std::vector<i
 
 namespace {
 
+/// Whether a track's velocity is known well enough to be reported (std of vx and vz at most
+/// max_velocity_sigma_mps).
+bool velocity_known(const Track& t, const TrackerOptions& o) {
+    const auto& P = t.motion.covariance();
+    const double v2 = o.max_velocity_sigma_mps * o.max_velocity_sigma_mps;
+    return P(2, 2) <= v2 && P(3, 3) <= v2;
+}
+
 /// Folds a measured box into a matched track's height, heading and size; true when the
 /// direction of motion turned the track's heading round.
 bool absorb(Track& t, const scene_schema::Entity& e, const TrackerOptions& o) {
@@ -131,9 +139,7 @@ bool absorb(Track& t, const scene_schema::Entity& e, const TrackerOptions& o) {
     const double speed = std::hypot(t.motion.vx_mps(), t.motion.vz_mps());
     // Only a velocity known well enough to be reported may turn the heading: a track's first
     // velocities are differences of two boxes, whose jitter alone can pass the speed.
-    const auto& P = t.motion.covariance();
-    const double v2 = o.max_velocity_sigma_mps * o.max_velocity_sigma_mps;
-    if (speed > o.heading_from_motion_mps && P(2, 2) <= v2 && P(3, 3) <= v2) {
+    if (speed > o.heading_from_motion_mps && velocity_known(t, o)) {
         // Moving: the box's axis, turned to point where the object goes.
         const double motion = std::atan2(-t.motion.vz_mps(), t.motion.vx_mps());
         target = align_modulo_pi(target, motion);
@@ -181,9 +187,7 @@ Track born(const scene_schema::Entity& e, std::int64_t id, const TrackerOptions&
 
 void report(const Track& t, const TrackerOptions& o, scene_schema::Entity& e) {
     e.track_id = t.id;
-    const auto& P = t.motion.covariance();
-    const double v2 = o.max_velocity_sigma_mps * o.max_velocity_sigma_mps;
-    if (P(2, 2) <= v2 && P(3, 3) <= v2) {
+    if (velocity_known(t, o)) {
         e.velocity = scene_schema::Velocity{t.motion.vx_mps(), t.motion.vz_mps()};
     } else {
         e.velocity.reset();
@@ -229,9 +233,7 @@ bool seen_in_part(const Track& t, const TrackerOptions& o,
         t.seen_in_part >= o.support_frames) {
         return false;
     }
-    const auto& P = t.motion.covariance();
-    const double v2 = o.max_velocity_sigma_mps * o.max_velocity_sigma_mps;
-    if (!(P(2, 2) <= v2 && P(3, 3) <= v2) ||
+    if (!velocity_known(t, o) ||
         std::hypot(t.motion.vx_mps(), t.motion.vz_mps()) > o.still_max_speed_mps) {
         return false;
     }

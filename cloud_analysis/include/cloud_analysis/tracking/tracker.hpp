@@ -107,7 +107,7 @@ struct Track {
     int hits_since_lock = 0;                       ///< hits since the size was first held
     int hits = 0;                                  ///< frames with a detection
     int misses = 0;                                ///< consecutive frames without one
-    int seen_in_part = 0;    ///< consecutive frames missed but seen in part (support_frames)
+    int seen_in_part = 0;    ///< frames missed but seen in part since its last hit
     bool confirmed = false;  ///< reached min_hits (or was born in the first frames)
 };
 
