@@ -636,14 +636,11 @@ Split split_oversized(const std::vector<Eigen::Vector3f>& pts, const Indices& id
             int tall_pieces = 0, roofed_pieces = 0;
             for (const Indices& part : cut->parts) {
                 if (part.empty()) continue;
-                std::vector<double> h, along;
+                std::vector<double> h;
                 h.reserve(part.size());
-                along.reserve(part.size());
-                for (const auto k : part) {
-                    h.push_back(ground->height(pts[k].cast<double>()));
-                    along.push_back(double{pts[k].x()} * c - double{pts[k].z()} * sn);
-                }
+                for (const auto k : part) h.push_back(ground->height(pts[k].cast<double>()));
                 const double top = quantile(h, 0.98);
+                std::vector<double> along = project(pts, part, c, -sn).along;
                 const auto [first, last] = quantiles(along, 0.02, 0.98);
                 if (top >= options.van_min_height_m) ++tall_pieces;
                 if (top >= options.row_valley_min_peak_fraction * s.prior_H_m &&
