@@ -476,12 +476,14 @@ std::vector<Indices> split_at_valleys(const std::vector<Eigen::Vector3f>& pts, c
 /// occupied bin's points) that leaves each piece at least a fifth of the points (a sliver or
 /// a sparse far side is no second thing), or at least min_piece points when that is set, and
 /// whose pieces overlap along the cut by at least min_overlap_m; nothing when there is no such
-/// gap.
+/// gap. With max_near_piece_m > 0 the piece at the end of the blob nearer the camera (along
+/// the direction) must be at most that long.
 std::optional<Split> split_at_gap(const std::vector<Eigen::Vector3f>& pts, const Indices& idx,
                                   double dir_x, double dir_z, int min_gap_bins,
                                   double min_extent_m = 0.0, int* gap_bins = nullptr,
                                   std::size_t min_piece = 0,
-                                  double min_overlap_m = kSideBySideOverlap) {
+                                  double min_overlap_m = kSideBySideOverlap,
+                                  double max_near_piece_m = 0.0) {
     if (idx.size() < 20) return std::nullopt;
     const Projection p = project(pts, idx, dir_x, dir_z);
     const std::vector<double>& along = p.along;
@@ -513,9 +515,12 @@ std::optional<Split> split_at_gap(const std::vector<Eigen::Vector3f>& pts, const
         const std::size_t left = before + inside / 2, right = total - left;
         const bool pieces = min_piece > 0 ? std::min(left, right) >= min_piece
                                           : 5 * left >= total && 5 * right >= total;
-        if (end - b >= min_gap_bins && end - b > best_width && pieces) {
+        const double cut = lo + 0.5 * (b + end) * kBin;
+        const double near_piece = std::abs(lo) < std::abs(hi) ? cut - lo : hi - cut;
+        const bool near_fits = !(max_near_piece_m > 0.0) || near_piece <= max_near_piece_m;
+        if (end - b >= min_gap_bins && end - b > best_width && pieces && near_fits) {
             best_width = end - b;
-            best_cut = lo + 0.5 * (b + end) * kBin;
+            best_cut = cut;
         }
         before += inside;
         b = end;
@@ -575,11 +580,9 @@ Split split_oversized(const std::vector<Eigen::Vector3f>& pts, const Indices& id
     std::optional<Split> widest;
     int widest_bins = 0;
     // The widest clear gap across the unit direction (dir_x, dir_z) so far.
-    const auto consider = [&](double dir_x, double dir_z, double min_extent,
-                              std::size_t min_piece = 0, double min_overlap = kSideBySideOverlap) {
+    const auto consider = [&](double dir_x, double dir_z, double min_extent) {
         int bins = 0;
-        auto cut = split_at_gap(pts, idx, dir_x, dir_z, kSideBySideGapBins, min_extent, &bins,
-                                min_piece, min_overlap);
+        auto cut = split_at_gap(pts, idx, dir_x, dir_z, kSideBySideGapBins, min_extent, &bins);
         if (cut && bins > widest_bins) {
             widest = std::move(cut);
             widest_bins = bins;
@@ -608,18 +611,23 @@ Split split_oversized(const std::vector<Eigen::Vector3f>& pts, const Indices& id
         if (parts.size() > 1) return {std::move(parts), false, std::nullopt};
     }
     // Things in line: the widest clear gap within 20 degrees of the box's heading (which smear
-    // skews), each piece holding at least a thing's minimum of points; looked for once.
-    std::optional<std::optional<Split>> in_line_cut;
-    const auto in_line = [&]() -> const std::optional<Split>& {
-        if (!in_line_cut) {
-            for (int k = -4; k <= 4; ++k) {
-                const double a = box.theta + k * kHalfPi / 18.0;  // a heading: along (cos, -sin)
-                consider(std::cos(a), -std::sin(a), 0.0, static_cast<std::size_t>(s.min_points),
-                         kInLineOverlap);
+    // skews), each piece holding at least a thing's minimum of points (and the piece nearer
+    // the camera at most max_near_m long, when that is set).
+    const auto in_line = [&](double max_near_m = 0.0) {
+        std::optional<Split> cut;
+        int cut_bins = 0;
+        for (int k = -4; k <= 4; ++k) {
+            const double a = box.theta + k * kHalfPi / 18.0;  // a heading: along (cos, -sin)
+            int bins = 0;
+            auto piece =
+                split_at_gap(pts, idx, std::cos(a), -std::sin(a), kSideBySideGapBins, 0.0, &bins,
+                             static_cast<std::size_t>(s.min_points), kInLineOverlap, max_near_m);
+            if (piece && bins > cut_bins) {
+                cut = std::move(piece);
+                cut_bins = bins;
             }
-            in_line_cut = std::move(widest);
         }
-        return *in_line_cut;
+        return cut;
     };
     const double van_pitch = options.van_prior_L_m + options.row_gap_m;
     if (ground && s.name == options.family_class && box.L_m > van_pitch &&
@@ -632,7 +640,7 @@ Split split_oversized(const std::vector<Eigen::Vector3f>& pts, const Indices& id
         // valley cut's peak height over half a car's length. One car seen long by smear has
         // holes of the disparity's sub-pixel steps too, but they leave a short or low piece
         // (its bonnet or its boot) beyond them.
-        if (const std::optional<Split>& cut = in_line()) {
+        if (const std::optional<Split> cut = in_line()) {
             int tall_pieces = 0, roofed_pieces = 0;
             for (const Indices& part : cut->parts) {
                 if (part.empty()) continue;
@@ -667,8 +675,13 @@ Split split_oversized(const std::vector<Eigen::Vector3f>& pts, const Indices& id
     if (truncated && box.L_m > options.row_valley_min_length_fraction * s.prior_L_m) {
         // The image's edge cuts the thing: what shows of it is at most its own length, so a
         // longer blob holds a second thing beyond it, parted by a clear gap along the row
-        // (the two in line, their sides seen edge-on as thin as they are).
-        if (const std::optional<Split>& cut = in_line()) return *cut;
+        // (the two in line, their sides seen edge-on as thin as they are) that leaves the cut
+        // thing, the piece nearer the camera, no longer than that: a wider gap farther on (a
+        // sliver of smear beyond the second thing) would leave both in one piece.
+        if (std::optional<Split> cut =
+                in_line(options.row_valley_min_length_fraction * s.prior_L_m)) {
+            return std::move(*cut);
+        }
     }
     // Across the heading only for a clear double width: smear and oblique views widen single cars.
     if (box.W_m > std::max(s.split_factor, 1.9) * s.prior_W_m) {

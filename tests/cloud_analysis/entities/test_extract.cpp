@@ -387,13 +387,17 @@ void project_pixels(LabeledCloud& cloud) {
     }
 }
 
-/// split_oversized with the bundled car settings, the default options and no ground plane.
+/// split_oversized with the bundled car settings, the default options and no ground plane (and
+/// not cut by the image's edge) unless given.
 instances::Split split_with_car_prior(const std::vector<Eigen::Vector3f>& pts,
                                       const instances::Indices& idx, const OrientedBox& box,
-                                      const std::optional<GroundPlane>& ground = std::nullopt) {
+                                      const std::optional<GroundPlane>& ground = std::nullopt,
+                                      bool truncated = false) {
     const auto config = load_class_config(std::string(STEREOSCENE_SOURCE_DIR) +
                                           "/assets/classes/entity_config.json");
-    return instances::split_oversized(pts, idx, box, config.find("car"), ground, ExtractOptions{});
+    const ExtractOptions options;
+    return instances::split_oversized(pts, idx, box, config.find("car"), ground, options,
+                                      truncated);
 }
 
 /// The 1.8 m wide box of a row at x = -1.1 along +z, centred at (y, z).
@@ -882,6 +886,25 @@ TEST_CASE("two small cars end to end boxed longer than a van are cut at the gap 
     CHECK(split_with_car_prior(pts, all_of(pts), row_box_along_z(0.65, 13.2, 6.4, 1.45),
                                GroundPlane{})
               .parts.size() == 1);
+}
+
+TEST_CASE(
+    "a row cut by the image's edge is parted where its near piece is one car, not at smear "
+    "beyond",
+    "[entities][split][truncation]") {
+    // What shows of a car cut by the left edge (1.2 m of its side), a 0.4 m notch, the next car
+    // (3.8 m), then 0.8 m on a sliver of smear: 6.5 m in all. The smear's gap is the widest,
+    // but cut there the near piece (5.4 m) still holds both cars.
+    std::vector<Eigen::Vector3f> pts;
+    add_side(pts, 5.6f, 6.8f, 1.4f);
+    add_side(pts, 7.2f, 11.0f, 1.45f);
+    add_side(pts, 11.8f, 12.1f, 1.4f);
+    const OrientedBox box = row_box_along_z(0.65, 8.85, 6.5, 1.45);
+    const auto split = split_with_car_prior(pts, all_of(pts), box, std::nullopt, true);
+    REQUIRE(split.parts.size() == 2);
+    CHECK(parted_at(pts, split, 6.8f, 7.2f));
+    // Not cut by the edge: no reason to part it.
+    CHECK(split_with_car_prior(pts, all_of(pts), box).parts.size() == 1);
 }
 
 TEST_CASE("a walk of cuts crosses stray points smeared into the gap behind a van",
