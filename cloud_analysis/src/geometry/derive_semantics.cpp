@@ -47,15 +47,23 @@ struct Cell {
     float blend2 = -1e9f;   ///< foot of a surface above (foot_of_surface_above), which give
                             ///< its top only when it has no other
     float low = 1e9f;       ///< lowest height, metres
+    float high = -1e9f;     ///< highest height, metres
     int top_v = 1 << 30;    ///< row of its highest pixel (smallest v)
     int top_u = 0;          ///< column of that pixel
     bool occluded = false;  ///< a nearer surface lies right above that pixel: top unknown
     int segment = -1;       ///< segment index once linked; -1: sparse (noise)
     bool is_tall = false;   ///< upper layer, or a lower layer the surface above continues
+    std::array<int, 2> surface{-1, -1};  ///< lower layer: the tall cells one disparity bin
+                                         ///< nearer and farther whose surface it may hold
+                                         ///< (GeometryOptions::split_surface_px), -1: none
 };
 
 /// Cells per (column band, disparity bin): the lower and the upper layer.
 constexpr int kLayers = 2;
+
+/// Heights within this of a tall cell's are its surface's (GeometryOptions::split_surface_px):
+/// one image row spans 0.04 m at 30 m, metres.
+constexpr float kSplitSurfaceMarginM = 0.05f;
 
 /// The rig's depth of disparity d and the pixel grid, shared by the passes.
 struct Rig {
@@ -226,6 +234,66 @@ void make_bins(double max_d, double share, Grid& g) {
     g.bins_d = static_cast<int>(g.bin_centre.size());
 }
 
+/// Fewest pixels of a dense cell at disparity bin bd, and the pixels within continuity_band_m
+/// of the layers' border that make a surface continue across it.
+std::pair<int, double> cell_thresholds(const Grid& g, const Rig& rig, const GeometryOptions& o,
+                                       int bd) {
+    // Pixels a surface h metres tall fills in a cell at this disparity.
+    const double px_per_m =
+        rig.fy * g.bin_centre[static_cast<std::size_t>(bd)] / rig.fb * o.column_bin_px;
+    return {std::max(o.min_cell_pixels, static_cast<int>(o.min_cell_height_m * px_per_m)),
+            o.continuity_share * o.continuity_band_m * px_per_m};
+}
+
+/// Every cell's kind: tall in the upper layer, and in the lower layer when its surface runs on
+/// across the layers' border (a wall, a trunk: then both layers join when linked). A car under
+/// a tree's crown has a gap there, so its cells stay low and apart from the crown's. A tall
+/// surface at the border between two disparity bins (the matcher's sub-pixel steps put its
+/// rows in either) leaves part of its lower rows in the next bin, in a cell of their own that
+/// does not reach the border: the cell is that surface's when its mean disparity lies within
+/// split_surface_px of a dense, tall, not green lower cell of its column band one bin away and
+/// its heights lie within that cell's (a tree's trunk or crown, green, often stands just
+/// before a car; a car before a wall hides the wall's foot, so its cell reaches lower).
+void mark_kinds(Grid& g, const Rig& rig, const GeometryOptions& o) {
+    const auto index = [&g](int bu, int bd, int layer) {
+        return static_cast<std::size_t>((bu * g.bins_d + bd) * kLayers + layer);
+    };
+    std::vector<char> dense_tall(g.cells.size(), 0);  // lower cells tall by continuity
+    for (int bd = 0; bd < g.bins_d; ++bd) {
+        const auto [min_count, at_cut] = cell_thresholds(g, rig, o, bd);
+        for (int bu = 0; bu < g.bins_u; ++bu) {
+            Cell& lower = g.cells[index(bu, bd, 0)];
+            g.cells[index(bu, bd, 1)].is_tall = true;
+            int upper_at_cut = 0;  // the border rows of the surface above, noise spread over bins
+            for (int k = std::max(0, bd - 1); k <= std::min(g.bins_d - 1, bd + 1); ++k) {
+                upper_at_cut += g.cells[index(bu, k, 1)].at_cut;
+            }
+            lower.is_tall = lower.at_cut >= at_cut && upper_at_cut >= at_cut;
+            dense_tall[index(bu, bd, 0)] =
+                lower.is_tall && lower.count >= min_count &&
+                static_cast<double>(lower.green) < o.green_fraction * lower.count;
+        }
+    }
+    if (!(o.split_surface_px > 0.0)) return;
+    for (int bu = 0; bu < g.bins_u; ++bu) {
+        for (int bd = 0; bd < g.bins_d; ++bd) {
+            Cell& c = g.cells[index(bu, bd, 0)];
+            if (c.is_tall || c.count == 0) continue;
+            bool inside = false;
+            for (int side = 0; side < 2; ++side) {
+                const int nd = bd + (side == 0 ? -1 : 1);
+                if (nd < 0 || nd >= g.bins_d || !dense_tall[index(bu, nd, 0)]) continue;
+                const Cell& t = g.cells[index(bu, nd, 0)];
+                if (std::abs(c.d_sum / c.count - t.d_sum / t.count) > o.split_surface_px) continue;
+                c.surface[static_cast<std::size_t>(side)] = static_cast<int>(index(bu, nd, 0));
+                inside = inside || (c.low >= t.low - kSplitSurfaceMarginM &&
+                                    c.high <= t.high + kSplitSurfaceMarginM);
+            }
+            c.is_tall = inside;
+        }
+    }
+}
+
 /// Pass 1: road pixels labelled, every other pixel above the road counted in its cell.
 Grid fill_grid(const DisparityMap& disparity, const Rig& rig, const ImageU8& left,
                const GroundEstimate& ground, const GeometryOptions& o, std::uint16_t road,
@@ -285,8 +353,22 @@ Grid fill_grid(const DisparityMap& disparity, const Rig& rig, const ImageU8& lef
             c.at_cut += std::abs(hf - tall_m) <= band_m ? 1 : 0;
             c.green += green ? 1 : 0;
             c.low = std::min(c.low, hf);
+            c.high = std::max(c.high, hf);
         }
     }
+    mark_kinds(g, rig, o);
+    // Whether lower-layer pixel height hf of cell c lies within a tall cell whose surface c
+    // holds in part (kSplitSurfaceMarginM, a row at range): that surface's pixels, not c's own.
+    const auto on_split_surface = [&g](const Cell& c, float hf) {
+        for (const int j : c.surface) {
+            if (j < 0) continue;
+            const Cell& t = g.cells[static_cast<std::size_t>(j)];
+            if (hf >= t.low - kSplitSurfaceMarginM && hf <= t.high + kSplitSurfaceMarginM) {
+                return true;
+            }
+        }
+        return false;
+    };
     // Tops second, from the pixels at the cell's depth: at range one disparity bin spans
     // metres, and the surface just behind a thing (a bus's side above a car's roof, 1-2 px of
     // disparity farther) shares its bins but not its top, nor does the lowest edge of a tree's
@@ -312,7 +394,8 @@ Grid fill_grid(const DisparityMap& disparity, const Rig& rig, const ImageU8& lef
             if (d < mean_d - o.top_behind_px) continue;
             const float hf = g.pixel_height[row + u];
             if (hf > c.top2 || hf > c.blend2) {  // else neither pair changes
-                if (on_blend(disparity, u, v, o.blend_rows, o.blend_step_px) ||
+                if ((!c.is_tall && on_split_surface(c, hf)) ||
+                    on_blend(disparity, u, v, o.blend_rows, o.blend_step_px) ||
                     (d > mean_d + o.foot_ahead_px &&
                      foot_of_surface_above(disparity, g.pixel_cell, rig.offset, u, v, d,
                                            o.blend_rows, o.blend_step_px))) {
@@ -348,23 +431,13 @@ bool top_occluded(const DisparityMap& disparity, const Cell& c, double cell_d) {
     return false;
 }
 
-/// Pass 2a: the dense cells (each its own root; -1 for sparse cells) and every cell's kind: tall
-/// in the upper layer, and in the lower layer when its surface runs on across the layers' border
-/// (a wall, a trunk: then both layers join when linked). A car under a tree's crown has a gap
-/// there, so its cells stay low and apart from the crown's.
+/// Pass 2a: the dense cells, each its own root (-1 for sparse cells), and whether a nearer
+/// surface hides each one's top.
 std::vector<int> dense_cells(Grid& g, const DisparityMap& disparity, const Rig& rig,
                              const GeometryOptions& o) {
     std::vector<int> parent(g.cells.size(), -1);
-    const auto cell = [&](int bu, int bd, int layer) -> Cell& {
-        return g.cells[static_cast<std::size_t>((bu * g.bins_d + bd) * kLayers + layer)];
-    };
     for (int bd = 0; bd < g.bins_d; ++bd) {
-        // Pixels a surface h metres tall fills in a cell at this disparity.
-        const double px_per_m =
-            rig.fy * g.bin_centre[static_cast<std::size_t>(bd)] / rig.fb * o.column_bin_px;
-        const int min_count =
-            std::max(o.min_cell_pixels, static_cast<int>(o.min_cell_height_m * px_per_m));
-        const double at_cut = o.continuity_share * o.continuity_band_m * px_per_m;
+        const int min_count = cell_thresholds(g, rig, o, bd).first;
         for (int bu = 0; bu < g.bins_u; ++bu) {
             for (int layer = 0; layer < kLayers; ++layer) {
                 const int i = (bu * g.bins_d + bd) * kLayers + layer;
@@ -373,14 +446,6 @@ std::vector<int> dense_cells(Grid& g, const DisparityMap& disparity, const Rig& 
                 parent[static_cast<std::size_t>(i)] = i;
                 c.occluded = top_occluded(disparity, c, g.bin_centre[static_cast<std::size_t>(bd)]);
             }
-            Cell& lower = cell(bu, bd, 0);
-            Cell& upper = cell(bu, bd, 1);
-            upper.is_tall = true;
-            int upper_at_cut = 0;  // the border rows of the surface above, noise spread over bins
-            for (int k = std::max(0, bd - 1); k <= std::min(g.bins_d - 1, bd + 1); ++k) {
-                upper_at_cut += cell(bu, k, 1).at_cut;
-            }
-            lower.is_tall = lower.at_cut >= at_cut && upper_at_cut >= at_cut;
         }
     }
     return parent;

@@ -54,6 +54,9 @@ void GeometryOptions::validate() const {
     if (!(foot_ahead_px > 0.0 && foot_ahead_px < 1e6)) {
         throw std::invalid_argument("geometry.foot_ahead_px: must be > 0");
     }
+    if (!(split_surface_px >= 0.0 && split_surface_px < 1e6)) {
+        throw std::invalid_argument("geometry.split_surface_px: must be >= 0");
+    }
     if (!(behind_gap_m >= 0.0 && behind_gap_m < 1e6)) {
         throw std::invalid_argument("geometry.behind_gap_m: must be >= 0");
     }

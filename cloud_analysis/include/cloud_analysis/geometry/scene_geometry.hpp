@@ -62,6 +62,14 @@ struct GeometryOptions {
                                            ///< thing (a bus's back beyond a row's last car):
                                            ///< its top is not the segment's, while such cells
                                            ///< are fewer than the rest, metres, >= 0, 0 = off
+    double split_surface_px = 0.5;         ///< a lower cell whose mean disparity lies within
+                                           ///< this of a dense, tall, not green lower cell one
+                                           ///< disparity bin away in its column band is that
+                                           ///< surface, split over two bins at their border (a
+                                           ///< bus's back 1 m beyond a car at 30 m): tall when
+                                           ///< its heights lie within that cell's, and its
+                                           ///< pixels at those heights give its top only when
+                                           ///< it has no other, px, >= 0, 0 = off
     int blend_rows = 4;                    ///< ... and not a pixel whose column is nearer this
     double blend_step_px = 0.3;            ///< many rows above and farther as far below, each by
                                            ///< more than this (the matcher's blend of a crown
