@@ -294,7 +294,8 @@ void mark_kinds(Grid& g, const Rig& rig, const GeometryOptions& o) {
     }
 }
 
-/// Pass 1: road pixels labelled, every other pixel above the road counted in its cell.
+/// Pass 1: road pixels labelled, every other pixel above the road counted in its cell; then the
+/// cells' kinds (mark_kinds) and their tops.
 Grid fill_grid(const DisparityMap& disparity, const Rig& rig, const ImageU8& left,
                const GroundEstimate& ground, const GeometryOptions& o, std::uint16_t road,
                ClassImage& out) {
