@@ -65,6 +65,11 @@ constexpr int kLayers = 2;
 /// one image row spans 0.04 m at 30 m, metres.
 constexpr float kSplitSurfaceMarginM = 0.05f;
 
+/// Whether heights lo to hi lie within tall cell t's (kSplitSurfaceMarginM).
+bool within_heights(const Cell& t, float lo, float hi) {
+    return lo >= t.low - kSplitSurfaceMarginM && hi <= t.high + kSplitSurfaceMarginM;
+}
+
 /// The rig's depth of disparity d and the pixel grid, shared by the passes.
 struct Rig {
     double fb = 0.0, offset = 0.0, cx = 0.0, cy = 0.0, fx = 0.0, fy = 0.0;
@@ -258,7 +263,7 @@ void mark_kinds(Grid& g, const Rig& rig, const GeometryOptions& o) {
     const auto index = [&g](int bu, int bd, int layer) {
         return static_cast<std::size_t>((bu * g.bins_d + bd) * kLayers + layer);
     };
-    std::vector<char> dense_tall(g.cells.size(), 0);  // lower cells tall by continuity
+    std::vector<char> dense_tall(g.cells.size(), 0);  // dense, tall by continuity, not green
     for (int bd = 0; bd < g.bins_d; ++bd) {
         const auto [min_count, at_cut] = cell_thresholds(g, rig, o, bd);
         for (int bu = 0; bu < g.bins_u; ++bu) {
@@ -286,8 +291,7 @@ void mark_kinds(Grid& g, const Rig& rig, const GeometryOptions& o) {
                 const Cell& t = g.cells[index(bu, nd, 0)];
                 if (std::abs(c.d_sum / c.count - t.d_sum / t.count) > o.split_surface_px) continue;
                 c.surface[static_cast<std::size_t>(side)] = static_cast<int>(index(bu, nd, 0));
-                inside = inside || (c.low >= t.low - kSplitSurfaceMarginM &&
-                                    c.high <= t.high + kSplitSurfaceMarginM);
+                inside = inside || within_heights(t, c.low, c.high);
             }
             c.is_tall = inside;
         }
@@ -359,16 +363,11 @@ Grid fill_grid(const DisparityMap& disparity, const Rig& rig, const ImageU8& lef
     }
     mark_kinds(g, rig, o);
     // Whether lower-layer pixel height hf of cell c lies within a tall cell whose surface c
-    // holds in part (kSplitSurfaceMarginM, a row at range): that surface's pixels, not c's own.
+    // holds in part: that surface's pixels, not c's own.
     const auto on_split_surface = [&g](const Cell& c, float hf) {
-        for (const int j : c.surface) {
-            if (j < 0) continue;
-            const Cell& t = g.cells[static_cast<std::size_t>(j)];
-            if (hf >= t.low - kSplitSurfaceMarginM && hf <= t.high + kSplitSurfaceMarginM) {
-                return true;
-            }
-        }
-        return false;
+        return std::any_of(c.surface.begin(), c.surface.end(), [&](int j) {
+            return j >= 0 && within_heights(g.cells[static_cast<std::size_t>(j)], hf, hf);
+        });
     };
     // Tops second, from the pixels at the cell's depth: at range one disparity bin spans
     // metres, and the surface just behind a thing (a bus's side above a car's roof, 1-2 px of
