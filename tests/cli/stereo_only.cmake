@@ -41,7 +41,9 @@ endforeach()
 # row stands 0.5-1.7 m before the bus at 29-30 m, where one disparity pixel spans 2 m, under a
 # tree's crown. Its top must be its own, not the bus's back seen above its roof (-27) nor the
 # crown's lowest rows in its cells (-29), nor the bus's lower rows that the matcher put in its
-# disparity bin (-45). On parking-street-27 the right row's walk of cuts also
+# disparity bin (-45); on parking-street-100 the bus's back over the car's roof shares the
+# bin of the car's side and runs on across the layers' border, which must not make the car's
+# cells tall. On parking-street-27 the right row's walk of cuts also
 # steps a van's length over its van, or the cars beyond it are boxed 0.5-1.3 m nearer than they
 # are. On parking-street-51 a small car and the van beyond it make one box 6.7 m long, too low
 # for a van and too short for a row's walk, cut at the clear gap between the van's height and
@@ -66,6 +68,7 @@ if(TARGET scene-render)
             "parking-street-27|27|the car before the bus|${STEREOSCENE_STEREO_ONLY_BARS}"
             "parking-street-29|29|the car before the bus|${STEREOSCENE_STEREO_ONLY_BARS}"
             "parking-street-45|45|the car before the bus, split bins|${STEREOSCENE_STEREO_ONLY_BARS}"
+            "parking-street-100|100|the car before the bus, the bus over its roof|${STEREOSCENE_STEREO_ONLY_BARS}"
             "parking-street-48|48|a car behind a van|${STEREOSCENE_STEREO_ONLY_BARS}"
             "parking-street-51|51|a small car and the van beyond it|${_so_street_bars}"
             "parking-street-68|68|two small cars end to end|${STEREOSCENE_STEREO_ONLY_BARS}"

@@ -322,6 +322,7 @@ Grid fill_grid(const DisparityMap& disparity, const Rig& rig, const ImageU8& lef
     const auto tall_m = static_cast<float>(o.layer_height_m);
     const auto band_m = static_cast<float>(o.continuity_band_m);
     const std::vector<char> green_px = green_mask(left, w, h, o.green_window_px);
+    std::vector<std::size_t> lower_at_cut;  // lower-layer pixels near the layers' border
     for (int v = 0; v < h; ++v) {
         const std::size_t row = static_cast<std::size_t>(v) * w;
         const double row_term = n.y() * (v - rig.cy) / rig.fy + n.z();
@@ -355,10 +356,29 @@ Grid fill_grid(const DisparityMap& disparity, const Rig& rig, const ImageU8& lef
             c.d_sum += d;
             g.pixel_height[row + u] = hf;
             c.height_sum += hf;
-            c.at_cut += std::abs(hf - tall_m) <= band_m ? 1 : 0;
+            if (std::abs(hf - tall_m) <= band_m) {
+                if (upper || !(o.continuity_behind_m > 0.0)) {
+                    ++c.at_cut;
+                } else {
+                    lower_at_cut.push_back(row + u);
+                }
+            }
             c.green += green ? 1 : 0;
             c.low = std::min(c.low, hf);
             c.high = std::max(c.high, hf);
+        }
+    }
+    // A lower cell's border rows continue its own surface only at its depth: at range one bin
+    // spans metres, and the surface seen over a thing's top (a bus's back 1 m beyond a car's
+    // roof at 30 m) shares its cell, pixel-locked a few tenths of a pixel farther. A surface
+    // along the ray spreads over the whole bin, so only pixels farther than both limits drop.
+    for (const std::size_t p : lower_at_cut) {
+        Cell& c = g.cells[static_cast<std::size_t>(g.pixel_cell[p])];
+        const double d = double{disparity.disparity_px[p]} - rig.offset;
+        const double mean_d = c.d_sum / c.count;
+        if (d >= mean_d - o.continuity_behind_px ||
+            rig.fb / d <= rig.fb / mean_d + o.continuity_behind_m) {
+            ++c.at_cut;
         }
     }
     mark_kinds(g, rig, o);

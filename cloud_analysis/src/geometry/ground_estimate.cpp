@@ -87,6 +87,12 @@ void GeometryOptions::validate() const {
     if (!(continuity_band_m > 0.0)) {
         throw std::invalid_argument("geometry.continuity_band_m: must be > 0");
     }
+    if (!(continuity_behind_m >= 0.0 && continuity_behind_m < 1e6)) {
+        throw std::invalid_argument("geometry.continuity_behind_m: must be >= 0");
+    }
+    if (!(continuity_behind_px > 0.0 && continuity_behind_px < 1e6)) {
+        throw std::invalid_argument("geometry.continuity_behind_px: must be > 0");
+    }
     if (!(continuity_share > 0.0 && continuity_share <= 1.0)) {
         throw std::invalid_argument("geometry.continuity_share: must be in (0, 1]");
     }

@@ -248,6 +248,28 @@ TEST_CASE("a bus's back split over two disparity bins beside a car is the bus's,
     CHECK_THROWS_WITH(o.validate(), Catch::Contains("split_surface_px"));
 }
 
+TEST_CASE("a bus's back over a car's roof in the car's disparity bin does not make the car tall",
+          "[geometry]") {
+    const StereoCamera cam = kitti_rig();
+    const auto palette = cloud_analysis::load_palette("cityscapes");
+    // A car's back at 28.2 m (13.82 px, 1.6 m high) and, 1.7 m beyond, a bus's back (3.2 m
+    // tall from 0.3 m up) that the matcher locks at 13.03 px: both in the car's 1 px bin. Over
+    // the roof the bus's rows run on across the layers' border, 0.5 px behind the cell's mean.
+    const std::vector<Box> boxes = {{-1.0, 0.8, 28.2, 1.6}, {-1.6, 1.4, 29.9, 3.2, 0.3}};
+    const DisparityMap d = render(cam, 1.65, boxes);
+    check_car_only_with_rule(d, cam, palette, pixel_of(cam, 0.0, 0.8, 28.2),
+                             [](GeometryOptions& o) { o.continuity_behind_m = 0.0; });
+    // The bus beside the car still continues across the border.
+    const auto [u, v] = pixel_of(cam, 1.2, 0.8, 29.9);
+    CHECK(class_at(derive_semantics(d, cam, ImageU8{}, palette, {}), palette, u, v) == "building");
+    GeometryOptions o;
+    o.continuity_behind_m = -1.0;
+    CHECK_THROWS_WITH(o.validate(), Catch::Contains("continuity_behind_m"));
+    o = GeometryOptions{};
+    o.continuity_behind_px = 0.0;
+    CHECK_THROWS_WITH(o.validate(), Catch::Contains("continuity_behind_px"));
+}
+
 TEST_CASE("a crown's blend into the bus behind is not the top of the car between them",
           "[geometry]") {
     const StereoCamera cam = kitti_rig();

@@ -84,6 +84,11 @@ struct GeometryOptions {
                                            ///< wall, a trunk: its cells are tall) when it fills
     double continuity_share = 0.3;         ///< this share of the band this tall on both sides of
                                            ///< it; else the layers stay apart, metres, (0, 1]
+    double continuity_behind_m = 0.5;      ///< a lower cell's pixels in that band count only
+    double continuity_behind_px = 0.35;    ///< when at most this far behind its mean depth or
+                                           ///< mean disparity (the bus's back over a car's roof
+                                           ///< shares the car's bin at 30 m, 0.4 px farther),
+                                           ///< metres >= 0 (0 = every pixel counts), px > 0
     double car_min_height_m = 0.9;         ///< car tops lie between this ...
     double car_max_height_m = 2.2;         ///< ... and this above the road (below layer_height_m:
                                            ///< a segment reaching it meets a surface above), m
