@@ -60,10 +60,11 @@ struct TallPitch {
 /// about `prior_m`, cutting at the emptiest place near each even cut (touching parked cars).
 /// With `from_near_end`, the cuts are walked from the end nearer the camera instead, each at
 /// the emptiest place about `prior_m` beyond the previous one: the far end of a long row is
-/// seen sparsely, so its extent (and an even division of it) is unreliable. With `tall`, where
-/// no clear gap lies within reach of one `prior_m` on, a thing whose points within `prior_m`
-/// of the walk's last cut reach its height has its pitch instead (a van's length, not a car's:
-/// a cut one car length on falls inside the van).
+/// seen sparsely, so its extent (and an even division of it) is unreliable. With `tall`, a thing
+/// whose points within `prior_m` of the walk's last cut reach its height has its pitch instead
+/// (a van's length, not a car's: a cut one car length on falls inside the van) where no clear
+/// gap lies within reach of one `prior_m` on, or where a wider one lies within reach of its
+/// pitch (gaps measured with single-bin islands of stray points merged).
 Split split_along(const std::vector<Eigen::Vector3f>& pts, const Indices& idx, double dir_x,
                   double dir_z, double extent_m, double prior_m, bool from_near_end = false,
                   const TallPitch* tall = nullptr) {
@@ -130,14 +131,47 @@ Split split_along(const std::vector<Eigen::Vector3f>& pts, const Indices& idx, d
         // clear gap (kClearGapBins gap bins in a row) lies within reach of one prior pitch on
         // and the points within that pitch are tall, one tall thing's pitch on instead.
         const int tall_step = tall ? static_cast<int>(std::lround(tall->pitch_m / bin)) : step;
+        const int tall_reach = tall ? static_cast<int>(0.25 * tall->pitch_m / bin) : reach;
+        // Gaps with single-bin islands of stray points merged: per gap bin, the first and last
+        // bin of its gap (-1 off gaps).
+        std::vector<int> gap_first(hist.size(), -1), gap_last(hist.size(), -1);
+        for (int b = 0; b < bins;) {
+            if (!is_gap(b)) {
+                ++b;
+                continue;
+            }
+            int e = b;
+            while (inside(e + 1) && (is_gap(e + 1) || (inside(e + 2) && is_gap(e + 2)))) {
+                e += is_gap(e + 1) ? 1 : 2;
+            }
+            for (int k = b; k <= e; ++k) {
+                gap_first[static_cast<std::size_t>(k)] = b;
+                gap_last[static_cast<std::size_t>(k)] = e;
+            }
+            b = e + 1;
+        }
+        // Bins of the widest merged gap within [first, last] (each gap counted within it), 0
+        // when none holds kClearGapBins.
+        const auto widest_gap = [&](int first, int last) {
+            first = std::max(first, 0);
+            last = std::min(last, bins - 1);
+            int widest = 0;
+            for (int b = first; b <= last; ++b) {
+                const auto k = static_cast<std::size_t>(b);
+                if (gap_first[k] < 0 || (b > first && gap_first[k] == gap_first[k - 1])) continue;
+                const int width = std::min(gap_last[k], last) - std::max(gap_first[k], first) + 1;
+                if (width >= kClearGapBins) widest = std::max(widest, width);
+            }
+            return widest;
+        };
         const auto next_cut = [&](int from, int dir) {
             const int centre = from + dir * step;
             if (!tall || tall_step <= step) return emptiest(centre, reach);
-            int run = 0;
-            for (int b = std::max(0, centre - reach); b <= std::min(bins - 1, centre + reach);
-                 ++b) {
+            bool clear = false;
+            for (int b = std::max(0, centre - reach), run = 0;
+                 b <= std::min(bins - 1, centre + reach) && !clear; ++b) {
                 run = is_gap(b) ? run + 1 : 0;
-                if (run >= kClearGapBins) return emptiest(centre, reach);
+                clear = run >= kClearGapBins;
             }
             std::vector<double> h;
             for (int b = std::max(0, std::min(from, from + dir * step));
@@ -148,7 +182,15 @@ Split split_along(const std::vector<Eigen::Vector3f>& pts, const Indices& idx, d
             if (h.empty() || quantile(h, 0.98) < tall->min_height_m) {
                 return emptiest(centre, reach);
             }
-            return emptiest(from + dir * tall_step, static_cast<int>(0.25 * tall->pitch_m / bin));
+            const int tall_centre = from + dir * tall_step;
+            // A tall thing with a clear gap one car's pitch on: a car's end there unless a wider
+            // gap lies about a van's pitch on (the dip under a van's lower rear, a metre short
+            // of the gap behind it).
+            if (clear && widest_gap(tall_centre - tall_reach, tall_centre + tall_reach) <=
+                             widest_gap(centre - reach, centre + reach)) {
+                return emptiest(centre, reach);
+            }
+            return emptiest(tall_centre, tall_reach);
         };
         if (std::abs(hi) < std::abs(lo)) {
             const int start = static_cast<int>((q_hi - lo) / bin);

@@ -844,6 +844,42 @@ TEST_CASE("a parked row's walk of cuts steps a van's length over a van when a ca
     CHECK(spans[2].first == Approx(18.1f).margin(0.1));
 }
 
+TEST_CASE(
+    "a parked row's walk of cuts steps over the dip under a van's lower rear to the gap "
+    "behind it",
+    "[entities][split]") {
+    // A van (roof 2.0 m) whose side thins out for 0.3 m one car's pitch on, where its lower
+    // rear (1.1 m) starts, then a 1.2 m gap whose first half holds smear, then two cars. The
+    // dip is the emptiest place within reach of a car's pitch, but a wider gap lies within
+    // reach of a van's: the van ends there, its lower rear with it.
+    std::vector<Eigen::Vector3f> pts;
+    add_side(pts, 12.0f, 15.9f, 2.0f);
+    for (float z = 15.95f; z < 16.2f; z += 0.05f) pts.emplace_back(-1.1f, 0.55f, z);
+    add_side(pts, 16.2f, 17.4f, 1.1f);
+    for (float z = 17.45f; z < 18.0f; z += 0.05f) {
+        pts.emplace_back(-1.1f, 0.55f, z);
+        pts.emplace_back(-1.1f, 0.6f, z);
+    }
+    add_side(pts, 18.6f, 22.8f, 1.45f);
+    add_side(pts, 23.3f, 26.0f, 1.45f);
+    const auto split = split_with_car_prior(pts, all_of(pts),
+                                            row_box_along_z(0.65, 19.0, 14.0, 2.0), GroundPlane{});
+    REQUIRE(split.parts.size() == 3);
+    CHECK(parted_at(pts, split, 18.0f, 18.6f));
+    CHECK(parted_at(pts, split, 22.8f, 23.3f));
+    // A tall thing 3.9 m long, a clear 0.3 m gap one car's pitch on and the next car's side
+    // where a van's pitch reaches, no gap there: the car's pitch cuts, at that gap.
+    pts.clear();
+    add_side(pts, 12.0f, 15.9f, 2.0f);
+    add_side(pts, 16.2f, 20.4f, 1.45f);
+    add_side(pts, 20.9f, 25.1f, 1.45f);
+    const auto plain = split_with_car_prior(pts, all_of(pts),
+                                            row_box_along_z(0.65, 18.55, 13.1, 2.0), GroundPlane{});
+    REQUIRE(plain.parts.size() == 3);
+    CHECK(parted_at(pts, plain, 15.9f, 16.2f));
+    CHECK(parted_at(pts, plain, 20.4f, 20.9f));
+}
+
 TEST_CASE("a car box longer than a van is cut at a clear gap between a van and a lower car",
           "[entities][split]") {
     // The last 2.2 m of a small car (roof 1.35 m, boot 1.0 m), 0.6 m apart from a van whose
