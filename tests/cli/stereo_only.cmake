@@ -51,14 +51,17 @@ endforeach()
 # cuts, its first metre with the van; its two faint pieces are joined. On parking-street-68 two
 # small cars 0.6 m apart at 25-30 m make one box 6.2 m long, cut at the gap between their roofs.
 # On kerbside-70 0.2 m of a van's smear lies in the 2.5 m gap behind it, which the row's walk of
-# cuts crosses to the small car beyond. On parking-street-20 (a held-out street) 1.2 m of a small
+# cuts crosses to the small car beyond. On kerbside-98 the side of a van thins out one car's pitch
+# on, where its lower rear starts a metre before the gap behind it; the walk steps a van's pitch
+# to that gap, or the next car is boxed with the van's rear. On parking-street-20 (a held-out street) 1.2 m of a small
 # car at 5 m shows past the matcher's left border, 0.4 m before the next car; the cut at the
 # image's edge parts the two there, not at a sliver of smear beyond the second. All meet the
 # stereo-only bars.
 if(TARGET scene-render)
     file(MAKE_DIRECTORY ${_so_out}/rendered)
     # parking-street-51 shows two false cars (a second box on a car, a phantom on the bus),
-    # kerbside-70 three (kerbside clutter: walls, a hedge).
+    # kerbside-98 two (kerbside posts, a bicycle), kerbside-70 three (kerbside clutter:
+    # walls, a hedge).
     set(_so_street_bars ${STEREOSCENE_STEREO_ONLY_BARS})
     list(REMOVE_AT _so_street_bars -1)
     set(_so_kerbside_bars ${_so_street_bars})
@@ -73,7 +76,8 @@ if(TARGET scene-render)
             "parking-street-51|51|a small car and the van beyond it|${_so_street_bars}"
             "parking-street-68|68|two small cars end to end|${STEREOSCENE_STEREO_ONLY_BARS}"
             "parking-street-20|20|a car cut by the left edge and the next car|${STEREOSCENE_STEREO_ONLY_BARS}"
-            "kerbside-70|70|a small car past a van's smear|${_so_kerbside_bars}")
+            "kerbside-70|70|a small car past a van's smear|${_so_kerbside_bars}"
+            "kerbside-98|98|a van's lower rear before the next car|${_so_street_bars}")
         string(REPLACE "|" ";" _street "${_street}")
         list(POP_FRONT _street _scene _seed _what)
         set(_dir ${_so_out}/rendered/${_scene})
