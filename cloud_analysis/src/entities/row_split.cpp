@@ -127,9 +127,10 @@ Split split_along(const std::vector<Eigen::Vector3f>& pts, const Indices& idx, d
                 b = e;
             }
         };
-        // The next cut from the bin `from` in the direction dir: about one pitch on. When no
-        // clear gap (kClearGapBins gap bins in a row) lies within reach of one prior pitch on
-        // and the points within that pitch are tall, one tall thing's pitch on instead.
+        // The next cut from the bin `from` in the direction dir: about one pitch on. When the
+        // points within that pitch are tall and no clear gap (kClearGapBins gap bins in a row)
+        // lies within reach of one prior pitch on, or a wider one lies within reach of a tall
+        // thing's pitch, one tall thing's pitch on instead.
         const int tall_step = tall ? static_cast<int>(std::lround(tall->pitch_m / bin)) : step;
         const int tall_reach = tall ? static_cast<int>(0.25 * tall->pitch_m / bin) : reach;
         // Gaps with single-bin islands of stray points merged: per gap bin, the first and last
