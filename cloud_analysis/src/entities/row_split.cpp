@@ -134,9 +134,9 @@ Split split_along(const std::vector<Eigen::Vector3f>& pts, const Indices& idx, d
         const int tall_step = tall ? static_cast<int>(std::lround(tall->pitch_m / bin)) : step;
         const int tall_reach = tall ? static_cast<int>(0.25 * tall->pitch_m / bin) : reach;
         // Gaps with single-bin islands of stray points merged: per gap bin, the first and last
-        // bin of its gap (-1 off gaps).
-        std::vector<int> gap_first(hist.size(), -1), gap_last(hist.size(), -1);
-        for (int b = 0; b < bins;) {
+        // bin of its gap (-1 off gaps); read only by a walk with a tall pitch.
+        std::vector<int> gap_first(tall ? hist.size() : 0, -1), gap_last(gap_first);
+        for (int b = 0; tall && b < bins;) {
             if (!is_gap(b)) {
                 ++b;
                 continue;
