@@ -132,6 +132,9 @@ class Checker : public detail::CheckerBase {
         if (auto it = value.find("velocity"); it != value.end()) {
             velocity(*it, at(pointer, "velocity"));
         }
+        if (auto it = value.find("instance_id"); it != value.end()) {
+            integer_in(*it, at(pointer, "instance_id"), 1.0, 4294967295.0);
+        }
     }
 
     void document(const json& value) {

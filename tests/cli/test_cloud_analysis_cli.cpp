@@ -769,3 +769,79 @@ TEST_CASE("track's benchmark follows 50 cars without losing one and says how lon
     CHECK(bad.code == 2);
     CHECK(bad.err.find("--bench-objects") != std::string::npos);
 }
+
+TEST_CASE("an instance image makes each object one entity carrying its id, and the file says so",
+          "[cli][instances]") {
+    const auto dir = scratch("instances");
+    const fs::path root = fs::path(STEREOSCENE_SAMPLES_DIR) / "rendered" / "street";
+    const Run r = run(
+        tool() + " --kitti-root " + quote(root.string()) + " --frame 000000 --instances -o -", dir);
+    REQUIRE(r.code == 0);
+    const auto doc = nlohmann::json::parse(r.out);
+    CHECK(doc["source"]["inputs"]["instance"].get<std::string>().find("instance/000000.png") !=
+          std::string::npos);
+    CHECK(doc["source"]["instances"]["encoding"] == "kitti");
+    int with_id = 0;
+    for (const auto& e : doc["entities"]) {
+        if (e.contains("instance_id")) {
+            ++with_id;
+            // KITTI ids: the labelId of the entity's class in the high byte.
+            CHECK(e["instance_id"].get<std::uint32_t>() >> 8 == e["class_id"].get<std::uint32_t>());
+        }
+    }
+    CHECK(with_id >= 5);
+    CHECK(doc["source"]["instances"]["entities"] == with_id);
+    // batch reads the KITTI root's instance/ too.
+    const fs::path out = dir / "batch";
+    fs::create_directories(out);
+    const Run b = run(tool() + " batch --kitti-root " + quote(root.string()) +
+                          " --frames 000000 --instances -q --out-dir " + quote(out.string()),
+                      dir);
+    REQUIRE(b.code == 0);
+    CHECK(nlohmann::json::parse(slurp(out / "000000.json"))["source"]["instances"]["entities"] ==
+          with_id);
+}
+
+TEST_CASE("a bad instance image exits 1 with one line naming it and writes nothing",
+          "[cli][instances]") {
+    const auto dir = scratch("bad_instances");
+    const fs::path root = fs::path(STEREOSCENE_SAMPLES_DIR) / "rendered" / "street";
+    const fs::path json = dir / "e.json";
+    const std::string inputs =
+        " --kitti-root " + quote(root.string()) + " --frame 000000 -o " + quote(json.string());
+    const std::string street_instance = quote((root / "instance" / "000000.png").string());
+    struct Case {
+        std::string flags;
+        std::string says;
+    };
+    const std::vector<Case> cases = {
+        // Another size.
+        {" --instance " + quote((kSample / "semantic.png").string()), "instance image is"},
+        // 8-bit colours where 16-bit ids are asked for.
+        {" --instance " + quote((root / "semantic_rgb" / "000000.png").string()) +
+             " --instance-encoding kitti",
+         "8-bit samples where 16-bit kitti ids are expected"},
+        // 16-bit ids read with the wrong encoding: their classes are not the semantic image's.
+        {" --instance " + street_instance + " --instance-encoding cityscapes",
+         "match the semantic image on"},
+        // 16-bit ids where colours are asked for.
+        {" --instance " + street_instance + " --instance-encoding colour",
+         "16-bit ids where 8-bit RGB colours are expected"},
+        // No semantic image to take the classes from.
+        {" --instance " + street_instance + " --semantics geometry", "need the semantic image"},
+        {" --instance " + quote((dir / "nope.png").string()), "nope.png"},
+    };
+    for (const auto& c : cases) {
+        INFO(c.flags);
+        const Run r = run(tool() + inputs + c.flags, dir);
+        CHECK(r.code == 1);
+        CHECK(count_lines(r.err) == 1);
+        CHECK(r.err.find(c.says) != std::string::npos);
+        CHECK_FALSE(fs::exists(json));
+    }
+    const Run usage = run(tool() + inputs + " --instance-encoding rgb", dir);
+    CHECK(usage.code == 2);
+    const Run no_root = run(tool() + sample_inputs() + " --instances -o -", dir);
+    CHECK(no_root.code == 2);
+    CHECK(no_root.err.find("--instances") != std::string::npos);
+}

@@ -67,7 +67,7 @@ TEST_CASE("a 1.0 file without the 1.1 members still reads and keeps its version"
     CHECK_FALSE(doc.frame.timestamp_s);
     CHECK(scene_schema::to_json(doc) == old);
     const scene_schema::EntityDocument fresh;
-    CHECK(fresh.schema_version == "1.1.0");
+    CHECK(fresh.schema_version == scene_schema::kSchemaVersion);
 }
 
 TEST_CASE("the 1.1 members are validated at their pointers", "[schema]") {

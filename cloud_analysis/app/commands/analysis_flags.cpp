@@ -18,6 +18,10 @@ void add_input_flags(CLI::App& cmd, AnalyseArgs& a) {
     cmd.add_option("--right,-r", a.paths.right, "right rectified image")->group(in);
     cmd.add_option("--semantic,-s", a.paths.semantic, "semantic colour image of the left view")
         ->group(in);
+    cmd.add_option("--instance", a.paths.instance,
+                   "instance image of the left view (16-bit KITTI or Cityscapes ids, or 8-bit RGB "
+                   "colours): each object taken whole, needs --semantic")
+        ->group(in);
     cmd.add_option("--calib,-c", a.paths.calibration,
                    "calibration: KITTI calib_cam_to_cam.txt, KITTI object calib, or YAML/JSON "
                    "(fx fy cx cy baseline_m [distortion])")
@@ -26,6 +30,9 @@ void add_input_flags(CLI::App& cmd, AnalyseArgs& a) {
                    "KITTI folder: image_2/ image_3/ semantic_rgb/ calib/ (with --frame)")
         ->group(in);
     cmd.add_option("--frame", a.frame, "frame id, e.g. 000000_10 (names the entity frame)")
+        ->group(in);
+    cmd.add_flag("--instances", a.kitti_instances,
+                 "--kitti-root: also read its instance/<frame>.png (see --instance)")
         ->group(in);
 }
 
@@ -49,6 +56,13 @@ void add_input_settings_flags(CLI::App& cmd, AnalyseArgs& a) {
                    "classes from: labels (the semantic image), geometry (the stereo pair alone, "
                    "docs/stereo-only.md) or auto (labels when a semantic image is given)")
         ->check(CLI::IsMember({"labels", "geometry", "auto"}))
+        ->capture_default_str()
+        ->group(in);
+    cmd.add_option("--instance-encoding", a.options.instance_encoding,
+                   "how the instance image stores objects: auto (16-bit: KITTI or Cityscapes, "
+                   "whichever matches the semantic image; 8-bit: colours), kitti (labelId << 8 | "
+                   "n), cityscapes (labelId * 1000 + n) or colour (RGB, black = none)")
+        ->check(CLI::IsMember({"auto", "kitti", "cityscapes", "colour"}))
         ->capture_default_str()
         ->group(in);
     cmd.add_option("--stereo-segmentation", a.options.geometry.segmentation,
@@ -319,6 +333,11 @@ void resolve(AnalyseArgs& a, const CLI::App& cmd) {
         if (a.paths.right.empty()) a.paths.right = k.right;
         if (a.paths.semantic.empty()) a.paths.semantic = k.semantic;
         if (a.paths.calibration.empty()) a.paths.calibration = k.calibration;
+        if (a.kitti_instances && a.paths.instance.empty()) {
+            a.paths.instance = cloud_analysis::kitti_instance_path(a.kitti_root, a.frame);
+        }
+    } else if (a.kitti_instances) {
+        throw CLI::ValidationError("--instances", "needs --kitti-root (its instance/ folder)");
     }
     if (a.paths.left.empty()) throw CLI::RequiredError("--left (or --kitti-root and --frame)");
     if (a.paths.right.empty()) throw CLI::RequiredError("--right (or --kitti-root and --frame)");

@@ -22,6 +22,7 @@ namespace cloud_analysis::app {
 struct AnalyseArgs {
     cloud_analysis::InputPaths paths;
     std::filesystem::path kitti_root;
+    bool kitti_instances = false;  ///< --instances: the KITTI root's instance/<frame>.png
     std::string frame;
     cloud_analysis::AnalyseOptions options;
     std::string preset = "tuned";

@@ -102,6 +102,7 @@ double unix_seconds() {
 cloud_analysis::BatchOptions batch_options(const BatchArgs& a, std::vector<std::string> frames) {
     cloud_analysis::BatchOptions options;
     options.kitti_root = a.kitti_root;
+    options.kitti_instances = a.instances;
     options.frames = std::move(frames);
     if (!a.drive.empty()) {
         // The share's frames, in the drive's order.
@@ -168,9 +169,10 @@ CLI::App* add_batch_command(CLI::App& app, BatchArgs& a) {
     auto* drive = cmd->add_option("--drive", a.drive_dir,
                                   "KITTI raw drive folder: image_02/data/*.png, image_03/data/, "
                                   "image_02/timestamps.txt; calib_cam_to_cam.txt beside or above");
-    auto* pairs = cmd->add_option("--pairs", a.pairs,
-                                  "file of frames, one a line: LEFT RIGHT [SEMANTIC] (paths "
-                                  "relative to the file; needs --calib)");
+    auto* pairs =
+        cmd->add_option("--pairs", a.pairs,
+                        "file of frames, one a line: LEFT RIGHT [SEMANTIC [INSTANCE]] (paths "
+                        "relative to the file; needs --calib)");
     root->excludes(drive)->excludes(pairs);
     drive->excludes(pairs);
     auto* frames = cmd->add_option("--frames", a.frames, "frame ids, e.g. 000000_10 000001_10");
@@ -180,6 +182,11 @@ CLI::App* add_batch_command(CLI::App& app, BatchArgs& a) {
     cmd->add_option("--calib,-c", a.calib, "calibration of --drive (default: found) or --pairs");
     cmd->add_option("--semantic-dir", a.semantic_dir,
                     "--drive: semantic images, one per left image of the same name");
+    cmd->add_option("--instance-dir", a.instance_dir,
+                    "--drive: instance images, one per left image of the same name (see "
+                    "--instance-encoding)");
+    cmd->add_flag("--instances", a.instances,
+                  "--kitti-root: also read instance/<frame>.png: each object taken whole");
     cmd->add_flag("--track", a.track,
                   "track the frames in order: entity files with track_id and velocity, and "
                   "<out-dir>/sequence.json (see `track`)");
@@ -241,7 +248,8 @@ namespace {
 /// The frames of --drive or --pairs (read now: the share and --resume need their ids).
 void read_drive(BatchArgs& a) {
     if (!a.drive_dir.empty()) {
-        a.drive = cloud_analysis::kitti_raw_drive(a.drive_dir, a.calib, a.semantic_dir);
+        a.drive =
+            cloud_analysis::kitti_raw_drive(a.drive_dir, a.calib, a.semantic_dir, a.instance_dir);
     } else {
         std::string text;
         try {
@@ -268,6 +276,10 @@ void check_batch_flags(const BatchArgs& a) {
                                    "only with --drive or --pairs (a KITTI root has calib/)");
     if (!a.semantic_dir.empty() && a.drive_dir.empty())
         throw CLI::ValidationError("--semantic-dir", "only with --drive");
+    if (!a.instance_dir.empty() && a.drive_dir.empty())
+        throw CLI::ValidationError("--instance-dir", "only with --drive");
+    if (a.instances && a.kitti_root.empty())
+        throw CLI::ValidationError("--instances", "only with --kitti-root (its instance/)");
     if (a.evaluate && a.kitti_root.empty())
         throw CLI::ValidationError("--evaluate", "needs --kitti-root (its disp_occ_0/)");
     if (a.track && a.resume)

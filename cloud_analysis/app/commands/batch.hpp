@@ -21,12 +21,14 @@ namespace cloud_analysis::app {
 
 /// Flags of `batch`.
 struct BatchArgs {
-    AnalyseArgs settings;                ///< palette, preset, SGBM, cloud and entity flags
-    std::filesystem::path kitti_root;    ///< --kitti-root: KITTI layout folder
-    std::filesystem::path drive_dir;     ///< --drive: KITTI raw drive folder
-    std::filesystem::path pairs;         ///< --pairs: file of LEFT RIGHT [SEMANTIC] lines
-    std::filesystem::path calib;         ///< --calib: the calibration of --drive / --pairs
+    AnalyseArgs settings;              ///< palette, preset, SGBM, cloud and entity flags
+    std::filesystem::path kitti_root;  ///< --kitti-root: KITTI layout folder
+    std::filesystem::path drive_dir;   ///< --drive: KITTI raw drive folder
+    std::filesystem::path pairs;       ///< --pairs: file of LEFT RIGHT [SEMANTIC [INSTANCE]] lines
+    std::filesystem::path calib;       ///< --calib: the calibration of --drive / --pairs
     std::filesystem::path semantic_dir;  ///< --semantic-dir: a drive's semantic images
+    std::filesystem::path instance_dir;  ///< --instance-dir: a drive's instance images
+    bool instances = false;              ///< --instances: a KITTI root's instance/<frame>.png
     std::vector<cloud_analysis::DriveFrame> drive;  ///< the frames of --drive or --pairs
     bool track = false;                             ///< --track: track ids + sequence.json
     tracking::SequenceTrackOptions track_options;   ///< --fps, --min-hits, --max-misses

@@ -1,7 +1,9 @@
 #include "cloud_analysis/entities/candidate.hpp"
 
 #include <algorithm>
+#include <cmath>
 #include <cstdint>
+#include <utility>
 
 namespace cloud_analysis::instances {
 
@@ -59,6 +61,35 @@ void keep_largest(std::vector<scene_schema::Entity>& entities, int max_entities)
     if (entities.size() > static_cast<std::size_t>(max_entities)) {
         entities.resize(static_cast<std::size_t>(max_entities));
     }
+}
+
+Indices densest_range_window(const std::vector<Eigen::Vector3f>& pts, const Indices& members,
+                             double extent_m, std::size_t min_points) {
+    if (members.size() < 2 || !(extent_m > 0.0)) return members;
+    std::vector<std::pair<double, std::size_t>> by_range;
+    by_range.reserve(members.size());
+    for (std::size_t i : members) {
+        by_range.emplace_back(std::hypot(double{pts[i].x()}, double{pts[i].z()}), i);
+    }
+    std::sort(by_range.begin(), by_range.end());
+    std::size_t best_first = 0, best_count = 0;
+    for (std::size_t first = 0, last = 0; first < by_range.size(); ++first) {
+        while (last < by_range.size() && by_range[last].first <= by_range[first].first + extent_m) {
+            ++last;
+        }
+        if (last - first > best_count) {
+            best_count = last - first;
+            best_first = first;
+        }
+    }
+    if (best_count < min_points || best_count == members.size()) return members;
+    Indices kept;
+    kept.reserve(best_count);
+    for (std::size_t k = best_first; k < best_first + best_count; ++k) {
+        kept.push_back(by_range[k].second);
+    }
+    std::sort(kept.begin(), kept.end());
+    return kept;
 }
 
 }  // namespace cloud_analysis::instances

@@ -42,6 +42,14 @@ scene_schema::EntityDocument entity_document(const LoadedInputs& in, const Analy
     doc.frame.camera = cam;
     nlohmann::json source = describe_run(in, run.analyse, run.tool_version);
     source["extract"] = {{"method", extract.method}, {"class_config", run.class_config}};
+    if (!r.instances.empty()) {
+        // Things of the instance image's objects were taken whole, the rest clustered.
+        std::size_t taken = 0;
+        for (const auto& e : doc.entities) taken += e.extra.contains("instance_id") ? 1 : 0;
+        source["instances"] = {{"encoding", instance_encoding_name(r.instances.encoding)},
+                               {"objects", r.instances.objects},
+                               {"entities", taken}};
+    }
     doc.source = source;
     return doc;
 }

@@ -353,6 +353,7 @@ ClassPoints points_by_class(const LabeledCloud& cloud, const ClassSelection& sel
             std::min(*std::min_element(first_col.begin(), first_col.end()), width - 1));
         out.last_column = static_cast<int>(*std::max_element(last_col.begin(), last_col.end()));
         out.depth_edge = cloud.depth_edge;
+        out.instance_id = cloud.instance_id;
     }
     // Sized for every point of the class, written by index, then cut to the points kept.
     for (std::size_t k = 0; k < classes; ++k) {
@@ -402,6 +403,10 @@ scene_schema::EntityDocument extract_entities(const ClassPoints& points, const P
     if (grid.valid() && points.depth_edge.size() == static_cast<std::size_t>(grid.width_px) *
                                                         static_cast<std::size_t>(grid.height_px)) {
         grid.depth_edge = &points.depth_edge;
+    }
+    if (grid.valid() && points.instance_id.size() == static_cast<std::size_t>(grid.width_px) *
+                                                         static_cast<std::size_t>(grid.height_px)) {
+        grid.instance_id = &points.instance_id;
     }
 
     // The ground plane is the first task, fitted beside the clustering of the classes (which

@@ -7,6 +7,8 @@
 #include <limits>
 #include <memory>
 #include <tuple>
+#include <unordered_map>
+#include <unordered_set>
 #include <utility>
 
 #include "cloud_analysis/entities/image_components.hpp"
@@ -218,6 +220,68 @@ std::optional<Eigen::Vector2d> truncation_point(const std::vector<Eigen::Vector3
                              : Eigen::Vector2d(right / static_cast<double>(n_right));
 }
 
+/// The fit of a thing's own box once no split is left: the splits read the box as fitted; the
+/// thing's own box trims its near end further along the viewing ray and takes its extents over
+/// seen surface (a side seen along the ray holds few points per metre at its far end).
+BoxFitOptions own_box_fit(const BoxFitOptions& fit, const ExtractOptions& options) {
+    BoxFitOptions final_fit = fit;
+    final_fit.near_trim_fraction = std::max(fit.trim_fraction, options.near_trim_fraction);
+    final_fit.area_weighted_extents = options.area_weighted_extents;
+    return final_fit;
+}
+
+/// The thing's own box (own_box_fit) of its points, `box` when that fit changes nothing.
+OrientedBox own_box(const std::vector<Eigen::Vector3f>& member_pts, const OrientedBox& box,
+                    const BoxFitOptions& fit, const BoxFitOptions& final_fit,
+                    const std::optional<GroundPlane>& ground) {
+    if (final_fit.near_trim_fraction > fit.near_trim_fraction || final_fit.area_weighted_extents) {
+        return fit_upright_box(member_pts, ground, final_fit);
+    }
+    return box;
+}
+
+/// A candidate's size family (a van's length prior when it is as tall as one, its box as
+/// fitted being `fitted_H_m` tall), the far end of its side from its pixel columns, its
+/// fragment flag and its mean range.
+void complete_candidate(Candidate& c, const std::vector<Eigen::Vector3f>& pts,
+                        const std::vector<Eigen::Vector3f>& member_pts, double fitted_H_m,
+                        const BoxFitOptions& final_fit, const ClassSettings& s,
+                        const std::optional<GroundPlane>& ground, const ExtractOptions& options) {
+    if (!options.family_class.empty() && s.name == options.family_class) {
+        // A van shows its height: its hidden length is a van's, not a car's.
+        c.subclass = "car";
+        if (fitted_H_m >= options.van_min_height_m) {
+            BoxFitOptions van = final_fit;
+            van.prior_L_m = options.van_prior_L_m;
+            van.prior_W_m = options.van_prior_W_m;
+            c.box = fit_upright_box(member_pts, ground, van);
+            c.subclass = "van";
+        }
+    }
+    if (s.name == options.family_class && options.far_column_length_fraction > 0.0) {
+        // A side seen along the viewing ray: its far end where its pixels end in the image.
+        const double prior = c.subclass == "van" ? options.van_prior_L_m : s.prior_L_m;
+        c.box = extend_far_end_to_columns(
+            c.box, member_pts, std::max(c.box.L_m, options.far_column_length_fraction * prior));
+    }
+    if (c.subclass == "van" && c.box.L_m > options.van_max_L_m) {
+        // Longer than any van: the piece holds the end of the thing before it in its row
+        // too (a row's cut at a van's windscreen foot, where the glass matches sparsely,
+        // leaves the van's front to the piece beyond). The van keeps its far end.
+        c.box = with_length(c.box, options.van_prior_L_m, true);
+    }
+    if (s.has_prior()) {
+        c.fragment =
+            c.members.size() < static_cast<std::size_t>(s.min_points) ||
+            height_spread(pts, c.members, ground) < options.fragment_height_fraction * s.prior_H_m;
+    }
+    for (std::size_t i : c.members) {
+        const double x = pts[i].x(), z = pts[i].z();
+        c.range_m += std::sqrt(x * x + z * z);
+    }
+    c.range_m /= static_cast<double>(c.members.size());
+}
+
 /// The candidates of thing cluster number `cluster`: its points without smear, fitted, split
 /// when oversized (at most three levels: side by side, rows, their pieces) and refitted. Pieces cut
 /// at clear gaps keep the cluster's shadow group (`cluster`); other pieces get groups of their own,
@@ -294,20 +358,11 @@ std::vector<Candidate> candidates_of_cluster(const std::vector<Eigen::Vector3f>&
                 continue;
             }
             Candidate c;
-            c.box = box;
             c.members = std::move(part);
             c.group = group;
-            // The splits above read the box as fitted; the thing's own box trims its near end
-            // further along the viewing ray and takes its extents over seen surface (a side seen
-            // along the ray holds few points per metre at its far end).
-            BoxFitOptions final_fit = fit;
-            final_fit.near_trim_fraction = std::max(fit.trim_fraction, options.near_trim_fraction);
-            final_fit.area_weighted_extents = options.area_weighted_extents;
             const std::vector<Eigen::Vector3f> member_pts = gather(pts, c.members);
-            if (final_fit.near_trim_fraction > fit.near_trim_fraction ||
-                final_fit.area_weighted_extents) {
-                c.box = fit_upright_box(member_pts, ground, final_fit);
-            }
+            const BoxFitOptions final_fit = own_box_fit(fit, options);
+            c.box = own_box(member_pts, box, fit, final_fit, ground);
             // The thing's own box can come out longer than the box the splits read (its near end
             // trimmed along the ray, its extents over seen surface): still more than one.
             if (depth < 4 && !yaw && s.has_prior() && c.box.L_m > s.split_factor * s.prior_L_m &&
@@ -316,40 +371,7 @@ std::vector<Candidate> candidates_of_cluster(const std::vector<Eigen::Vector3f>&
                              depth, group)) {
                 continue;
             }
-            if (!options.family_class.empty() && s.name == options.family_class) {
-                // A van shows its height: its hidden length is a van's, not a car's.
-                c.subclass = "car";
-                if (box.H_m >= options.van_min_height_m) {
-                    BoxFitOptions van = final_fit;
-                    van.prior_L_m = options.van_prior_L_m;
-                    van.prior_W_m = options.van_prior_W_m;
-                    c.box = fit_upright_box(member_pts, ground, van);
-                    c.subclass = "van";
-                }
-            }
-            if (s.name == options.family_class && options.far_column_length_fraction > 0.0) {
-                // A side seen along the viewing ray: its far end where its pixels end in the image.
-                const double prior = c.subclass == "van" ? options.van_prior_L_m : s.prior_L_m;
-                c.box = extend_far_end_to_columns(
-                    c.box, member_pts,
-                    std::max(c.box.L_m, options.far_column_length_fraction * prior));
-            }
-            if (c.subclass == "van" && c.box.L_m > options.van_max_L_m) {
-                // Longer than any van: the piece holds the end of the thing before it in its row
-                // too (a row's cut at a van's windscreen foot, where the glass matches sparsely,
-                // leaves the van's front to the piece beyond). The van keeps its far end.
-                c.box = with_length(c.box, options.van_prior_L_m, true);
-            }
-            if (s.has_prior()) {
-                c.fragment = c.members.size() < static_cast<std::size_t>(s.min_points) ||
-                             height_spread(pts, c.members, ground) <
-                                 options.fragment_height_fraction * s.prior_H_m;
-            }
-            for (std::size_t i : c.members) {
-                const double x = pts[i].x(), z = pts[i].z();
-                c.range_m += std::sqrt(x * x + z * z);
-            }
-            c.range_m /= static_cast<double>(c.members.size());
+            complete_candidate(c, pts, member_pts, box.H_m, final_fit, s, ground, options);
             candidates.push_back(std::move(c));
         }
     };
@@ -365,6 +387,102 @@ std::vector<Candidate> candidates_of_cluster(const std::vector<Eigen::Vector3f>&
     return candidates;
 }
 
+/// The candidate of one object of the instance image: its points off depth edges and without
+/// the smear behind it, fitted once and never split (the instance image says where it ends).
+std::vector<Candidate> candidates_of_instance(const std::vector<Eigen::Vector3f>& pts,
+                                              const std::vector<std::uint32_t>& pixels,
+                                              const PixelGrid& grid, Indices members,
+                                              std::size_t cluster, std::uint32_t instance,
+                                              const ClassSettings& s, const ClassFit& class_fit,
+                                              const std::optional<GroundPlane>& ground,
+                                              const ExtractOptions& options) {
+    BoxFitOptions fit = class_fit.box;
+    fit.disparity_fb_px_m = grid.border.fb_px_m;
+    Indices on_edge;
+    members = off_depth_edges(pixels, grid, std::move(members), s, on_edge);
+    const bool family = !options.family_class.empty() && s.name == options.family_class;
+    if (s.has_prior()) {
+        // The longest thing of the class (a van for the size-family class) spans its diagonal.
+        const double L = family ? std::max(s.prior_L_m, options.van_prior_L_m) : s.prior_L_m;
+        const double W = family ? std::max(s.prior_W_m, options.van_prior_W_m) : s.prior_W_m;
+        members = densest_range_window(pts, members, std::hypot(L, W) + options.outlier_margin_m,
+                                       static_cast<std::size_t>(s.min_points));
+    }
+    members = drop_outliers(pts, members, s, ground, options.outlier_margin_m);
+    if (members.size() < static_cast<std::size_t>(std::max(s.min_points, 1))) return {};
+    fit.truncation_xz = truncation_point(pts, pixels, grid, members);
+    const std::vector<Eigen::Vector3f> member_pts = gather(pts, members);
+    const OrientedBox box = fit_upright_box(member_pts, ground, fit);
+    // Points all near the ground are no object, whatever the image says.
+    if (s.prior_H_m > 0.0 && ground && box.H_m < options.min_height_fraction * s.prior_H_m) {
+        return {};
+    }
+    Candidate c;
+    c.members = std::move(members);
+    c.group = cluster;
+    c.instance = instance;
+    const BoxFitOptions final_fit = own_box_fit(fit, options);
+    c.box = own_box(member_pts, box, fit, final_fit, ground);
+    complete_candidate(c, pts, member_pts, box.H_m, final_fit, s, ground, options);
+    // Longer than any thing of its class, the box holds range smear behind the face it shows
+    // (far away a pixel of disparity spans metres): the face is kept, the class's length
+    // completes it, as for a thing whose far end is hidden.
+    const bool van = c.subclass == "van";
+    const double max_L_m = van ? options.van_max_L_m : s.split_factor * s.prior_L_m;
+    if (s.has_prior() && c.box.L_m > max_L_m) {
+        c.box = with_length(c.box, van ? options.van_prior_L_m : s.prior_L_m, false);
+    }
+    std::vector<Candidate> out;
+    out.push_back(std::move(c));
+    give_back_edge_points(pts, on_edge, out);
+    return out;
+}
+
+/// The clusters of a thing class: with an instance image, one per object id among its points
+/// (in the order of their first points), then the clusters (thing_clusters) of the points
+/// without one; `instance` receives each cluster's object id, 0 for the clustered ones.
+std::vector<Indices> clusters_of_class(const std::vector<Eigen::Vector3f>& pts,
+                                       const std::vector<std::uint32_t>& pixels,
+                                       const PixelGrid& grid, const ClassSettings& s,
+                                       const ClusterOptions& co, const ExtractOptions& options,
+                                       std::vector<std::uint32_t>& instance) {
+    if (grid.instance_id == nullptr || pixels.size() < pts.size()) {
+        std::vector<Indices> out = thing_clusters(pts, pixels, grid, s, co, options);
+        instance.assign(out.size(), 0);
+        return out;
+    }
+    const std::vector<std::uint32_t>& ids = *grid.instance_id;
+    std::unordered_map<std::uint32_t, std::size_t> slot;
+    std::vector<Indices> out;
+    Indices rest;
+    instance.clear();
+    for (std::size_t i = 0; i < pts.size(); ++i) {
+        const std::uint32_t id = ids[pixels[i]];
+        if (id == 0) {
+            rest.push_back(i);
+            continue;
+        }
+        const auto [it, fresh] = slot.emplace(id, out.size());
+        if (fresh) {
+            out.emplace_back();
+            instance.push_back(id);
+        }
+        out[it->second].push_back(i);
+    }
+    if (rest.empty()) return out;
+    std::vector<std::uint32_t> rest_pixels;
+    rest_pixels.reserve(rest.size());
+    for (std::size_t i : rest) rest_pixels.push_back(pixels[i]);
+    for (const Indices& c : thing_clusters(gather(pts, rest), rest_pixels, grid, s, co, options)) {
+        Indices members;
+        members.reserve(c.size());
+        for (std::size_t k : c) members.push_back(rest[k]);
+        out.push_back(std::move(members));
+        instance.push_back(0);
+    }
+    return out;
+}
+
 /// The entities of a thing class from its clusters' candidates (in cluster order): shadows,
 /// nested fragments and things seen over too little of their prior face suppressed, the largest
 /// kept.
@@ -374,6 +492,12 @@ std::vector<scene_schema::Entity> things_of_class(const ClassInfo& info,
                                                   const std::vector<std::uint32_t>& pixels,
                                                   const PixelGrid& grid, const ClassSettings& s,
                                                   const ExtractOptions& options) {
+    // An object of the instance image is one thing as the image says: no suppression rule
+    // (shadows, strips, nesting, faint faces) drops it, though it may drop clustered pieces.
+    std::vector<Candidate> exact;
+    for (const Candidate& c : candidates) {
+        if (c.instance != 0) exact.push_back(c);
+    }
     if (s.has_prior()) {
         candidates = drop_strips(std::move(candidates), pixels, grid, options.min_width_px);
         candidates =
@@ -388,16 +512,25 @@ std::vector<scene_schema::Entity> things_of_class(const ClassInfo& info,
         // nearer than the points it holds, one completed away from the camera farther.
         candidates.erase(std::remove_if(candidates.begin(), candidates.end(),
                                         [&](const Candidate& c) {
-                                            return seen_area_m2(pts, c.members, options.fx_px,
+                                            return c.instance == 0 &&
+                                                   seen_area_m2(pts, c.members, options.fx_px,
                                                                 options.fy_px) < min_m2;
                                         }),
                          candidates.end());
+    }
+    if (!exact.empty()) {
+        std::unordered_set<std::uint32_t> kept;
+        for (const Candidate& c : candidates) kept.insert(c.instance);
+        for (Candidate& c : exact) {
+            if (kept.count(c.instance) == 0) candidates.push_back(std::move(c));
+        }
     }
     std::vector<scene_schema::Entity> out;
     for (const auto& c : candidates) {
         out.push_back(make_entity(info, c.box, c.members.size(), confidence_of(c.members.size(), s),
                                   "instances"));
         if (!c.subclass.empty()) out.back().extra["subclass"] = c.subclass;
+        if (c.instance != 0) out.back().extra["instance_id"] = c.instance;
     }
     keep_largest(out, s.max_entities);
     return out;
@@ -414,13 +547,15 @@ void queue_things_of_class(TaskQueue& queue, const ClassInfo& info,
         ClassSettings s;
         ClassFit fit;
         std::vector<Indices> clusters;
+        std::vector<std::uint32_t> instance;             ///< per cluster: its object id, or 0
         std::vector<std::vector<Candidate>> candidates;  ///< per cluster
         std::atomic<std::size_t> left{0};                ///< clusters not fitted yet
     };
     auto job = std::make_shared<Job>();
     job->s = settings;
     job->fit = class_fit(settings);
-    job->clusters = thing_clusters(pts, pixels, grid, settings, job->fit.cluster, options);
+    job->clusters =
+        clusters_of_class(pts, pixels, grid, settings, job->fit.cluster, options, job->instance);
     job->candidates.resize(job->clusters.size());
     const auto finish = [&info, &pts, &pixels, &grid, &options, &out](Job& j) {
         std::vector<Candidate> all;
@@ -448,9 +583,14 @@ void queue_things_of_class(TaskQueue& queue, const ClassInfo& info,
     std::vector<TaskQueue::Task> tasks;
     for (const std::size_t c : fitted) {
         tasks.emplace_back([job, c, finish, &pts, &pixels, &grid, &pending_ground, &options] {
+            const std::optional<GroundPlane>& ground = pending_ground.get();
+            Indices members = std::move(job->clusters[c]);
             job->candidates[c] =
-                candidates_of_cluster(pts, pixels, grid, std::move(job->clusters[c]), c, job->s,
-                                      job->fit, pending_ground.get(), options);
+                job->instance[c] != 0
+                    ? candidates_of_instance(pts, pixels, grid, std::move(members), c,
+                                             job->instance[c], job->s, job->fit, ground, options)
+                    : candidates_of_cluster(pts, pixels, grid, std::move(members), c, job->s,
+                                            job->fit, ground, options);
             if (--job->left == 0) finish(*job);
         });
     }

@@ -208,6 +208,33 @@ ImageU16 read_png_u16(const std::filesystem::path& path) {
     return out;
 }
 
+IdImage read_id_image(const std::filesystem::path& path) {
+    cv::Mat m = read_raw(path, cv::IMREAD_UNCHANGED);
+    IdImage out;
+    if (m.type() == CV_16UC1) {
+        out.ids.width_px = m.cols;
+        out.ids.height_px = m.rows;
+        out.ids.values.resize(static_cast<std::size_t>(m.cols) * m.rows);
+        cv::Mat wrap(m.rows, m.cols, CV_16UC1, out.ids.values.data());
+        m.copyTo(wrap);
+        return out;
+    }
+    if (m.type() != CV_8UC1 && m.type() != CV_8UC3) {
+        throw std::runtime_error(
+            "cannot use instance image: neither 16-bit single-channel ids nor 8-bit RGB colours "
+            "(" +
+            path.string() + ")");
+    }
+    if (m.channels() == 3) cv::cvtColor(m, m, cv::COLOR_BGR2RGB);
+    out.colour.width_px = m.cols;
+    out.colour.height_px = m.rows;
+    out.colour.channels = m.channels();
+    out.colour.data.resize(static_cast<std::size_t>(m.cols) * m.rows * m.channels());
+    cv::Mat wrap(m.rows, m.cols, m.type(), out.colour.data.data());
+    m.copyTo(wrap);
+    return out;
+}
+
 DisparityMap read_kitti_disparity(const std::filesystem::path& path) {
     const ImageU16 raw = read_png_u16(path);
     DisparityMap out;

@@ -165,9 +165,11 @@ class FrameLoader {
         f.frame = options_.frames[i];
         const auto start = Clock::now();
         try {
-            const InputPaths paths = options_.drive.empty()
-                                         ? kitti_layout(options_.kitti_root, f.frame)
-                                         : options_.drive[i].paths;
+            InputPaths paths = options_.drive.empty() ? kitti_layout(options_.kitti_root, f.frame)
+                                                      : options_.drive[i].paths;
+            if (options_.drive.empty() && options_.kitti_instances) {
+                paths.instance = kitti_instance_path(options_.kitti_root, f.frame);
+            }
             auto it = calibrations_.find(paths.calibration);
             if (it == calibrations_.end()) {
                 it = calibrations_

@@ -88,7 +88,8 @@ std::optional<double> parse_kitti_timestamp(std::string_view text) {
 }
 
 std::vector<DriveFrame> kitti_raw_drive(const fs::path& drive, const fs::path& calibration,
-                                        const fs::path& semantic_dir) {
+                                        const fs::path& semantic_dir,
+                                        const fs::path& instance_dir) {
     const fs::path left_dir = drive / "image_02" / "data";
     const fs::path right_dir = drive / "image_03" / "data";
     std::error_code ec;
@@ -118,6 +119,11 @@ std::vector<DriveFrame> kitti_raw_drive(const fs::path& drive, const fs::path& c
             if (!fs::is_regular_file(f.paths.semantic, ec))
                 throw failure("no semantic image for frame " + f.id, f.paths.semantic);
         }
+        if (!instance_dir.empty()) {
+            f.paths.instance = instance_dir / names[i];
+            if (!fs::is_regular_file(f.paths.instance, ec))
+                throw failure("no instance image for frame " + f.id, f.paths.instance);
+        }
         f.paths.calibration = calib;
         f.paths.frame_id = f.id;
         if (!times.empty()) f.timestamp_s = times[i];
@@ -139,13 +145,15 @@ std::vector<DriveFrame> pair_list(std::string_view text, const fs::path& base,
         for (std::string w; words >> w;) paths.push_back(w);
         if (paths.empty()) continue;
         const std::string at = " (" + where + ", line " + std::to_string(number) + ")";
-        if (paths.size() < 2 || paths.size() > 3)
-            throw std::runtime_error("bad frame line: expected LEFT RIGHT [SEMANTIC], got " +
-                                     std::to_string(paths.size()) + " paths" + at);
+        if (paths.size() < 2 || paths.size() > 4)
+            throw std::runtime_error(
+                "bad frame line: expected LEFT RIGHT [SEMANTIC [INSTANCE]], got " +
+                std::to_string(paths.size()) + " paths" + at);
         DriveFrame f;
         f.paths.left = base / paths[0];
         f.paths.right = base / paths[1];
-        if (paths.size() == 3) f.paths.semantic = base / paths[2];
+        if (paths.size() >= 3) f.paths.semantic = base / paths[2];
+        if (paths.size() == 4) f.paths.instance = base / paths[3];
         f.paths.calibration = calibration;
         f.id = fs::path(paths[0]).stem().string();
         if (f.id.empty() || f.id[0] == '.')

@@ -25,6 +25,48 @@ class Stopwatch {
     std::chrono::steady_clock::time_point start_ = std::chrono::steady_clock::now();
 };
 
+/// Reads the instance image of `in` and checks it against the other inputs.
+void load_instance(LoadedInputs& in, const AnalyseOptions& options) {
+    const std::string at = " (" + in.paths.instance.string() + ")";
+    if (in.semantic.empty() || options.semantics == "geometry") {
+        throw std::runtime_error(
+            "cannot use instance image: instances need the semantic image's classes (--semantic, "
+            "not --semantics geometry)" +
+            at);
+    }
+    if (options.raw) {
+        throw std::runtime_error(
+            "cannot use instance image: it is not rectified with --raw (give rectified images)" +
+            at);
+    }
+    in.instance = read_id_image(in.paths.instance);
+    if (in.instance.width_px() != in.left.width_px ||
+        in.instance.height_px() != in.left.height_px) {
+        throw std::runtime_error("inputs do not match: instance image is " +
+                                 std::to_string(in.instance.width_px()) + "x" +
+                                 std::to_string(in.instance.height_px()) + ", left image is " +
+                                 size_text(in.left) + at);
+    }
+}
+
+/// The per-pixel objects of the instance image of `in`, decoded against `classes`.
+InstanceMap decode_instance_image(const LoadedInputs& in, const ClassImage& classes,
+                                  const AnalyseOptions& options) {
+    try {
+        return decode_instances(in.instance, parse_instance_encoding(options.instance_encoding),
+                                classes, in.palette);
+    } catch (const std::invalid_argument& e) {
+        throw std::runtime_error(std::string("cannot use instance image: ") + e.what() + " (" +
+                                 in.paths.instance.string() + ")");
+    }
+}
+
+/// The semantic image's classes and the instance image's objects.
+struct Labels {
+    ClassImage classes;
+    InstanceMap instances;
+};
+
 }  // namespace
 
 InputPaths kitti_layout(const std::filesystem::path& root, const std::string& frame) {
@@ -48,11 +90,17 @@ InputPaths kitti_layout(const std::filesystem::path& root, const std::string& fr
     return p;
 }
 
+std::filesystem::path kitti_instance_path(const std::filesystem::path& root,
+                                          const std::string& frame) {
+    return root / "instance" / (frame + ".png");
+}
+
 void AnalyseOptions::validate() const {
     if (palette.empty()) throw std::invalid_argument("palette: must not be empty");
     if (semantics != "labels" && semantics != "geometry" && semantics != "auto") {
         throw std::invalid_argument("semantics: must be labels, geometry or auto");
     }
+    parse_instance_encoding(instance_encoding);
     geometry.validate();
     calibration.validate();
     disparity.validate();
@@ -98,6 +146,7 @@ LoadedInputs load_inputs(const InputPaths& paths, const AnalyseOptions& options,
         in.right = read_image(paths.right, ImageMode::kGrey);
     }
     in.semantic = semantic.get();
+    if (!paths.instance.empty()) load_instance(in, options);
     if (!paths.semantic.empty()) {
         if (in.semantic.width_px != in.left.width_px ||
             in.semantic.height_px != in.left.height_px) {
@@ -162,10 +211,15 @@ AnalyseResult analyse(const LoadedInputs& in, const AnalyseOptions& options,
     // The class lookup does not depend on the disparity: it runs beside the matcher, and the
     // "semantic" lap below is only the wait for it.
     r.semantics = semantics_path(in, options);
-    std::future<ClassImage> classes;
+    std::future<Labels> labels;
     if (r.semantics == "labels") {
-        classes = std::async(std::launch::async,
-                             [semantic, &in] { return classify_pixels(*semantic, in.palette); });
+        labels = std::async(std::launch::async, [semantic, &in, &options] {
+            Labels l;
+            l.classes = classify_pixels(*semantic, in.palette);
+            if (in.instance.width_px() > 0)
+                l.instances = decode_instance_image(in, l.classes, options);
+            return l;
+        });
     }
     r.disparity = matcher.compute(*left, *right);
     watch.lap("disparity");
@@ -173,7 +227,11 @@ AnalyseResult analyse(const LoadedInputs& in, const AnalyseOptions& options,
         throw std::runtime_error("empty disparity: no pixel has a valid disparity (" +
                                  in.paths.left.string() + ")");
     }
-    if (classes.valid()) r.classes = classes.get();
+    if (labels.valid()) {
+        Labels l = labels.get();
+        r.classes = std::move(l.classes);
+        r.instances = std::move(l.instances);
+    }
     if (r.semantics != "geometry") {
         watch.lap("semantic");
     } else {
@@ -187,9 +245,11 @@ AnalyseResult analyse(const LoadedInputs& in, const AnalyseOptions& options,
         r.points = reproject_by_class(r.disparity, r.camera, r.classes, options.reproject,
                                       *options.class_points_only);
         r.cloud_points = r.points.cloud_points;
+        r.points.instance_id = r.instances.id;
     } else {
         r.cloud = reproject(r.disparity, r.camera, *left, r.classes, options.reproject);
         r.cloud_points = r.cloud.size();
+        r.cloud.instance_id = r.instances.id;
     }
     watch.lap("reproject");
     if (r.cloud_points == 0) {
@@ -231,6 +291,7 @@ nlohmann::json describe_run(const LoadedInputs& in, const AnalyseOptions& o,
     j["inputs"] = {{"left", in.paths.left.string()},
                    {"right", in.paths.right.string()},
                    {"semantic", in.paths.semantic.string()},
+                   {"instance", in.paths.instance.string()},
                    {"calibration", in.paths.calibration.string()}};
     j["calibration"] = {
         {"format", in.calibration.format},

@@ -18,7 +18,7 @@
 namespace scene_schema {
 
 /// Major.minor.patch of the format this library writes; files with another major are refused.
-inline constexpr const char* kSchemaVersion = "1.1.0";
+inline constexpr const char* kSchemaVersion = "1.2.0";
 inline constexpr int kSchemaMajor = 1;
 
 /// The only coordinate convention of version 1: KITTI's rectified left camera.

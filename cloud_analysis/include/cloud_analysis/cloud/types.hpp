@@ -73,6 +73,9 @@ struct LabeledCloud {
     /// Per pixel (v * width_px + u): 1 on the far side of a depth step, where the disparity
     /// mixes two surfaces (depth_edge_band in reproject.hpp); empty when not computed.
     std::vector<std::uint8_t> depth_edge;
+    /// Per pixel (v * width_px + u): the object the pixel belongs to in an instance image
+    /// (InstanceMap::id, 0 = none); empty without an instance image.
+    std::vector<std::uint32_t> instance_id;
     std::size_t size() const { return xyz_m.size(); }
 };
 
@@ -95,6 +98,9 @@ struct ClassPoints {
     /// Per pixel of the grid: 1 on the far side of a depth step (LabeledCloud::depth_edge);
     /// empty when not computed.
     std::vector<std::uint8_t> depth_edge;
+    /// Per pixel of the grid: the object the pixel belongs to (LabeledCloud::instance_id, 0 =
+    /// none); empty without an instance image.
+    std::vector<std::uint32_t> instance_id;
 };
 
 }  // namespace cloud_analysis

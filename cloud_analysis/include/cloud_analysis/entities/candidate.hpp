@@ -36,17 +36,21 @@ struct PixelGrid {
     /// Per pixel, 1 on the far side of a depth step (ClassPoints::depth_edge); null when unknown
     /// or not used.
     const std::vector<std::uint8_t>* depth_edge = nullptr;
+    /// Per pixel, the object of an instance image (ClassPoints::instance_id, 0 = none); null
+    /// without one.
+    const std::vector<std::uint32_t>* instance_id = nullptr;
     bool valid() const { return width_px > 0 && height_px > 0; }
 };
 
 /// One thing instance before it becomes an entity.
 struct Candidate {
-    OrientedBox box;        ///< fitted box
-    Indices members;        ///< the points of the class it holds
-    double range_m = 0.0;   ///< mean bird's-eye range of the points
-    std::size_t group = 0;  ///< pieces cut from one 3D cluster at clear gaps share a group
-    bool fragment = false;  ///< short (a strip) or sparse (under min_points): edge smear?
-    std::string subclass;   ///< size family ("car", "van") of ExtractOptions::family_class
+    OrientedBox box;             ///< fitted box
+    Indices members;             ///< the points of the class it holds
+    double range_m = 0.0;        ///< mean bird's-eye range of the points
+    std::size_t group = 0;       ///< pieces cut from one 3D cluster at clear gaps share a group
+    bool fragment = false;       ///< short (a strip) or sparse (under min_points): edge smear?
+    std::string subclass;        ///< size family ("car", "van") of ExtractOptions::family_class
+    std::uint32_t instance = 0;  ///< the object of the instance image it is (0: clustered)
 };
 
 /// Clustering and box-fit settings of a class.
@@ -69,6 +73,13 @@ double seen_area_m2(const std::vector<Eigen::Vector3f>& pts, const Indices& memb
 
 /// confidence = n / (n + 2 * min_points): 1/3 at the minimum, -> 1 with many points.
 double confidence_of(std::size_t n, const ClassSettings& s);
+
+/// The members within the window of bird's-eye range `extent_m` long that holds most of them:
+/// the pixels of one object mostly show its surface, which spans at most its diagonal in range;
+/// the rest took a nearer or farther surface's disparity (the matching window straddling the
+/// object's outline, a mask drawn past it). All of them when fewer than `min_points` remain.
+Indices densest_range_window(const std::vector<Eigen::Vector3f>& pts, const Indices& members,
+                             double extent_m, std::size_t min_points);
 
 /// Keeps the `max_entities` entities with the most points, largest first (stable).
 void keep_largest(std::vector<scene_schema::Entity>& entities, int max_entities);

@@ -58,6 +58,21 @@ DisparityMap read_kitti_disparity(const std::filesystem::path& path);
 /// missing, corrupt or of another type.
 ImageU16 read_png_u16(const std::filesystem::path& path);
 
+/// An image whose samples are ids rather than light: 16-bit single-channel (ids) or 8-bit
+/// with 1 or 3 channels (RGB order), exactly one of the two filled.
+struct IdImage {
+    ImageU16 ids;    ///< 16-bit samples; empty values when the file has 8-bit samples
+    ImageU8 colour;  ///< 8-bit samples; empty when the file has 16-bit samples
+    bool has_ids() const { return !ids.values.empty(); }
+    int width_px() const { return has_ids() ? ids.width_px : colour.width_px; }
+    int height_px() const { return has_ids() ? ids.height_px : colour.height_px; }
+};
+
+/// Reads an instance image as stored (no conversion of depth or channels); throws
+/// std::runtime_error naming the file when it is missing, corrupt, or neither 16-bit
+/// single-channel nor 8-bit grey or RGB.
+IdImage read_id_image(const std::filesystem::path& path);
+
 /// PNG bytes of a 16-bit single-channel image.
 std::string encode_png_u16(const ImageU16& image);
 

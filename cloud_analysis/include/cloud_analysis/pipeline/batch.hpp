@@ -26,6 +26,7 @@ namespace cloud_analysis {
 struct BatchOptions {
     std::filesystem::path kitti_root;  ///< KITTI layout folder (image_2/, image_3/, ...)
     std::vector<std::string> frames;   ///< frame ids, analysed in this order
+    bool kitti_instances = false;      ///< also read kitti_root's instance/<frame>.png
     /// Frames with their own files (a KITTI raw drive or a list of pairs), analysed in this
     /// order; when given, `frames` must hold their ids and kitti_root is not read.
     std::vector<DriveFrame> drive;

@@ -28,16 +28,18 @@ std::optional<double> parse_kitti_timestamp(std::string_view text);
 
 /// The frames of a KITTI raw drive folder, in name order: image_02/data/*.png with
 /// image_03/data/<same name>; the semantic image <semantic_dir>/<same name> when `semantic_dir`
-/// is given (it must exist for every frame); calibration `calibration`, else
+/// is given (it must exist for every frame), likewise the instance image in `instance_dir`;
+/// calibration `calibration`, else
 /// calib_cam_to_cam.txt in the drive folder or its parent (KITTI raw keeps it in the date
 /// folder); times from image_02/timestamps.txt (line i for frame i) when present. Throws
 /// std::runtime_error "<what>: <detail> (<path>)" for a missing folder, right image, semantic
 /// image or calibration, or a timestamps file whose line count or order is wrong.
 std::vector<DriveFrame> kitti_raw_drive(const std::filesystem::path& drive,
                                         const std::filesystem::path& calibration,
-                                        const std::filesystem::path& semantic_dir);
+                                        const std::filesystem::path& semantic_dir,
+                                        const std::filesystem::path& instance_dir = {});
 
-/// The frames of a list: each line "LEFT RIGHT [SEMANTIC]" (paths relative to `base`,
+/// The frames of a list: each line "LEFT RIGHT [SEMANTIC [INSTANCE]]" (paths relative to `base`,
 /// whitespace-separated, '#' starts a comment), all with `calibration`. Frame ids are the left
 /// stems and must be unique. Throws std::runtime_error naming `where` and the line.
 std::vector<DriveFrame> pair_list(std::string_view text, const std::filesystem::path& base,

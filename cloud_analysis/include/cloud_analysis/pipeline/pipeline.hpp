@@ -10,6 +10,7 @@
 
 #include <nlohmann/json.hpp>
 
+#include "cloud_analysis/cloud/instances.hpp"
 #include "cloud_analysis/cloud/reproject.hpp"
 #include "cloud_analysis/cloud/semantic.hpp"
 #include "cloud_analysis/cloud/types.hpp"
@@ -25,6 +26,7 @@ struct InputPaths {
     std::filesystem::path left;         ///< left image
     std::filesystem::path right;        ///< right image
     std::filesystem::path semantic;     ///< semantic colour image of the left view; empty = none
+    std::filesystem::path instance;     ///< instance image of the left view; empty = none
     std::filesystem::path calibration;  ///< calibration file (any supported format)
     std::string frame_id;               ///< frame id written to the entity file
 };
@@ -33,6 +35,10 @@ struct InputPaths {
 /// (when the file exists) and calib/<frame>.txt, calib/<frame without _10>.txt or
 /// calib/calib_cam_to_cam.txt, the first that exists.
 InputPaths kitti_layout(const std::filesystem::path& root, const std::string& frame);
+
+/// The instance image of `frame` in KITTI layout: instance/<frame>.png under `root`.
+std::filesystem::path kitti_instance_path(const std::filesystem::path& root,
+                                          const std::string& frame);
 
 /// Settings of the whole chain.
 struct AnalyseOptions {
@@ -45,6 +51,9 @@ struct AnalyseOptions {
     /// Where the per-pixel classes come from: "labels" (the semantic image), "geometry" (the
     /// stereo pair alone, docs/stereo-only.md) or "auto" (labels when a semantic image is given).
     std::string semantics = "auto";
+    /// How the instance image (InputPaths::instance) stores its objects: auto, kitti,
+    /// cityscapes or colour (cloud/instances.hpp).
+    std::string instance_encoding = "auto";
     geometry::GeometryOptions geometry;  ///< the stereo-only path's settings
     /// When set, analyse builds no cloud: it reprojects straight into the entity extractor's
     /// per-class points (AnalyseResult::points, see reproject_by_class), for runs whose only
@@ -60,12 +69,14 @@ struct LoadedInputs {
     ImageU8 left;             ///< as read (grey or RGB)
     ImageU8 right;            ///< as read
     ImageU8 semantic;         ///< RGB, empty when no semantic image was given
+    IdImage instance;         ///< as stored, empty when no instance image was given
     Calibration calibration;  ///< with camera.width/height set to the rectified image size
     Palette palette;          ///< palette of the semantic image
 };
 
 /// Reads and validates every input before any expensive work: files readable and decodable,
-/// left/right/semantic of one size, calibration complete with a positive baseline, its image
+/// left/right/semantic/instance of one size, an instance image only with a semantic image
+/// and without `raw`, calibration complete with a positive baseline, its image
 /// size (when it has one) equal to the images', raw rectification data present when `raw`.
 /// Throws std::runtime_error "<what failed>: <detail> (<file>)".
 LoadedInputs load_inputs(const InputPaths& paths, const AnalyseOptions& options);
@@ -86,6 +97,8 @@ struct AnalyseResult {
     StereoCamera camera;     ///< rectified rig used
     DisparityMap disparity;  ///< left disparity, px
     ClassImage classes;      ///< per-pixel classes (empty without semantic image)
+    InstanceMap instances;   ///< per-pixel objects (empty without instance image); its ids
+                             ///< are also in the cloud's or the points' instance_id
     std::string semantics;   ///< "labels", "geometry" or "none" (no classes)
     std::optional<geometry::SceneGeometry> geometry;  ///< stereo-only path: ground, segments,
                                                       ///< warnings (its classes moved to classes)
