@@ -32,6 +32,10 @@ set(STEREOSCENE_CLOSED_LOOP_BARS
     --bar-class car --bar-range 30 --require-recall 1.0 --max-spurious 0
     --max-stuff-on-things 0 --max-median-centre-error 0.5 --max-median-heading-error 10
     --min-good-iou-fraction 0.7)
+set(STEREOSCENE_CLOSED_LOOP_INSTANCE_BARS
+    --bar-class car --bar-range 30 --require-recall 1.0 --max-spurious 0
+    --max-stuff-on-things 0 --max-median-centre-error 0.3 --max-median-heading-error 10
+    --min-good-iou-fraction 0.7)
 # KITTI's moderate setting does not owe largely occluded objects (occlusion level 2): references
 # of which less than a quarter is visible (visibility/<frame>.json of scene-render sensors) are
 # not scored, like DontCare. The evaluation also prints the unfiltered recall.
@@ -89,11 +93,11 @@ set(STEREOSCENE_CLOSED_LOOP_ALL_CARS_FOUND parking-row thesis-one-car)
 # FIXTURE, itself needing REQUIRES when given), then evaluate scores ENTITIES against TRUTH with
 # BARS and the visibility rule, writing EVAL_JSON.
 function(closed_loop_frame_tests name)
-    cmake_parse_arguments(L "" "DIR;FRAME;TRUTH;ENTITIES;EVAL_JSON;FIXTURE;REQUIRES" "BARS"
-        ${ARGN})
+    cmake_parse_arguments(L "" "DIR;FRAME;TRUTH;ENTITIES;EVAL_JSON;FIXTURE;REQUIRES"
+        "BARS;ANALYSE" ${ARGN})
     add_test(NAME "closed loop ${name}: cloud-analysis reconstructs the scene"
         COMMAND $<TARGET_FILE:cloud-analysis> --kitti-root ${L_DIR} --frame ${L_FRAME}
-            -o ${L_ENTITIES})
+            ${L_ANALYSE} -o ${L_ENTITIES})
     set_tests_properties("closed loop ${name}: cloud-analysis reconstructs the scene"
         PROPERTIES FIXTURES_SETUP ${L_FIXTURE} LABELS closed_loop)
     if(L_REQUIRES)
@@ -147,6 +151,13 @@ foreach(_calib IN LISTS _loop_calibs)
                 PROPERTIES FIXTURES_REQUIRED "closed_loop_${_scene}_${_frame}"
                 LABELS closed_loop)
         endif()
+        # With the instance image as input (--instances) every scene meets one set of bars:
+        # each object is given, so the boxes are what is scored (median centre error 0.3 m).
+        closed_loop_frame_tests("${_name} with its instance image" DIR ${_dir} FRAME ${_frame}
+            TRUTH ${_truth} ENTITIES ${_loop_out}/${_scene}-${_frame}-instances.json
+            EVAL_JSON ${_loop_out}/${_scene}-${_frame}-instances-eval.json
+            FIXTURE "closed_loop_${_scene}_${_frame}_instances" ANALYSE --instances
+            BARS ${STEREOSCENE_CLOSED_LOOP_INSTANCE_BARS})
         list(APPEND STEREOSCENE_CLOSED_LOOP_SCENES ${_name})
     endforeach()
 endforeach()

@@ -203,4 +203,47 @@ InstanceMap decode_instances(const IdImage& image, InstanceEncoding encoding,
     return out;
 }
 
+void mark_object_outlines(std::vector<std::uint8_t>& depth_edge, const InstanceMap& instances,
+                          const DisparityMap& disparity, const MatchBorder& border, double step_m,
+                          int columns) {
+    const int w = instances.width_px, h = instances.height_px;
+    const auto n = static_cast<std::size_t>(w) * static_cast<std::size_t>(h);
+    if (!(step_m > 0.0) || columns <= 0 || !(border.fb_px_m > 0.0) || instances.id.size() != n ||
+        disparity.disparity_px.size() != n || disparity.width_px != w) {
+        return;
+    }
+    // Each object's median depth.
+    std::unordered_map<std::uint32_t, std::vector<float>> disparities;
+    for (std::size_t p = 0; p < n; ++p) {
+        if (instances.id[p] != 0 && disparity.disparity_px[p] > 0.0f) {
+            disparities[instances.id[p]].push_back(disparity.disparity_px[p]);
+        }
+    }
+    std::unordered_map<std::uint32_t, double> depth_m;
+    for (auto& [id, d] : disparities) {
+        auto mid = d.begin() + static_cast<std::ptrdiff_t>(d.size() / 2);
+        std::nth_element(d.begin(), mid, d.end());
+        const double own = double{*mid} - border.offset_px;
+        if (own > 0.0) depth_m[id] = border.fb_px_m / own;
+    }
+    if (depth_m.size() < 2) return;
+    if (depth_edge.size() != n) depth_edge.assign(n, 0);
+    for (int v = 0; v < h; ++v) {
+        const std::uint32_t* row = instances.id.data() + static_cast<std::size_t>(v) * w;
+        std::uint8_t* edge = depth_edge.data() + static_cast<std::size_t>(v) * w;
+        for (int u = 0; u < w; ++u) {
+            const auto own = depth_m.find(row[u]);
+            if (own == depth_m.end() || edge[u] != 0) continue;
+            for (int k = std::max(0, u - columns); k <= std::min(w - 1, u + columns); ++k) {
+                if (row[k] == row[u] || row[k] == 0) continue;
+                const auto other = depth_m.find(row[k]);
+                if (other != depth_m.end() && other->second <= own->second - step_m) {
+                    edge[u] = 1;
+                    break;
+                }
+            }
+        }
+    }
+}
+
 }  // namespace cloud_analysis

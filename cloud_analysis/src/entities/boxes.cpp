@@ -419,7 +419,10 @@ OrientedBox assemble_box(const GroundFrame& frame, bool has_ground, const BoxFit
             // runs along the viewing ray.
             const Eigen::Vector2d centre = ((lo1 + hi1) / 2.0) * e1 + ((lo2 + hi2) / 2.0) * e2;
             const Eigen::Vector2d ray = centre.normalized();
-            swap = std::abs(ray.dot(e2)) > std::abs(ray.dot(e1));
+            // A face cut by the image's edge may be a side running out of the image.
+            swap = options.short_face_is_end && !options.truncation_xz
+                       ? (hi2 - lo2) < (hi1 - lo1)
+                       : std::abs(ray.dot(e2)) > std::abs(ray.dot(e1));
         }
     }
     if (swap) {

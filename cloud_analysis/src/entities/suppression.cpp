@@ -105,16 +105,21 @@ std::vector<Footprint> footprints_of(const std::vector<scene_schema::Entity>& th
     return out;
 }
 
-double footprint_share_inside(const scene_schema::Entity& e, const std::vector<Footprint>& things) {
+namespace {
+
+/// Share of the footprint at (x, z), heading theta, L x W (sampled on a 10 x 10 grid of cell
+/// centres) inside any of `things`.
+double share_inside(double x0, double z0, double theta, double L, double W,
+                    const std::vector<Footprint>& things) {
     constexpr int kSamples = 10;
-    const double c = std::cos(e.theta), sn = std::sin(e.theta);
+    const double c = std::cos(theta), sn = std::sin(theta);
     int inside = 0;
     for (int i = 0; i < kSamples; ++i) {
         for (int j = 0; j < kSamples; ++j) {
             // Heading (cos t, -sin t) in x-z; across it (sin t, cos t).
-            const double a = ((i + 0.5) / kSamples - 0.5) * e.L;
-            const double b = ((j + 0.5) / kSamples - 0.5) * e.W;
-            const double x = e.x + a * c + b * sn, z = e.z - a * sn + b * c;
+            const double a = ((i + 0.5) / kSamples - 0.5) * L;
+            const double b = ((j + 0.5) / kSamples - 0.5) * W;
+            const double x = x0 + a * c + b * sn, z = z0 - a * sn + b * c;
             for (const auto& t : things) {
                 const double dx = x - t.x, dz = z - t.z;
                 if (std::abs(dx * t.c - dz * t.s) <= t.half_L &&
@@ -126,6 +131,44 @@ double footprint_share_inside(const scene_schema::Entity& e, const std::vector<F
         }
     }
     return static_cast<double>(inside) / (kSamples * kSamples);
+}
+
+double share_inside(const OrientedBox& b, const std::vector<Footprint>& things) {
+    return share_inside(b.centre_m.x(), b.centre_m.z(), b.theta, b.L_m, b.W_m, things);
+}
+
+}  // namespace
+
+double footprint_share_inside(const scene_schema::Entity& e, const std::vector<Footprint>& things) {
+    return share_inside(e.x, e.z, e.theta, e.L, e.W, things);
+}
+
+void turn_overlapping_objects(std::vector<Candidate>& candidates,
+                              const std::vector<Eigen::Vector3f>& pts, BoxFitOptions fit,
+                              const std::optional<GroundPlane>& ground) {
+    constexpr double kOverlapShare = 0.25;  // a quarter of a box on another's ground
+    constexpr double kHalfPi = 1.57079632679489661923;
+    const auto others = [&](std::size_t k) {
+        std::vector<Footprint> out;
+        for (std::size_t j = 0; j < candidates.size(); ++j) {
+            if (j != k && candidates[j].instance != 0)
+                out.push_back(footprint_of(candidates[j].box));
+        }
+        return out;
+    };
+    for (std::size_t k = 0; k < candidates.size(); ++k) {
+        Candidate& c = candidates[k];
+        if (c.instance == 0) continue;
+        const std::vector<Footprint> around = others(k);
+        const double share = share_inside(c.box, around);
+        if (share <= kOverlapShare) continue;
+        std::vector<Eigen::Vector3f> member_pts;
+        member_pts.reserve(c.members.size());
+        for (std::size_t i : c.members) member_pts.push_back(pts[i]);
+        fit.yaw_rad = c.box.theta + kHalfPi;
+        const OrientedBox turned = fit_upright_box(member_pts, ground, fit);
+        if (share_inside(turned, around) <= share / 2.0) c.box = turned;
+    }
 }
 
 double median_row_width_px(const Indices& members, const std::vector<std::uint32_t>& pixels,

@@ -13,6 +13,7 @@
 
 #include "cloud_analysis/entities/image_components.hpp"
 #include "cloud_analysis/entities/row_split.hpp"
+#include "cloud_analysis/entities/smear.hpp"
 #include "cloud_analysis/entities/suppression.hpp"
 
 namespace cloud_analysis::instances {
@@ -41,137 +42,6 @@ std::vector<Eigen::Vector3f> gather(const std::vector<Eigen::Vector3f>& pts, con
     out.reserve(idx.size());
     for (std::size_t i : idx) out.push_back(pts[i]);
     return out;
-}
-
-/// Azimuth bin of a point: lround(atan2(x, z) / 0.5 degrees), clamped to +-360, plus 360.
-/// In front of the camera (z > 0, |x / z| < kMaxSlope) the bin comes from the slope x / z
-/// compared with the tangents of the bin boundaries (a uniform grid of slopes finer than any
-/// bin gives the candidate, one or two comparisons settle it) instead of a call to atan2: the
-/// same bins, up to rounding within ~1e-15 of a boundary.
-class AzimuthBins {
-  public:
-    static constexpr double kBinRad = 0.5 * 3.14159265358979323846 / 180.0;
-    static constexpr long kBins = 360;  // |atan2| <= pi is at most 360 bins either side
-
-    AzimuthBins() {
-        // upper_[b + 180] = tan of the upper boundary of bin b, b in [-180, 180).
-        for (long b = -180; b < 180; ++b) upper_.push_back(std::tan((b + 0.5) * kBinRad));
-        const auto cells = static_cast<std::size_t>(2.0 * kMaxSlope / kStep) + 2;
-        for (std::size_t c = 0; c < cells; ++c) {
-            first_.push_back(settle(-180, -kMaxSlope + static_cast<double>(c) * kStep));
-        }
-    }
-    long operator()(double x, double z) const {
-        if (z > 0.0) {
-            const double t = x / z;
-            if (t > -kMaxSlope && t < kMaxSlope) {
-                const auto c = static_cast<std::size_t>((t + kMaxSlope) * (1.0 / kStep));
-                return settle(first_[c], t) + kBins;
-            }
-        }
-        return std::clamp(std::lround(std::atan2(x, z) / kBinRad), -kBins, kBins) + kBins;
-    }
-
-  private:
-    static constexpr double kMaxSlope = 4.0;  // |x / z| below this (76 degrees) is looked up
-    static constexpr double kStep = 0.004;    // slope grid step; a bin spans >= 0.0087
-    /// The bin (in [-180, 180]) of slope t: the first whose upper boundary lies above t,
-    /// walked to from bin b.
-    long settle(long b, double t) const {
-        while (b < 180 && !(t < upper_[static_cast<std::size_t>(b + 180)])) ++b;
-        while (b > -180 && t < upper_[static_cast<std::size_t>(b + 179)]) --b;
-        return b;
-    }
-    std::vector<double> upper_;
-    std::vector<long> first_;  ///< bin of the lower end of each grid cell
-};
-
-/// Drops stereo smear behind a thing: per viewing direction (0.5 degree azimuth bins), points
-/// farther (bird's-eye range) than the nearest one plus the prior's diagonal plus a margin;
-/// and points implausibly high above or below the ground. `behind`, when given, receives the
-/// points dropped for their range.
-Indices drop_outliers(const std::vector<Eigen::Vector3f>& pts, const Indices& idx,
-                      const ClassSettings& s, const std::optional<GroundPlane>& ground,
-                      double margin_m, Indices* behind = nullptr) {
-    if (!s.has_prior() || idx.size() < 10) return idx;
-    static const AzimuthBins azimuth_bin;
-    std::vector<double> range(idx.size());
-    std::vector<long> bin(idx.size());
-    std::vector<double> nearest(2 * AzimuthBins::kBins + 1,
-                                std::numeric_limits<double>::infinity());
-    for (std::size_t k = 0; k < idx.size(); ++k) {
-        const double x = pts[idx[k]].x(), z = pts[idx[k]].z();
-        range[k] = std::sqrt(x * x + z * z);  // float inputs: no overflow for hypot to guard
-        bin[k] = azimuth_bin(x, z);
-        double& n = nearest[static_cast<std::size_t>(bin[k])];
-        n = std::min(n, range[k]);
-    }
-    const double depth = std::hypot(s.prior_L_m, s.prior_W_m) + margin_m;
-    Indices kept;
-    kept.reserve(idx.size());
-    Indices far;
-    for (std::size_t k = 0; k < idx.size(); ++k) {
-        if (range[k] > nearest[static_cast<std::size_t>(bin[k])] + depth) {
-            far.push_back(idx[k]);
-            continue;
-        }
-        if (ground) {
-            const double h = ground->height(pts[idx[k]].cast<double>());
-            if (h < -0.5 || h > 1.5 * s.prior_H_m + 0.5) continue;
-        }
-        kept.push_back(idx[k]);
-    }
-    if (kept.size() < static_cast<std::size_t>(s.min_points)) return idx;
-    if (behind) *behind = std::move(far);
-    return kept;
-}
-
-/// The members whose pixels are not on the far side of a depth step (PixelGrid::depth_edge),
-/// when at least min_points of them remain (the others in `on_edge`); all of them otherwise (a
-/// thing seen only as a strip over a nearer one has nothing better).
-Indices off_depth_edges(const std::vector<std::uint32_t>& pixels, const PixelGrid& grid,
-                        Indices members, const ClassSettings& s, Indices& on_edge) {
-    if (grid.depth_edge == nullptr || pixels.empty()) return members;
-    const std::vector<std::uint8_t>& edge = *grid.depth_edge;
-    Indices kept, dropped;
-    kept.reserve(members.size());
-    for (std::size_t i : members) {
-        (edge[pixels[i]] == 0 ? kept : dropped).push_back(i);
-    }
-    if (kept.size() < static_cast<std::size_t>(s.min_points)) return members;
-    on_edge = std::move(dropped);
-    return kept;
-}
-
-/// The points on a depth edge that a cluster's boxes were fitted without, each given back to
-/// the candidate whose box footprint lies nearest it, within kEdgePointReach: they are seen
-/// surface of that thing, at a mixed depth, and count as such (point count, seen area, image
-/// extent) though they do not shape its box. Farther ones are dropped.
-void give_back_edge_points(const std::vector<Eigen::Vector3f>& pts, const Indices& on_edge,
-                           std::vector<Candidate>& candidates) {
-    constexpr double kEdgePointReach = 1.0;  // metres: beside the box, at most
-    if (on_edge.empty() || candidates.empty()) return;
-    std::vector<Footprint> footprints;
-    footprints.reserve(candidates.size());
-    for (const Candidate& c : candidates) footprints.push_back(footprint_of(c.box));
-    std::vector<char> grown(candidates.size(), 0);
-    for (std::size_t i : on_edge) {
-        double best = kEdgePointReach;
-        std::size_t to = candidates.size();
-        for (std::size_t k = 0; k < candidates.size(); ++k) {
-            const double d = footprints[k].distance_m(pts[i].x(), pts[i].z());
-            if (d < best) {
-                best = d;
-                to = k;
-            }
-        }
-        if (to == candidates.size()) continue;
-        candidates[to].members.push_back(i);
-        grown[to] = 1;
-    }
-    for (std::size_t k = 0; k < candidates.size(); ++k) {
-        if (grown[k]) std::sort(candidates[k].members.begin(), candidates[k].members.end());
-    }
 }
 
 /// The clusters of a thing class (point indices in point order).
@@ -387,6 +257,31 @@ std::vector<Candidate> candidates_of_cluster(const std::vector<Eigen::Vector3f>&
     return candidates;
 }
 
+/// The members in the largest of their clusters (thing_clusters): an object's surface is
+/// connected, and those of its pixels that took another surface's disparity lie apart from it.
+/// All of them when that cluster has fewer than min_points.
+Indices largest_piece(const std::vector<Eigen::Vector3f>& pts,
+                      const std::vector<std::uint32_t>& pixels, const PixelGrid& grid,
+                      const Indices& members, const ClassSettings& s, const ClusterOptions& co,
+                      const ExtractOptions& options) {
+    std::vector<std::uint32_t> member_pixels;
+    for (std::size_t i = 0; pixels.size() >= pts.size() && i < members.size(); ++i) {
+        member_pixels.push_back(pixels[members[i]]);
+    }
+    const std::vector<Indices> pieces =
+        thing_clusters(gather(pts, members), member_pixels, grid, s, co, options);
+    const auto largest =
+        std::max_element(pieces.begin(), pieces.end(),
+                         [](const Indices& a, const Indices& b) { return a.size() < b.size(); });
+    if (largest == pieces.end() || largest->size() < static_cast<std::size_t>(s.min_points)) {
+        return members;
+    }
+    Indices kept;
+    for (std::size_t k : *largest) kept.push_back(members[k]);
+    std::sort(kept.begin(), kept.end());
+    return kept;
+}
+
 /// The candidate of one object of the instance image: its points off depth edges and without
 /// the smear behind it, fitted once and never split (the instance image says where it ends).
 std::vector<Candidate> candidates_of_instance(const std::vector<Eigen::Vector3f>& pts,
@@ -398,6 +293,7 @@ std::vector<Candidate> candidates_of_instance(const std::vector<Eigen::Vector3f>
                                               const ExtractOptions& options) {
     BoxFitOptions fit = class_fit.box;
     fit.disparity_fb_px_m = grid.border.fb_px_m;
+    fit.short_face_is_end = true;
     Indices on_edge;
     members = off_depth_edges(pixels, grid, std::move(members), s, on_edge);
     const bool family = !options.family_class.empty() && s.name == options.family_class;
@@ -408,6 +304,7 @@ std::vector<Candidate> candidates_of_instance(const std::vector<Eigen::Vector3f>
         members = densest_range_window(pts, members, std::hypot(L, W) + options.outlier_margin_m,
                                        static_cast<std::size_t>(s.min_points));
     }
+    members = largest_piece(pts, pixels, grid, members, s, class_fit.cluster, options);
     members = drop_outliers(pts, members, s, ground, options.outlier_margin_m);
     if (members.size() < static_cast<std::size_t>(std::max(s.min_points, 1))) return {};
     fit.truncation_xz = truncation_point(pts, pixels, grid, members);
@@ -557,11 +454,16 @@ void queue_things_of_class(TaskQueue& queue, const ClassInfo& info,
     job->clusters =
         clusters_of_class(pts, pixels, grid, settings, job->fit.cluster, options, job->instance);
     job->candidates.resize(job->clusters.size());
-    const auto finish = [&info, &pts, &pixels, &grid, &options, &out](Job& j) {
+    const auto finish = [&info, &pts, &pixels, &grid, &options, &out, &pending_ground](Job& j) {
         std::vector<Candidate> all;
         for (auto& c : j.candidates) {
             all.insert(all.end(), std::make_move_iterator(c.begin()),
                        std::make_move_iterator(c.end()));
+        }
+        if (std::any_of(all.begin(), all.end(), [](const Candidate& c) { return c.instance; })) {
+            BoxFitOptions fit = own_box_fit(j.fit.box, options);
+            fit.disparity_fb_px_m = grid.border.fb_px_m;
+            turn_overlapping_objects(all, pts, fit, pending_ground.get());
         }
         out = things_of_class(info, std::move(all), pts, pixels, grid, j.s, options);
     };

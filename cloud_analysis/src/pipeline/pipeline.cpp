@@ -4,6 +4,8 @@
 #include <future>
 #include <stdexcept>
 
+#include "stereoscene/support/limits.hpp"
+
 namespace cloud_analysis {
 namespace {
 
@@ -162,6 +164,15 @@ LoadedInputs load_inputs(const InputPaths& paths, const AnalyseOptions& options,
                 "cannot rectify: calibration has no K_0x/D_0x/R_rect_0x or distortion (" +
                 paths.calibration.string() + ")");
         }
+        // The rectified images are the calibration's size, not the inputs': refused up front
+        // like any image over the limit, before the maps are built.
+        if (cam.width_px > 0) {
+            stereoscene::support::check_limit("rectified image of " + paths.calibration.string(),
+                                              static_cast<std::uint64_t>(cam.width_px) *
+                                                  static_cast<std::uint64_t>(cam.height_px),
+                                              stereoscene::support::limits().max_image_pixels,
+                                              "pixels", stereoscene::support::kPixelsHint);
+        }
     } else if (cam.width_px > 0 &&
                (cam.width_px != in.left.width_px || cam.height_px != in.left.height_px)) {
         throw std::runtime_error("inputs do not match: calibration is for " +
@@ -246,10 +257,16 @@ AnalyseResult analyse(const LoadedInputs& in, const AnalyseOptions& options,
                                       *options.class_points_only);
         r.cloud_points = r.points.cloud_points;
         r.points.instance_id = r.instances.id;
+        mark_object_outlines(r.points.depth_edge, r.instances, r.disparity, r.points.border,
+                             options.reproject.depth_edge_step_m,
+                             options.reproject.depth_edge_rows);
     } else {
         r.cloud = reproject(r.disparity, r.camera, *left, r.classes, options.reproject);
         r.cloud_points = r.cloud.size();
         r.cloud.instance_id = r.instances.id;
+        mark_object_outlines(r.cloud.depth_edge, r.instances, r.disparity, r.cloud.border,
+                             options.reproject.depth_edge_step_m,
+                             options.reproject.depth_edge_rows);
     }
     watch.lap("reproject");
     if (r.cloud_points == 0) {

@@ -1,3 +1,4 @@
+#include <algorithm>
 #include <cstdint>
 #include <vector>
 
@@ -124,4 +125,36 @@ TEST_CASE("instance encodings are named", "[instances]") {
         CHECK(instance_encoding_name(parse_instance_encoding(name)) == name);
     }
     CHECK_THROWS_WITH(parse_instance_encoding("rgb"), Catch::Contains("auto, kitti"));
+}
+
+TEST_CASE("an object's pixels beside a nearer object's outline are marked as a depth edge",
+          "[instances]") {
+    // One row: object 1 (near, disparity 40) over columns 0-9, object 2 (far, 10) over 10-19,
+    // then background without an object.
+    InstanceMap m;
+    m.width_px = 24;
+    m.height_px = 1;
+    m.id.assign(24, 0);
+    DisparityMap d;
+    d.width_px = 24;
+    d.height_px = 1;
+    d.disparity_px.assign(24, 5.0f);
+    for (int u = 0; u < 20; ++u) {
+        m.id[static_cast<std::size_t>(u)] = u < 10 ? 1 : 2;
+        d.disparity_px[static_cast<std::size_t>(u)] = u < 10 ? 40.0f : 10.0f;
+    }
+    MatchBorder border{400.0, 0.0};  // depths 10 m and 40 m
+    std::vector<std::uint8_t> edge;
+    mark_object_outlines(edge, m, d, border, 0.8, 4);
+    REQUIRE(edge.size() == 24);
+    for (int u = 0; u < 24; ++u) {
+        INFO("column " << u);
+        // The far object's first four columns; never the near object, never the background.
+        CHECK(edge[static_cast<std::size_t>(u)] == (u >= 10 && u < 14 ? 1 : 0));
+    }
+    // Objects at one depth (within the step) mark nothing.
+    std::fill(d.disparity_px.begin(), d.disparity_px.begin() + 20, 40.0f);
+    std::vector<std::uint8_t> none;
+    mark_object_outlines(none, m, d, border, 0.8, 4);
+    CHECK(std::count(none.begin(), none.end(), 1) == 0);
 }

@@ -130,3 +130,25 @@ TEST_CASE("the densest range window keeps the surface and drops what lies beyond
     // Fewer than min_points in the window: everything is kept.
     CHECK(instances::densest_range_window(pts, all, 5.0, 150).size() == pts.size());
 }
+
+TEST_CASE("cars parked side by side seen front-on at an angle head along their end faces' normal",
+          "[entities][instances]") {
+    Scene s;
+    // Noses at x = 4.35 (cars 4.3 m long heading along x), 2.4 m apart along z: each shows its
+    // front and bonnet only, 35 degrees off the optical axis for the first.
+    for (int k = 0; k < 3; ++k) {
+        const float zc = 7.0f + 2.4f * static_cast<float>(k);
+        const auto id = static_cast<std::uint32_t>(0x1a01 + k);
+        for (float z = zc - 0.9f; z <= zc + 0.9f; z += 0.05f) {
+            for (float h = 0.3f; h <= 0.9f; h += 0.05f) s.add({4.35f, 1.65f - h, z}, 1, id);
+            for (float x = 4.35f; x <= 5.35f; x += 0.05f) s.add({x, 1.65f - 0.9f, z}, 1, id);
+        }
+    }
+    const auto cars = s.cars(true);
+    REQUIRE(cars.size() == 3);
+    for (std::size_t k = 0; k < 3; ++k) {
+        CHECK(std::abs(std::sin(cars[k].theta)) < std::sin(10.0 * 3.14159265358979 / 180.0));
+        CHECK(cars[k].z == Approx(7.0 + 2.4 * static_cast<double>(k)).margin(0.3));
+        CHECK(cars[k].x == Approx(6.5).margin(0.4));
+    }
+}

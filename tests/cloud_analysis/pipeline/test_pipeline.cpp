@@ -173,3 +173,25 @@ TEST_CASE("the depth edge band is on by default whichever path makes the classes
         CHECK_THROWS_WITH(o.validate(), Catch::Contains("depth_edge_step_m"));
     }
 }
+
+TEST_CASE("a calibration asking for a rectified image over the pixel limit is refused up front",
+          "[pipeline][calibration]") {
+    const auto dir = std::filesystem::temp_directory_path() / "stereoscene_test_huge_rectified";
+    std::filesystem::create_directories(dir);
+    const ImageU8 small{200, 60, 1, std::vector<std::uint8_t>(200 * 60, 90)};
+    std::ofstream(dir / "small.png", std::ios::binary) << encode_png(small);
+    std::ofstream(dir / "calib.yaml") << "fx: 100\nfy: 100\ncx: 100\ncy: 30\nbaseline_m: 0.5\n"
+                                         "width: 20000\nheight: 10000\n"
+                                         "distortion: [0, 0, 0, 0, 0]\n";
+    InputPaths p;
+    p.left = p.right = dir / "small.png";
+    p.calibration = dir / "calib.yaml";
+    AnalyseOptions options;
+    options.raw = true;
+    REQUIRE_THROWS_WITH(load_inputs(p, options), Catch::Contains("rectified image of") &&
+                                                     Catch::Contains("calib.yaml") &&
+                                                     Catch::Contains("--max-pixels"));
+    options.raw = false;  // as rectified input, the size is checked against the images
+    REQUIRE_THROWS_WITH(load_inputs(p, options), Catch::Contains("calibration is for 20000x10000"));
+    std::filesystem::remove_all(dir);
+}

@@ -53,6 +53,12 @@ struct BoxFitOptions {
     /// smear lines points up along rays only farther out); 0 = unknown, only faces across the
     /// ray.
     double disparity_fb_px_m = 0.0;
+    /// When only a short face is seen (no side longer than 1.3 prior widths): false, the length
+    /// runs along the footprint axis nearer the viewing ray (a piece of a thing, likely its end
+    /// seen from behind); true, along the face's normal, the axis the points extend less along
+    /// (a whole object: the face it shows is an end, whatever the angle it is seen at), unless
+    /// the image's edge cuts it (truncation_xz).
+    bool short_face_is_end = false;
     std::optional<double> yaw_rad;  ///< heading imposed instead of the L-shape search, radians
                                     ///< (cars cut from a row seen front-on), finite
     /// Camera-frame (x, z) mean of the points in the image's outermost columns when the image's

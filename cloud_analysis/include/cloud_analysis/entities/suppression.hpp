@@ -5,6 +5,7 @@
 /// onto things' silhouettes.
 
 #include <cstdint>
+#include <optional>
 #include <vector>
 
 #include <scene_schema/entities.hpp>
@@ -76,5 +77,14 @@ std::vector<Footprint> footprints_of(const std::vector<scene_schema::Entity>& th
 /// Share of the bird's-eye footprint of `e` (sampled on a 10 x 10 grid of cell centres) inside
 /// any of the `things` footprints.
 double footprint_share_inside(const scene_schema::Entity& e, const std::vector<Footprint>& things);
+
+/// Objects of an instance image cannot share ground: an object's box (Candidate::instance)
+/// with more than a quarter of its footprint inside the other objects' boxes is fitted again
+/// with its heading turned a quarter turn (`fit` with yaw_rad imposed) when that at least halves
+/// the share. The end face of a car seen front-on does not tell its heading by itself; its
+/// neighbours side by side in a row do. Candidates without an object are left alone.
+void turn_overlapping_objects(std::vector<Candidate>& candidates,
+                              const std::vector<Eigen::Vector3f>& pts, BoxFitOptions fit,
+                              const std::optional<GroundPlane>& ground);
 
 }  // namespace cloud_analysis::instances
