@@ -18,6 +18,7 @@
 #include "commands/batch.hpp"
 #include "commands/bench.hpp"
 #include "commands/evaluate.hpp"
+#include "commands/evaluate_odometry.hpp"
 #include "commands/evaluate_tracks.hpp"
 #include "commands/export_kitti.hpp"
 #include "commands/make_sample.hpp"
@@ -33,7 +34,8 @@ using cloud_analysis::app::kTool;
 bool is_subcommand(const std::string& arg) {
     return arg == "analyse" || arg == "evaluate" || arg == "export-kitti" || arg == "make-sample" ||
            arg == "batch" || arg == "bench" || arg == "report" || arg == "score-semantics" ||
-           arg == "track" || arg == "evaluate-tracks" || arg == "help";
+           arg == "track" || arg == "evaluate-tracks" || arg == "evaluate-odometry" ||
+           arg == "help";
 }
 
 }  // namespace
@@ -55,7 +57,8 @@ int main(int argc, char** argv) {
         "cloud-analysis: rectified stereo pair + calibration + semantic image -> "
         "disparity, labelled metric point cloud and entity file.\n"
         "Commands: analyse (default), evaluate, export-kitti, make-sample, batch, report, bench, "
-        "score-semantics, track, evaluate-tracks. Exit codes: 0 ok, 1 failure, 2 usage, 3 "
+        "score-semantics, track, evaluate-tracks, evaluate-odometry. Exit codes: 0 ok, 1 failure, "
+        "2 usage, 3 "
         "(evaluate) a bar was missed."};
     app.set_version_flag("--version", std::string(kTool) + " " + STEREOSCENE_VERSION);
     app.require_subcommand(0, 1);
@@ -79,6 +82,8 @@ int main(int argc, char** argv) {
     CLI::App* track = app_::add_track_command(app, track_args);
     app_::EvaluateTracksArgs evaluate_tracks_args;
     CLI::App* evaluate_tracks = app_::add_evaluate_tracks_command(app, evaluate_tracks_args);
+    app_::EvaluateOdometryArgs evaluate_odometry_args;
+    CLI::App* evaluate_odometry = app_::add_evaluate_odometry_command(app, evaluate_odometry_args);
     stereoscene::support::LimitFlags limit_flags;
     for (CLI::App* sub : app.get_subcommands([](CLI::App*) { return true; })) {
         stereoscene::support::add_limit_flags(*sub, limit_flags, false);
@@ -106,6 +111,7 @@ int main(int argc, char** argv) {
         if (*score) return app_::run_score_semantics(score_args);
         if (*track) return app_::run_track(track_args);
         if (*evaluate_tracks) return app_::run_evaluate_tracks(evaluate_tracks_args);
+        if (*evaluate_odometry) return app_::run_evaluate_odometry(evaluate_odometry_args);
         std::cout << app.help();
         return 0;
     } catch (const CLI::ParseError& e) {

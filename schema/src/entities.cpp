@@ -83,6 +83,16 @@ class Checker : public detail::CheckerBase {
                 bounded(*it, p, 0.0, kMaxTimestamp_s);
             }
         }
+        if (auto it = value.find("pose"); it != value.end()) {
+            const auto p = at(pointer, "pose");
+            if (!it->is_array() || it->size() != 12) {
+                fail(p, "must be an array of 12 numbers (3x4, row-major)");
+            } else {
+                for (std::size_t k = 0; k < 12; ++k) {
+                    bounded((*it)[k], at(p, std::to_string(k)), -kMaxPoseValue, kMaxPoseValue);
+                }
+            }
+        }
     }
 
     void velocity(const json& value, const std::string& pointer) {
@@ -209,7 +219,12 @@ EntityDocument from_json(const json& j) {
         doc.frame.camera = c;
     }
     if (auto it = f.find("timestamp"); it != f.end()) doc.frame.timestamp_s = it->get<double>();
-    doc.frame.extra = without(f, {"id", "convention", "camera", "timestamp"});
+    if (auto it = f.find("pose"); it != f.end()) {
+        std::array<double, 12> pose{};
+        for (std::size_t k = 0; k < 12; ++k) pose[k] = (*it)[k].get<double>();
+        doc.frame.pose = pose;
+    }
+    doc.frame.extra = without(f, {"id", "convention", "camera", "timestamp", "pose"});
     if (auto it = j.find("source"); it != j.end()) doc.source = *it;
     for (const json& e : j.at("entities")) {
         Entity entity;
@@ -257,6 +272,7 @@ json to_json(const EntityDocument& doc) {
                        {"baseline_m", c.baseline_m}};
     }
     if (doc.frame.timestamp_s) f["timestamp"] = *doc.frame.timestamp_s;
+    if (doc.frame.pose) f["pose"] = *doc.frame.pose;
     merge_extra(f, doc.frame.extra);
     j["frame"] = std::move(f);
     if (doc.source) j["source"] = *doc.source;

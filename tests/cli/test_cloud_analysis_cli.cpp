@@ -845,3 +845,53 @@ TEST_CASE("a bad instance image exits 1 with one line naming it and writes nothi
     CHECK(no_root.code == 2);
     CHECK(no_root.err.find("--instances") != std::string::npos);
 }
+
+TEST_CASE("batch --odometry writes each frame's pose and poses.txt; evaluate-odometry scores it",
+          "[cli][odometry]") {
+    const auto dir = scratch("odometry");
+    const fs::path root = fs::path(STEREOSCENE_SAMPLES_DIR) / "rendered" / "street";
+    // The same stereo frame twice: the camera did not move.
+    for (const char* name : {"a", "b"}) {
+        fs::copy_file(root / "image_2" / "000000.png", dir / (std::string(name) + "_l.png"));
+        fs::copy_file(root / "image_3" / "000000.png", dir / (std::string(name) + "_r.png"));
+    }
+    std::ofstream(dir / "pairs.txt") << "a_l.png a_r.png\nb_l.png b_r.png\n";
+    const fs::path out = dir / "out";
+    fs::create_directories(out);
+    const Run b = run(tool() + " batch --pairs " + quote((dir / "pairs.txt").string()) +
+                          " --calib " + quote((root / "calib" / "calib_cam_to_cam.txt").string()) +
+                          " --odometry -q --out-dir " + quote(out.string()),
+                      dir);
+    REQUIRE(b.code == 0);
+    const std::string poses = slurp(out / "poses.txt");
+    CHECK(std::count(poses.begin(), poses.end(), '\n') == 2);
+    const auto second = nlohmann::json::parse(slurp(out / "b_l.json"));
+    REQUIRE(second["frame"].contains("pose"));
+    for (int k = 0; k < 12; ++k) {
+        const double identity = k % 5 == 0 ? 1.0 : 0.0;  // 0, 5, 10: the diagonal of [R | t]
+        CHECK(second["frame"]["pose"][k].get<double>() == Approx(identity).margin(0.01));
+    }
+    const std::string poses_file = quote((out / "poses.txt").string());
+    const Run same = run(tool() + " evaluate-odometry --poses " + poses_file + " --truth " +
+                             poses_file + " --max-end-point-error 0 --json -",
+                         dir);
+    CHECK(same.code == 0);
+    CHECK(nlohmann::json::parse(same.out)["end_point_m"].get<double>() == Approx(0.0));
+    std::ofstream(dir / "three.txt") << poses << poses.substr(0, poses.find('\n') + 1);
+    const Run other = run(tool() + " evaluate-odometry --poses " + poses_file + " --truth " +
+                              quote((dir / "three.txt").string()),
+                          dir);
+    CHECK(other.code == 1);
+    CHECK(count_lines(other.err) == 1);
+    CHECK(other.err.find("differ in frames: 2 and 3") != std::string::npos);
+    const Run missing =
+        run(tool() + " evaluate-odometry --poses " + poses_file + " --truth nope.txt", dir);
+    CHECK(missing.code == 1);
+    CHECK(missing.err.find("nope.txt") != std::string::npos);
+    const Run resume =
+        run(tool() + " batch --pairs " + quote((dir / "pairs.txt").string()) + " --calib " +
+                quote((root / "calib" / "calib_cam_to_cam.txt").string()) +
+                " --odometry --resume --out-dir " + quote(out.string()),
+            dir);
+    CHECK(resume.code == 2);
+}

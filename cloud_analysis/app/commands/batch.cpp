@@ -103,6 +103,7 @@ cloud_analysis::BatchOptions batch_options(const BatchArgs& a, std::vector<std::
     cloud_analysis::BatchOptions options;
     options.kitti_root = a.kitti_root;
     options.kitti_instances = a.instances;
+    options.odometry = a.odometry;
     options.frames = std::move(frames);
     if (!a.drive.empty()) {
         // The share's frames, in the drive's order.
@@ -190,6 +191,9 @@ CLI::App* add_batch_command(CLI::App& app, BatchArgs& a) {
     cmd->add_flag("--track", a.track,
                   "track the frames in order: entity files with track_id and velocity, and "
                   "<out-dir>/sequence.json (see `track`)");
+    cmd->add_flag("--odometry", a.odometry,
+                  "estimate where the camera went from frame to frame (stereo visual odometry): "
+                  "<out-dir>/poses.txt (KITTI odometry format) and each entity file's frame.pose");
     cmd->add_option("--fps", a.track_options.fps,
                     "--track: frame rate when frames carry no timestamps, Hz")
         ->capture_default_str();
@@ -287,6 +291,13 @@ void check_batch_flags(const BatchArgs& a) {
                                    "cannot resume: the tracker needs every frame in order");
     if (a.track && a.shard.count > 1)
         throw CLI::ValidationError("--track", "cannot track a share of the frames (--shard)");
+    if (a.odometry && a.resume)
+        throw CLI::ValidationError("--odometry",
+                                   "cannot resume: the odometry needs every frame in order");
+    if (a.odometry && a.shard.count > 1)
+        throw CLI::ValidationError("--odometry", "cannot chain a share of the frames (--shard)");
+    if (a.odometry && a.settings.options.raw)
+        throw CLI::ValidationError("--odometry", "needs rectified frames (not --raw)");
     try {
         a.track_options.validate();
     } catch (const std::invalid_argument& e) {

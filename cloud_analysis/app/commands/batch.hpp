@@ -31,6 +31,7 @@ struct BatchArgs {
     bool instances = false;              ///< --instances: a KITTI root's instance/<frame>.png
     std::vector<cloud_analysis::DriveFrame> drive;  ///< the frames of --drive or --pairs
     bool track = false;                             ///< --track: track ids + sequence.json
+    bool odometry = false;                          ///< --odometry: poses.txt + frame.pose
     tracking::SequenceTrackOptions track_options;   ///< --fps, --min-hits, --max-misses
     std::vector<std::string> frames;                ///< --frames: frame ids
     std::filesystem::path list;                     ///< --list: file of frame ids, one per line

@@ -3,6 +3,7 @@
 #include <sys/resource.h>
 
 #include <algorithm>
+#include <array>
 #include <chrono>
 #include <exception>
 #include <fstream>
@@ -15,6 +16,7 @@
 
 #include <scene_schema/entities.hpp>
 #include <scene_schema/sequence.hpp>
+#include <stereoscene/support/atomic_file.hpp>
 #include <stereoscene/support/output_transaction.hpp>
 
 #include "cloud_analysis/cloud/cloud_io.hpp"
@@ -88,15 +90,37 @@ struct FrameOutput {
     stereoscene::support::FileSync sync = stereoscene::support::FileSync::kDurable;
 };
 
-/// The frame's entity file: its entities with the drive's capture time, tracked when
-/// `sequence` is given.
+/// The camera's odometry over a batch: the poses of the frames written, in order.
+struct Odometry {
+    std::optional<odometry::VisualOdometry> chain;  ///< made with the first frame's camera
+    std::vector<odometry::Pose> poses;              ///< of the frames written
+};
+
+/// The pose of the frame of `job`, its motion chained onto the frames before it.
+odometry::Pose pose_of(const FinishJob& job, const BatchOptions& options, Odometry& odo) {
+    if (!odo.chain) odo.chain.emplace(job.result.camera, options.odometry_options);
+    std::vector<char> is_thing;
+    for (const auto& c : job.in.palette.classes) is_thing.push_back(c.thing ? 1 : 0);
+    odometry::OdometryFrame frame{job.in.left, job.in.right, job.result.disparity,
+                                  odometry::static_mask(job.result.classes.class_index, is_thing)};
+    return odo.chain->add(std::move(frame));
+}
+
+/// The frame's entity file: its entities with the drive's capture time and the camera's pose
+/// when given, tracked when `sequence` is given.
 std::string frame_entities(const FinishJob& job, const BatchOptions& options,
-                           tracking::SequenceTracker* sequence) {
+                           tracking::SequenceTracker* sequence,
+                           const std::optional<odometry::Pose>& pose) {
     scene_schema::EntityDocument doc =
         entity_document(job.in, job.result, options.extract, options.run);
     std::optional<double> time;
     if (job.position < options.drive.size()) time = options.drive[job.position].timestamp_s;
     if (time) doc.frame.timestamp_s = time;
+    if (pose) {
+        std::array<double, 12> row_major{};
+        for (int k = 0; k < 12; ++k) row_major[static_cast<std::size_t>(k)] = (*pose)(k / 4, k % 4);
+        doc.frame.pose = row_major;
+    }
     if (sequence != nullptr) {
         doc = sequence->track(doc, static_cast<std::int64_t>(job.position),
                               job.stem.filename().string() + ".json", time);
@@ -107,7 +131,7 @@ std::string frame_entities(const FinishJob& job, const BatchOptions& options,
 /// Extracts the entities, formats every output and writes them, all or nothing, the entity
 /// file last; with `sequence`, tracks the frame first and adds it to the index after.
 Finished finish_frame(const FinishJob& job, const BatchOptions& options,
-                      tracking::SequenceTracker* sequence) {
+                      tracking::SequenceTracker* sequence, Odometry* odo) {
     const auto start = Clock::now();
     Finished done;
     try {
@@ -131,12 +155,16 @@ Finished finish_frame(const FinishJob& job, const BatchOptions& options,
                                options.fsync_clouds ? stereoscene::support::FileSync::kDurable
                                                     : stereoscene::support::FileSync::kAtomicOnly});
         }
-        outputs.push_back({job.stem.string() + ".json", frame_entities(job, options, sequence)});
+        std::optional<odometry::Pose> pose;
+        if (odo != nullptr) pose = pose_of(job, options, *odo);
+        outputs.push_back(
+            {job.stem.string() + ".json", frame_entities(job, options, sequence, pose)});
         // One transaction: a frame's files are all written or none, and a failure restores
         // what a frame of an earlier run left there.
         stereoscene::support::OutputTransaction files;
         for (const auto& out : outputs) files.stage(out.path, out.bytes, out.sync);
         files.commit();
+        if (pose) odo->poses.push_back(*pose);
         if (sequence != nullptr) sequence->commit(options.out_dir / "sequence.json");
     } catch (const std::exception& e) {
         done.error = e.what();
@@ -307,6 +335,9 @@ BatchReport run_batch(const BatchOptions& options, const BatchObserver& observer
                          });
     }
 
+    std::optional<Odometry> odo;
+    if (options.odometry) odo.emplace();
+
     BatchReport report;
     const std::size_t n = options.frames.size();
     report.frames = n;
@@ -349,9 +380,11 @@ BatchReport run_batch(const BatchOptions& options, const BatchObserver& observer
             job->position = i;
             finishing_frame = frame.frame;
             finishing_record = per_frame.size() - 1;
-            finishing = std::async(std::launch::async, [&options, &sequence, j = std::move(*job)] {
-                return finish_frame(j, options, sequence ? &*sequence : nullptr);
-            });
+            finishing =
+                std::async(std::launch::async, [&options, &sequence, &odo, j = std::move(*job)] {
+                    return finish_frame(j, options, sequence ? &*sequence : nullptr,
+                                        odo ? &*odo : nullptr);
+                });
         }
         if (observer.progress) {
             observer.progress(i + 1, n, report.failed, ms_between(start, Clock::now()) / 1000.0);
@@ -362,6 +395,10 @@ BatchReport run_batch(const BatchOptions& options, const BatchObserver& observer
         sequence->commit(options.out_dir / "sequence.json",
                          stereoscene::support::FileSync::kDurable);
         report.tracking = sequence->report();
+    }
+    if (odo) {
+        stereoscene::support::write_file_atomic(options.out_dir / "poses.txt",
+                                                odometry::format_kitti_poses(odo->poses));
     }
     summarize(report, start, cpu_start);
     return report;

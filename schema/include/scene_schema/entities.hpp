@@ -3,6 +3,7 @@
 /// The entity file: the contract between cloud-analysis (writer) and scene-render (reader).
 /// The format is specified in schema/entities.schema.json and docs/format.md.
 
+#include <array>
 #include <cstdint>
 #include <filesystem>
 #include <optional>
@@ -35,7 +36,9 @@ inline constexpr double kMaxImageSide_px = 1e6;               ///< camera width 
 inline constexpr double kMaxPixelValue_px = 1e9;              ///< |fx|, |fy|, |cx|, |cy|
 inline constexpr double kMaxSpeed_mps = 1e3;                  ///< |vx|, |vz| (1.1)
 inline constexpr double kMaxTimestamp_s = 1e11;               ///< frame.timestamp (1.1)
-inline constexpr double kMaxTrackId = 2147483647.0;           ///< track_id fits an int (1.1)
+inline constexpr double kMaxTrackId = 2147483647.0;
+inline constexpr double kMaxPoseValue =
+    1e7;  ///< |pose entry| (1.2)           ///< track_id fits an int (1.1)
 
 /// A validation or read failure, located by a JSON pointer into the document.
 class SchemaError : public std::runtime_error {
@@ -68,6 +71,9 @@ struct Frame {
     std::string convention = kConventionKittiCamera;  ///< coordinate convention
     std::optional<CameraIntrinsics> camera;           ///< intrinsics, when known
     std::optional<double> timestamp_s;  ///< capture time in seconds, >= 0 (1.1; a sequence's clock)
+    /// Pose of this frame's camera in the drive's world (1.2): the 3x4 matrix [R | t] of
+    /// T_world_camera, row-major (KITTI odometry poses; the world is the first frame's camera).
+    std::optional<std::array<double, 12>> pose;
     nlohmann::json extra = nlohmann::json::object();  ///< unknown members, kept verbatim
 };
 

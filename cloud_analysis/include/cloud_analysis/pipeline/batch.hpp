@@ -16,6 +16,7 @@
 
 #include "cloud_analysis/entities/entity_document.hpp"
 #include "cloud_analysis/entities/extract.hpp"
+#include "cloud_analysis/odometry/visual_odometry.hpp"
 #include "cloud_analysis/pipeline/batch_report.hpp"
 #include "cloud_analysis/pipeline/drive.hpp"
 #include "cloud_analysis/tracking/sequence.hpp"
@@ -38,7 +39,12 @@ struct BatchOptions {
     std::vector<std::string> cloud_formats;       ///< also <frame>.<fmt> for each of xyz, pcd, ply
     std::vector<std::string> cloud_drop_classes;  ///< classes left out of the clouds ("sky")
     bool disparity_kitti = false;                 ///< also <frame>_disparity.png (KITTI 16-bit)
-    bool fsync_clouds = false;                    ///< clouds fsync'ed too (entity files always are)
+    /// Estimate the camera's motion frame to frame (odometry/visual_odometry.hpp): each entity
+    /// file's frame.pose and out_dir/poses.txt (KITTI odometry format, one line per frame
+    /// written, in order). Needs the frames in order, as tracking does.
+    bool odometry = false;
+    odometry::OdometryOptions odometry_options;  ///< its settings
+    bool fsync_clouds = false;                   ///< clouds fsync'ed too (entity files always are)
     /// Score each frame's disparity against <kitti_root>/disp_occ_0/<frame>.png when present.
     bool evaluate = false;
     ExtractOptions extract;  ///< entity extraction (class config read)
