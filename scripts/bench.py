@@ -384,6 +384,48 @@ def plot(scaling, folder):
         fig.savefig(folder / "perf_entities.png", dpi=100)
 
 
+def part_odometry(a, tool, result):
+    """The real drive with and without --odometry: what the odometry costs beside the rest of
+    the frame (CPU time per frame, same process) and how far it drifts (evaluate-odometry)."""
+    drive = KITTI.parent / "kitti_odometry_02"
+    if not (drive / "image_2").is_dir():
+        log(f"no real drive at {drive}: odometry rows skipped")
+        return
+    out = a.out / "odometry"
+    out.mkdir(parents=True, exist_ok=True)
+    pairs = out / "pairs.txt"
+    pairs.write_text("".join(f"{p} {drive / 'image_3' / p.name}\n"
+                             for p in sorted((drive / "image_2").glob("*.png"))))
+    rows = {}
+    for name, extra in [("without", []), ("with --odometry", ["--odometry"])]:
+        cpu, fps = [], []
+        for _ in range(a.runs):
+            report = out / "report.json"
+            r = run([tool, "batch", "--pairs", pairs, "--calib", drive / "calib.txt",
+                     "--out-dir", out, "-q", "--report", report, *extra])
+            if r.returncode != 0:
+                sys.exit(f"batch failed: {r.stderr}")
+            rep = json.loads(report.read_text())
+            cpu.append(rep["cpu_ms_per_frame"])
+            fps.append(rep["fps"])
+        rows[name] = (statistics.median(cpu), statistics.median(fps))
+    score = run([tool, "evaluate-odometry", "--poses", out / "poses.txt", "--truth",
+                 drive / "poses.txt", "--json", "-"])
+    errors = json.loads(score.stdout)
+    result["odometry"] = {"cpu_ms_per_frame": {k: v[0] for k, v in rows.items()},
+                          "fps": {k: v[1] for k, v in rows.items()}, "errors": errors}
+    print(f"\n### Odometry on the real drive ({drive.name}, 20 frames, medians of {a.runs} runs)\n")
+    print("| batch | CPU ms per frame | fps |")
+    print("|---|---|---|")
+    for name, (c, f) in rows.items():
+        print(f"| {name} | {c:.1f} | {f:.1f} |")
+    extra = rows["with --odometry"][0] - rows["without"][0]
+    print(f"\nThe odometry's own cost: {extra:.1f} ms of CPU a frame. Drift: translation "
+          f"{errors['translation_pct']:.2f} % and rotation {errors['rotation_deg_per_m']:.4f} deg/m "
+          f"over the segments, end point {errors['end_point_m']:.2f} m = "
+          f"{errors['end_point_pct']:.2f} % of {errors['path_m']:.1f} m.")
+
+
 def main():
     p = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     p.add_argument("--build", type=pathlib.Path, required=True)
@@ -391,7 +433,7 @@ def main():
     p.add_argument("--runs", type=int, default=5)
     p.add_argument("--batch-frames", type=int, default=100)
     p.add_argument("--render-frames", type=int, default=30)
-    p.add_argument("--parts", default="table,batch,presets,scaling,matchers")
+    p.add_argument("--parts", default="table,batch,presets,scaling,matchers,odometry")
     p.add_argument("--plots", default="")
     p.add_argument("--render", type=pathlib.Path, help="scene-render binary (default: BUILD's)")
     a = p.parse_args()
@@ -426,6 +468,8 @@ def main():
         part_scaling(a, tool, render, result)
     if "matchers" in parts:
         part_matchers(a, tool, result)
+    if "odometry" in parts:
+        part_odometry(a, tool, result)
     result["load_average_at_end"] = os.getloadavg()
     (a.out / "bench.json").write_text(json.dumps(result, indent=1) + "\n")
     log(f"wrote {a.out / 'bench.json'}")

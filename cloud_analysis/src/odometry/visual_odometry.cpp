@@ -1,5 +1,6 @@
 #include "cloud_analysis/odometry/visual_odometry.hpp"
 
+#include <algorithm>
 #include <cmath>
 #include <cstdio>
 #include <sstream>
@@ -9,6 +10,7 @@
 #include <opencv2/calib3d.hpp>
 #include <opencv2/core.hpp>
 #include <opencv2/core/eigen.hpp>
+#include <opencv2/features2d.hpp>
 #include <opencv2/imgproc.hpp>
 #include <opencv2/video/tracking.hpp>
 
@@ -37,13 +39,41 @@ Pose pose_of(const cv::Mat& rvec, const cv::Mat& tvec) {
     return T;
 }
 
+/// FAST corners (Rosten & Drummond 2006) of `grey` where `mask` is set, the strongest of each
+/// square cell of corner_cell_px, about max_corners in all: spread over the image, so that the
+/// motion is not fitted to one textured patch.
+std::vector<cv::Point2f> spread_corners(const cv::Mat& grey, const cv::Mat& mask,
+                                        const OdometryOptions& options) {
+    std::vector<cv::KeyPoint> found;
+    cv::FAST(grey, found, 20, true);
+    const double cell = options.corner_cell_px;
+    const int columns = static_cast<int>(std::ceil(grey.cols / cell));
+    const int rows = static_cast<int>(std::ceil(grey.rows / cell));
+    const auto per_cell = static_cast<std::size_t>(
+        std::max(1, options.max_corners / std::max(1, columns * rows) + 1));
+    std::vector<std::vector<cv::KeyPoint>> cells(static_cast<std::size_t>(columns * rows));
+    for (const cv::KeyPoint& k : found) {
+        const int u = static_cast<int>(k.pt.x), v = static_cast<int>(k.pt.y);
+        if (mask.at<std::uint8_t>(v, u) == 0) continue;
+        const int c = static_cast<int>(v / cell) * columns + static_cast<int>(u / cell);
+        cells[static_cast<std::size_t>(c)].push_back(k);
+    }
+    std::vector<cv::Point2f> out;
+    for (auto& c : cells) {
+        const auto keep = std::min(per_cell, c.size());
+        std::partial_sort(
+            c.begin(), c.begin() + static_cast<std::ptrdiff_t>(keep), c.end(),
+            [](const cv::KeyPoint& a, const cv::KeyPoint& b) { return a.response > b.response; });
+        for (std::size_t k = 0; k < keep; ++k) out.push_back(c[k].pt);
+    }
+    return out;
+}
+
 }  // namespace
 
 void OdometryOptions::validate() const {
     if (max_corners < 10) throw std::invalid_argument("max_corners: must be >= 10");
-    if (!(min_corner_distance_px > 0.0)) {
-        throw std::invalid_argument("min_corner_distance_px: must be > 0");
-    }
+    if (!(corner_cell_px >= 4.0)) throw std::invalid_argument("corner_cell_px: must be >= 4");
     if (track_window_px < 5 || track_window_px % 2 == 0) {
         throw std::invalid_argument("track_window_px: must be odd and >= 5");
     }
@@ -63,9 +93,25 @@ void OdometryOptions::validate() const {
     if (min_inliers < 6) throw std::invalid_argument("min_inliers: must be >= 6");
 }
 
-MotionEstimate estimate_motion(const OdometryFrame& prev, const ImageU8& curr_left,
-                               const StereoCamera& camera, const OdometryOptions& options) {
-    options.validate();
+/// Image pyramids of Lucas-Kanade (cv::buildOpticalFlowPyramid), kept for the next frame.
+struct VisualOdometry::Pyramid {
+    std::vector<cv::Mat> levels;
+};
+
+namespace {
+
+VisualOdometry::Pyramid pyramid_of(const cv::Mat& grey, const OdometryOptions& options) {
+    VisualOdometry::Pyramid p;
+    cv::buildOpticalFlowPyramid(grey, p.levels,
+                                cv::Size(options.track_window_px, options.track_window_px),
+                                options.track_levels);
+    return p;
+}
+
+/// estimate_motion with the two left images' pyramids built.
+MotionEstimate motion(const OdometryFrame& prev, const VisualOdometry::Pyramid& prev_pyramid,
+                      const ImageU8& curr_left, const VisualOdometry::Pyramid& curr_pyramid,
+                      const StereoCamera& camera, const OdometryOptions& options) {
     const int w = prev.left.width_px, h = prev.left.height_px;
     if (curr_left.width_px != w || curr_left.height_px != h || prev.disparity.width_px != w ||
         prev.disparity.height_px != h) {
@@ -85,20 +131,18 @@ MotionEstimate estimate_motion(const OdometryFrame& prev, const ImageU8& curr_le
         const bool still = prev.static_mask.empty() || prev.static_mask[p] != 0;
         mask.data[p] = near && still ? 255 : 0;
     }
-    const cv::Mat prev_grey = grey_of(prev.left), curr_grey = grey_of(curr_left);
-    std::vector<cv::Point2f> corners;
-    cv::goodFeaturesToTrack(prev_grey, corners, options.max_corners, 0.01,
-                            options.min_corner_distance_px, mask);
+    const cv::Mat prev_grey = grey_of(prev.left);
+    const std::vector<cv::Point2f> corners = spread_corners(prev_grey, mask, options);
     MotionEstimate out;
     if (corners.size() < static_cast<std::size_t>(options.min_inliers)) return out;
     std::vector<cv::Point2f> forward, back;
     std::vector<std::uint8_t> ok_forward, ok_back;
     std::vector<float> error;
     const cv::Size window(options.track_window_px, options.track_window_px);
-    cv::calcOpticalFlowPyrLK(prev_grey, curr_grey, corners, forward, ok_forward, error, window,
-                             options.track_levels);
-    cv::calcOpticalFlowPyrLK(curr_grey, prev_grey, forward, back, ok_back, error, window,
-                             options.track_levels);
+    cv::calcOpticalFlowPyrLK(prev_pyramid.levels, curr_pyramid.levels, corners, forward, ok_forward,
+                             error, window, options.track_levels);
+    cv::calcOpticalFlowPyrLK(curr_pyramid.levels, prev_pyramid.levels, forward, back, ok_back,
+                             error, window, options.track_levels);
     // Each corner's own match in the previous right image, from the dense disparity.
     const bool stereo = !prev.right.empty();
     std::vector<cv::Point2f> across;
@@ -170,6 +214,18 @@ MotionEstimate estimate_motion(const OdometryFrame& prev, const ImageU8& curr_le
     return out;
 }
 
+}  // namespace
+
+MotionEstimate estimate_motion(const OdometryFrame& prev, const ImageU8& curr_left,
+                               const StereoCamera& camera, const OdometryOptions& options) {
+    options.validate();
+    if (curr_left.width_px != prev.left.width_px || curr_left.height_px != prev.left.height_px) {
+        throw std::invalid_argument("estimate_motion: images and disparity differ in size");
+    }
+    return motion(prev, pyramid_of(grey_of(prev.left), options), curr_left,
+                  pyramid_of(grey_of(curr_left), options), camera, options);
+}
+
 std::vector<std::uint8_t> static_mask(const std::vector<std::uint16_t>& class_index,
                                       const std::vector<char>& is_thing) {
     std::vector<std::uint8_t> out(class_index.size(), 1);
@@ -185,13 +241,30 @@ VisualOdometry::VisualOdometry(const StereoCamera& camera, const OdometryOptions
     options_.validate();
 }
 
+VisualOdometry::~VisualOdometry() = default;
+
 Pose VisualOdometry::add(OdometryFrame frame) {
+    // Grey once: the left image is tracked from twice (into this frame and the next).
+    const auto to_grey = [](ImageU8& image) {
+        if (image.channels == 1 || image.empty()) return;
+        const cv::Mat grey = grey_of(image);
+        image = ImageU8{image.width_px, image.height_px, 1,
+                        std::vector<std::uint8_t>(grey.data, grey.data + grey.total())};
+    };
+    to_grey(frame.left);
+    to_grey(frame.right);
+    auto pyramid = std::make_unique<Pyramid>(pyramid_of(grey_of(frame.left), options_));
     if (prev_) {
-        last_ = estimate_motion(*prev_, frame.left, camera_, options_);
+        if (frame.left.width_px != prev_->left.width_px ||
+            frame.left.height_px != prev_->left.height_px) {
+            throw std::invalid_argument("odometry: a frame of another size than the one before");
+        }
+        last_ = motion(*prev_, *prev_pyramid_, frame.left, *pyramid, camera_, options_);
         if (last_.valid) velocity_ = last_.T_curr_prev;
         T_world_prev_ = T_world_prev_ * velocity_.inverse();
     }
     prev_ = std::move(frame);
+    prev_pyramid_ = std::move(pyramid);
     return T_world_prev_;
 }
 

@@ -1,7 +1,8 @@
 #pragma once
 
 /// Stereo visual odometry: where the left camera went between consecutive frames of a drive.
-/// Corners of the previous left image (Shi-Tomasi) are tracked into the current one (pyramidal
+/// Corners of the previous left image (FAST, Rosten & Drummond 2006, spread over a grid) are
+/// tracked into the current one (pyramidal
 /// Lucas-Kanade, kept when the backward track returns within a pixel) and matched across the
 /// previous pair (Lucas-Kanade along the row from the dense disparity: a corner's own sub-pixel
 /// disparity, where a matching window centred on an outline would mix two depths), lifted to
@@ -11,6 +12,7 @@
 /// thing classes (cars, people: what may move) do not vote. See docs/odometry.md.
 
 #include <cstdint>
+#include <memory>
 #include <optional>
 #include <string>
 #include <string_view>
@@ -28,13 +30,15 @@ using Pose = Eigen::Matrix4d;
 
 /// Settings of the odometry.
 struct OdometryOptions {
-    int max_corners = 1500;               ///< corners detected in the previous image, >= 10
-    double min_corner_distance_px = 8.0;  ///< between two corners, px, > 0
-    int track_window_px = 21;             ///< Lucas-Kanade window side, px, odd, >= 5
-    int track_levels = 3;                 ///< image pyramid levels above the image, [0, 8]
-    double max_round_trip_px = 1.0;       ///< forward-backward track error kept, px, > 0
-    double max_stereo_gap_px = 1.0;       ///< a corner's match across the pair: off its row, or
-                                          ///< off the dense disparity, by at most this, px, > 0
+    int max_corners = 1000;          ///< corners kept in the previous image, >= 10
+    double corner_cell_px = 32.0;    ///< corners are kept strongest first per square cell of this
+                                     ///< side, the same number in each: spread over the image, px,
+                                     ///< >= 4
+    int track_window_px = 11;        ///< Lucas-Kanade window side, px, odd, >= 5
+    int track_levels = 3;            ///< image pyramid levels above the image, [0, 8]
+    double max_round_trip_px = 1.0;  ///< forward-backward track error kept, px, > 0
+    double max_stereo_gap_px = 1.0;  ///< a corner's match across the pair: off its row, or
+                                     ///< off the dense disparity, by at most this, px, > 0
     /// A point votes when its depth is known to this share at least: its disparity at least
     /// disparity_noise_px / max_relative_depth_error (12.5 px, 31 m on KITTI's rig). Depth error
     /// grows as z^2 and the matcher's bias does not shrink with the disparity: far points
@@ -82,10 +86,15 @@ std::vector<std::uint8_t> static_mask(const std::vector<std::uint16_t>& class_in
 class VisualOdometry {
   public:
     VisualOdometry(const StereoCamera& camera, const OdometryOptions& options);
+    ~VisualOdometry();
+    VisualOdometry(VisualOdometry&&) noexcept = default;
+    VisualOdometry& operator=(VisualOdometry&&) noexcept = default;
     /// Adds the next frame; returns its pose.
     Pose add(OdometryFrame frame);
     /// The last motion's estimate (invalid for the first frame).
     const MotionEstimate& last_motion() const { return last_; }
+
+    struct Pyramid;  ///< the previous left image's image pyramid (behind the .cpp: OpenCV)
 
   private:
     StereoCamera camera_;
@@ -94,6 +103,7 @@ class VisualOdometry {
     Pose T_world_prev_ = Pose::Identity();
     Pose velocity_ = Pose::Identity();  ///< the last trusted T_curr_prev
     MotionEstimate last_;
+    std::unique_ptr<Pyramid> prev_pyramid_;
 };
 
 /// KITTI odometry poses text: per frame one line of the 3x4 matrix [R | t] of T_world_camera,
