@@ -846,8 +846,9 @@ TEST_CASE("a bad instance image exits 1 with one line naming it and writes nothi
     CHECK(no_root.err.find("--instances") != std::string::npos);
 }
 
-TEST_CASE("batch --odometry writes each frame's pose and poses.txt; evaluate-odometry scores it",
-          "[cli][odometry]") {
+TEST_CASE(
+    "batch --odometry writes each frame's pose and poses.txt, and evaluate-odometry scores it",
+    "[cli][odometry]") {
     const auto dir = scratch("odometry");
     const fs::path root = fs::path(STEREOSCENE_SAMPLES_DIR) / "rendered" / "street";
     // The same stereo frame twice: the camera did not move.

@@ -75,6 +75,15 @@ Eigen::Matrix2d GroundKalman::measurement_covariance(double x_m, double z_m) con
     return along * along * ray * ray.transpose() + across * across * side * side.transpose();
 }
 
+void GroundKalman::change_frame(const Eigen::Matrix2d& R, const Eigen::Vector2d& t) {
+    Eigen::Matrix4d M = Eigen::Matrix4d::Zero();
+    M.topLeftCorner<2, 2>() = R;
+    M.bottomRightCorner<2, 2>() = R;
+    state_ = M * state_;
+    state_.head<2>() += t;
+    covariance_ = M * covariance_ * M.transpose();
+}
+
 void GroundKalman::update(double x_m, double z_m) {
     const Eigen::Matrix2d R = measurement_covariance(x_m, z_m);
     const Eigen::Matrix2d S = innovation_covariance(covariance_, R);

@@ -4,6 +4,8 @@
 #include <cmath>
 #include <stdexcept>
 
+#include <Eigen/LU>
+
 #include "cloud_analysis/support/angles.hpp"
 #include "cloud_analysis/tracking/assignment.hpp"
 
@@ -60,9 +62,31 @@ void TrackerOptions::validate() const {
 
 Tracker::Tracker(TrackerOptions options) : options_(std::move(options)) { options_.validate(); }
 
+void Tracker::carry(const std::array<double, 12>& T_world_prev,
+                    const std::array<double, 12>& T_world_curr) {
+    const auto matrix = [](const std::array<double, 12>& a) {
+        Eigen::Matrix4d T = Eigen::Matrix4d::Identity();
+        for (int k = 0; k < 12; ++k) T(k / 4, k % 4) = a[static_cast<std::size_t>(k)];
+        return T;
+    };
+    const Eigen::Matrix4d T_curr_prev = matrix(T_world_curr).inverse() * matrix(T_world_prev);
+    // The ground-plane part: the yaw about +y (a car's camera pitches and rolls little), and
+    // the translation in x and z; y moves by the vertical translation.
+    const double yaw = std::atan2(T_curr_prev(0, 2), T_curr_prev(0, 0));
+    Eigen::Matrix2d R;
+    R << std::cos(yaw), std::sin(yaw), -std::sin(yaw), std::cos(yaw);
+    const Eigen::Vector2d t(T_curr_prev(0, 3), T_curr_prev(2, 3));
+    for (Track& track : tracks_) {
+        track.motion.change_frame(R, t);
+        track.theta_rad += yaw;
+        track.y_m += T_curr_prev(1, 3);
+    }
+}
+
 void Tracker::reset() {
     tracks_.clear();
     last_time_s_.reset();
+    last_pose_.reset();
     frames_since_start_ = 0;
 }
 
@@ -272,6 +296,8 @@ scene_schema::EntityDocument Tracker::update(const scene_schema::EntityDocument&
     }
     last_time_s_ = timestamp_s;
     ++frames_since_start_;
+    if (frame.frame.pose && last_pose_) carry(*last_pose_, *frame.frame.pose);
+    last_pose_ = frame.frame.pose;
     predict(dt);
 
     std::vector<int> track_of;

@@ -1,6 +1,7 @@
 #include <catch2/catch.hpp>
 
 #include <algorithm>
+#include <array>
 #include <cmath>
 #include <filesystem>
 #include <map>
@@ -221,6 +222,56 @@ TEST_CASE("a crossing car and a parked car keep their ids, velocity and one size
     const auto [lo, hi] = std::minmax_element(parked_L.begin(), parked_L.end());
     CHECK(*hi - *lo < 0.05);
     for (double vx : moving_vx) CHECK(vx == Approx(8.0).margin(1.0));
+}
+
+TEST_CASE(
+    "with the camera's poses a parked car seen from a moving car is still, and a car "
+    "driving alongside moves over the ground",
+    "[tracking][odometry]") {
+    std::mt19937 rng(5);
+    std::normal_distribution<double> noise(0.0, 0.1);
+    Tracker with_poses, without;
+    std::vector<double> parked_speed, parked_speed_relative, moving_vz;
+    for (int i = 0; i < 20; ++i) {
+        const double t = 0.1 * i;
+        // The camera drives at 15 m/s along its z and turns 0.5 degrees a frame; the parked car
+        // stands at (4, 32) in the world, the other car drives at 10 m/s beside the camera's
+        // start, along the world's z.
+        const double yaw = 0.5 * kPi / 180.0 * i;
+        const Eigen::Vector2d cam(0.0, 15.0 * t);  // the camera in the world (x, z)
+        // World (x, z) -> this camera's (x, z): rotate by -yaw about y after the translation.
+        const auto to_camera = [&](double wx, double wz) {
+            const double dx = wx - cam.x(), dz = wz - cam.y();
+            return Eigen::Vector2d(std::cos(yaw) * dx - std::sin(yaw) * dz,
+                                   std::sin(yaw) * dx + std::cos(yaw) * dz);
+        };
+        const Eigen::Vector2d p = to_camera(4.0, 32.0), m = to_camera(-3.5, 5.0 + 10.0 * t);
+        EntityDocument doc =
+            frame_of({car(p.x() + noise(rng), p.y() + noise(rng), -kPi / 2 + yaw),
+                      car(m.x() + noise(rng), m.y() + noise(rng), -kPi / 2 + yaw)});
+        // T_world_camera: R_y(yaw) and the camera's position.
+        doc.frame.pose =
+            std::array<double, 12>{std::cos(yaw),  0.0, std::sin(yaw), cam.x(), 0.0, 1.0, 0.0, 0.0,
+                                   -std::sin(yaw), 0.0, std::cos(yaw), cam.y()};
+        const auto out = with_poses.update(doc, t);
+        doc.frame.pose.reset();
+        const auto relative = without.update(doc, t);
+        if (i < 8) continue;
+        REQUIRE(out.entities[0].velocity);
+        REQUIRE(relative.entities[0].velocity);
+        parked_speed.push_back(
+            std::hypot(out.entities[0].velocity->vx_mps, out.entities[0].velocity->vz_mps));
+        parked_speed_relative.push_back(std::hypot(relative.entities[0].velocity->vx_mps,
+                                                   relative.entities[0].velocity->vz_mps));
+        // Over the ground, in this camera's axes: 10 m/s along the world's z, turned by -yaw.
+        moving_vz.push_back(
+            std::hypot(out.entities[1].velocity->vx_mps, out.entities[1].velocity->vz_mps));
+        CHECK(out.entities[0].x == Approx(p.x()).margin(0.3));  // still the camera's frame
+        CHECK(out.entities[0].z == Approx(p.y()).margin(0.3));
+    }
+    for (double v : parked_speed) CHECK(v < 0.5);
+    for (double v : parked_speed_relative) CHECK(v > 10.0);  // the camera's own motion
+    for (double v : moving_vz) CHECK(v == Approx(10.0).margin(1.0));
 }
 
 TEST_CASE("a track is reported after min_hits and dies after max_misses", "[tracking]") {

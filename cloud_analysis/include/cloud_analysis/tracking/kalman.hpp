@@ -35,6 +35,9 @@ class GroundKalman {
     void predict(double dt_s);
     /// Corrects with a measured position (its noise from its range).
     void update(double x_m, double z_m);
+    /// Moves the state into another ground frame: position p -> R p + t, velocity v -> R v,
+    /// covariance rotated alike (the camera moved; R is a rotation of the ground plane).
+    void change_frame(const Eigen::Matrix2d& R, const Eigen::Vector2d& t);
     /// Squared Mahalanobis distance of a measurement from the predicted one.
     double mahalanobis2(double x_m, double z_m) const;
     /// Measurement noise (std, metres) along the viewing ray of a position at this

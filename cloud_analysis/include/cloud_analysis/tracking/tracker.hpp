@@ -5,6 +5,7 @@
 /// per class, birth after N hits and death after M misses (AB3DMOT, Weng et al. 2020, with
 /// distance instead of 3D IoU), smoothed size and heading.
 
+#include <array>
 #include <cstdint>
 #include <map>
 #include <optional>
@@ -118,7 +119,11 @@ class Tracker {
 
     /// Tracks one frame taken at `timestamp_s`: returns the document with `track_id`,
     /// `velocity` and smoothed position, size and heading on the entities of confirmed tracks
-    /// matched in this frame; other entities are kept as they came. A timestamp not after the
+    /// matched in this frame; other entities are kept as they came. When this frame and the
+    /// one before carry a pose (frame.pose, the camera's in the drive's world), the tracks are
+    /// first carried into this frame's camera by the camera's motion between them: positions
+    /// stay in each frame's camera coordinates, velocities are over the ground (a parked car
+    /// is still however the camera moves). A timestamp not after the
     /// previous one, or more than max_gap_s after it, restarts the tracker (new ids, never
     /// reused); `stats` (optional) says what happened.
     scene_schema::EntityDocument update(const scene_schema::EntityDocument& frame,
@@ -132,10 +137,14 @@ class Tracker {
 
   private:
     void predict(double dt_s);
+    /// Carries every track from the previous frame's camera into this frame's.
+    void carry(const std::array<double, 12>& T_world_prev,
+               const std::array<double, 12>& T_world_curr);
     void associate(const scene_schema::EntityDocument& frame, std::vector<int>& track_of);
     TrackerOptions options_;
     std::vector<Track> tracks_;
     std::optional<double> last_time_s_;
+    std::optional<std::array<double, 12>> last_pose_;  ///< the previous frame's, when it had one
     std::int64_t next_id_ = 0;
     int frames_since_start_ = 0;
 };
