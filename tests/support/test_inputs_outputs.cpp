@@ -11,6 +11,7 @@
 
 #include "stereoscene/support/atomic_file.hpp"
 #include "stereoscene/support/file_read.hpp"
+#include "stereoscene/support/folder_lock.hpp"
 #include "stereoscene/support/limits.hpp"
 #include "stereoscene/support/output_transaction.hpp"
 
@@ -156,4 +157,27 @@ TEST_CASE("an output transaction refuses a directory and a path named twice up f
     CHECK_THROWS_WITH(support::check_output_path(s.path / "no" / "x.png"),
                       Catch::Contains("no such folder"));
     CHECK_NOTHROW(support::check_output_path("-"));
+}
+
+TEST_CASE("a folder lock keeps a second writer out until it is released, then is taken over",
+          "[support][lock]") {
+    Scratch s;
+    {
+        const support::FolderLock first(s.path, ".lock");
+        CHECK(fs::exists(s.path / ".lock"));
+        std::ifstream pid_file(s.path / ".lock");
+        long pid = 0;
+        pid_file >> pid;
+        CHECK(pid == ::getpid());
+        CHECK_THROWS_WITH(support::FolderLock(s.path, ".lock"),
+                          Catch::Contains(".lock: held by another writer (pid " +
+                                          std::to_string(::getpid()) + ")"));
+        // Another name is another lock.
+        const support::FolderLock other(s.path, ".other.lock");
+    }
+    CHECK_FALSE(fs::exists(s.path / ".lock"));     // removed on release
+    std::ofstream(s.path / ".lock") << "99999\n";  // as a writer that died leaves it
+    const support::FolderLock again(s.path, ".lock");
+    CHECK_THROWS_WITH(support::FolderLock(s.path / "missing", ".lock"),
+                      Catch::Contains("cannot lock"));
 }

@@ -121,6 +121,10 @@ cloud_analysis::BatchOptions batch_options(const BatchArgs& a, std::vector<std::
         if (options.sequence_id.empty()) options.sequence_id = "drive";
     }
     options.out_dir = a.out_dir;
+    if (a.shard.count > 1) {
+        options.lock_name = ".batch-" + std::to_string(a.shard.index) + "-of-" +
+                            std::to_string(a.shard.count) + ".lock";
+    }
     options.cloud_formats = a.cloud_formats;
     options.cloud_drop_classes = a.settings.drop_classes;
     options.disparity_kitti = a.disparity_kitti;

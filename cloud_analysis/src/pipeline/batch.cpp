@@ -17,6 +17,7 @@
 #include <scene_schema/entities.hpp>
 #include <scene_schema/sequence.hpp>
 #include <stereoscene/support/atomic_file.hpp>
+#include <stereoscene/support/folder_lock.hpp>
 #include <stereoscene/support/output_transaction.hpp>
 
 #include "cloud_analysis/cloud/cloud_io.hpp"
@@ -309,10 +310,22 @@ BatchReport run_batch(const BatchOptions& options, const BatchObserver& observer
     if (!options.drive.empty() && options.drive.size() != options.frames.size()) {
         throw std::invalid_argument("run_batch: the drive's frames and their ids differ in number");
     }
-    if (options.drive.empty() && !std::filesystem::is_directory(options.kitti_root)) {
+    // Nothing to read without frames (a resumed share already complete).
+    if (options.drive.empty() && !options.frames.empty() &&
+        !std::filesystem::is_directory(options.kitti_root)) {
         throw std::runtime_error("cannot read frames: no such folder (" +
                                  options.kitti_root.string() + ")");
     }
+    // A second writer of the same frames is refused before any frame is read.
+    const stereoscene::support::FolderLock lock = [&] {
+        try {
+            return stereoscene::support::FolderLock(options.out_dir, options.lock_name);
+        } catch (const stereoscene::support::FileError& e) {
+            throw std::runtime_error("cannot write output: the folder's lock is " + e.reason() +
+                                     ", another batch is writing these frames (" +
+                                     e.path().string() + ")");
+        }
+    }();
     const Palette palette = [&] {
         try {
             return load_palette(options.run.analyse.palette);

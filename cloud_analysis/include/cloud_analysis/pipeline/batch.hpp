@@ -34,8 +34,11 @@ struct BatchOptions {
     /// Track the frames in order as they are written: entity files with track ids and
     /// out_dir/sequence.json, rewritten after every frame (tracking/sequence.hpp).
     std::optional<tracking::SequenceTrackOptions> track;
-    std::string sequence_id = "drive";            ///< the index's id when tracking
-    std::filesystem::path out_dir;                ///< <frame>.json (+ clouds) per frame; must exist
+    std::string sequence_id = "drive";  ///< the index's id when tracking
+    std::filesystem::path out_dir;      ///< <frame>.json (+ clouds) per frame; must exist
+    /// The lock file in out_dir held while the batch writes (one writer of these frames at a
+    /// time; shards of one list take one each, stereoscene::support::FolderLock).
+    std::string lock_name = ".batch.lock";
     std::vector<std::string> cloud_formats;       ///< also <frame>.<fmt> for each of xyz, pcd, ply
     std::vector<std::string> cloud_drop_classes;  ///< classes left out of the clouds ("sky")
     bool disparity_kitti = false;                 ///< also <frame>_disparity.png (KITTI 16-bit)
