@@ -1,9 +1,10 @@
 #!/usr/bin/env bash
 # The world failing around a good input (docs/reliability.md "Faults"): cloud-analysis batch
-# killed with SIGKILL at random moments then resumed, two batches writing into one folder,
+# and scene-render sensors killed with SIGKILL at random moments then resumed, two batches writing into one folder,
 # a resume over truncated and foreign files, and a disk filling up mid-batch. Every finished
 # run must leave byte for byte what an uninterrupted run leaves.
 # usage: faults.sh CLOUD_ANALYSIS SAMPLE_DIR kill [KILLS] | lock | truncated | full-disk
+#        faults.sh SCENE_RENDER DRIVE_SCENE sensors-kill [KILLS]
 #   SAMPLE_DIR: samples/synthetic (left.png right.png semantic.png calib.yaml)
 #   full-disk needs to mount a tmpfs (root); without it the test is skipped (exit 77)
 set -euo pipefail
@@ -16,6 +17,35 @@ cleanup() {
 }
 trap cleanup EXIT
 fail() { echo "faults.sh $mode: $*" >&2; exit 1; }
+
+if [ "$mode" = sensors-kill ]; then
+    # scene-render sensors --frames killed at random moments, then --resume: the same files as
+    # an uninterrupted render. Here `tool` is scene-render and `sample` a drive's scene file.
+    n=8
+    "$tool" sensors "$sample" --out "$d/reference" --frames $n >/dev/null 2>&1
+    start=$(date +%s%N)
+    "$tool" sensors "$sample" --out "$d/timed" --frames $n >/dev/null 2>&1
+    span_ms=$((($(date +%s%N) - start) / 1000000))
+    for k in $(seq 1 "$kills"); do
+        out="$d/killed-$k"
+        at_ms=$((RANDOM % (span_ms + 1)))
+        { timeout -s KILL "$(printf '%d.%03d' $((at_ms / 1000)) $((at_ms % 1000)))" \
+            "$tool" sensors "$sample" --out "$out" --frames $n >/dev/null 2>&1 || true; } 2>/dev/null
+        "$tool" sensors "$sample" --out "$out" --frames $n --resume >/dev/null 2>&1 ||
+            fail "the resumed render after a kill at ${at_ms} ms failed"
+        diff -r "$d/reference" "$out" >/dev/null ||
+            fail "kill at ${at_ms} ms: $(diff -rq "$d/reference" "$out" | head -3)"
+        rm -rf "$out"
+    done
+    # A complete drive resumed is left as it is: no frame rendered again.
+    touch "$d/marker"
+    sleep 1
+    "$tool" sensors "$sample" --out "$d/reference" --frames $n --resume >/dev/null 2>&1
+    [ -z "$(find "$d/reference" -type f -newer "$d/marker" ! -name sequence.json)" ] ||
+        fail "--resume rendered complete frames again"
+    echo "faults.sh sensors-kill: $kills kills within ${span_ms} ms, every render resumed to the reference"
+    exit 0
+fi
 
 # A 30-frame list of copies of the sample (distinct ids), and the uninterrupted run.
 frames=30

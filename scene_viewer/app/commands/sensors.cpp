@@ -55,6 +55,9 @@ CLI::App* add_sensors_command(CLI::App& app, SensorsArgs& a) {
                   "render a drive of N frames named 0000000000.. (entities move by their "
                   "velocity), with truth/<frame>.json and truth/sequence.json");
     s->add_option("--fps", a.drive.fps, "frame rate of a drive, Hz")->capture_default_str();
+    s->add_flag("--resume", a.resume,
+                "--frames: keep the frames whose files are all there (each file is written "
+                "whole, so a killed run leaves them whole) and render the rest");
     s->add_option("--classes", a.classes,
                   "class table (default: assets/classes/render_classes.json)");
     return s;
@@ -93,6 +96,11 @@ int run_drive(SensorsArgs& a, const scene_schema::EntityDocument& scene, Gpu& gp
     const auto index = drive_index(scene.frame.id, a.drive);
     for (const auto& f : index.frames) {
         const std::string name = drive_frame_name(static_cast<int>(f.index));
+        if (a.resume) {
+            std::vector<std::string> names = kitti_layout_names(name);
+            names.push_back("truth/" + f.file);
+            if (files_complete(a.out, names)) continue;
+        }
         const auto truth = scene_at(scene, *f.timestamp_s, name);
         std::map<std::string, std::string> files;
         try {
@@ -139,6 +147,8 @@ int run_sensors(SensorsArgs a) {
         } catch (const std::invalid_argument& e) {
             usage(e.what(), "sensors");
         }
+    } else if (a.resume) {
+        usage("only with --frames (a drive)", "--resume");
     }
     const auto classes = read_classes(a.boxes, a.classes);
     auto gpu = start_gpu(classes);

@@ -24,6 +24,7 @@ struct SensorsArgs {
     scene_viewer::SensorOptions options;  ///< noise, blur, gain, vignetting, MSAA, seed
     std::optional<int> frames;            ///< a drive of this many frames; none: one frame
     scene_viewer::DriveOptions drive;     ///< frame rate of a drive
+    bool resume = false;                  ///< --resume: a drive's complete frames are kept
 };
 
 CLI::App* add_sensors_command(CLI::App& app, SensorsArgs& args);

@@ -132,6 +132,38 @@ std::string format_visibility_json(const StereoFrame& frame) {
     return out.dump(2) + "\n";
 }
 
+std::vector<std::string> kitti_layout_names(const std::string& frame_name) {
+    check_frame_name(frame_name);
+    const std::string png = frame_name + ".png";
+    return {"calib/calib_cam_to_cam.txt",
+            "depth/" + png,
+            "disp_occ_0/" + png,
+            "image_2/" + png,
+            "image_3/" + png,
+            "instance/" + png,
+            "semantic_rgb/" + png,
+            "visibility/" + frame_name + ".json"};
+}
+
+bool files_complete(const std::filesystem::path& root, const std::vector<std::string>& relative) {
+    namespace fs = std::filesystem;
+    bool complete = true;
+    for (const auto& name : relative) {
+        const fs::path path = root / name;
+        std::error_code ec;
+        const std::string hidden = "." + path.filename().string() + ".";
+        for (const auto& entry : fs::directory_iterator(path.parent_path(), ec)) {
+            const std::string file = entry.path().filename().string();
+            if (file.rfind(hidden + "tmp-", 0) == 0 || file.rfind(hidden + "old-", 0) == 0) {
+                std::error_code ignored;
+                fs::remove(entry.path(), ignored);
+            }
+        }
+        if (!fs::is_regular_file(path, ec)) complete = false;
+    }
+    return complete;
+}
+
 std::map<std::string, std::string> kitti_layout_files(const StereoFrame& frame,
                                                       const std::string& frame_name) {
     check_frame_name(frame_name);

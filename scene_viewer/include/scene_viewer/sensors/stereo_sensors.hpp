@@ -158,6 +158,14 @@ std::string format_visibility_json(const StereoFrame& frame);
 std::map<std::string, std::string> kitti_layout_files(const StereoFrame& frame,
                                                       const std::string& frame_name);
 
+/// The relative paths kitti_layout_files writes for a frame, in the same order.
+std::vector<std::string> kitti_layout_names(const std::string& frame_name);
+
+/// Whether every file of `relative` exists under `root` as a regular file (written whole: each
+/// is renamed into place), after removing the temporary and backup files a killed writer left
+/// beside them (`.NAME.tmp-*`, `.NAME.old-*`, support::OutputTransaction).
+bool files_complete(const std::filesystem::path& root, const std::vector<std::string>& relative);
+
 /// Writes every file of `files` under `root` as one support::OutputTransaction: all of them or
 /// none, earlier files restored on failure, folders created as needed and removed again when
 /// the write fails. A relative path that is absolute or climbs out of `root` is refused.
