@@ -96,9 +96,12 @@ lock)
     # A second batch on a folder a first one holds is refused at once, writing nothing; a lock
     # file left by a dead writer is taken over.
     mkdir "$d/out"
-    flock -o "$d/out/.batch.lock" sleep 5 &
+    flock -o "$d/out/.batch.lock" sleep 30 &
     holder=$!
-    sleep 0.5
+    for _ in $(seq 1 100); do  # until the holder has it
+        flock -n "$d/out/.batch.lock" true 2>/dev/null || break
+        sleep 0.1
+    done
     code=0
     run "$d/out" 2>"$d/err" || code=$?
     [ "$code" = 1 ] || fail "a second writer exited $code, not 1"
