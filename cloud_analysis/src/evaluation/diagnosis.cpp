@@ -6,7 +6,7 @@
 #include <map>
 #include <stdexcept>
 
-#include <opencv2/imgcodecs.hpp>
+#include "cloud_analysis/io/io.hpp"
 
 namespace cloud_analysis {
 namespace {
@@ -237,25 +237,11 @@ std::vector<Diagnosis> diagnose_entities(
 
 InstanceImage load_instance_image(const std::filesystem::path& instance_png,
                                   const Palette& palette) {
-    cv::Mat image;
-    try {
-        image = cv::imread(instance_png.string(), cv::IMREAD_UNCHANGED);
-    } catch (const cv::Exception& e) {
-        throw std::runtime_error("cannot read instance image: " + e.msg + " (" +
-                                 instance_png.string() + ")");
-    }
-    if (image.empty() || image.type() != CV_16UC1) {
-        throw std::runtime_error("cannot read instance image: not a 16-bit single-channel PNG (" +
-                                 instance_png.string() + ")");
-    }
+    ImageU16 image = read_instance_png(instance_png);
     InstanceImage out;
-    out.width_px = image.cols;
-    out.height_px = image.rows;
-    out.values.reserve(static_cast<std::size_t>(image.cols) * image.rows);
-    for (int v = 0; v < image.rows; ++v) {
-        const auto* row = image.ptr<std::uint16_t>(v);
-        out.values.insert(out.values.end(), row, row + image.cols);
-    }
+    out.width_px = image.width_px;
+    out.height_px = image.height_px;
+    out.values = std::move(image.values);
     out.label_name.assign(256, "");
     for (const auto& c : palette.classes) {
         if (c.id >= 0 && c.id < 256) out.label_name[static_cast<std::size_t>(c.id)] = c.name;

@@ -9,8 +9,8 @@
 #include <stdexcept>
 
 #include <nlohmann/json.hpp>
-#include <opencv2/imgcodecs.hpp>
 
+#include "cloud_analysis/io/io.hpp"
 #include "scene_schema/entities.hpp"
 #include "scene_schema/json_text.hpp"
 #include "stereoscene/support/file_read.hpp"
@@ -313,22 +313,8 @@ EntityEvaluation evaluate_entities(const std::vector<scene_schema::Entity>& refe
 
 std::vector<std::size_t> visible_instance_pixels(
     const std::filesystem::path& instance_png, const std::vector<scene_schema::Entity>& reference) {
-    cv::Mat image;
-    try {
-        image = cv::imread(instance_png.string(), cv::IMREAD_UNCHANGED);
-    } catch (const cv::Exception& e) {
-        throw std::runtime_error("cannot read instance image: " + e.msg + " (" +
-                                 instance_png.string() + ")");
-    }
-    if (image.empty() || image.type() != CV_16UC1) {
-        throw std::runtime_error("cannot read instance image: not a 16-bit single-channel PNG (" +
-                                 instance_png.string() + ")");
-    }
     std::vector<std::size_t> count_of_id(65536, 0);
-    for (int v = 0; v < image.rows; ++v) {
-        const auto* row = image.ptr<std::uint16_t>(v);
-        for (int u = 0; u < image.cols; ++u) ++count_of_id[row[u]];
-    }
+    for (const std::uint16_t id : read_instance_png(instance_png).values) ++count_of_id[id];
     std::map<int, int> ordinal;
     std::vector<std::size_t> visible(reference.size(), 0);
     for (std::size_t i = 0; i < reference.size(); ++i) {

@@ -208,6 +208,14 @@ ImageU16 read_png_u16(const std::filesystem::path& path) {
     return out;
 }
 
+ImageU16 read_instance_png(const std::filesystem::path& path) {
+    try {
+        return read_png_u16(path);
+    } catch (const std::exception& e) {
+        throw std::runtime_error(std::string("cannot read instance image: ") + e.what());
+    }
+}
+
 IdImage read_id_image(const std::filesystem::path& path) {
     cv::Mat m = read_raw(path, cv::IMREAD_UNCHANGED);
     IdImage out;

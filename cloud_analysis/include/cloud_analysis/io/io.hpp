@@ -73,6 +73,10 @@ struct IdImage {
 /// single-channel nor 8-bit grey or RGB.
 IdImage read_id_image(const std::filesystem::path& path);
 
+/// Reads a 16-bit single-channel instance PNG (KITTI's, scene-render sensors' ground truth);
+/// throws std::runtime_error "cannot read instance image: <reason>" naming the file.
+ImageU16 read_instance_png(const std::filesystem::path& path);
+
 /// PNG bytes of a 16-bit single-channel image.
 std::string encode_png_u16(const ImageU16& image);
 
