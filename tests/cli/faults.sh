@@ -17,6 +17,12 @@ cleanup() {
 }
 trap cleanup EXIT
 fail() { echo "faults.sh $mode: $*" >&2; exit 1; }
+kill_at() {  # MS COMMAND...: runs the command, SIGKILLed MS milliseconds after its start
+    local ms=$1
+    shift
+    { timeout -s KILL "$(printf '%d.%03d' $((ms / 1000)) $((ms % 1000)))" "$@" \
+        >/dev/null 2>&1 || true; } 2>/dev/null
+}
 
 if [ "$mode" = sensors-kill ]; then
     # scene-render sensors --frames killed at random moments, then --resume: the same files as
@@ -29,8 +35,7 @@ if [ "$mode" = sensors-kill ]; then
     for k in $(seq 1 "$kills"); do
         out="$d/killed-$k"
         at_ms=$((RANDOM % (span_ms + 1)))
-        { timeout -s KILL "$(printf '%d.%03d' $((at_ms / 1000)) $((at_ms % 1000)))" \
-            "$tool" sensors "$sample" --out "$out" --frames $n >/dev/null 2>&1 || true; } 2>/dev/null
+        kill_at "$at_ms" "$tool" sensors "$sample" --out "$out" --frames $n
         "$tool" sensors "$sample" --out "$out" --frames $n --resume >/dev/null 2>&1 ||
             fail "the resumed render after a kill at ${at_ms} ms failed"
         diff -r "$d/reference" "$out" >/dev/null ||
@@ -78,9 +83,8 @@ kill)
         out="$d/killed-$k"
         mkdir "$out"
         at_ms=$((RANDOM % (span_ms + 1)))
-        { timeout -s KILL "$(printf '%d.%03d' $((at_ms / 1000)) $((at_ms % 1000)))" \
-            "$tool" batch --pairs "$d/pairs.txt" --calib "$sample/calib.yaml" --out-dir "$out" \
-            --clouds ply xyz --disparity-kitti --quiet || true; } 2>/dev/null
+        kill_at "$at_ms" "$tool" batch --pairs "$d/pairs.txt" --calib "$sample/calib.yaml" \
+            --out-dir "$out" --clouds ply xyz --disparity-kitti --quiet
         # No partial file under a final name: every entity file there is whole.
         for f in "$out"/*.json; do
             [ -e "$f" ] || continue

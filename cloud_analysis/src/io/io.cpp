@@ -128,6 +128,19 @@ std::optional<bool> png_is_grey8(const std::vector<unsigned char>& bytes) {
     return bytes[25] == 0 && bytes[24] <= 8;
 }
 
+/// The samples of a 16-bit single-channel image.
+ImageU16 u16_of(const cv::Mat& m) {
+    ImageU16 out;
+    out.width_px = m.cols;
+    out.height_px = m.rows;
+    out.values.resize(static_cast<std::size_t>(m.cols) * m.rows);
+    for (int v = 0; v < m.rows; ++v) {
+        const auto* row = m.ptr<std::uint16_t>(v);
+        std::copy(row, row + m.cols, out.values.data() + static_cast<std::size_t>(v) * m.cols);
+    }
+    return out;
+}
+
 std::string encode(const cv::Mat& m) {
     std::vector<std::uint8_t> bytes;
     if (!cv::imencode(".png", m, bytes)) throw std::runtime_error("PNG encoding failed");
@@ -197,15 +210,7 @@ ImageU16 read_png_u16(const std::filesystem::path& path) {
     if (m.type() != CV_16UC1) {
         throw std::runtime_error("not a 16-bit single-channel PNG (" + path.string() + ")");
     }
-    ImageU16 out;
-    out.width_px = m.cols;
-    out.height_px = m.rows;
-    out.values.resize(static_cast<std::size_t>(m.cols) * m.rows);
-    for (int v = 0; v < m.rows; ++v) {
-        const auto* row = m.ptr<std::uint16_t>(v);
-        std::copy(row, row + m.cols, out.values.data() + static_cast<std::size_t>(v) * m.cols);
-    }
-    return out;
+    return u16_of(m);
 }
 
 ImageU16 read_instance_png(const std::filesystem::path& path) {
@@ -220,11 +225,7 @@ IdImage read_id_image(const std::filesystem::path& path) {
     cv::Mat m = read_raw(path, cv::IMREAD_UNCHANGED);
     IdImage out;
     if (m.type() == CV_16UC1) {
-        out.ids.width_px = m.cols;
-        out.ids.height_px = m.rows;
-        out.ids.values.resize(static_cast<std::size_t>(m.cols) * m.rows);
-        cv::Mat wrap(m.rows, m.cols, CV_16UC1, out.ids.values.data());
-        m.copyTo(wrap);
+        out.ids = u16_of(m);
         return out;
     }
     if (m.type() != CV_8UC1 && m.type() != CV_8UC3) {

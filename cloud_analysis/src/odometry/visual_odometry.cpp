@@ -219,9 +219,6 @@ MotionEstimate motion(const OdometryFrame& prev, const VisualOdometry::Pyramid& 
 MotionEstimate estimate_motion(const OdometryFrame& prev, const ImageU8& curr_left,
                                const StereoCamera& camera, const OdometryOptions& options) {
     options.validate();
-    if (curr_left.width_px != prev.left.width_px || curr_left.height_px != prev.left.height_px) {
-        throw std::invalid_argument("estimate_motion: images and disparity differ in size");
-    }
     return motion(prev, pyramid_of(grey_of(prev.left), options), curr_left,
                   pyramid_of(grey_of(curr_left), options), camera, options);
 }
@@ -255,10 +252,6 @@ Pose VisualOdometry::add(OdometryFrame frame) {
     to_grey(frame.right);
     auto pyramid = std::make_unique<Pyramid>(pyramid_of(grey_of(frame.left), options_));
     if (prev_) {
-        if (frame.left.width_px != prev_->left.width_px ||
-            frame.left.height_px != prev_->left.height_px) {
-            throw std::invalid_argument("odometry: a frame of another size than the one before");
-        }
         last_ = motion(*prev_, *prev_pyramid_, frame.left, *pyramid, camera_, options_);
         if (last_.valid) velocity_ = last_.T_curr_prev;
         T_world_prev_ = T_world_prev_ * velocity_.inverse();

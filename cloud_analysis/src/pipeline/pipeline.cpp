@@ -256,15 +256,15 @@ AnalyseResult analyse(const LoadedInputs& in, const AnalyseOptions& options,
         r.points = reproject_by_class(r.disparity, r.camera, r.classes, options.reproject,
                                       *options.class_points_only);
         r.cloud_points = r.points.cloud_points;
-        r.points.instance_id = r.instances.id;
-        mark_object_outlines(r.points.depth_edge, r.instances, r.disparity, r.points.border,
-                             options.reproject.depth_edge_step_m,
-                             options.reproject.depth_edge_rows);
     } else {
         r.cloud = reproject(r.disparity, r.camera, *left, r.classes, options.reproject);
         r.cloud_points = r.cloud.size();
-        r.cloud.instance_id = r.instances.id;
-        mark_object_outlines(r.cloud.depth_edge, r.instances, r.disparity, r.cloud.border,
+    }
+    if (!r.instances.empty()) {
+        const bool points = options.class_points_only.has_value();
+        (points ? r.points.instance_id : r.cloud.instance_id) = r.instances.id;
+        mark_object_outlines(points ? r.points.depth_edge : r.cloud.depth_edge, r.instances,
+                             r.disparity, points ? r.points.border : r.cloud.border,
                              options.reproject.depth_edge_step_m,
                              options.reproject.depth_edge_rows);
     }
