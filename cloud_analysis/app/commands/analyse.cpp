@@ -70,8 +70,9 @@ LoadedRun load_run(const AnalyseArgs& a) {
                                      flag + ")");
         }
     }
-    LoadedRun run{{}, extract_options(a), std::nullopt};
+    LoadedRun run{{}, extract_options(a), {}, std::nullopt};
     run.inputs = cloud_analysis::load_inputs(a.paths, a.options);
+    run.fit = cloud_analysis::fit_to_rig(a.options, run.extract, run.inputs.calibration.camera);
     if ((!a.segments_out.empty() || !a.segment_ids_out.empty()) &&
         cloud_analysis::semantics_path(run.inputs, a.options) != "geometry") {
         throw std::runtime_error(
@@ -107,6 +108,7 @@ double ms_since(Clock::time_point t) {
 void report_analysis(const LoadedRun& run, const cloud_analysis::AnalyseResult& r,
                      const AnalyseArgs& a) {
     if (a.warnings) {
+        for (const auto& w : run.fit.warnings) std::cerr << kTool << ": warning: " << w << "\n";
         for (const auto& w : cloud_analysis::analysis_warnings(run.inputs, r)) {
             std::cerr << kTool << ": warning: " << w << "\n";
         }
@@ -144,9 +146,10 @@ std::vector<PendingOutput> format_outputs(const LoadedRun& run,
     std::vector<PendingOutput> outputs;
     auto t = Clock::now();
     if (!a.entities.empty()) {
-        outputs.push_back({a.entities,
-                           cloud_analysis::entity_json(in, r, run.extract, run_settings(a)),
-                           "--entities"});
+        outputs.push_back(
+            {a.entities,
+             cloud_analysis::entity_json(in, r, run.fit.extract, run_settings(a, run.fit, in)),
+             "--entities"});
         timings.push_back({"entities", ms_since(t)});
     }
     const std::vector<std::pair<std::filesystem::path, const char*>> clouds = {
@@ -244,8 +247,8 @@ RunReport analyse_loaded_and_write(const LoadedRun& run, const AnalyseArgs& a,
                   << ")\n";
     }
     const bool any_cloud = !a.xyz.empty() || !a.pcd.empty() || !a.ply.empty();
-    cloud_analysis::AnalyseResult r = cloud_analysis::analyse(
-        in, options_for_outputs(a, run.extract, in.palette, any_cloud), matcher);
+    cloud_analysis::AnalyseResult r =
+        cloud_analysis::analyse(in, options_for_outputs(run.fit, in.palette, any_cloud), matcher);
     timings.insert(timings.end(), r.timings.begin(), r.timings.end());
     report_analysis(run, r, a);
     const std::vector<PendingOutput> outputs = format_outputs(run, r, a, timings);
@@ -254,20 +257,28 @@ RunReport analyse_loaded_and_write(const LoadedRun& run, const AnalyseArgs& a,
     return {timings, r.cloud_points};
 }
 
-RunReport analyse_and_write(const AnalyseArgs& a, cloud_analysis::DisparityMatcher& matcher) {
+namespace {
+
+/// load_run, then the stages after it with `matcher` or, when null, a matcher of the run's own
+/// fitted options; the first timing is "load".
+RunReport load_analyse_and_write(const AnalyseArgs& a, cloud_analysis::DisparityMatcher* matcher) {
     const auto start = std::chrono::steady_clock::now();
     const LoadedRun run = load_run(a);
-    const double load_ms =
-        std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - start).count();
-    RunReport report = analyse_loaded_and_write(run, a, matcher);
+    const double load_ms = ms_since(start);
+    std::optional<cloud_analysis::DisparityMatcher> own;
+    if (matcher == nullptr) matcher = &own.emplace(run.fit.analyse.disparity);
+    RunReport report = analyse_loaded_and_write(run, a, *matcher);
     report.timings.insert(report.timings.begin(), {"load", load_ms});
     return report;
 }
 
-RunReport analyse_and_write(const AnalyseArgs& a) {
-    cloud_analysis::DisparityMatcher matcher(a.options.disparity);
-    return analyse_and_write(a, matcher);
+}  // namespace
+
+RunReport analyse_and_write(const AnalyseArgs& a, cloud_analysis::DisparityMatcher& matcher) {
+    return load_analyse_and_write(a, &matcher);
 }
+
+RunReport analyse_and_write(const AnalyseArgs& a) { return load_analyse_and_write(a, nullptr); }
 
 int run_analyse(const AnalyseArgs& a) {
     const RunReport report = analyse_and_write(a);

@@ -26,18 +26,20 @@ struct RunReport {
 /// What a run reads before its expensive stages: the decoded frame, the extraction settings
 /// and the optional GT disparity.
 struct LoadedRun {
-    cloud_analysis::LoadedInputs inputs;                       ///< decoded images, calibration
-    cloud_analysis::ExtractOptions extract;                    ///< with the class config read
+    cloud_analysis::LoadedInputs inputs;     ///< decoded images, calibration
+    cloud_analysis::ExtractOptions extract;  ///< with the class config read
+    cloud_analysis::RigFit fit;  ///< the analyse and extract options fitted to the frame's rig
     std::optional<cloud_analysis::DisparityMap> gt_disparity;  ///< --gt-disparity, when given
 };
 
-/// Checks the output flags and folders, reads the class config and the GT disparity, and
-/// decodes and checks the inputs. Throws before anything expensive or written.
+/// Checks the output flags and folders, reads the class config and the GT disparity, decodes
+/// and checks the inputs and fits the settings to their rig. Throws before anything expensive
+/// or written.
 LoadedRun load_run(const AnalyseArgs& a);
 
 /// The stages after decoding (disparity ... entity file and clouds written), with a matcher
-/// kept across frames: a frame already in memory, as from a camera. Throws on failure, leaving
-/// no output behind.
+/// made with run.fit's disparity options kept across frames: a frame already in memory, as from a
+/// camera. Throws on failure, leaving no output behind.
 RunReport analyse_loaded_and_write(const LoadedRun& run, const AnalyseArgs& a,
                                    cloud_analysis::DisparityMatcher& matcher);
 

@@ -1,6 +1,7 @@
 #include "analysis_flags.hpp"
 
 #include <algorithm>
+#include <set>
 #include <stdexcept>
 #include <string>
 
@@ -8,6 +9,7 @@
 #include "cloud_analysis/cloud/semantic.hpp"
 #include "cloud_analysis/entities/class_config.hpp"
 #include "cloud_analysis/io/io.hpp"
+#include "cloud_analysis/pipeline/rig_fit.hpp"
 #include "cloud_analysis/stereo/disparity.hpp"
 
 namespace cloud_analysis::app {
@@ -91,8 +93,22 @@ void add_disparity_flags(CLI::App& cmd, AnalyseArgs& a) {
     cmd.add_option("--min-disparity", d.min_disparity, "smallest disparity, px")
         ->capture_default_str()
         ->group(sg);
-    cmd.add_option("--num-disparities", d.num_disparities, "search range, px, multiple of 16")
+    cmd.add_option("--num-disparities", d.num_disparities,
+                   "search range, px, multiple of 16 (default: from --min-depth and the rig)")
+        ->group(sg);
+    auto& rig = a.options.rig;
+    cmd.add_option("--min-depth", rig.min_depth_m,
+                   "nearest depth to match, metres: sets --num-disparities from the rig "
+                   "(fx B / depth, to a multiple of 16); 0 = --num-disparities (128)")
         ->capture_default_str()
+        ->group(sg);
+    cmd.add_option("--half-resolution-above", rig.half_resolution_above_px,
+                   "frames with more pixels are analysed at half resolution; 0 = never")
+        ->capture_default_str()
+        ->group(sg);
+    cmd.add_flag("--no-rig-scaling", a.no_rig_scaling,
+                 "keep every pixel setting as written for KITTI's focal length (721.5 px) "
+                 "instead of scaling it to the rig's")
         ->group(sg);
     cmd.add_option("--block-size", d.block_size, "matching window, px, odd")
         ->capture_default_str()
@@ -309,6 +325,18 @@ void resolve_settings(AnalyseArgs& a, const CLI::App& cmd) {
             d.pad_left = preset.pad_left;
         }
     }
+    // Settings the user gave are kept as given when the analysis is fitted to the rig.
+    auto& rig = a.options.rig;
+    rig.scale_pixel_settings = !a.no_rig_scaling;
+    rig.given.clear();
+    std::set<std::string> fields = cloud_analysis::rig_scaled_fields();
+    fields.insert("num_disparities");
+    for (const auto& field : fields) {
+        std::string flag = "--" + field;
+        std::replace(flag.begin(), flag.end(), '_', '-');
+        if (cmd.get_option_no_throw(flag) != nullptr && cmd.count(flag) > 0)
+            rig.given.insert(field);
+    }
     try {
         a.options.validate();
     } catch (const std::invalid_argument& e) {
@@ -362,18 +390,25 @@ cloud_analysis::ExtractOptions extract_options(const AnalyseArgs& a) {
     return extract;
 }
 
-cloud_analysis::AnalyseOptions options_for_outputs(const AnalyseArgs& a,
-                                                   const cloud_analysis::ExtractOptions& extract,
+cloud_analysis::AnalyseOptions options_for_outputs(const cloud_analysis::RigFit& fit,
                                                    const cloud_analysis::Palette& palette,
                                                    bool clouds) {
-    cloud_analysis::AnalyseOptions options = a.options;
-    if (!clouds) options.class_points_only = cloud_analysis::class_selection(palette, extract);
+    cloud_analysis::AnalyseOptions options = fit.analyse;
+    if (!clouds) options.class_points_only = cloud_analysis::class_selection(palette, fit.extract);
     return options;
 }
 
 cloud_analysis::RunSettings run_settings(const AnalyseArgs& a) {
     return {a.options, a.class_config.empty() ? std::string("default") : a.class_config.string(),
             STEREOSCENE_VERSION};
+}
+
+cloud_analysis::RunSettings run_settings(const AnalyseArgs& a, const cloud_analysis::RigFit& fit,
+                                         const cloud_analysis::LoadedInputs& inputs) {
+    cloud_analysis::RunSettings run = run_settings(a);
+    run.analyse = fit.analyse;
+    run.rig = fit.describe(inputs);
+    return run;
 }
 
 }  // namespace cloud_analysis::app

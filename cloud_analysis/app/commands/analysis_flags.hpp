@@ -15,6 +15,7 @@
 #include "cloud_analysis/entities/entity_document.hpp"
 #include "cloud_analysis/entities/extract.hpp"
 #include "cloud_analysis/pipeline/pipeline.hpp"
+#include "cloud_analysis/pipeline/rig_fit.hpp"
 
 namespace cloud_analysis::app {
 
@@ -34,8 +35,9 @@ struct AnalyseArgs {
     std::filesystem::path segments_out;     ///< --segments-out: the stereo-only segments, JSON
     std::filesystem::path segment_ids_out;  ///< --segment-ids-out: their pixels, 16-bit PNG
     std::vector<std::string>
-        drop_classes;       ///< --drop-classes (+ sky with --drop-sky): not in clouds
-    bool drop_sky = false;  ///< --drop-sky
+        drop_classes;             ///< --drop-classes (+ sky with --drop-sky): not in clouds
+    bool drop_sky = false;        ///< --drop-sky
+    bool no_rig_scaling = false;  ///< --no-rig-scaling: pixel settings as written for KITTI
     bool timings = false;
     bool fsync_clouds = false;  ///< --fsync-clouds: the clouds are durable too
     bool warnings = true;       ///< print the inputs' warnings (bench: on its first run only)
@@ -59,15 +61,18 @@ stereoscene::support::FileSync cloud_sync(const AnalyseArgs& a);
 /// Extraction settings of the flags, with the class config read and validated.
 cloud_analysis::ExtractOptions extract_options(const AnalyseArgs& a);
 
-/// The analyse options for a run: without cloud outputs, analyse builds no cloud and
-/// reprojects straight into the extractor's per-class points (AnalyseOptions::class_points_only).
-cloud_analysis::AnalyseOptions options_for_outputs(const AnalyseArgs& a,
-                                                   const cloud_analysis::ExtractOptions& extract,
+/// The analyse options for a run fitted to its rig: without cloud outputs, analyse builds no
+/// cloud and reprojects straight into the extractor's per-class points
+/// (AnalyseOptions::class_points_only).
+cloud_analysis::AnalyseOptions options_for_outputs(const cloud_analysis::RigFit& fit,
                                                    const cloud_analysis::Palette& palette,
                                                    bool clouds);
 
 /// What the entity file's source block records of the flags: the analysis settings, the class
 /// config ("default" for the bundled one) and the tool's version.
 cloud_analysis::RunSettings run_settings(const AnalyseArgs& a);
+/// The same for a run fitted to its rig: the fitted settings and the source.rig block.
+cloud_analysis::RunSettings run_settings(const AnalyseArgs& a, const cloud_analysis::RigFit& fit,
+                                         const cloud_analysis::LoadedInputs& inputs);
 
 }  // namespace cloud_analysis::app

@@ -160,15 +160,16 @@ int run_bench(const BenchArgs& a) {
     // interleaved with the rows (matcher, row 1, ..., row 4, matcher, ...) so that all of them
     // see the same load of the machine over time. One matcher serves every row, as in a batch.
     // Another matcher than cv::StereoSGBM is timed beside it with the same options, interleaved.
-    DisparityMatcher matcher(a.analyse.options.disparity);
-    const bool own_matcher = a.analyse.options.disparity.matcher != "sgbm";
-    DisparityOptions reference_options = a.analyse.options.disparity;
+    std::vector<Row> rows = make_rows(a);
+    const LoadedInputs& in = rows.front().loaded->inputs;
+    const DisparityOptions& d = rows.front().loaded->fit.analyse.disparity;  // fitted to the rig
+    DisparityMatcher matcher(d);
+    const bool own_matcher = d.matcher != "sgbm";
+    DisparityOptions reference_options = d;
     reference_options.matcher = "sgbm";
     std::optional<DisparityMatcher> reference;
     if (own_matcher) reference.emplace(reference_options);
     MatcherTimes matcher_times, reference_times;
-    std::vector<Row> rows = make_rows(a);
-    const LoadedInputs& in = rows.front().loaded->inputs;
     for (int i = 0; i < a.warmup + a.runs; ++i) {
         const bool timed = i >= a.warmup;
         matcher_times.time(matcher, in, timed);
@@ -177,7 +178,6 @@ int run_bench(const BenchArgs& a) {
     }
     const double floor_ms = median(matcher_times.wall_ms);
     const MatcherTimes& ref = own_matcher ? reference_times : matcher_times;
-    const auto& d = a.analyse.options.disparity;
     const nlohmann::json result = {
         {"frame", in.paths.frame_id},
         {"width", in.left.width_px},

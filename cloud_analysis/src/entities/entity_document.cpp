@@ -32,16 +32,20 @@ scene_schema::EntityDocument entity_document(const LoadedInputs& in, const Analy
                                       {"problem", g.problem}};
     }
     scene_schema::CameraIntrinsics cam;
-    cam.width_px = r.camera.width_px;
-    cam.height_px = r.camera.height_px;
-    cam.fx_px = r.camera.fx_px;
-    cam.fy_px = r.camera.fy_px;
-    cam.cx_px = r.camera.cx_px;
-    cam.cy_px = r.camera.cy_px;
+    // The rig of the images as read (a frame analysed at half resolution is described at its
+    // own): pixel u of the analysed image is (u + 0.5) / scale - 0.5 of the image read.
+    const double scale = in.resolution_scale;
+    cam.width_px = in.read_width_px > 0 ? in.read_width_px : r.camera.width_px;
+    cam.height_px = in.read_height_px > 0 ? in.read_height_px : r.camera.height_px;
+    cam.fx_px = r.camera.fx_px / scale;
+    cam.fy_px = r.camera.fy_px / scale;
+    cam.cx_px = (r.camera.cx_px + 0.5) / scale - 0.5;
+    cam.cy_px = (r.camera.cy_px + 0.5) / scale - 0.5;
     cam.baseline_m = r.camera.baseline_m;
     doc.frame.camera = cam;
     nlohmann::json source = describe_run(in, run.analyse, run.tool_version);
     source["extract"] = {{"method", extract.method}, {"class_config", run.class_config}};
+    if (!run.rig.is_null()) source["rig"] = run.rig;
     if (!r.instances.empty()) {
         // Things of the instance image's objects were taken whole, the rest clustered.
         std::size_t taken = 0;

@@ -9,9 +9,11 @@
 #include <fstream>
 #include <future>
 #include <map>
+#include <memory>
 #include <optional>
 #include <stdexcept>
 #include <thread>
+#include <tuple>
 #include <utility>
 
 #include <scene_schema/entities.hpp>
@@ -22,6 +24,7 @@
 
 #include "cloud_analysis/cloud/cloud_io.hpp"
 #include "cloud_analysis/io/io.hpp"
+#include "cloud_analysis/pipeline/rig_fit.hpp"
 #include "cloud_analysis/stereo/calibration.hpp"
 #include "cloud_analysis/stereo/disparity.hpp"
 
@@ -59,10 +62,18 @@ double current_rss_mb() {
     return 0.0;
 }
 
+/// The batch's settings fitted to one rig (fit_to_rig): frames of one calibration share them.
+struct FittedRig {
+    RigFit fit;
+    AnalyseOptions analysis;  ///< fit.analyse, reprojecting by class when there are no clouds
+    RunSettings run;          ///< the batch's, with the fitted settings and source.rig
+};
+
 /// One frame read from disk, or why it could not be.
 struct LoadedFrame {
     std::string frame;
     std::optional<LoadedInputs> inputs;
+    std::shared_ptr<const FittedRig> rig;  ///< with inputs
     std::string error;
     double ms = 0.0;
 };
@@ -70,6 +81,7 @@ struct LoadedFrame {
 /// One analysed frame handed to the finishing thread: entity extraction, formatting, writing.
 struct FinishJob {
     LoadedInputs in;
+    std::shared_ptr<const FittedRig> rig;
     AnalyseResult result;
     std::filesystem::path stem;          ///< out-dir/<frame>
     std::filesystem::path gt_disparity;  ///< scored against when set (BatchOptions::evaluate)
@@ -113,7 +125,7 @@ std::string frame_entities(const FinishJob& job, const BatchOptions& options,
                            tracking::SequenceTracker* sequence,
                            const std::optional<odometry::Pose>& pose) {
     scene_schema::EntityDocument doc =
-        entity_document(job.in, job.result, options.extract, options.run);
+        entity_document(job.in, job.result, job.rig->fit.extract, job.rig->run);
     std::optional<double> time;
     if (job.position < options.drive.size()) time = options.drive[job.position].timestamp_s;
     if (time) doc.frame.timestamp_s = time;
@@ -183,11 +195,11 @@ Finished finish_frame(const FinishJob& job, const BatchOptions& options,
     return done;
 }
 
-/// Decodes the frames of a KITTI-layout folder, each calibration file read once.
+/// Decodes the frames of a KITTI-layout folder, each calibration file read and fitted once.
 class FrameLoader {
   public:
-    FrameLoader(const BatchOptions& options, const AnalyseOptions& analyse, const Palette& palette)
-        : options_(options), analyse_(analyse), palette_(palette) {}
+    FrameLoader(const BatchOptions& options, const Palette& palette)
+        : options_(options), analyse_(options.run.analyse), palette_(palette) {}
 
     LoadedFrame operator()(std::size_t i) {
         LoadedFrame f;
@@ -207,6 +219,7 @@ class FrameLoader {
                          .first;
             }
             f.inputs = load_inputs(paths, analyse_, it->second, palette_);
+            f.rig = fitted(paths.calibration, *f.inputs);
         } catch (const std::exception& e) {
             f.error = e.what();
         }
@@ -215,17 +228,38 @@ class FrameLoader {
     }
 
   private:
+    /// The settings fitted to the rig of `calibration` (as `in` has it, halved or not).
+    std::shared_ptr<const FittedRig> fitted(const std::filesystem::path& calibration,
+                                            const LoadedInputs& in) {
+        const StereoCamera& c = in.calibration.camera;
+        auto& rig = rigs_[{calibration, c.width_px, c.height_px}];
+        if (rig) return rig;
+        auto made = std::make_shared<FittedRig>();
+        made->fit = fit_to_rig(analyse_, options_.extract, c);
+        made->analysis = made->fit.analyse;
+        if (options_.cloud_formats.empty()) {
+            made->analysis.class_points_only = class_selection(palette_, made->fit.extract);
+        }
+        made->run = options_.run;
+        made->run.analyse = made->fit.analyse;
+        made->run.rig = made->fit.describe(in);
+        rig = made;
+        return rig;
+    }
+
     const BatchOptions& options_;
     const AnalyseOptions& analyse_;
     const Palette& palette_;
     std::map<std::filesystem::path, Calibration> calibrations_;  // used by one thread at a time
+    // By calibration and analysed size; used by one thread at a time.
+    std::map<std::tuple<std::filesystem::path, int, int>, std::shared_ptr<const FittedRig>> rigs_;
 };
 
 /// Matches a loaded frame (its stage timings and point count into `record`): the job that
 /// finishes it, or nothing when it failed (reported to `fail` and recorded).
 template <typename Fail>
-std::optional<FinishJob> match(LoadedFrame& frame, const AnalyseOptions& analysis,
-                               DisparityMatcher& matcher, const BatchOptions& options,
+std::optional<FinishJob> match(LoadedFrame& frame, std::optional<DisparityMatcher>& matcher,
+                               const FittedRig*& matcher_rig, const BatchOptions& options,
                                nlohmann::json& record, Fail&& fail) {
     if (!frame.inputs) {
         fail(frame.frame, frame.error);
@@ -233,9 +267,15 @@ std::optional<FinishJob> match(LoadedFrame& frame, const AnalyseOptions& analysi
         return std::nullopt;
     }
     try {
-        AnalyseResult r = analyse(*frame.inputs, analysis, matcher);
+        // One matcher per rig, made again only when a frame brings another rig.
+        if (matcher_rig != frame.rig.get()) {
+            matcher.emplace(frame.rig->fit.analyse.disparity);
+            matcher_rig = frame.rig.get();
+        }
+        AnalyseResult r = analyse(*frame.inputs, frame.rig->analysis, *matcher);
         for (const auto& s : r.timings) record[s.stage + "_ms"] = s.ms;
-        std::vector<std::string> warnings = analysis_warnings(*frame.inputs, r);
+        std::vector<std::string> warnings = frame.rig->fit.warnings;
+        for (auto& w : analysis_warnings(*frame.inputs, r)) warnings.push_back(std::move(w));
         const Calibration& calibration = frame.inputs->calibration;
         if (!calibration.note.empty()) {
             warnings.insert(warnings.begin(), calibration.note + " (" + calibration.source + ")");
@@ -245,8 +285,12 @@ std::optional<FinishJob> match(LoadedFrame& frame, const AnalyseOptions& analysi
         const auto gt = options.kitti_root / "disp_occ_0" / (frame.frame + ".png");
         const bool scored =
             options.evaluate && options.drive.empty() && std::filesystem::exists(gt);
-        return FinishJob{std::move(*frame.inputs), std::move(r), options.out_dir / frame.frame,
-                         scored ? gt : std::filesystem::path(), 0};
+        return FinishJob{std::move(*frame.inputs),
+                         frame.rig,
+                         std::move(r),
+                         options.out_dir / frame.frame,
+                         scored ? gt : std::filesystem::path(),
+                         0};
     } catch (const std::exception& e) {
         fail(frame.frame, e.what());
         record["error"] = e.what();
@@ -333,13 +377,10 @@ BatchReport run_batch(const BatchOptions& options, const BatchObserver& observer
             throw std::runtime_error(std::string("cannot read palette: ") + e.what());
         }
     }();
-    // Without clouds the entities are extracted from points reprojected by class directly.
-    AnalyseOptions analysis = options.run.analyse;
-    if (options.cloud_formats.empty()) {
-        analysis.class_points_only = class_selection(palette, options.extract);
-    }
-    DisparityMatcher matcher(analysis.disparity);
-    FrameLoader load(options, analysis, palette);
+    // Made with the first frame's rig (FittedRig).
+    std::optional<DisparityMatcher> matcher;
+    const FittedRig* matcher_rig = nullptr;
+    FrameLoader load(options, palette);
     std::optional<tracking::SequenceTracker> sequence;
     if (options.track) {
         sequence.emplace(options.sequence_id, options.track->fps, *options.track,
@@ -381,7 +422,7 @@ BatchReport run_batch(const BatchOptions& options, const BatchObserver& observer
         nlohmann::json record = {{"frame", frame.frame},
                                  {"load_ms", frame.ms},
                                  {"wait_load_ms", ms_between(wait_start, t0)}};
-        std::optional<FinishJob> job = match(frame, analysis, matcher, options, record, fail);
+        std::optional<FinishJob> job = match(frame, matcher, matcher_rig, options, record, fail);
         record["analyse_ms"] = ms_between(t0, Clock::now());
         record["rss_mb"] = current_rss_mb();
         per_frame.push_back(record);

@@ -4,6 +4,7 @@
 #include <future>
 #include <stdexcept>
 
+#include "cloud_analysis/pipeline/rig_fit.hpp"
 #include "stereoscene/support/limits.hpp"
 
 namespace cloud_analysis {
@@ -107,6 +108,7 @@ void AnalyseOptions::validate() const {
     calibration.validate();
     disparity.validate();
     reproject.validate();
+    rig.validate();
 }
 
 LoadedInputs load_inputs(const InputPaths& paths, const AnalyseOptions& options) {
@@ -184,7 +186,18 @@ LoadedInputs load_inputs(const InputPaths& paths, const AnalyseOptions& options,
         cam.width_px = in.left.width_px;
         cam.height_px = in.left.height_px;
     }
-    if (in.left.width_px < options.disparity.num_disparities + options.disparity.block_size) {
+    in.read_width_px = in.left.width_px;
+    in.read_height_px = in.left.height_px;
+    const long long pixels = static_cast<long long>(in.left.width_px) * in.left.height_px;
+    if (!options.raw && options.rig.half_resolution_above_px > 0 &&
+        pixels > options.rig.half_resolution_above_px) {
+        halve_inputs(in);
+    }
+    // A range from the rig's minimum depth is checked when it is fitted (fit_to_rig).
+    const bool fixed_range =
+        options.rig.min_depth_m <= 0.0 || options.rig.given.count("num_disparities") > 0;
+    if (fixed_range &&
+        in.left.width_px < options.disparity.num_disparities + options.disparity.block_size) {
         throw std::runtime_error("image too narrow: " + std::to_string(in.left.width_px) +
                                  " px for " + std::to_string(options.disparity.num_disparities) +
                                  " disparities (--num-disparities)");
@@ -279,6 +292,11 @@ AnalyseResult analyse(const LoadedInputs& in, const AnalyseOptions& options,
 
 std::vector<std::string> analysis_warnings(const LoadedInputs& in, const AnalyseResult& r) {
     std::vector<std::string> out;
+    if (in.resolution_scale != 1.0) {
+        out.push_back("analysed at half resolution (" + size_text(in.left) + "): " +
+                      std::to_string(in.read_width_px) + "x" + std::to_string(in.read_height_px) +
+                      " is over --half-resolution-above pixels (" + in.paths.left.string() + ")");
+    }
     if (r.geometry) {
         for (const auto& w : r.geometry->warnings) out.push_back(w);
     }

@@ -23,9 +23,17 @@ CLI::App* add_sensors_command(CLI::App& app, SensorsArgs& a) {
     s->add_option("--out", a.out, "output folder (KITTI layout)")->required();
     s->add_option("--frame", a.frame, "frame name of the files")->capture_default_str();
     s->add_option("--seed", o.sensor.seed, "seed of the sensor noise")->capture_default_str();
-    s->add_option("--rig", a.rig,
-                  "rig from a KITTI calib_cam_to_cam.txt (P_rect_02, P_rect_03, S_rect_02); "
-                  "default: the file's frame.camera, else KITTI's");
+    CLI::Option* rig =
+        s->add_option("--rig", a.rig,
+                      "rig from a KITTI calib_cam_to_cam.txt (P_rect_02, P_rect_03, S_rect_02); "
+                      "default: the file's frame.camera, else KITTI's");
+    s->add_option("--preset", a.preset,
+                  "a named rig: kitti, cityscapes, argoverse (5 MP), zed or realsense "
+                  "(docs/cli.md); the camera height stays the scene's")
+        ->check(CLI::IsMember(rig_preset_names()))
+        ->excludes(rig);
+    s->add_option("--fx", a.fx_px, "focal length in pixels (fx = fy; after --size)")
+        ->check(CLI::PositiveNumber);
     s->add_option("--size", a.size,
                   "image size WxH; the intrinsics scale with it (default: the file's "
                   "frame.camera, else KITTI's 1242x375)");
@@ -65,7 +73,8 @@ CLI::App* add_sensors_command(CLI::App& app, SensorsArgs& a) {
 
 namespace {
 
-/// The rig: the document's (or KITTI's), replaced by --rig, then resized and re-based.
+/// The rig: the document's (or KITTI's), replaced by --rig or --preset, then resized, its
+/// focal length and baseline replaced.
 StereoRig resolve_rig(const SensorsArgs& a, const scene_schema::EntityDocument& document) {
     StereoRig rig = rig_for(document, a.options.rig);
     if (!a.rig.empty()) {
@@ -83,10 +92,12 @@ StereoRig resolve_rig(const SensorsArgs& a, const scene_schema::EntityDocument& 
             throw Failure{"invalid rig", e.what(), a.rig};
         }
     }
+    if (!a.preset.empty()) rig = rig_preset(a.preset, rig);
     if (!a.size.empty()) {
         const auto [w, h] = size_flag(a.size, "--size");
         rig = rig.resized(w, h);
     }
+    if (a.fx_px) rig.fx_px = rig.fy_px = *a.fx_px;
     if (a.baseline_m) rig.baseline_m = *a.baseline_m;
     return rig;
 }

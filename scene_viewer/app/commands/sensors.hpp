@@ -17,6 +17,8 @@ struct SensorsArgs {
     std::string frame = "000000";         ///< frame name of the files
     std::string rig;                      ///< KITTI calib_cam_to_cam.txt; empty: the file's camera
     std::string size;                     ///< image size WxH; empty: the rig's
+    std::string preset;                   ///< a named rig (rig_preset); empty: none
+    std::optional<double> fx_px;          ///< focal length (fx = fy), px; none: the rig's
     std::optional<double> baseline_m;     ///< stereo baseline, metres; none: the rig's
     bool no_ground = false;               ///< no terrain underlay under the road level
     bool boxes = false;                   ///< boxes instead of glTF models

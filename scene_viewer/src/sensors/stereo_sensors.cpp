@@ -84,6 +84,54 @@ StereoRig StereoRig::resized(int width, int height) const {
     return r;
 }
 
+namespace {
+
+struct RigPreset {
+    const char* name;
+    int width_px, height_px;
+    double fx_px, cx_px, cy_px, baseline_m;
+};
+
+// Published calibrations (KITTI 2011_09_26 P_rect_02/03; Cityscapes' camera.json of its
+// training cities) and data sheets of the sensor families (Argoverse 1 stereo pair, ZED 2 at
+// HD720, RealSense D435 infrared pair at 1280x720), rounded.
+constexpr RigPreset kRigPresets[] = {
+    {"kitti", 1242, 375, 721.5377, 609.5593, 172.854, 0.54},
+    {"cityscapes", 2048, 1024, 2262.52, 1096.98, 513.137, 0.209313},
+    {"argoverse", 2464, 2056, 3894.0, 1232.0, 1028.0, 0.30},
+    {"zed", 1280, 720, 700.0, 640.0, 360.0, 0.12},
+    {"realsense", 1280, 720, 640.0, 640.0, 360.0, 0.05},
+};
+
+}  // namespace
+
+const std::vector<std::string>& rig_preset_names() {
+    static const std::vector<std::string> names = [] {
+        std::vector<std::string> out;
+        for (const auto& p : kRigPresets) out.emplace_back(p.name);
+        return out;
+    }();
+    return names;
+}
+
+StereoRig rig_preset(const std::string& name, const StereoRig& base) {
+    for (const auto& p : kRigPresets) {
+        if (name != p.name) continue;
+        StereoRig rig = base;
+        rig.width_px = p.width_px;
+        rig.height_px = p.height_px;
+        rig.fx_px = p.fx_px;
+        rig.fy_px = p.fx_px;
+        rig.cx_px = p.cx_px;
+        rig.cy_px = p.cy_px;
+        rig.baseline_m = p.baseline_m;
+        return rig;
+    }
+    std::string known;
+    for (const auto& n : rig_preset_names()) known += (known.empty() ? "" : ", ") + n;
+    throw std::invalid_argument("no rig preset '" + name + "' (" + known + ")");
+}
+
 StereoRig rig_for(const scene_schema::EntityDocument& document, const StereoRig& defaults) {
     StereoRig rig = defaults;
     if (const auto& k = document.frame.camera) {

@@ -20,6 +20,8 @@ struct RunSettings {
                                            ///< decide whether a cloud is built)
     std::string class_config = "default";  ///< class config file, "default" for the bundled one
     std::string tool_version;              ///< version of the tool that made the file
+    nlohmann::json rig;                    ///< source.rig: how the analysis fitted the rig
+                                           ///< (RigFit::describe), null = not written
 };
 
 /// The entities of analysis `r` of frame `in` (extract_entities on its per-class points when

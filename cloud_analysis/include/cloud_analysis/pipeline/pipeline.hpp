@@ -5,6 +5,7 @@
 
 #include <filesystem>
 #include <optional>
+#include <set>
 #include <string>
 #include <vector>
 
@@ -40,6 +41,21 @@ InputPaths kitti_layout(const std::filesystem::path& root, const std::string& fr
 std::filesystem::path kitti_instance_path(const std::filesystem::path& root,
                                           const std::string& frame);
 
+/// How the analysis fits itself to the rig of a frame (pipeline/rig_fit.hpp).
+struct RigOptions {
+    /// Nearest depth the disparity range must reach, metres: sets num_disparities unless given
+    /// (3 m: 128 disparities on KITTI's rig); 0 = keep num_disparities as it is.
+    double min_depth_m = 3.0;
+    /// Frames with more pixels are analysed at half resolution (2.5 MP: a 5 MP frame is, a
+    /// Cityscapes 2 MP frame is not); 0 = never. Not with raw (unrectified) input.
+    long long half_resolution_above_px = 2'500'000;
+    bool scale_pixel_settings = true;  ///< scale pixel settings by fx / kReferenceFocalPx
+    std::set<std::string> given;       ///< option fields the user set (rig_scaled_fields(),
+                                       ///< "num_disparities"): kept as they are
+    /// Throws std::invalid_argument naming the first bad field.
+    void validate() const;
+};
+
 /// Settings of the whole chain.
 struct AnalyseOptions {
     std::string palette = "cityscapes";  ///< bundled palette name or palette file path
@@ -59,6 +75,7 @@ struct AnalyseOptions {
     /// per-class points (AnalyseResult::points, see reproject_by_class), for runs whose only
     /// output is entities. Unset: the labelled cloud (AnalyseResult::cloud).
     std::optional<ClassSelection> class_points_only;
+    RigOptions rig;  ///< fitting to the rig (fit_to_rig; load_inputs halves large frames)
     /// Throws std::invalid_argument naming the first bad field.
     void validate() const;
 };
@@ -72,13 +89,19 @@ struct LoadedInputs {
     IdImage instance;         ///< as stored, empty when no instance image was given
     Calibration calibration;  ///< with camera.width/height set to the rectified image size
     Palette palette;          ///< palette of the semantic image
+    /// 1, or 0.5 when load_inputs halved the frame (RigOptions::half_resolution_above_px);
+    /// the images and calibration.camera are then the halved ones
+    double resolution_scale = 1.0;
+    int read_width_px = 0;   ///< size of the images as read
+    int read_height_px = 0;  ///< idem
 };
 
 /// Reads and validates every input before any expensive work: files readable and decodable,
 /// left/right/semantic/instance of one size, an instance image only with a semantic image
 /// and without `raw`, calibration complete with a positive baseline, its image
 /// size (when it has one) equal to the images', raw rectification data present when `raw`.
-/// Throws std::runtime_error "<what failed>: <detail> (<file>)".
+/// Then, without `raw`, a frame over options.rig.half_resolution_above_px pixels is halved
+/// (halve_inputs). Throws std::runtime_error "<what failed>: <detail> (<file>)".
 LoadedInputs load_inputs(const InputPaths& paths, const AnalyseOptions& options);
 
 /// As load_inputs with a calibration and palette already read (batch mode reads them once);

@@ -49,6 +49,17 @@ struct StereoRig {
     StereoRig resized(int width_px, int height_px) const;
 };
 
+/// Names of the rig presets (rig_preset).
+const std::vector<std::string>& rig_preset_names();
+
+/// A named rig's image size, intrinsics and baseline, the camera height kept from `base` (the
+/// scene's): "kitti" (1242x375, fx 721.5, 0.54 m), "cityscapes" (2048x1024, fx 2262.5,
+/// 0.209 m), "argoverse" (a 5 MP rig like Argoverse's stereo pair: 2464x2056, fx 3894,
+/// 0.30 m), "zed" (a ZED-like 720p rig: 1280x720, fx 700, 0.12 m) and "realsense" (a
+/// RealSense D435-like 720p rig: 1280x720, fx 640, 0.05 m). Throws std::invalid_argument for
+/// another name.
+StereoRig rig_preset(const std::string& name, const StereoRig& base);
+
 /// The rig for a document: `defaults`, with the intrinsics (and baseline, when > 0) of the file's
 /// frame.camera when present.
 StereoRig rig_for(const scene_schema::EntityDocument& document, const StereoRig& defaults);
