@@ -212,6 +212,43 @@ TEST_CASE("A car half hidden behind another is about half visible and stuff has 
     CHECK(kitti_layout_files(f, "000007").count("visibility/000007.json") == 1);
 }
 
+TEST_CASE("A car cut by the image border is as visible as the share of it inside the image",
+          "[sensors][gl]") {
+    // The image spans u 0..319 (cx 160, fx 300): the 3.6 x 0.6 m box centred on x = -6.0 m,
+    // z = 10 m spans u -81..38 (its front face at 9.7 m, its inner side to 10.3 m), so about a
+    // third of its columns, all of the same height, are in the image.
+    const auto doc = scene({box("building-1", "building", 11, 0.0, -1.0, 40.0, 30.0, 10.0, 4.0),
+                            box("car-cut", "car", 26, -6.0, 0.5, 10.0, 3.6, 1.5, 0.6),
+                            box("car-whole", "car", 26, 1.0, 0.5, 10.0, 1.8, 1.5, 0.6)});
+    const StereoFrame f = render(doc, small_options());
+    REQUIRE(f.visibility.size() == 2);
+    const EntityVisibility& cut = f.visibility[0];
+    const EntityVisibility& whole = f.visibility[1];
+    CHECK(cut.visible_px == cut.unoccluded_px);  // nothing hides it
+    CHECK(cut.in_view_fraction == Approx(38.0 / 119.0).margin(0.05));
+    CHECK(cut.visible_fraction() == Approx(cut.in_view_fraction));
+    CHECK(whole.in_view_fraction == 1.0);
+    CHECK(whole.visible_fraction() == 1.0);
+    CHECK(format_visibility_json(f).find("\"in_view_fraction\"") != std::string::npos);
+}
+
+TEST_CASE("Rig presets set the size, intrinsics and baseline and keep the camera height",
+          "[sensors]") {
+    StereoRig base;
+    base.camera_height_m = 1.2;
+    const StereoRig argoverse = rig_preset("argoverse", base);
+    CHECK(argoverse.width_px == 2464);
+    CHECK(argoverse.height_px == 2056);
+    CHECK(argoverse.fx_px == 3894.0);
+    CHECK(argoverse.fy_px == 3894.0);
+    CHECK(argoverse.baseline_m == 0.30);
+    CHECK(argoverse.camera_height_m == 1.2);
+    CHECK(rig_preset("kitti", base).fx_px == StereoRig{}.fx_px);
+    for (const auto& name : rig_preset_names()) CHECK_NOTHROW(rig_preset(name, base).validate());
+    CHECK_THROWS_WITH(rig_preset("bumblebee", base),
+                      Catch::Contains("bumblebee") && Catch::Contains("realsense"));
+}
+
 TEST_CASE("KITTI instance ids count per class in file order", "[sensors]") {
     const std::vector<std::uint16_t> ids = kitti_instance_ids({26, 7, 26, 24, 26, 11});
     const std::vector<std::uint16_t> expected = {26 << 8 | 1, 7 << 8,      26 << 8 | 2,
@@ -348,7 +385,8 @@ TEST_CASE("The sensor pipeline runs on the null backend: all sky, no disparity",
     SceneRenderer renderer(device);
     const auto doc = scene({box("car-1", "car", 26, 1.0, 0.5, 12.0, 1.8, 1.5, 4.2)});
     const StereoFrame f = render_stereo_frame(renderer, doc, small_options());
-    CHECK(device.frames_begun == 5);  // left, right, semantic, instance, car-1 alone
+    // left, right, semantic, instance, car-1 alone and alone seen wider
+    CHECK(device.frames_begun == 6);
     CHECK(f.left.width == 320);
     CHECK(rgb(f.semantic, 160, 80) == Rgb8{70, 130, 180});
     CHECK(std::all_of(f.disparity.values.begin(), f.disparity.values.end(),

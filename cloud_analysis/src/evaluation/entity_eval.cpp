@@ -347,9 +347,16 @@ std::vector<std::optional<ReferenceVisibility>> load_reference_visibility(
             ReferenceVisibility v;
             v.visible_px = scene_schema::get_count(r.at("visible_px"), "visible_px");
             v.unoccluded_px = scene_schema::get_count(r.at("unoccluded_px"), "unoccluded_px");
-            v.visible_fraction = v.unoccluded_px == 0 ? 0.0
-                                                      : static_cast<double>(v.visible_px) /
-                                                            static_cast<double>(v.unoccluded_px);
+            // Files without in_view_fraction predate it: the object is taken as wholly in view.
+            v.in_view_fraction =
+                r.contains("in_view_fraction") ? r.at("in_view_fraction").get<double>() : 1.0;
+            if (!(v.in_view_fraction >= 0.0 && v.in_view_fraction <= 1.0)) {
+                throw fail("in_view_fraction: must be in [0, 1]");
+            }
+            v.visible_fraction = v.unoccluded_px == 0
+                                     ? 0.0
+                                     : v.in_view_fraction * static_cast<double>(v.visible_px) /
+                                           static_cast<double>(v.unoccluded_px);
             by_id[r.at("id").get<std::string>()] = v;
         }
     } catch (const nlohmann::json::exception& e) {

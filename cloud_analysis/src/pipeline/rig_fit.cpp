@@ -25,14 +25,6 @@ int scaled_length(int px, double scale) {
     return std::max(1, static_cast<int>(std::lround(px * scale)));
 }
 
-/// A matching window side at another scale: the nearest odd side, 1..31.
-int scaled_window(int side, double scale) {
-    const double target = side * scale;
-    int odd = 2 * static_cast<int>(std::floor((target - 1.0) / 2.0)) + 1;
-    if (target - odd > 1.0) odd += 2;  // the nearer of the two odd sides around it
-    return std::clamp(odd, 1, 31);
-}
-
 /// A pixel count at another scale (an area: times scale^2), at least 1 when it was.
 int scaled_count(int count, double scale) {
     if (count <= 0) return count;
@@ -102,8 +94,6 @@ void RigOptions::validate() const {
 
 const std::set<std::string>& rig_scaled_fields() {
     static const std::set<std::string> fields = {
-        // matcher (at the matched resolution, like the preset's own values)
-        "block_size", "speckle_window_size", "p1", "p2",
         // reprojection
         "depth_edge_rows",
         // stereo-only segmentation
@@ -159,18 +149,6 @@ RigFit fit_to_rig(const AnalyseOptions& analyse, const ExtractOptions& extract,
     if (rig.scale_pixel_settings && camera.fx_px > 0.0) {
         const double s = camera.fx_px / kReferenceFocalPx;
         fit.scale = s;
-        if (!given("block_size")) {
-            const int before = d.block_size;
-            d.block_size = scaled_window(before, s);
-            // SGBM's costs sum over the window: its penalties keep their share of them.
-            const double area = static_cast<double>(d.block_size * d.block_size) /
-                                static_cast<double>(before * before);
-            if (!given("p1") && d.p1 > 0) d.p1 = static_cast<int>(std::lround(d.p1 * area));
-            if (!given("p2") && d.p2 > 0) d.p2 = static_cast<int>(std::lround(d.p2 * area));
-        }
-        if (!given("speckle_window_size")) {
-            d.speckle_window_size = scaled_count(d.speckle_window_size, s);
-        }
         auto& r = fit.analyse.reproject;
         if (!given("depth_edge_rows")) r.depth_edge_rows = scaled_length(r.depth_edge_rows, s);
         auto& g = fit.analyse.geometry;

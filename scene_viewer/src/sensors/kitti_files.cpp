@@ -124,6 +124,7 @@ std::string format_visibility_json(const StereoFrame& frame) {
              {"instance", v.instance},
              {"visible_px", v.visible_px},
              {"unoccluded_px", v.unoccluded_px},
+             {"in_view_fraction", std::round(v.in_view_fraction * 10000.0) / 10000.0},
              {"visible_fraction", std::round(v.visible_fraction() * 10000.0) / 10000.0}});
     }
     nlohmann::ordered_json out = {{"width_px", frame.rig.width_px},

@@ -51,9 +51,9 @@ ImageRgb8 composite_sky(const ImageRgba8& render, double cy_px) {
 }  // namespace
 
 double EntityVisibility::visible_fraction() const {
-    return unoccluded_px == 0
-               ? 0.0
-               : static_cast<double>(visible_px) / static_cast<double>(unoccluded_px);
+    return unoccluded_px == 0 ? 0.0
+                              : in_view_fraction * static_cast<double>(visible_px) /
+                                    static_cast<double>(unoccluded_px);
 }
 
 void StereoRig::validate() const {
@@ -265,11 +265,41 @@ void fill_ground_truth(StereoFrame& frame, const ImageRgba8& semantic, const Ima
     }
 }
 
-/// Visibility of every thing entity: its pixels in the instance image, and alone (rendered
-/// with `o`, instance shading).
+/// `o` seeing three times as far to each side at the same image size: the image is the centre
+/// tile of a 3 x 3 grid (pixel u of the image is 3 u' - width of this one, u' in its tile).
+RenderOptions wide_view(const RenderOptions& o) {
+    RenderOptions wide = o;
+    auto& k = *wide.view.intrinsics;
+    k.fx_px /= 3.0;
+    k.fy_px /= 3.0;
+    k.cx_px = (k.cx_px + o.width_px) / 3.0;
+    k.cy_px = (k.cy_px + o.height_px) / 3.0;
+    return wide;
+}
+
+/// Share of the covered pixels of `solo` (rendered with wide_view) in its centre tile: the share
+/// of the object inside the image, KITTI's 1 - truncation; 0 when nothing is covered.
+double in_view_fraction(const ImageRgba8& solo) {
+    const int w = solo.width;
+    const int h = solo.height;
+    std::size_t all = 0;
+    std::size_t inside = 0;
+    for (int v = 0; v < h; ++v) {
+        for (int u = 0; u < w; ++u) {
+            if (solo.pixels[(static_cast<std::size_t>(v) * w + u) * 4 + 3] == 0) continue;
+            ++all;
+            inside += 3 * u >= w && 3 * u < 2 * w && 3 * v >= h && 3 * v < 2 * h;
+        }
+    }
+    return all == 0 ? 0.0 : static_cast<double>(inside) / static_cast<double>(all);
+}
+
+/// Visibility of every thing entity: its pixels in the instance image, alone (rendered with
+/// `o`, instance shading), and the share of it inside the image (alone, seen wider).
 void add_visibility(StereoFrame& frame, SceneRenderer& renderer,
                     const scene_schema::EntityDocument& document,
                     const scene_schema::EntityDocument& scene, const RenderOptions& o) {
+    const RenderOptions wide = wide_view(o);
     const std::size_t count = frame.instance.values.size();
     std::vector<int> class_ids;
     for (const auto& e : scene.entities) class_ids.push_back(e.class_id);
@@ -289,6 +319,7 @@ void add_visibility(StereoFrame& frame, SceneRenderer& renderer,
         record.instance = ids[e];
         record.visible_px = visible[ids[e]];
         for (std::size_t i = 0; i < count; ++i) record.unoccluded_px += solo.pixels[i * 4 + 3] != 0;
+        record.in_view_fraction = in_view_fraction(renderer.render(alone, nullptr, wide));
         frame.visibility.push_back(record);
     }
 }

@@ -74,19 +74,16 @@ TEST_CASE("pixel settings scale with the focal length, counts with its square", 
     SECTION("KITTI's focal length changes nothing") {
         const RigFit fit = fit_to_rig(options, extract, rig(1242, 375, 721.5377, 0.54));
         CHECK(fit.scale == Approx(1.0));
-        CHECK(fit.analyse.disparity.block_size == options.disparity.block_size);
-        CHECK(fit.analyse.disparity.p2 == options.disparity.p2);
-        CHECK(fit.analyse.disparity.speckle_window_size == 100);
+        CHECK(fit.analyse.reproject.depth_edge_rows == options.reproject.depth_edge_rows);
         CHECK(fit.extract.shadow_radius_px == extract.shadow_radius_px);
         CHECK(fit.extract.classes.find("car").min_points == extract.classes.find("car").min_points);
     }
     SECTION("three times the focal length") {
         const RigFit fit = fit_to_rig(options, extract, rig(2400, 1000, 3 * 721.5377, 0.2));
         CHECK(fit.scale == Approx(3.0));
-        CHECK(fit.analyse.disparity.block_size == 27);  // 9 x 3, odd
-        // SGBM's penalties keep their share of a window's cost: times (27 / 9)^2.
-        CHECK(fit.analyse.disparity.p2 == 9 * options.disparity.p2);
-        CHECK(fit.analyse.disparity.speckle_window_size == 900);
+        // The matcher works on image texture, in pixels of any camera.
+        CHECK(fit.analyse.disparity.block_size == options.disparity.block_size);
+        CHECK(fit.analyse.disparity.speckle_window_size == 100);
         CHECK(fit.analyse.reproject.depth_edge_rows == 3 * options.reproject.depth_edge_rows);
         CHECK(fit.analyse.geometry.column_bin_px == 3 * options.geometry.column_bin_px);
         CHECK(fit.analyse.geometry.min_cell_pixels == 9 * options.geometry.min_cell_pixels);
@@ -95,20 +92,17 @@ TEST_CASE("pixel settings scale with the focal length, counts with its square", 
         CHECK(fit.extract.classes.find("car").min_points ==
               9 * extract.classes.find("car").min_points);
     }
-    SECTION("half the focal length keeps windows odd and counts at least 1") {
-        const RigFit fit = fit_to_rig(options, extract, rig(621, 188, 721.5377 / 2, 0.54));
-        CHECK(fit.analyse.disparity.block_size == 5);  // 4.5 -> the nearer odd side
-        CHECK(fit.analyse.disparity.speckle_window_size == 25);
-        CHECK(fit.analyse.geometry.min_cell_pixels >= 1);
+    SECTION("a fifth of the focal length keeps lengths and counts at least 1") {
+        const RigFit fit = fit_to_rig(options, extract, rig(621, 188, 721.5377 / 5, 0.54));
+        CHECK(fit.analyse.geometry.min_cell_pixels == 1);
         CHECK(fit.extract.image_radius_px == 1);
     }
     SECTION("settings the user gave stay as given") {
         AnalyseOptions given = options;
-        given.rig.given = {"block_size", "speckle_window_size"};
+        given.rig.given = {"depth_edge_rows", "min_points"};
         const RigFit fit = fit_to_rig(given, extract, rig(2400, 1000, 3 * 721.5377, 0.2));
-        CHECK(fit.analyse.disparity.block_size == options.disparity.block_size);
-        CHECK(fit.analyse.disparity.p2 == options.disparity.p2);
-        CHECK(fit.analyse.disparity.speckle_window_size == 100);
+        CHECK(fit.analyse.reproject.depth_edge_rows == options.reproject.depth_edge_rows);
+        CHECK(fit.extract.classes.find("car").min_points == extract.classes.find("car").min_points);
         CHECK(fit.extract.shadow_radius_px == 3 * extract.shadow_radius_px);
     }
     SECTION("off") {
@@ -116,7 +110,7 @@ TEST_CASE("pixel settings scale with the focal length, counts with its square", 
         off.rig.scale_pixel_settings = false;
         const RigFit fit = fit_to_rig(off, extract, rig(2400, 1000, 3 * 721.5377, 0.2));
         CHECK(fit.scale == 1.0);
-        CHECK(fit.analyse.disparity.block_size == options.disparity.block_size);
+        CHECK(fit.extract.shadow_radius_px == extract.shadow_radius_px);
     }
 }
 

@@ -145,7 +145,9 @@ std::vector<std::size_t> visible_instance_pixels(
 struct ReferenceVisibility {
     std::size_t visible_px = 0;     ///< pixels in the instance image
     std::size_t unoccluded_px = 0;  ///< pixels when rendered alone (no occluders)
-    double visible_fraction = 0.0;  ///< visible_px / unoccluded_px, 0 when not in the image
+    double in_view_fraction = 1.0;  ///< share of it inside the image (1 - KITTI's truncation)
+    double visible_fraction = 0.0;  ///< in_view_fraction * visible_px / unoccluded_px: hidden
+                                    ///< or cut by the image border; 0 when not in the image
 };
 
 /// The visibility record of each reference entity, matched by id, from a visibility JSON file

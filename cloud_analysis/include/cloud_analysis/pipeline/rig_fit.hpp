@@ -4,11 +4,12 @@
 /// to see, every pixel setting scaled from the focal length at which it is written, and frames
 /// over a pixel count analysed at half resolution (docs/cli.md, "Any stereo rig").
 ///
-/// A pixel setting is written for KITTI's rig (focal length kReferenceFocalPx); the same scene
-/// seen through a rig with focal length f spans f / kReferenceFocalPx as many pixels across, so
-/// lengths in pixels scale by that factor and pixel counts by its square. Disparity-valued
-/// settings (noise, tolerances, the speckle range) describe the matcher's sub-pixel error, which
-/// does not depend on the rig, and stay as they are.
+/// A pixel setting of the stages after the matcher is written for KITTI's rig (focal length
+/// kReferenceFocalPx); the same scene seen through a rig with focal length f spans
+/// f / kReferenceFocalPx as many pixels across, so lengths in pixels scale by that factor and
+/// pixel counts by its square. The matcher's settings (window, penalties, speckle filter) and
+/// disparity-valued settings work on image texture and the matcher's sub-pixel error, which are
+/// pixels of any camera, and stay as they are.
 
 #include <set>
 #include <string>
@@ -50,8 +51,8 @@ double depth_at_disparity(const StereoCamera& camera, double disparity_px);
 /// - num_disparities: the nearest multiple of 16 (at least 16, at most the matcher's maximum)
 ///   to the full-resolution disparity at rig.min_depth_m, unless rig.given names it; a given
 ///   range that stops short of that depth adds a warning;
-/// - pixel settings (rig.scale_pixel_settings) times scale = fx / kReferenceFocalPx, pixel
-///   counts times scale^2, each odd window kept odd; fields named in rig.given are kept.
+/// - pixel settings after the matcher (rig.scale_pixel_settings, rig_scaled_fields()) times
+///   scale = fx / kReferenceFocalPx, pixel counts times scale^2; fields in rig.given are kept.
 /// Throws std::runtime_error when the image is narrower than the range plus the window.
 RigFit fit_to_rig(const AnalyseOptions& analyse, const ExtractOptions& extract,
                   const StereoCamera& camera);

@@ -101,7 +101,11 @@ struct EntityVisibility {
     std::uint16_t instance = 0;     ///< its value in the instance image (labelId << 8 | n)
     std::size_t visible_px = 0;     ///< pixels in the instance image
     std::size_t unoccluded_px = 0;  ///< pixels when rendered alone
-    /// visible_px / unoccluded_px (0 when it is not in the image at all).
+    /// Share of it inside the image when rendered alone on an image plane three times as wide
+    /// and high (KITTI's 1 - truncation): 1 when it lies wholly in the image.
+    double in_view_fraction = 1.0;
+    /// Share of the object the camera sees: in_view_fraction * visible_px / unoccluded_px (0
+    /// when it is not in the image at all), hidden by other objects or cut by the image border.
     double visible_fraction() const;
 };
 
