@@ -400,7 +400,7 @@ cloud_analysis::AnalyseOptions options_for_outputs(const cloud_analysis::RigFit&
 
 cloud_analysis::RunSettings run_settings(const AnalyseArgs& a) {
     return {a.options, a.class_config.empty() ? std::string("default") : a.class_config.string(),
-            STEREOSCENE_VERSION};
+            STEREOSCENE_VERSION, nullptr};
 }
 
 cloud_analysis::RunSettings run_settings(const AnalyseArgs& a, const cloud_analysis::RigFit& fit,

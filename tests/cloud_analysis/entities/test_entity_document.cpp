@@ -26,7 +26,7 @@ TEST_CASE("the entity document names the frame, its camera and how it was made",
     const AnalyseOptions options;
     const LoadedInputs in = load_inputs(sample_paths(), options);
     const AnalyseResult r = analyse(in, options);
-    const RunSettings run{options, "my-classes.json", "9.8.7"};
+    const RunSettings run{options, "my-classes.json", "9.8.7", nullptr};
     const scene_schema::EntityDocument doc = entity_document(in, r, default_extract(), run);
     CHECK(doc.frame.id == "synthetic-street");
     REQUIRE(doc.frame.camera);
@@ -51,7 +51,7 @@ TEST_CASE("the entity document is the same from the cloud and from per-class poi
     const AnalyseOptions options;
     const LoadedInputs in = load_inputs(sample_paths(), options);
     const ExtractOptions extract = default_extract();
-    const RunSettings run{options, "default", "1.0.0"};
+    const RunSettings run{options, "default", "1.0.0", nullptr};
     AnalyseOptions by_class = options;
     by_class.class_points_only = class_selection(in.palette, extract);
     const AnalyseResult from_cloud = analyse(in, options);
