@@ -298,7 +298,8 @@ def part_scaling(a, tool, render, result):
     scaling = {"size": [], "disparities": [], "entities": []}
     for w, h, label in sizes:
         args = make_sample(tool, a.out / f"sample-{w}x{h}", w, h)
-        b = bench(tool, args, a.out / "work", 3)
+        # Pixels alone: the range fitted to each size's focal length would change it too.
+        b = bench(tool, args, a.out / "work", 3, ["--num-disparities", 128])
         row = b["rows"][0]
         scaling["size"].append({"pixels": w * h, "label": f"{label} ({w}x{h})",
                                 "matcher_ms": b["matcher_ms"], "total_ms": row["total_ms"],
