@@ -89,6 +89,20 @@ assert run("--pedestrians")[0] == 2, "--pedestrians without --kerbside must fail
 # cars are less than a quarter visible, behind the cars beside them, and all are found).
 set(STEREOSCENE_CLOSED_LOOP_ALL_CARS_FOUND parking-row thesis-one-car)
 
+# A scene's extra sensor flags (e.g. --label-bleed 3), from scenes/<scene>.sensors beside its
+# scene file, into OUT (empty without one).
+function(closed_loop_sensor_flags truth out)
+    get_filename_component(_scene ${truth} NAME_WE)
+    get_filename_component(_truth_dir ${truth} DIRECTORY)
+    set(_extra "")
+    if(EXISTS ${_truth_dir}/${_scene}.sensors)
+        file(READ ${_truth_dir}/${_scene}.sensors _extra)
+        string(STRIP "${_extra}" _extra)
+        separate_arguments(_extra UNIX_COMMAND "${_extra}")
+    endif()
+    set(${out} "${_extra}" PARENT_SCOPE)
+endfunction()
+
 # Two tests for one rendered frame: cloud-analysis reconstructs it into ENTITIES (fixture
 # FIXTURE, itself needing REQUIRES when given), then evaluate scores ENTITIES against TRUTH with
 # BARS and the visibility rule, writing EVAL_JSON. RANGE (30 by default) names the bars' range.
@@ -182,14 +196,7 @@ if(TARGET scene-render)
         else()
             set(_bars ${STEREOSCENE_CLOSED_LOOP_BARS})
         endif()
-        # A scene's extra sensor flags (e.g. --label-bleed 3) sit in scenes/<scene>.sensors.
-        set(_extra "")
-        get_filename_component(_truth_dir ${_truth} DIRECTORY)
-        if(EXISTS ${_truth_dir}/${_scene}.sensors)
-            file(READ ${_truth_dir}/${_scene}.sensors _extra)
-            string(STRIP "${_extra}" _extra)
-            separate_arguments(_extra UNIX_COMMAND "${_extra}")
-        endif()
+        closed_loop_sensor_flags(${_truth} _extra)
         add_test(NAME "closed loop ${_name}: scene-render sensors renders the stereo frame"
             COMMAND $<TARGET_FILE:scene-render> sensors ${_truth} --out ${_dir} --frame 000000
                 --seed 0 ${_extra})
@@ -283,13 +290,7 @@ if(TARGET scene-render)
             endif()
             set(_dir ${_loop_out}/${_rig}/${_scene})
             set(_name "${_scene} through the ${_rig} rig")
-            set(_extra "")
-            get_filename_component(_truth_dir ${_truth} DIRECTORY)
-            if(EXISTS ${_truth_dir}/${_scene}.sensors)
-                file(READ ${_truth_dir}/${_scene}.sensors _extra)
-                string(STRIP "${_extra}" _extra)
-                separate_arguments(_extra UNIX_COMMAND "${_extra}")
-            endif()
+            closed_loop_sensor_flags(${_truth} _extra)
             add_test(NAME "closed loop ${_name}: scene-render sensors renders the stereo frame"
                 COMMAND $<TARGET_FILE:scene-render> sensors ${_truth} --out ${_dir} --frame 000000
                     --seed 0 --preset ${_rig} ${_extra})
