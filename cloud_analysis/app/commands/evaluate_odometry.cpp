@@ -1,9 +1,9 @@
 #include "evaluate_odometry.hpp"
 
-#include <cstdio>
 #include <iostream>
 
 #include <stereoscene/support/file_read.hpp>
+#include <stereoscene/support/number_text.hpp>
 
 #include "cloud_analysis/evaluation/odometry_eval.hpp"
 #include "output.hpp"
@@ -11,6 +11,8 @@
 namespace cloud_analysis::app {
 
 namespace {
+
+using stereoscene::support::fixed_text;
 
 std::vector<odometry::Pose> read_poses(const std::filesystem::path& path, const char* flag) {
     std::string text;
@@ -21,12 +23,6 @@ std::vector<odometry::Pose> read_poses(const std::filesystem::path& path, const 
                                  flag + ")");
     }
     return odometry::parse_kitti_poses(text, path.string());
-}
-
-std::string fixed(double v, int digits) {
-    char text[64];
-    std::snprintf(text, sizeof text, "%.*f", digits, v);
-    return text;
 }
 
 }  // namespace
@@ -66,27 +62,27 @@ int run_evaluate_odometry(const EvaluateOdometryArgs& a) {
     }
     if (!a.json.empty()) write_output({a.json, e.to_json().dump(2) + "\n", "--json"});
     if (a.json != "-") {
-        std::cout << "odometry over " << e.frames << " frames, " << fixed(e.path_m, 1)
+        std::cout << "odometry over " << e.frames << " frames, " << fixed_text(e.path_m, 1)
                   << " m of true path\n";
         std::cout << "  length_m  segments  translation_%  rotation_deg/m\n";
         for (const auto& s : e.lengths) {
             std::printf("  %8.0f  %8zu  %13.2f  %14.4f\n", s.length_m, s.segments,
                         s.translation_pct, s.rotation_deg_per_m);
         }
-        std::cout << "  mean translation error " << fixed(e.translation_pct, 2)
-                  << " %, rotation error " << fixed(e.rotation_deg_per_m, 4) << " deg/m\n";
-        std::cout << "  end point error " << fixed(e.end_point_m, 2)
-                  << " m = " << fixed(e.end_point_pct, 2) << " % of the path\n";
+        std::cout << "  mean translation error " << fixed_text(e.translation_pct, 2)
+                  << " %, rotation error " << fixed_text(e.rotation_deg_per_m, 4) << " deg/m\n";
+        std::cout << "  end point error " << fixed_text(e.end_point_m, 2)
+                  << " m = " << fixed_text(e.end_point_pct, 2) << " % of the path\n";
         std::cout.flush();
     }
     int code = 0;
     if (a.max_translation_pct && !(e.translation_pct <= *a.max_translation_pct)) {
-        std::cerr << kTool << ": bar missed: translation error " << fixed(e.translation_pct, 2)
+        std::cerr << kTool << ": bar missed: translation error " << fixed_text(e.translation_pct, 2)
                   << " % > " << *a.max_translation_pct << " (--max-translation-error)\n";
         code = 3;
     }
     if (a.max_end_point_pct && !(e.end_point_pct <= *a.max_end_point_pct)) {
-        std::cerr << kTool << ": bar missed: end point error " << fixed(e.end_point_pct, 2)
+        std::cerr << kTool << ": bar missed: end point error " << fixed_text(e.end_point_pct, 2)
                   << " % > " << *a.max_end_point_pct << " (--max-end-point-error)\n";
         code = 3;
     }

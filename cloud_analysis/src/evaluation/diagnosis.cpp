@@ -2,14 +2,16 @@
 
 #include <algorithm>
 #include <cmath>
-#include <cstdio>
 #include <map>
 #include <stdexcept>
 
 #include "cloud_analysis/io/io.hpp"
+#include "stereoscene/support/number_text.hpp"
 
 namespace cloud_analysis {
 namespace {
+
+using stereoscene::support::fixed_text;
 
 using Polygon = std::vector<Eigen::Vector2d>;
 
@@ -24,15 +26,11 @@ double covered_share(const scene_schema::Entity& of, const scene_schema::Entity&
     return area > 0.0 ? convex_intersection_area(footprint(of), footprint(by)) / area : 0.0;
 }
 
-std::string num(double v, int decimals) {
-    char buf[32];
-    std::snprintf(buf, sizeof buf, "%.*f", decimals, v);
-    return buf;
+std::string pct(double share) { return fixed_text(100.0 * share, 0) + " %"; }
+
+std::string box_size(const scene_schema::Entity& e) {
+    return fixed_text(e.L, 1) + " x " + fixed_text(e.W, 1);
 }
-
-std::string pct(double share) { return num(100.0 * share, 0) + " %"; }
-
-std::string box_size(const scene_schema::Entity& e) { return num(e.L, 1) + " x " + num(e.W, 1); }
 
 double bev_distance(const scene_schema::Entity& a, const scene_schema::Entity& b) {
     return std::hypot(a.x - b.x, a.z - b.z);
@@ -98,13 +96,13 @@ Diagnosis missed_reason(std::size_t r, const std::vector<scene_schema::Entity>& 
                 d.kind = "merged";
                 d.reason = "merged with " + reference[static_cast<std::size_t>(partner)].id +
                            " into " + est.id + " (" + box_size(est) + " m box over " +
-                           pct(same_share) + " of it, centre " + num(bev_distance(est, ref), 2) +
-                           " m away: matched to neither)";
+                           pct(same_share) + " of it, centre " +
+                           fixed_text(bev_distance(est, ref), 2) + " m away: matched to neither)";
             } else {
                 d.kind = "off-centre";
                 d.reason = est.id + " (" + box_size(est) + " m) covers " + pct(same_share) +
-                           " of it but its centre is " + num(bev_distance(est, ref), 2) +
-                           " m away (> " + num(ev.options.max_match_distance_m, 1) + " m)";
+                           " of it but its centre is " + fixed_text(bev_distance(est, ref), 2) +
+                           " m away (> " + fixed_text(ev.options.max_match_distance_m, 1) + " m)";
             }
         }
     } else if (other >= 0 && other_share >= 0.3) {
@@ -125,7 +123,7 @@ Diagnosis missed_reason(std::size_t r, const std::vector<scene_schema::Entity>& 
         if (nearest >= 0) {
             const auto& est = estimate[static_cast<std::size_t>(nearest)];
             d.reason += "; nearest " + ref.class_name + " box " + est.id + " is " +
-                        num(bev_distance(est, ref), 1) + " m away";
+                        fixed_text(bev_distance(est, ref), 1) + " m away";
         }
     }
     return d;
@@ -173,15 +171,15 @@ Diagnosis spurious_reason(std::size_t e, const std::vector<scene_schema::Entity>
         const std::size_t r = same[0].second;
         d.kind = "off-centre";
         d.reason = "box on " + reference[r].id + " with its centre " +
-                   num(bev_distance(est, reference[r]), 2) + " m off (> " +
-                   num(ev.options.max_match_distance_m, 1) + " m; " + pct(same[0].first) +
+                   fixed_text(bev_distance(est, reference[r]), 2) + " m off (> " +
+                   fixed_text(ev.options.max_match_distance_m, 1) + " m; " + pct(same[0].first) +
                    " of the box on it)";
     } else if (!same.empty()) {
         const std::size_t r = same[0].second;
         d.kind = "duplicate";
         d.reason = "second box on " + reference[r].id + " (" + owner(r) + "; " +
                    pct(same[0].first) + " of the box on it, centre " +
-                   num(bev_distance(est, reference[r]), 2) + " m off)";
+                   fixed_text(bev_distance(est, reference[r]), 2) + " m off)";
     } else if (!under.empty()) {
         const auto& ref = reference[under[0].second];
         d.kind = "phantom";
@@ -199,8 +197,8 @@ Diagnosis spurious_reason(std::size_t e, const std::vector<scene_schema::Entity>
         d.reason = "phantom over nothing in the truth";
         if (nearest >= 0) {
             const auto& ref = reference[static_cast<std::size_t>(nearest)];
-            d.reason +=
-                "; nearest thing " + ref.id + " is " + num(bev_distance(est, ref), 1) + " m away";
+            d.reason += "; nearest thing " + ref.id + " is " +
+                        fixed_text(bev_distance(est, ref), 1) + " m away";
         }
     }
     return d;
@@ -217,7 +215,7 @@ std::vector<Diagnosis> diagnose_entities(
     for (const auto r : ev.missed) {
         Diagnosis d = missed_reason(r, reference, estimate, ev, l);
         if (r < visibility.size() && visibility[r])
-            d.reason += "; visible " + num(visibility[r]->visible_fraction, 2);
+            d.reason += "; visible " + fixed_text(visibility[r]->visible_fraction, 2);
         out.push_back(d);
     }
     for (const auto& m : ev.matches) {
@@ -227,9 +225,9 @@ std::vector<Diagnosis> diagnose_entities(
         out.push_back({ref.id, "under-covered",
                        est.id + " covers " + pct(covered_share(ref, est)) + " of it (box " +
                            box_size(est) + " m vs " + box_size(ref) + " m, centre " +
-                           num(m.bev_centre_error_m, 2) + " m off, heading " +
-                           num(m.heading_error_rad * 180.0 / M_PI, 0) + " deg off, BEV IoU " +
-                           num(m.bev_iou, 2) + ")"});
+                           fixed_text(m.bev_centre_error_m, 2) + " m off, heading " +
+                           fixed_text(m.heading_error_rad * 180.0 / M_PI, 0) +
+                           " deg off, BEV IoU " + fixed_text(m.bev_iou, 2) + ")"});
     }
     for (const auto e : ev.spurious) out.push_back(spurious_reason(e, reference, estimate, ev, l));
     return out;
@@ -311,8 +309,8 @@ std::vector<Diagnosis> diagnose_cars(const std::vector<scene_schema::Entity>& en
             }
         }
         Diagnosis d{gt_name(g), "", ""};
-        const std::string where =
-            " (" + std::to_string(car.pixel_count) + " GT px at " + num(car.range_m(), 1) + " m)";
+        const std::string where = " (" + std::to_string(car.pixel_count) + " GT px at " +
+                                  fixed_text(car.range_m(), 1) + " m)";
         if (best < 0) {
             d.kind = "no-box";
             d.reason = "no car box holds any of its points" + where;
@@ -323,8 +321,8 @@ std::vector<Diagnosis> diagnose_cars(const std::vector<scene_schema::Entity>& en
             if (area > options.max_footprint_area_m2) {
                 d.kind = "too-large";
                 d.reason = e.id + " holds " + pct(best_share) + " of its points but its grown " +
-                           "footprint is " + num(area, 1) + " m2 (> " +
-                           num(options.max_footprint_area_m2, 0) + ")" + where;
+                           "footprint is " + fixed_text(area, 1) + " m2 (> " +
+                           fixed_text(options.max_footprint_area_m2, 0) + ")" + where;
             } else if (m >= 0 && best_share >= options.min_inside_fraction) {
                 d.kind = "merged";
                 d.reason = "merged with " + gt_name(ev.matches[static_cast<std::size_t>(m)].gt) +
@@ -371,7 +369,8 @@ std::vector<Diagnosis> diagnose_cars(const std::vector<scene_schema::Entity>& en
                 ")";
         } else {
             d.kind = "phantom";
-            d.reason = "phantom at " + num(std::hypot(e.x, e.z), 1) + " m, no GT car point inside";
+            d.reason =
+                "phantom at " + fixed_text(std::hypot(e.x, e.z), 1) + " m, no GT car point inside";
             if (image && camera) {
                 const auto rect = projected_box_px(e, *camera, image->width_px, image->height_px);
                 if (rect) d.reason += "; its image box shows " + classes_in_rect(*image, *rect);

@@ -6,15 +6,12 @@
 #include <sstream>
 
 #include "cloud_analysis/evaluation/diagnosis.hpp"
+#include "stereoscene/support/number_text.hpp"
 
 namespace cloud_analysis {
 namespace {
 
-std::string fixed(double v, int decimals) {
-    char buf[64];
-    std::snprintf(buf, sizeof buf, "%.*f", decimals, v);
-    return buf;
-}
+using stereoscene::support::fixed_text;
 
 /// Median absolute size errors along W, H, L, metres.
 std::array<double, 3> median_abs_size_errors(const ClassBinScore& s) {
@@ -89,8 +86,9 @@ nlohmann::json class_scores(const EntityComparison& c, const EntityEvaluation& e
     const auto& o = ev.options;
     table << "entities " << c.entities_file << " vs reference " << c.reference_file << "\n"
           << "  matching: same class, greedy by bird's-eye centre distance <= "
-          << fixed(o.max_match_distance_m, 2) << " m; range <= " << fixed(o.max_range_m, 0)
-          << " m; good = BEV IoU >= " << fixed(o.iou_threshold, 2) << "\n"
+          << fixed_text(o.max_match_distance_m, 2)
+          << " m; range <= " << fixed_text(o.max_range_m, 0)
+          << " m; good = BEV IoU >= " << fixed_text(o.iou_threshold, 2) << "\n"
           << "  class        bin     ref  est  hit miss spur recall  prec. centre_m head_deg "
              "bev   3d   good      |dW|  |dH|  |dL|\n";
     nlohmann::json classes = nlohmann::json::object();
@@ -150,11 +148,11 @@ void not_scored_lines(const EntityComparison& c, const nlohmann::json& not_score
     if (c.min_visible_pixels > 0) table << "< " << c.min_visible_pixels << " visible px";
     if (c.min_visible_pixels > 0 && c.min_visible_fraction > 0.0) table << " or ";
     if (c.min_visible_fraction > 0.0)
-        table << "visible fraction < " << fixed(c.min_visible_fraction, 2);
+        table << "visible fraction < " << fixed_text(c.min_visible_fraction, 2);
     table << "): " << not_scored.dump() << "\n";
     table << "  unfiltered (every reference scored): " << bars.class_name << " within "
-          << fixed(bars.max_range_m, 0) << " m recall " << all.matched << "/" << all.reference
-          << " = " << fixed(all.recall(), 3) << ", BEV IoU >= " << fixed(iou_threshold, 2)
+          << fixed_text(bars.max_range_m, 0) << " m recall " << all.matched << "/" << all.reference
+          << " = " << fixed_text(all.recall(), 3) << ", BEV IoU >= " << fixed_text(iou_threshold, 2)
           << " for " << all.good_iou << "/" << all.reference << "\n";
 }
 
@@ -163,12 +161,12 @@ void report_bars(const EntityEvaluation& ev, const EvalBars& bars, std::ostream&
                  EvaluationReport& report) {
     report.missed_bars = check_bars(ev, bars);
     const ClassBinScore s = ev.within(bars.class_name, bars.max_range_m);
-    table << "  bars (" << bars.class_name << " within " << fixed(bars.max_range_m, 0)
-          << " m): recall " << fixed(s.recall(), 3) << ", spurious " << s.spurious
+    table << "  bars (" << bars.class_name << " within " << fixed_text(bars.max_range_m, 0)
+          << " m): recall " << fixed_text(s.recall(), 3) << ", spurious " << s.spurious
           << ", stuff on things " << ev.stuff_on_things(bars.max_range_m)
-          << ", median centre error " << fixed(median(s.centre_errors_m), 3)
-          << " m, median heading error " << fixed(median(s.heading_errors_deg), 2)
-          << " deg, BEV IoU >= " << fixed(ev.options.iou_threshold, 2) << " for " << s.good_iou
+          << ", median centre error " << fixed_text(median(s.centre_errors_m), 3)
+          << " m, median heading error " << fixed_text(median(s.heading_errors_deg), 2)
+          << " deg, BEV IoU >= " << fixed_text(ev.options.iou_threshold, 2) << " for " << s.good_iou
           << "/" << s.reference << ": " << (report.missed_bars.empty() ? "PASS" : "FAIL") << "\n";
     report.json["bars"] = {{"class", bars.class_name},
                            {"max_range_m", bars.max_range_m},
@@ -217,11 +215,11 @@ nlohmann::json car_rows(const std::vector<scene_schema::Entity>& entities,
         char line[200];
         std::snprintf(line, sizeof line, "  %7d %8zu %8zu %8s  %-14s %4s %7s %7s %14s%s\n",
                       car.instance, car.pixel_count, car.occluder_pixel_count,
-                      no_points ? "-" : fixed(car.range_m(), 1).c_str(),
+                      no_points ? "-" : fixed_text(car.range_m(), 1).c_str(),
                       match ? entities[match->entity].id.c_str() : "-", match ? rule : "-",
-                      match && !no_points ? fixed(match->inside_fraction, 2).c_str() : "-",
-                      match && match->fallback ? fixed(match->iou_2d, 2).c_str() : "-",
-                      match && !no_points ? fixed(match->centre_distance_m, 2).c_str() : "-",
+                      match && !no_points ? fixed_text(match->inside_fraction, 2).c_str() : "-",
+                      match && match->fallback ? fixed_text(match->iou_2d, 2).c_str() : "-",
+                      match && !no_points ? fixed_text(match->centre_distance_m, 2).c_str() : "-",
                       owed ? "" : "  (not owed)");
         table << line;
     }
@@ -236,9 +234,10 @@ void report_disparity(const DisparityScore& s, const std::string& file, Evaluati
         {"d1_all", s.d1_all},  {"d1_valid", s.d1_valid},   {"epe_px", s.epe_px},
         {"density", s.density}};
     std::ostringstream table;
-    table << "disparity   D1-all " << fixed(100.0 * s.d1_all, 2) << " %   D1-valid "
-          << fixed(100.0 * s.d1_valid, 2) << " %   EPE " << fixed(s.epe_px, 3) << " px   density "
-          << fixed(100.0 * s.density, 1) << " %   (" << s.gt_pixels << " GT px)\n";
+    table << "disparity   D1-all " << fixed_text(100.0 * s.d1_all, 2) << " %   D1-valid "
+          << fixed_text(100.0 * s.d1_valid, 2) << " %   EPE " << fixed_text(s.epe_px, 3)
+          << " px   density " << fixed_text(100.0 * s.density, 1) << " %   (" << s.gt_pixels
+          << " GT px)\n";
     report.table += table.str();
 }
 
@@ -294,28 +293,28 @@ void report_cars(const std::string& entities_file,
     const CarEvaluation ev = evaluate_cars(entities, gt, options, fallback_camera);
     const bool with_fallback = fallback_camera != nullptr;
     std::ostringstream table;
-    table << "cars within " << fixed(options.max_range_m, 0)
+    table << "cars within " << fixed_text(options.max_range_m, 0)
           << " m (GT owed: >= " << options.min_gt_pixels
           << " GT disparity px of the car's own surface; occluder gap "
-          << fixed(gt_options.occluder_gap_m, 2) << " m)\n";
+          << fixed_text(gt_options.occluder_gap_m, 2) << " m)\n";
     table << "  GT inst   pixels occluder  range_m  matched_entity  rule  inside  iou_2d  "
              "centre_dist_m\n";
     const nlohmann::json cars = car_rows(entities, gt, ev, options, table);
     table << "  recall    " << ev.gt_owed_matched << "/" << ev.gt_owed << " = "
-          << fixed(100.0 * ev.recall(), 1) << " %\n";
+          << fixed_text(100.0 * ev.recall(), 1) << " %\n";
     table << "  precision " << ev.entities_matched << "/" << ev.entities_in_range << " = "
-          << fixed(100.0 * ev.precision(), 1) << " %   (scorable: " << ev.entities_matched << "/"
-          << ev.entities_in_range - ev.entities_unscorable << " = "
-          << fixed(100.0 * ev.precision_scorable(), 1) << " %; " << ev.entities_unscorable
+          << fixed_text(100.0 * ev.precision(), 1) << " %   (scorable: " << ev.entities_matched
+          << "/" << ev.entities_in_range - ev.entities_unscorable << " = "
+          << fixed_text(100.0 * ev.precision_scorable(), 1) << " %; " << ev.entities_unscorable
           << " entities lie on GT cars without GT points)\n";
     if (with_fallback) {
         table << "  matched by the 2D fallback (GT cars with <= " << options.fallback_max_points
-              << " GT points, IoU >= " << fixed(options.fallback_min_iou, 2)
+              << " GT points, IoU >= " << fixed_text(options.fallback_min_iou, 2)
               << "): " << ev.fallback_matched << " of " << ev.entities_matched << "\n";
     } else {
         table << "  2D fallback off\n";
     }
-    table << "  mean centre distance " << fixed(ev.mean_centre_distance_m(), 2)
+    table << "  mean centre distance " << fixed_text(ev.mean_centre_distance_m(), 2)
           << " m (entity centre to GT visible-point centroid, bird's-eye)\n";
     const nlohmann::json why =
         diagnosis_lines(diagnose_cars(entities, gt, ev, options, image, camera), table);
@@ -346,7 +345,7 @@ void report_ground_plane(const scene_schema::EntityDocument& doc, EvaluationRepo
     if (!doc.extra.contains("ground_plane")) return;
     const double h = doc.extra["ground_plane"].value("camera_height_m", 0.0);
     report.json["ground_plane"] = doc.extra["ground_plane"];
-    report.table += "ground plane: camera " + fixed(h, 3) + " m above it\n";
+    report.table += "ground plane: camera " + fixed_text(h, 3) + " m above it\n";
 }
 
 }  // namespace cloud_analysis

@@ -2,15 +2,18 @@
 
 #include <algorithm>
 #include <cmath>
-#include <cstdio>
 #include <limits>
 #include <stdexcept>
 
 #include <opencv2/core.hpp>
 #include <opencv2/imgproc.hpp>
 
+#include "stereoscene/support/number_text.hpp"
+
 namespace cloud_analysis {
 namespace {
+
+using stereoscene::support::fixed_text;
 
 /// The disparity range may stop this share short of the minimum depth (a range is a multiple
 /// of 16 disparities).
@@ -29,12 +32,6 @@ int scaled_length(int px, double scale) {
 int scaled_count(int count, double scale) {
     if (count <= 0) return count;
     return std::max(1, static_cast<int>(std::lround(count * scale * scale)));
-}
-
-std::string metres_text(double m) {
-    char buf[32];
-    std::snprintf(buf, sizeof(buf), "%.1f m", m);
-    return buf;
 }
 
 /// Labels (or ids) halved by the top-left pixel of each 2x2 block: no blending of classes.
@@ -139,10 +136,10 @@ RigFit fit_to_rig(const AnalyseOptions& analyse, const ExtractOptions& extract,
         const int needed = static_cast<int>(std::ceil(disparity_at_depth(camera, reach_m))) + 1;
         fit.warnings.push_back(
             std::to_string(d.num_disparities) + " disparities reach " +
-            metres_text(fit.nearest_depth_m) + " on this rig (fx B = " +
+            fixed_text(fit.nearest_depth_m, 1) + " m on this rig (fx B = " +
             std::to_string(static_cast<int>(std::lround(camera.fx_px * camera.baseline_m))) +
             " px m): nearer surfaces cannot be matched; --min-depth " +
-            metres_text(rig.min_depth_m) + " needs about " + std::to_string(needed) +
+            fixed_text(rig.min_depth_m, 1) + " m needs about " + std::to_string(needed) +
             (fit.range_from_min_depth ? ", more than the matcher takes" : " (--num-disparities)"));
     }
 
