@@ -15,6 +15,7 @@
 #include <opencv2/imgcodecs.hpp>
 #include <opencv2/imgproc.hpp>
 
+#include "cloud_analysis/io/mat_view.hpp"
 #include "stereoscene/support/file_read.hpp"
 #include "stereoscene/support/limits.hpp"
 
@@ -197,8 +198,7 @@ std::string encode_png(const ImageU8& image) {
     if (image.channels != 1 && image.channels != 3) {
         throw std::invalid_argument("encode_png: image must have 1 or 3 channels");
     }
-    const cv::Mat wrap(image.height_px, image.width_px, CV_8UC(image.channels),
-                       const_cast<std::uint8_t*>(image.data.data()));
+    const cv::Mat wrap = mat_view(image);
     if (image.channels == 1) return encode(wrap);
     cv::Mat bgr;
     cv::cvtColor(wrap, bgr, cv::COLOR_RGB2BGR);

@@ -14,12 +14,13 @@
 #include <opencv2/imgproc.hpp>
 #include <opencv2/video/tracking.hpp>
 
+#include "cloud_analysis/io/mat_view.hpp"
+
 namespace cloud_analysis::odometry {
 namespace {
 
 cv::Mat grey_of(const ImageU8& image) {
-    const cv::Mat wrap(image.height_px, image.width_px, CV_8UC(image.channels),
-                       const_cast<std::uint8_t*>(image.data.data()));
+    const cv::Mat wrap = mat_view(image);
     if (image.channels == 1) return wrap;
     cv::Mat grey;
     cv::cvtColor(wrap, grey, cv::COLOR_RGB2GRAY);

@@ -8,6 +8,7 @@
 #include <opencv2/core.hpp>
 #include <opencv2/imgproc.hpp>
 
+#include "cloud_analysis/io/mat_view.hpp"
 #include "stereoscene/support/number_text.hpp"
 
 namespace cloud_analysis {
@@ -55,8 +56,7 @@ ImageU8 halve_by_area(const ImageU8& img) {
     out.height_px = img.height_px / 2;
     out.channels = img.channels;
     out.data.resize(static_cast<std::size_t>(out.width_px) * out.height_px * out.channels);
-    const cv::Mat src(img.height_px, img.width_px, CV_8UC(img.channels),
-                      const_cast<std::uint8_t*>(img.data.data()));
+    const cv::Mat src = mat_view(img);
     cv::Mat dst(out.height_px, out.width_px, CV_8UC(out.channels), out.data.data());
     cv::resize(src(cv::Rect(0, 0, 2 * out.width_px, 2 * out.height_px)), dst, dst.size(), 0, 0,
                cv::INTER_AREA);

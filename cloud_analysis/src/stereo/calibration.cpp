@@ -10,6 +10,7 @@
 #include <opencv2/core.hpp>
 #include <opencv2/imgproc.hpp>
 
+#include "cloud_analysis/io/mat_view.hpp"
 #include "scene_schema/entities.hpp"
 #include "scene_schema/json_text.hpp"
 #include "stereoscene/support/atomic_file.hpp"
@@ -366,8 +367,7 @@ ImageU8 rectify_image(const ImageU8& raw, const RawCamera& rc, const StereoCamer
     const cv::Mat D(rc.distortion, true);
     cv::Mat map_x, map_y;
     cv::initUndistortRectifyMap(K, D, R, P, cv::Size(width, height), CV_32FC1, map_x, map_y);
-    const cv::Mat src(raw.height_px, raw.width_px, CV_8UC(raw.channels),
-                      const_cast<std::uint8_t*>(raw.data.data()));
+    const cv::Mat src = mat_view(raw);
     ImageU8 out;
     out.width_px = width;
     out.height_px = height;

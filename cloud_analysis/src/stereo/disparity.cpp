@@ -10,6 +10,8 @@
 #include <opencv2/imgproc.hpp>
 #include <opencv2/ximgproc/disparity_filter.hpp>
 
+#include "cloud_analysis/io/mat_view.hpp"
+
 namespace cloud_analysis {
 namespace {
 
@@ -23,11 +25,6 @@ int sgbm_mode(const std::string& mode) {
     if (mode == "sgbm_3way") return cv::StereoSGBM::MODE_SGBM_3WAY;
     if (mode == "hh4") return cv::StereoSGBM::MODE_HH4;
     bad("mode", "must be sgbm, hh, sgbm_3way or hh4");
-}
-
-cv::Mat wrap(const ImageU8& img) {
-    return cv::Mat(img.height_px, img.width_px, CV_8UC(img.channels),
-                   const_cast<std::uint8_t*>(img.data.data()));
 }
 
 }  // namespace
@@ -192,7 +189,7 @@ struct DisparityMatcher::Impl {
 
     /// Converts (grey) and scales `img` into `dst`, a view of the padded buffer.
     void fill(const ImageU8& img, bool to_grey, cv::Mat dst) {
-        const cv::Mat src = wrap(img);
+        const cv::Mat src = mat_view(img);
         if (options.downscale == 1) {
             if (to_grey) {
                 cv::cvtColor(src, dst, cv::COLOR_RGB2GRAY);
