@@ -146,10 +146,10 @@ std::vector<PendingOutput> format_outputs(const LoadedRun& run,
     std::vector<PendingOutput> outputs;
     auto t = Clock::now();
     if (!a.entities.empty()) {
-        outputs.push_back(
-            {a.entities,
-             cloud_analysis::entity_json(in, r, run.fit.extract, run_settings(a, run.fit, in)),
-             "--entities"});
+        outputs.push_back({a.entities,
+                           cloud_analysis::entity_json(in, r, run.fit.extract,
+                                                       run.fit.run_settings(run_settings(a), in)),
+                           "--entities"});
         timings.push_back({"entities", ms_since(t)});
     }
     const std::vector<std::pair<std::filesystem::path, const char*>> clouds = {
@@ -248,7 +248,7 @@ RunReport analyse_loaded_and_write(const LoadedRun& run, const AnalyseArgs& a,
     }
     const bool any_cloud = !a.xyz.empty() || !a.pcd.empty() || !a.ply.empty();
     cloud_analysis::AnalyseResult r =
-        cloud_analysis::analyse(in, options_for_outputs(run.fit, in.palette, any_cloud), matcher);
+        cloud_analysis::analyse(in, run.fit.run_options(in.palette, any_cloud), matcher);
     timings.insert(timings.end(), r.timings.begin(), r.timings.end());
     report_analysis(run, r, a);
     const std::vector<PendingOutput> outputs = format_outputs(run, r, a, timings);

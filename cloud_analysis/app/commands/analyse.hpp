@@ -10,6 +10,7 @@
 
 #include "analysis_flags.hpp"
 #include "cloud_analysis/io/io.hpp"
+#include "cloud_analysis/pipeline/rig_fit.hpp"
 #include "cloud_analysis/stereo/disparity.hpp"
 
 namespace cloud_analysis::app {

@@ -1,7 +1,6 @@
 #include "analysis_flags.hpp"
 
 #include <algorithm>
-#include <set>
 #include <stdexcept>
 #include <string>
 
@@ -9,7 +8,6 @@
 #include "cloud_analysis/cloud/semantic.hpp"
 #include "cloud_analysis/entities/class_config.hpp"
 #include "cloud_analysis/io/io.hpp"
-#include "cloud_analysis/pipeline/rig_fit.hpp"
 #include "cloud_analysis/stereo/disparity.hpp"
 
 namespace cloud_analysis::app {
@@ -325,18 +323,12 @@ void resolve_settings(AnalyseArgs& a, const CLI::App& cmd) {
             d.pad_left = preset.pad_left;
         }
     }
-    // Settings the user gave are kept as given when the analysis is fitted to the rig.
+    // A range the user gave is kept as given when the analysis is fitted to the rig (the
+    // scaled pixel settings have no flags).
     auto& rig = a.options.rig;
     rig.scale_pixel_settings = !a.no_rig_scaling;
     rig.given.clear();
-    std::set<std::string> fields = cloud_analysis::rig_scaled_fields();
-    fields.insert("num_disparities");
-    for (const auto& field : fields) {
-        std::string flag = "--" + field;
-        std::replace(flag.begin(), flag.end(), '_', '-');
-        if (cmd.get_option_no_throw(flag) != nullptr && cmd.count(flag) > 0)
-            rig.given.insert(field);
-    }
+    if (cmd.count("--num-disparities") > 0) rig.given.insert("num_disparities");
     try {
         a.options.validate();
     } catch (const std::invalid_argument& e) {
@@ -390,25 +382,9 @@ cloud_analysis::ExtractOptions extract_options(const AnalyseArgs& a) {
     return extract;
 }
 
-cloud_analysis::AnalyseOptions options_for_outputs(const cloud_analysis::RigFit& fit,
-                                                   const cloud_analysis::Palette& palette,
-                                                   bool clouds) {
-    cloud_analysis::AnalyseOptions options = fit.analyse;
-    if (!clouds) options.class_points_only = cloud_analysis::class_selection(palette, fit.extract);
-    return options;
-}
-
 cloud_analysis::RunSettings run_settings(const AnalyseArgs& a) {
     return {a.options, a.class_config.empty() ? std::string("default") : a.class_config.string(),
             STEREOSCENE_VERSION, nullptr};
-}
-
-cloud_analysis::RunSettings run_settings(const AnalyseArgs& a, const cloud_analysis::RigFit& fit,
-                                         const cloud_analysis::LoadedInputs& inputs) {
-    cloud_analysis::RunSettings run = run_settings(a);
-    run.analyse = fit.analyse;
-    run.rig = fit.describe(inputs);
-    return run;
 }
 
 }  // namespace cloud_analysis::app

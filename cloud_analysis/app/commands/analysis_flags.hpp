@@ -15,7 +15,6 @@
 #include "cloud_analysis/entities/entity_document.hpp"
 #include "cloud_analysis/entities/extract.hpp"
 #include "cloud_analysis/pipeline/pipeline.hpp"
-#include "cloud_analysis/pipeline/rig_fit.hpp"
 
 namespace cloud_analysis::app {
 
@@ -61,18 +60,8 @@ stereoscene::support::FileSync cloud_sync(const AnalyseArgs& a);
 /// Extraction settings of the flags, with the class config read and validated.
 cloud_analysis::ExtractOptions extract_options(const AnalyseArgs& a);
 
-/// The analyse options for a run fitted to its rig: without cloud outputs, analyse builds no
-/// cloud and reprojects straight into the extractor's per-class points
-/// (AnalyseOptions::class_points_only).
-cloud_analysis::AnalyseOptions options_for_outputs(const cloud_analysis::RigFit& fit,
-                                                   const cloud_analysis::Palette& palette,
-                                                   bool clouds);
-
 /// What the entity file's source block records of the flags: the analysis settings, the class
 /// config ("default" for the bundled one) and the tool's version.
 cloud_analysis::RunSettings run_settings(const AnalyseArgs& a);
-/// The same for a run fitted to its rig: the fitted settings and the source.rig block.
-cloud_analysis::RunSettings run_settings(const AnalyseArgs& a, const cloud_analysis::RigFit& fit,
-                                         const cloud_analysis::LoadedInputs& inputs);
 
 }  // namespace cloud_analysis::app

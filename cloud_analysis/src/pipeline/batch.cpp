@@ -236,13 +236,8 @@ class FrameLoader {
         if (rig) return rig;
         auto made = std::make_shared<FittedRig>();
         made->fit = fit_to_rig(analyse_, options_.extract, c);
-        made->analysis = made->fit.analyse;
-        if (options_.cloud_formats.empty()) {
-            made->analysis.class_points_only = class_selection(palette_, made->fit.extract);
-        }
-        made->run = options_.run;
-        made->run.analyse = made->fit.analyse;
-        made->run.rig = made->fit.describe(in);
+        made->analysis = made->fit.run_options(palette_, !options_.cloud_formats.empty());
+        made->run = made->fit.run_settings(options_.run, in);
         rig = made;
         return rig;
     }

@@ -193,16 +193,15 @@ LoadedInputs load_inputs(const InputPaths& paths, const AnalyseOptions& options,
         pixels > options.rig.half_resolution_above_px) {
         halve_inputs(in);
     }
-    // A range from the rig's minimum depth is checked when it is fitted (fit_to_rig).
-    const bool fixed_range =
-        options.rig.min_depth_m <= 0.0 || options.rig.given.count("num_disparities") > 0;
-    if (fixed_range &&
-        in.left.width_px < options.disparity.num_disparities + options.disparity.block_size) {
-        throw std::runtime_error("image too narrow: " + std::to_string(in.left.width_px) +
-                                 " px for " + std::to_string(options.disparity.num_disparities) +
-                                 " disparities (--num-disparities)");
-    }
     return in;
+}
+
+void check_range_fits(int width_px, const DisparityOptions& d) {
+    if (width_px > 0 && width_px < d.num_disparities + d.block_size) {
+        throw std::runtime_error("image too narrow: " + std::to_string(width_px) + " px for " +
+                                 std::to_string(d.num_disparities) +
+                                 " disparities (--num-disparities, --min-depth)");
+    }
 }
 
 AnalyseResult analyse(const LoadedInputs& in, const AnalyseOptions& options) {
@@ -215,6 +214,7 @@ AnalyseResult analyse(const LoadedInputs& in, const AnalyseOptions& options,
     options.validate();
     AnalyseResult r;
     r.camera = in.calibration.camera;
+    check_range_fits(r.camera.width_px, matcher.options());
     Stopwatch watch(r.timings);
     const ImageU8* left = &in.left;
     const ImageU8* right = &in.right;

@@ -163,11 +163,7 @@ RigFit fit_to_rig(const AnalyseOptions& analyse, const ExtractOptions& extract,
             for (auto& c : e.classes.classes) c.min_points = scaled_count(c.min_points, s);
         }
     }
-    if (camera.width_px > 0 && camera.width_px < d.num_disparities + d.block_size) {
-        throw std::runtime_error("image too narrow: " + std::to_string(camera.width_px) +
-                                 " px for " + std::to_string(d.num_disparities) +
-                                 " disparities (--num-disparities, --min-depth)");
-    }
+    check_range_fits(camera.width_px, d);
     fit.analyse.validate();
     fit.extract.validate();
     return fit;
@@ -186,6 +182,18 @@ nlohmann::json RigFit::describe(const LoadedInputs& in) const {
     j["read_size"] = {in.read_width_px, in.read_height_px};
     j["analysed_size"] = {in.left.width_px, in.left.height_px};
     return j;
+}
+
+AnalyseOptions RigFit::run_options(const Palette& palette, bool clouds) const {
+    AnalyseOptions options = analyse;
+    if (!clouds) options.class_points_only = class_selection(palette, extract);
+    return options;
+}
+
+RunSettings RigFit::run_settings(RunSettings base, const LoadedInputs& inputs) const {
+    base.analyse = analyse;
+    base.rig = describe(inputs);
+    return base;
 }
 
 void halve_inputs(LoadedInputs& in) {

@@ -109,6 +109,10 @@ LoadedInputs load_inputs(const InputPaths& paths, const AnalyseOptions& options)
 LoadedInputs load_inputs(const InputPaths& paths, const AnalyseOptions& options,
                          const Calibration& calibration, const Palette& palette);
 
+/// Throws std::runtime_error "image too narrow" when a rectified image `width_px` wide (0 =
+/// unknown, not checked) cannot hold the range and window of `d`.
+void check_range_fits(int width_px, const DisparityOptions& d);
+
 /// Milliseconds spent in one stage.
 struct StageTiming {
     std::string stage;  ///< e.g. "disparity"

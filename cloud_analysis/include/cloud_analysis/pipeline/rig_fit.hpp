@@ -18,6 +18,7 @@
 #include <nlohmann/json.hpp>
 
 #include "cloud_analysis/cloud/types.hpp"
+#include "cloud_analysis/entities/entity_document.hpp"
 #include "cloud_analysis/entities/extract.hpp"
 #include "cloud_analysis/pipeline/pipeline.hpp"
 
@@ -37,6 +38,11 @@ struct RigFit {
     std::vector<std::string> warnings;  ///< one line each: a range short of the minimum depth
     /// The entity file's source.rig block: scale, range, nearest depth, resolution.
     nlohmann::json describe(const LoadedInputs& inputs) const;
+    /// The analyse options of a run: `analyse`, reprojecting straight into the extractor's
+    /// per-class points (AnalyseOptions::class_points_only) when no cloud is written.
+    AnalyseOptions run_options(const Palette& palette, bool clouds) const;
+    /// `base` with the fitted settings and the source.rig block of `inputs`.
+    RunSettings run_settings(RunSettings base, const LoadedInputs& inputs) const;
 };
 
 /// Disparity, px, of a point at `depth_m` on the optical axis (fx B / z less the principal
