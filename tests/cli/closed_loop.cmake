@@ -103,6 +103,23 @@ function(closed_loop_sensor_flags truth out)
     set(${out} "${_extra}" PARENT_SCOPE)
 endfunction()
 
+# Three tests for a scene file rendered at test time: scene-render sensors renders it into DIR
+# (frame 000000, seed 0, SENSORS and the scene's own sensor flags; fixture FIXTURE_render), then
+# closed_loop_frame_tests reconstructs and scores it.
+function(closed_loop_rendered_tests name)
+    cmake_parse_arguments(R "" "TRUTH;DIR;ENTITIES;EVAL_JSON;FIXTURE;RANGE" "BARS;SENSORS"
+        ${ARGN})
+    closed_loop_sensor_flags(${R_TRUTH} _extra)
+    add_test(NAME "closed loop ${name}: scene-render sensors renders the stereo frame"
+        COMMAND $<TARGET_FILE:scene-render> sensors ${R_TRUTH} --out ${R_DIR} --frame 000000
+            --seed 0 ${R_SENSORS} ${_extra})
+    set_tests_properties("closed loop ${name}: scene-render sensors renders the stereo frame"
+        PROPERTIES FIXTURES_SETUP "${R_FIXTURE}_render" LABELS closed_loop)
+    closed_loop_frame_tests("${name}" DIR ${R_DIR} FRAME 000000 TRUTH ${R_TRUTH}
+        ENTITIES ${R_ENTITIES} EVAL_JSON ${R_EVAL_JSON} FIXTURE ${R_FIXTURE}
+        REQUIRES "${R_FIXTURE}_render" RANGE ${R_RANGE} BARS ${R_BARS})
+endfunction()
+
 # Two tests for one rendered frame: cloud-analysis reconstructs it into ENTITIES (fixture
 # FIXTURE, itself needing REQUIRES when given), then evaluate scores ENTITIES against TRUTH with
 # BARS and the visibility rule, writing EVAL_JSON. RANGE (30 by default) names the bars' range.
@@ -196,16 +213,9 @@ if(TARGET scene-render)
         else()
             set(_bars ${STEREOSCENE_CLOSED_LOOP_BARS})
         endif()
-        closed_loop_sensor_flags(${_truth} _extra)
-        add_test(NAME "closed loop ${_name}: scene-render sensors renders the stereo frame"
-            COMMAND $<TARGET_FILE:scene-render> sensors ${_truth} --out ${_dir} --frame 000000
-                --seed 0 ${_extra})
-        set_tests_properties("closed loop ${_name}: scene-render sensors renders the stereo frame"
-            PROPERTIES FIXTURES_SETUP "closed_loop_full_${_scene}_render" LABELS closed_loop)
-        closed_loop_frame_tests("${_name}" DIR ${_dir} FRAME 000000 TRUTH ${_truth}
+        closed_loop_rendered_tests("${_name}" TRUTH ${_truth} DIR ${_dir}
             ENTITIES ${_entities} EVAL_JSON ${_loop_out}/full-${_scene}-eval.json
-            FIXTURE "closed_loop_full_${_scene}" REQUIRES "closed_loop_full_${_scene}_render"
-            BARS ${_bars})
+            FIXTURE "closed_loop_full_${_scene}" BARS ${_bars})
     endforeach()
 endif()
 if(NOT STEREOSCENE_CLOSED_LOOP_SCENES)
@@ -290,20 +300,11 @@ if(TARGET scene-render)
             endif()
             set(_dir ${_loop_out}/${_rig}/${_scene})
             set(_name "${_scene} through the ${_rig} rig")
-            closed_loop_sensor_flags(${_truth} _extra)
-            add_test(NAME "closed loop ${_name}: scene-render sensors renders the stereo frame"
-                COMMAND $<TARGET_FILE:scene-render> sensors ${_truth} --out ${_dir} --frame 000000
-                    --seed 0 --preset ${_rig} ${_extra})
-            set_tests_properties(
-                "closed loop ${_name}: scene-render sensors renders the stereo frame"
-                PROPERTIES FIXTURES_SETUP "closed_loop_${_rig}_${_scene}_render"
-                LABELS closed_loop)
-            closed_loop_frame_tests("${_name}" DIR ${_dir} FRAME 000000 TRUTH ${_truth}
+            closed_loop_rendered_tests("${_name}" TRUTH ${_truth} DIR ${_dir}
                 ENTITIES ${_loop_out}/${_rig}-${_scene}.json
                 EVAL_JSON ${_loop_out}/${_rig}-${_scene}-eval.json
-                FIXTURE "closed_loop_${_rig}_${_scene}"
-                REQUIRES "closed_loop_${_rig}_${_scene}_render" RANGE ${_range}
-                BARS ${STEREOSCENE_RIG_LOOP_BARS} --bar-range ${_range})
+                FIXTURE "closed_loop_${_rig}_${_scene}" RANGE ${_range}
+                SENSORS --preset ${_rig} BARS ${STEREOSCENE_RIG_LOOP_BARS} --bar-range ${_range})
         endforeach()
     endforeach()
 endif()
