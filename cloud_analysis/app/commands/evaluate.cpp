@@ -18,6 +18,7 @@
 #include "cloud_analysis/io/io.hpp"
 #include "cloud_analysis/stereo/calibration.hpp"
 #include "cloud_analysis/stereo/disparity.hpp"
+#include "evaluate_labels_2d.hpp"
 #include "output.hpp"
 
 namespace cloud_analysis::app {
@@ -106,6 +107,8 @@ ResolvedPaths resolve_kitti_mode(const EvaluateArgs& args, ResolvedPaths p) {
 
 ResolvedPaths resolve(const EvaluateArgs& args) {
     ResolvedPaths p{args.gt_disparity, args.instance, args.calib, args.visibility};
+    check_labels_2d_flags(args);
+    if (!args.labels_2d.empty()) return p;
     if (!args.reference.empty() && !args.labels.empty()) {
         throw CLI::ValidationError("--reference/--labels", "give one reference, not both");
     }
@@ -238,7 +241,8 @@ CLI::App* add_evaluate_command(CLI::App& app, EvaluateArgs& args) {
         "evaluate",
         "Score a run against KITTI ground truth: disparity (D1-all, EPE, density) and "
         "car entities (footprint matching, recall and precision within range)");
-    sub->add_option("--entities", args.entities, "Entity JSON file to score (car entities)");
+    sub->add_option("--entities", args.entities,
+                    "Entity JSON file to score (with --labels-2d also a batch folder of them)");
     sub->add_option("--disparity", args.disparity, "Our disparity, KITTI 16-bit PNG");
     sub->add_option("--kitti-root", args.kitti_root,
                     "KITTI folder (disp_occ_0/, instance/, calib/calib_cam_to_cam.txt)");
@@ -252,6 +256,7 @@ CLI::App* add_evaluate_command(CLI::App& app, EvaluateArgs& args) {
     add_car_flags(sub, args);
     add_entity_flags(sub, args);
     add_bar_flags(sub, args);
+    add_labels_2d_flags(sub, args);
     sub->footer(
         "Exit codes: 0 ok, 1 failure, 2 usage error, 3 a bar was missed (one stderr line "
         "each).");
@@ -336,7 +341,9 @@ int run_evaluate(const EvaluateArgs& args) {
     EvaluationReport report;
     if (!args.frame.empty()) report.json["frame"] = args.frame;
     if (!args.disparity.empty()) evaluate_disparity(args, paths, report);
-    if (entity_mode(args)) {
+    if (!args.labels_2d.empty()) {
+        evaluate_labels_2d(args, report);
+    } else if (entity_mode(args)) {
         report_entities(read_comparison(args, paths), args.entity_eval, args.bars, report);
     } else if (!args.entities.empty()) {
         evaluate_car_entities(args, paths, report);

@@ -2,8 +2,8 @@
 
 /// `cloud-analysis evaluate`: scores a run against KITTI-style ground truth (disparity vs
 /// disp_occ_0; car entities vs the instance images' cars) or entity-to-entity against a
-/// reference entity file / KITTI label_2 file, with optional pass bars (exit 3 when one is
-/// missed), and prints a table (cloud_analysis/evaluation/report.hpp).
+/// reference entity file / KITTI label_2 file, or in the image against 2D boxes, with optional pass
+/// bars (exit 3 when one is missed), and prints a table (cloud_analysis/evaluation/report.hpp).
 
 #include <filesystem>
 #include <string>
@@ -11,6 +11,7 @@
 #include <CLI/CLI.hpp>
 
 #include "cloud_analysis/evaluation/entity_eval.hpp"
+#include "cloud_analysis/evaluation/labels_2d.hpp"
 
 namespace cloud_analysis::app {
 
@@ -36,6 +37,9 @@ struct EvaluateArgs {
     std::filesystem::path visibility;   ///< --visibility: overrides <root>/visibility/<frame>.json
     cloud_analysis::EntityEvalOptions entity_eval;  ///< --match-distance, --eval-range, ...
     cloud_analysis::EvalBars bars;                  ///< --require-recall, ... (exit 3)
+    std::filesystem::path labels_2d;          ///< --labels-2d: 2D boxes (JSON or KITTI label_2)
+    cloud_analysis::Match2dOptions match_2d;  ///< --min-iou-2d, --min-box-height, ...
+    double max_false_per_frame = -1.0;        ///< --max-false-per-frame bar (2D labels)
 };
 
 /// Exit code of `evaluate` when the scores miss a bar (--require-recall, ...).

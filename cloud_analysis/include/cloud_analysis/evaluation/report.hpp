@@ -14,6 +14,7 @@
 #include "cloud_analysis/evaluation/diagnosis.hpp"
 #include "cloud_analysis/evaluation/entity_eval.hpp"
 #include "cloud_analysis/evaluation/evaluate.hpp"
+#include "cloud_analysis/evaluation/labels_2d.hpp"
 #include "cloud_analysis/stereo/disparity.hpp"
 
 namespace cloud_analysis {
@@ -61,5 +62,27 @@ void report_cars(const std::string& entities_file,
 /// The ground plane an entity file reports (extra["ground_plane"]), when it has one:
 /// json["ground_plane"] and one line.
 void report_ground_plane(const scene_schema::EntityDocument& doc, EvaluationReport& report);
+
+/// Entity files scored against 2D labels, frame by frame (score_frame_2d).
+struct Labels2dComparison {
+    std::string labels_file;                                  ///< the labels read
+    std::string entities_source;                              ///< entity file or folder scored
+    std::vector<FrameLabels2d> labels;                        ///< per scored frame
+    std::vector<std::vector<scene_schema::Entity>> estimate;  ///< per scored frame
+    std::vector<FrameScore2d> scores;                         ///< per scored frame
+};
+
+/// Pass bars of the 2D scores (off when negative).
+struct Labels2dBars {
+    Category2d category = Category2d::vehicle;  ///< category the bars apply to
+    double require_recall = -1.0;               ///< least recall of owed labels, [0, 1]
+    double max_false_per_frame = -1.0;          ///< most false entities a frame, on average
+    bool any() const { return require_recall >= 0.0 || max_false_per_frame >= 0.0; }
+};
+
+/// 2D scores: json["labels_2d"] (totals per category, then each frame's false entities and
+/// missed labels), the table and the missed bars.
+void report_labels_2d(const Labels2dComparison& comparison, const Match2dOptions& options,
+                      const Labels2dBars& bars, EvaluationReport& report);
 
 }  // namespace cloud_analysis
