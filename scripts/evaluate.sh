@@ -189,6 +189,10 @@ for title, paths in tables:
           f"BEV IoU >= 0.5 for {t['good']} of {t['ref']} ({t['good'] / max(t['ref'], 1):.2f})")
 PY
 
+# The real drive against the hand-drawn 2D boxes (skipped without ../shared/data).
+"$STEREOSCENE_ROOT/scripts/evaluate-real-drive.sh" --no-build --build-dir "$build_dir" \
+    --out "$out_dir/real-drive"
+
 if [ ! -d "$kitti_root/disp_occ_0" ] || [ ! -d "$kitti_root/instance" ]; then
     echo "evaluate.sh: no KITTI data at $kitti_root (needs image_2 image_3 semantic_rgb disp_occ_0 instance calib); KITTI checks skipped" >&2
     exit 0

@@ -259,6 +259,32 @@ add_test(NAME "the exported labels read back as the reference give every car wit
 set_tests_properties(
     "the exported labels read back as the reference give every car with IoU 0.99"
     PROPERTIES FIXTURES_REQUIRED closed_loop_export)
+add_test(NAME "evaluate --labels-2d finds every exported 2D box and nothing false"
+    COMMAND $<TARGET_FILE:cloud-analysis> evaluate --entities ${_syn}/truth.json
+        --labels-2d ${_loop_out}/truth_label_2.txt --min-box-height 0 --require-recall 1.0
+        --max-false-per-frame 0)
+set_tests_properties("evaluate --labels-2d finds every exported 2D box and nothing false"
+    PROPERTIES FIXTURES_REQUIRED closed_loop_export)
+closed_loop_cli_test("evaluate --labels-2d exits 3 naming the false-entity bar when boxes miss"
+    ARGS evaluate --entities ${_syn}/truth.json --labels-2d ${_loop_out}/truth_label_2.txt
+        --min-iou-2d 1.0 --max-false-per-frame 0
+    CODE 3 STDERR "bar missed: vehicle false per frame 2.00 > 0.00 .--max-false-per-frame.")
+set_tests_properties("evaluate --labels-2d exits 3 naming the false-entity bar when boxes miss"
+    PROPERTIES FIXTURES_REQUIRED closed_loop_export)
+closed_loop_cli_test("evaluate --labels-2d refuses a file that is not JSON naming it"
+    ARGS evaluate --entities ${_syn}/truth.json --labels-2d ${_syn}/calib.yaml
+    CODE 1 STDERR "calib.yaml: cannot read 2D labels: not JSON")
+closed_loop_cli_test("evaluate --labels-2d without --entities is a usage error"
+    ARGS evaluate --labels-2d ${PROJECT_SOURCE_DIR}/samples/labels-2d/kitti_odometry_02.json
+    CODE 2 STDERR "--entities: required with --labels-2d")
+closed_loop_cli_test("evaluate --labels-2d with a 3D reference is a usage error"
+    ARGS evaluate --entities ${_syn}/truth.json --reference ${_syn}/truth.json
+        --labels-2d ${PROJECT_SOURCE_DIR}/samples/labels-2d/kitti_odometry_02.json
+    CODE 2 STDERR "not with --reference")
+closed_loop_cli_test("evaluate --labels-2d refuses an entity file of a frame not labelled"
+    ARGS evaluate --entities ${_syn}/truth.json
+        --labels-2d ${PROJECT_SOURCE_DIR}/samples/labels-2d/kitti_odometry_02.json
+    CODE 1 STDERR "kitti_odometry_02.json: cannot evaluate: frame .synthetic-street. is not labelled")
 closed_loop_cli_test("evaluate --min-visible-pixels without an instance image is a usage error"
     ARGS evaluate --entities ${_syn}/truth.json --reference ${_syn}/truth.json
         --min-visible-pixels 100

@@ -149,7 +149,7 @@ Labels2d parse_labels_2d(std::string_view text, const std::string& origin) {
     try {
         j = nlohmann::json::parse(text);
     } catch (const nlohmann::json::parse_error& e) {
-        fail(std::string("not JSON: ") + e.what(), origin);
+        fail("not JSON (syntax error at byte " + std::to_string(e.byte) + ")", origin);
     }
     if (!j.is_object() || !j.contains("frames") || !j["frames"].is_array()) {
         fail("needs a \"frames\" list", origin);
