@@ -119,10 +119,12 @@ def main(argv):
     schema = json.loads(schema_path.read_text())
 
     good = sorted(pathlib.Path(data_dir, "good").glob("*.json"))
-    # Entity files only: scene-render sensors' visibility/ records and sequence indexes
-    # (sequence.json, checked against sequence.schema.json below) are other formats.
+    # Entity files only: scene-render sensors' visibility/ records, sequence indexes
+    # (sequence.json, checked against sequence.schema.json below) and 2D labels (labels-2d/)
+    # are other formats.
     good += sorted(p for p in samples_dir.rglob("*.json")
-                   if p.parent.name != "visibility" and p.name != "sequence.json")
+                   if p.parent.name not in ("visibility", "labels-2d")
+                   and p.name != "sequence.json")
     expected = json.loads(pathlib.Path(data_dir, "broken_expected.json").read_text())
     broken = sorted(pathlib.Path(data_dir, "broken").glob("*.json"))
 

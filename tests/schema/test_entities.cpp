@@ -25,13 +25,14 @@ std::string slurp(const fs::path& path) {
     return out.str();
 }
 
-/// Entity files under root: every .json except scene-render sensors' visibility/ records and
-/// sequence indexes (sequence.json, tests/schema/test_sequence.cpp).
+/// Entity files under root: every .json except scene-render sensors' visibility/ records,
+/// sequence indexes (sequence.json, tests/schema/test_sequence.cpp) and 2D labels (labels-2d/).
 std::vector<fs::path> json_files_under(const fs::path& root) {
     std::vector<fs::path> files;
     for (const auto& entry : fs::recursive_directory_iterator(root)) {
         if (entry.is_regular_file() && entry.path().extension() == ".json" &&
             entry.path().parent_path().filename() != "visibility" &&
+            entry.path().parent_path().filename() != "labels-2d" &&
             entry.path().filename() != "sequence.json") {
             files.push_back(entry.path());
         }
