@@ -6,7 +6,7 @@
 #include <sstream>
 #include <string>
 
-#include "scene_viewer/render/point_cloud.hpp"
+#include "scene_viewer/assets/point_cloud.hpp"
 
 extern "C" int LLVMFuzzerTestOneInput(const std::uint8_t* data, std::size_t size) {
     if (size == 0) return 0;

@@ -13,7 +13,7 @@
 #include <scene_viewer/assets/class_table.hpp>
 #include <scene_viewer/assets/gltf_loader.hpp>
 #include <scene_viewer/assets/image_io.hpp>
-#include <scene_viewer/render/palette.hpp>
+#include <scene_viewer/assets/palette.hpp>
 
 namespace fs = std::filesystem;
 using scene_viewer::load_model;

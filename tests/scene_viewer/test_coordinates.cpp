@@ -3,7 +3,7 @@
 #include <catch2/catch.hpp>
 #include <glm/glm.hpp>
 
-#include "scene_viewer/render/coordinates.hpp"
+#include "scene_viewer/ecs/coordinates.hpp"
 
 using namespace scene_viewer;
 

@@ -4,9 +4,9 @@
 #include <catch2/catch.hpp>
 #include <glm/glm.hpp>
 
+#include "scene_viewer/ecs/coordinates.hpp"
 #include "scene_viewer/ecs/world.hpp"
 #include "scene_viewer/gfx/null_device.hpp"
-#include "scene_viewer/render/coordinates.hpp"
 #include "scene_viewer/render/scene_renderer.hpp"
 #include "scene_viewer/systems/camera_system.hpp"
 #include "scene_viewer/systems/transform_system.hpp"

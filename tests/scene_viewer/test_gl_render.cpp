@@ -9,9 +9,9 @@
 #include "gl_test_context.hpp"
 #include "scene_viewer/assets/class_table.hpp"
 #include "scene_viewer/assets/image_io.hpp"
+#include "scene_viewer/ecs/coordinates.hpp"
 #include "scene_viewer/gfx/gl_device.hpp"
 #include "scene_viewer/platform/headless_context.hpp"
-#include "scene_viewer/render/coordinates.hpp"
 #include "scene_viewer/render/image.hpp"
 #include "scene_viewer/render/scene_renderer.hpp"
 

@@ -6,7 +6,7 @@
 
 #include <catch2/catch.hpp>
 
-#include "scene_viewer/render/point_cloud.hpp"
+#include "scene_viewer/assets/point_cloud.hpp"
 
 using namespace scene_viewer;
 namespace fs = std::filesystem;

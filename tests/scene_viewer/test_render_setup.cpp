@@ -5,8 +5,8 @@
 
 #include <catch2/catch.hpp>
 
+#include "scene_viewer/bench/benchmark.hpp"
 #include "scene_viewer/gfx/null_device.hpp"
-#include "scene_viewer/render/benchmark.hpp"
 #include "scene_viewer/render/render_setup.hpp"
 
 using namespace scene_viewer;

@@ -10,8 +10,8 @@
 
 #include "gl_test_context.hpp"
 #include "scene_viewer/assets/image_io.hpp"
+#include "scene_viewer/assets/palette.hpp"
 #include "scene_viewer/gfx/null_device.hpp"
-#include "scene_viewer/render/palette.hpp"
 #include "scene_viewer/render/scene_renderer.hpp"
 #include "scene_viewer/sensors/stereo_sensors.hpp"
 

@@ -8,7 +8,7 @@
 #include <string>
 
 #include <nlohmann/json.hpp>
-#include <scene_viewer/render/coordinates.hpp>
+#include <scene_viewer/ecs/coordinates.hpp>
 #include <scene_viewer/views/views.hpp>
 #include <scene_viewer/web/viewer_folder.hpp>
 

@@ -9,9 +9,9 @@
 #include <stereoscene/support/output_transaction.hpp>
 
 #include "cloud_analysis/cloud/cloud_io.hpp"
-#include "cloud_analysis/entities/entity_document.hpp"
 #include "cloud_analysis/entities/extract.hpp"
 #include "cloud_analysis/geometry/scene_geometry.hpp"
+#include "cloud_analysis/pipeline/entity_document.hpp"
 #include "output.hpp"
 
 namespace cloud_analysis::app {

@@ -12,8 +12,8 @@
 #include <scene_schema/entities.hpp>
 #include <stereoscene/support/atomic_file.hpp>
 
-#include "cloud_analysis/entities/entity_document.hpp"
 #include "cloud_analysis/entities/extract.hpp"
+#include "cloud_analysis/pipeline/entity_document.hpp"
 #include "cloud_analysis/pipeline/pipeline.hpp"
 
 namespace cloud_analysis::app {

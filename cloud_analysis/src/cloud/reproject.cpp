@@ -9,8 +9,6 @@
 #include <opencv2/core.hpp>
 #include <opencv2/imgproc.hpp>
 
-#include "cloud_analysis/stereo/calibration.hpp"
-
 namespace cloud_analysis {
 namespace {
 
@@ -150,6 +148,19 @@ class RowReprojector {
 };
 
 }  // namespace
+
+Eigen::Matrix4d reprojection_matrix(const StereoCamera& c) {
+    // OpenCV stereoRectify's Q with Tx = -baseline (right camera at +x).
+    Eigen::Matrix4d Q = Eigen::Matrix4d::Zero();
+    Q(0, 0) = 1.0;
+    Q(0, 3) = -c.cx_px;
+    Q(1, 1) = c.fx_px / c.fy_px;  // square pixels make this 1
+    Q(1, 3) = -c.cy_px * c.fx_px / c.fy_px;
+    Q(2, 3) = c.fx_px;
+    Q(3, 2) = 1.0 / c.baseline_m;
+    Q(3, 3) = -(c.cx_px - c.cx_right_px) / c.baseline_m;
+    return Q;
+}
 
 void ReprojectOptions::validate() const {
     if (!(max_range_m > 0.0)) throw std::invalid_argument("max_range_m: must be > 0");

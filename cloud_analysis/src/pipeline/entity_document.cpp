@@ -1,4 +1,4 @@
-#include "cloud_analysis/entities/entity_document.hpp"
+#include "cloud_analysis/pipeline/entity_document.hpp"
 
 #include <string>
 

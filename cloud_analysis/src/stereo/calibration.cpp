@@ -339,19 +339,6 @@ Calibration load_calibration(const std::filesystem::path& path, const Calibratio
     return parse_calibration(text, path.string(), options);
 }
 
-Eigen::Matrix4d reprojection_matrix(const StereoCamera& c) {
-    // OpenCV stereoRectify's Q with Tx = -baseline (right camera at +x).
-    Eigen::Matrix4d Q = Eigen::Matrix4d::Zero();
-    Q(0, 0) = 1.0;
-    Q(0, 3) = -c.cx_px;
-    Q(1, 1) = c.fx_px / c.fy_px;  // square pixels make this 1
-    Q(1, 3) = -c.cy_px * c.fx_px / c.fy_px;
-    Q(2, 3) = c.fx_px;
-    Q(3, 2) = 1.0 / c.baseline_m;
-    Q(3, 3) = -(c.cx_px - c.cx_right_px) / c.baseline_m;
-    return Q;
-}
-
 ImageU8 rectify_image(const ImageU8& raw, const RawCamera& rc, const StereoCamera& camera,
                       bool nearest) {
     const int width = camera.width_px > 0 ? camera.width_px : raw.width_px;

@@ -5,7 +5,7 @@
 #include <string>
 
 #include "common.hpp"
-#include "scene_viewer/render/benchmark.hpp"
+#include "scene_viewer/bench/benchmark.hpp"
 
 namespace scene_render {
 

@@ -14,8 +14,8 @@
 #include <sstream>
 #include <stdexcept>
 
+#include "scene_viewer/assets/palette.hpp"
 #include "scene_viewer/render/image.hpp"
-#include "scene_viewer/render/palette.hpp"
 #include "scene_viewer/render/render_setup.hpp"
 #include "stereoscene/support/atomic_file.hpp"
 #include "stereoscene/support/file_read.hpp"

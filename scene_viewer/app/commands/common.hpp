@@ -11,9 +11,9 @@
 
 #include "scene_schema/entities.hpp"
 #include "scene_viewer/assets/class_table.hpp"
+#include "scene_viewer/assets/point_cloud.hpp"
 #include "scene_viewer/gfx/gl_device.hpp"
 #include "scene_viewer/platform/headless_context.hpp"
-#include "scene_viewer/render/point_cloud.hpp"
 #include "scene_viewer/render/scene_renderer.hpp"
 
 namespace scene_render {

@@ -1,4 +1,4 @@
-#include "scene_viewer/render/palette.hpp"
+#include "scene_viewer/assets/palette.hpp"
 
 #include <stdexcept>
 #include <string>

@@ -1,4 +1,4 @@
-#include "scene_viewer/render/point_cloud.hpp"
+#include "scene_viewer/assets/point_cloud.hpp"
 
 #include "stereoscene/support/file_read.hpp"
 #include "stereoscene/support/limits.hpp"

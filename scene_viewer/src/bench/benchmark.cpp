@@ -1,4 +1,4 @@
-#include "scene_viewer/render/benchmark.hpp"
+#include "scene_viewer/bench/benchmark.hpp"
 
 #include <algorithm>
 #include <chrono>

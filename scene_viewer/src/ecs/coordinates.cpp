@@ -1,4 +1,4 @@
-#include "scene_viewer/render/coordinates.hpp"
+#include "scene_viewer/ecs/coordinates.hpp"
 
 #include <cmath>
 

@@ -1,4 +1,4 @@
-#include "scene_viewer/render/render_options.hpp"
+#include "scene_viewer/ecs/render_options.hpp"
 
 #include <algorithm>
 #include <stdexcept>

@@ -1,4 +1,4 @@
-#include "scene_viewer/render/model_library.hpp"
+#include "scene_viewer/gfx/model_library.hpp"
 
 #include <algorithm>
 #include <cmath>

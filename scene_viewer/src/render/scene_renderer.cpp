@@ -5,7 +5,7 @@
 
 #include "scene_viewer/assets/class_table.hpp"
 #include "scene_viewer/assets/gltf_loader.hpp"
-#include "scene_viewer/render/palette.hpp"
+#include "scene_viewer/assets/palette.hpp"
 #include "scene_viewer/systems/build_scene_system.hpp"
 #include "scene_viewer/systems/camera_system.hpp"
 #include "scene_viewer/systems/render_system.hpp"

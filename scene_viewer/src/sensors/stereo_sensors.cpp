@@ -6,7 +6,7 @@
 #include <stdexcept>
 #include <string>
 
-#include "scene_viewer/render/palette.hpp"
+#include "scene_viewer/assets/palette.hpp"
 #include "scene_viewer/render/scene_renderer.hpp"
 
 namespace scene_viewer {

@@ -4,10 +4,10 @@
 #include <cmath>
 #include <cstdint>
 
-#include "scene_viewer/render/colours.hpp"
-#include "scene_viewer/render/coordinates.hpp"
-#include "scene_viewer/render/palette.hpp"
-#include "scene_viewer/render/render_options.hpp"
+#include "scene_viewer/assets/colours.hpp"
+#include "scene_viewer/assets/palette.hpp"
+#include "scene_viewer/ecs/coordinates.hpp"
+#include "scene_viewer/ecs/render_options.hpp"
 #include "scene_viewer/views/views.hpp"
 #include "stereoscene/support/limits.hpp"
 

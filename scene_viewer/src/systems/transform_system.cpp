@@ -1,6 +1,6 @@
 #include "scene_viewer/systems/transform_system.hpp"
 
-#include "scene_viewer/render/coordinates.hpp"
+#include "scene_viewer/ecs/coordinates.hpp"
 
 namespace scene_viewer {
 

@@ -6,7 +6,7 @@
 
 #include <glm/gtc/matrix_transform.hpp>
 
-#include "scene_viewer/render/coordinates.hpp"
+#include "scene_viewer/ecs/coordinates.hpp"
 
 namespace scene_viewer {
 

@@ -10,8 +10,8 @@
 #include <tiny_gltf.h>
 
 #include "../assets/gltf_internal.hpp"
-#include "scene_viewer/render/coordinates.hpp"
-#include "scene_viewer/render/palette.hpp"
+#include "scene_viewer/assets/palette.hpp"
+#include "scene_viewer/ecs/coordinates.hpp"
 #include "scene_viewer/web/viewer_folder.hpp"
 
 namespace scene_viewer {

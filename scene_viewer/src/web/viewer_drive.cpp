@@ -5,7 +5,7 @@
 #include <cstdio>
 #include <stdexcept>
 
-#include "scene_viewer/render/palette.hpp"
+#include "scene_viewer/assets/palette.hpp"
 #include "scene_viewer/web/viewer_folder.hpp"
 
 namespace scene_viewer {

@@ -11,8 +11,8 @@
 
 #include <nlohmann/json.hpp>
 
-#include "scene_viewer/render/coordinates.hpp"
-#include "scene_viewer/render/palette.hpp"
+#include "scene_viewer/assets/palette.hpp"
+#include "scene_viewer/ecs/coordinates.hpp"
 #include "scene_viewer/render/scene_renderer.hpp"
 #include "scene_viewer/views/views.hpp"
 #include "stereoscene/support/asset_dir.hpp"

@@ -6,7 +6,7 @@
 
 #include "../sample_inputs.hpp"
 #include "cloud_analysis/entities/class_config.hpp"
-#include "cloud_analysis/entities/entity_document.hpp"
+#include "cloud_analysis/pipeline/entity_document.hpp"
 
 using namespace cloud_analysis;
 

@@ -3,11 +3,17 @@
 /// Metric reprojection of a disparity map with the Q matrix of the rig, and semantic
 /// association of each point with the class of its pixel.
 
+#include <Eigen/Core>
+
 #include "cloud_analysis/cloud/semantic.hpp"
 #include "cloud_analysis/cloud/types.hpp"
 #include "cloud_analysis/io/io.hpp"
 
 namespace cloud_analysis {
+
+/// OpenCV's 4x4 reprojection matrix Q (Bradski & Kaehler, Learning OpenCV, ch. 12): maps
+/// (u, v, d, 1) to homogeneous (X, Y, Z, W) in the rectified left camera frame, metres.
+Eigen::Matrix4d reprojection_matrix(const StereoCamera& camera);
 
 /// Which reprojected pixels become points.
 struct ReprojectOptions {

@@ -14,11 +14,11 @@
 
 #include <nlohmann/json.hpp>
 
-#include "cloud_analysis/entities/entity_document.hpp"
 #include "cloud_analysis/entities/extract.hpp"
 #include "cloud_analysis/odometry/visual_odometry.hpp"
 #include "cloud_analysis/pipeline/batch_report.hpp"
 #include "cloud_analysis/pipeline/drive.hpp"
+#include "cloud_analysis/pipeline/entity_document.hpp"
 #include "cloud_analysis/tracking/sequence.hpp"
 
 namespace cloud_analysis {

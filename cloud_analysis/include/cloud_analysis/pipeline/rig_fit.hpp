@@ -18,8 +18,8 @@
 #include <nlohmann/json.hpp>
 
 #include "cloud_analysis/cloud/types.hpp"
-#include "cloud_analysis/entities/entity_document.hpp"
 #include "cloud_analysis/entities/extract.hpp"
+#include "cloud_analysis/pipeline/entity_document.hpp"
 #include "cloud_analysis/pipeline/pipeline.hpp"
 
 namespace cloud_analysis {

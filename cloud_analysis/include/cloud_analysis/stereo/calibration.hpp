@@ -58,10 +58,6 @@ Calibration parse_calibration(std::string_view text, const std::string& origin,
 Calibration load_calibration(const std::filesystem::path& path,
                              const CalibrationOptions& options = {});
 
-/// OpenCV's 4x4 reprojection matrix Q (Bradski & Kaehler, Learning OpenCV, ch. 12): maps
-/// (u, v, d, 1) to homogeneous (X, Y, Z, W) in the rectified left camera frame, metres.
-Eigen::Matrix4d reprojection_matrix(const StereoCamera& camera);
-
 /// Undistorts and rectifies a raw image into the rectified grid (cv::initUndistortRectifyMap +
 /// remap). The output has the rectified size of `camera` (or the input size if 0). Bilinear,
 /// or nearest neighbour for label images whose colours must not blend.

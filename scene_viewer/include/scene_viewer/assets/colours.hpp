@@ -2,7 +2,7 @@
 
 /// Colours of what is not an entity class (class colours come from the palette, palette.hpp).
 
-#include "scene_viewer/render/palette.hpp"
+#include "scene_viewer/assets/palette.hpp"
 
 namespace scene_viewer {
 

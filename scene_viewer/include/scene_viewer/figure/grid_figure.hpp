@@ -6,7 +6,7 @@
 #include <vector>
 
 #include "scene_viewer/assets/model.hpp"
-#include "scene_viewer/render/palette.hpp"
+#include "scene_viewer/assets/palette.hpp"
 
 namespace scene_viewer {
 

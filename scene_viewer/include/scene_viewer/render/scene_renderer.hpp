@@ -11,15 +11,15 @@
 #include <vector>
 
 #include "scene_schema/entities.hpp"
+#include "scene_viewer/assets/colours.hpp"
 #include "scene_viewer/assets/model.hpp"
+#include "scene_viewer/assets/palette.hpp"
+#include "scene_viewer/assets/point_cloud.hpp"
 #include "scene_viewer/assets/scene_export.hpp"
+#include "scene_viewer/ecs/render_options.hpp"
 #include "scene_viewer/ecs/world.hpp"
 #include "scene_viewer/gfx/device.hpp"
-#include "scene_viewer/render/colours.hpp"
-#include "scene_viewer/render/model_library.hpp"
-#include "scene_viewer/render/palette.hpp"
-#include "scene_viewer/render/point_cloud.hpp"
-#include "scene_viewer/render/render_options.hpp"
+#include "scene_viewer/gfx/model_library.hpp"
 #include "scene_viewer/views/views.hpp"
 
 namespace scene_viewer {

@@ -1,9 +1,9 @@
 #pragma once
 
 #include "scene_schema/entities.hpp"
+#include "scene_viewer/assets/point_cloud.hpp"
 #include "scene_viewer/ecs/world.hpp"
-#include "scene_viewer/render/model_library.hpp"
-#include "scene_viewer/render/point_cloud.hpp"
+#include "scene_viewer/gfx/model_library.hpp"
 
 namespace scene_viewer {
 

@@ -2,7 +2,7 @@
 
 #include "scene_viewer/ecs/world.hpp"
 #include "scene_viewer/gfx/device.hpp"
-#include "scene_viewer/render/model_library.hpp"
+#include "scene_viewer/gfx/model_library.hpp"
 
 namespace scene_viewer {
 

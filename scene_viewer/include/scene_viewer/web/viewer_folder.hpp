@@ -11,7 +11,7 @@
 #include <vector>
 
 #include "scene_schema/entities.hpp"
-#include "scene_viewer/render/point_cloud.hpp"
+#include "scene_viewer/assets/point_cloud.hpp"
 #include "scene_viewer/web/viewer_drive.hpp"
 
 namespace scene_viewer {

@@ -1,0 +1,2 @@
+#include "cyc/a/a.hpp"
+#include "cyc/c/c.hpp"

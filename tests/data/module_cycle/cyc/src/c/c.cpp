@@ -1,0 +1,2 @@
+// c depends on nothing: not in the cycle.
+int c();
