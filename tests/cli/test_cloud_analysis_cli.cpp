@@ -15,6 +15,9 @@
 
 #include <nlohmann/json.hpp>
 #include <scene_schema/entities.hpp>
+#include "stereoscene/support/angles.hpp"
+
+using stereoscene::support::kPi;
 
 namespace fs = std::filesystem;
 
@@ -238,7 +241,7 @@ TEST_CASE("the synthetic sample's entities lie close to its ground truth", "[cli
         CHECK(std::abs(best->y - t.y) < 0.2);
         if (t.class_name == "car" && t.z < 20.0) {
             ++cars;
-            const double dtheta = std::remainder(best->theta - t.theta, M_PI);
+            const double dtheta = std::remainder(best->theta - t.theta, kPi);
             CHECK(std::abs(dtheta) < 0.25);
             CHECK(best->L == Approx(t.L).margin(0.6));
             CHECK(best->W == Approx(t.W).margin(0.6));

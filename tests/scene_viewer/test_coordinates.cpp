@@ -4,6 +4,10 @@
 #include <glm/glm.hpp>
 
 #include "scene_viewer/ecs/coordinates.hpp"
+#include "scene_viewer/views/views.hpp"
+#include "stereoscene/support/angles.hpp"
+
+using stereoscene::support::kPi;
 
 using namespace scene_viewer;
 
@@ -25,14 +29,14 @@ TEST_CASE(
 
 TEST_CASE("The heading of theta = -pi/2 points forward (+z) and theta = 0 points right (+x)",
           "[coordinates]") {
-    CHECK(near(heading_kitti(-M_PI / 2), {0, 0, 1}));
+    CHECK(near(heading_kitti(-kPi / 2), {0, 0, 1}));
     CHECK(near(heading_kitti(0.0), {1, 0, 0}));
-    CHECK(near(heading_kitti(M_PI / 2), {0, 0, -1}));
+    CHECK(near(heading_kitti(kPi / 2), {0, 0, -1}));
 }
 
 TEST_CASE("The box world matrix turns the model front (+Z) onto the entity heading for any theta",
           "[coordinates]") {
-    for (double theta : {-M_PI / 2, 0.0, 0.3, 1.2, M_PI / 2, 2.5, -2.9}) {
+    for (double theta : {-kPi / 2, 0.0, 0.3, 1.2, kPi / 2, 2.5, -2.9}) {
         const glm::mat4 m = box_world_matrix({0, 0, 0}, theta, {1, 1, 1});
         const glm::vec3 front_gl = glm::vec3(m * glm::vec4(0, 0, 1, 0));
         CHECK(near(front_gl, kitti_to_gl(heading_kitti(theta))));
@@ -44,7 +48,7 @@ TEST_CASE("The box world matrix turns the model front (+Z) onto the entity headi
 TEST_CASE("The box world matrix scales the unit cube to W, H, L and places it at the centre",
           "[coordinates]") {
     // A car heading forward (theta = -pi/2) at x=5, y=1, z=20 of 1.8 x 1.5 x 4.2 m.
-    const glm::mat4 m = box_world_matrix({5, 1, 20}, -M_PI / 2, {1.8f, 1.5f, 4.2f});
+    const glm::mat4 m = box_world_matrix({5, 1, 20}, -kPi / 2, {1.8f, 1.5f, 4.2f});
     CHECK(near(glm::vec3(m * glm::vec4(0, 0, 0, 1)), kitti_to_gl({5, 1, 20})));
     // The model's front face centre lies L/2 further forward in KITTI z.
     CHECK(near(glm::vec3(m * glm::vec4(0, 0, 0.5f, 1)), kitti_to_gl({5, 1, 22.1f}), 1e-4f));
@@ -60,8 +64,6 @@ TEST_CASE("Model bounds are fitted onto the unit cube centred at the origin", "[
     CHECK(near(glm::vec3(fit * glm::vec4(-1, 0, -2, 1)), {-0.5f, -0.5f, -0.5f}));
     CHECK(near(glm::vec3(fit * glm::vec4(3, 2, 6, 1)), {0.5f, 0.5f, 0.5f}));
 }
-
-#include "scene_viewer/views/views.hpp"
 
 TEST_CASE("The camera view projects a KITTI point onto the pixel the pinhole model gives",
           "[coordinates][views]") {

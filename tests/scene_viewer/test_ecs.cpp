@@ -10,6 +10,9 @@
 #include "scene_viewer/render/scene_renderer.hpp"
 #include "scene_viewer/systems/camera_system.hpp"
 #include "scene_viewer/systems/transform_system.hpp"
+#include "stereoscene/support/angles.hpp"
+
+using stereoscene::support::kPi;
 
 using namespace scene_viewer;
 
@@ -130,7 +133,7 @@ TEST_CASE("Turning an entity by 90 degrees turns its world matrix about the vert
     NullDevice device;
     SceneRenderer renderer(device);
     RenderOptions options;
-    renderer.render(one_car(-M_PI / 2), nullptr, options);
+    renderer.render(one_car(-kPi / 2), nullptr, options);
     REQUIRE(device.draws.size() == 1);
     // theta = -pi/2 heads forward (+z KITTI).
     CHECK(near(apply(device.draws[0].model, {0, 0, 0.5f}), kitti_to_gl({5, 1, 22})));
@@ -150,7 +153,7 @@ TEST_CASE("A class model is fitted by its bounds into the entity box", "[ecs][sy
     model.bounds_max = {1, 2, 3};
     renderer.set_class_model("car", model);
     RenderOptions options;
-    renderer.render(one_car(-M_PI / 2), nullptr, options);
+    renderer.render(one_car(-kPi / 2), nullptr, options);
     REQUIRE(device.draws.size() == 1);
     const glm::mat4& m = device.draws[0].model;
     // Model-frame bounds corners land on the box corners: the box spans x 4..6, y 0.25..1.75,
@@ -202,7 +205,7 @@ TEST_CASE("Ground classes become flat patches on the bottom face of their box", 
     SceneRenderer renderer(device);
     scene_schema::EntityDocument doc;
     doc.frame.id = "ground";
-    doc.entities.push_back(entity("road", 7, {0, 1.5, 20}, -M_PI / 2, {8, 0.4, 40}));
+    doc.entities.push_back(entity("road", 7, {0, 1.5, 20}, -kPi / 2, {8, 0.4, 40}));
     RenderOptions options;
     options.view.kind = ViewKind::free;
     options.ego = false;
@@ -320,8 +323,8 @@ TEST_CASE("The assembled scene places every entity with the matrix it is drawn w
     renderer.set_class_model("car", car);
 
     auto doc = one_car(0.3);
-    doc.entities.push_back(entity("wall", 12, {-6, 0, 30}, -M_PI / 2, {0.3, 2, 10}));
-    doc.entities.push_back(entity("road", 7, {0, 1.6, 20}, -M_PI / 2, {7, 0.05, 40}));
+    doc.entities.push_back(entity("wall", 12, {-6, 0, 30}, -kPi / 2, {0.3, 2, 10}));
+    doc.entities.push_back(entity("road", 7, {0, 1.6, 20}, -kPi / 2, {7, 0.05, 40}));
     RenderOptions options;
     options.view = chase_view();
     renderer.load(doc, nullptr, options);

@@ -14,6 +14,9 @@
 #include "scene_viewer/platform/headless_context.hpp"
 #include "scene_viewer/render/image.hpp"
 #include "scene_viewer/render/scene_renderer.hpp"
+#include "stereoscene/support/angles.hpp"
+
+using stereoscene::support::kPi;
 
 using namespace scene_viewer;
 
@@ -101,10 +104,10 @@ TEST_CASE("In flat semantic mode each entity's projected centre shows its class 
     scene_schema::EntityDocument doc;
     doc.frame.id = "semantic";
     doc.frame.camera = kCamera;
-    doc.entities = {entity("road", 7, {0, 1.65, 30}, -M_PI / 2, {8, 0.05, 40}),
-                    entity("car", 26, {-3, 0.9, 15}, -M_PI / 2, {1.8, 1.5, 4.2}),
+    doc.entities = {entity("road", 7, {0, 1.65, 30}, -kPi / 2, {8, 0.05, 40}),
+                    entity("car", 26, {-3, 0.9, 15}, -kPi / 2, {1.8, 1.5, 4.2}),
                     entity("person", 24, {2.5, 0.8, 10}, 0.3, {0.6, 1.7, 0.5}),
-                    entity("building", 11, {12, -3, 40}, -M_PI / 2, {10, 12, 14}),
+                    entity("building", 11, {12, -3, 40}, -kPi / 2, {10, 12, 14}),
                     entity("vegetation", 21, {-9, -1, 25}, 0.0, {2.5, 5, 2.5}),
                     entity("unknown-thing", 99, {-4, -2, 20}, 0.0, {1, 1, 1})};
     SceneRenderer renderer(gl_device());
@@ -133,7 +136,7 @@ TEST_CASE("A car turned by 90 degrees swaps the width and height of its BEV foot
     SceneRenderer renderer(gl_device());
     scene_schema::EntityDocument doc;
     doc.frame.id = "bev";
-    doc.entities = {entity("car", 26, {0, 0.9, 20}, -M_PI / 2, {2, 1.5, 4})};
+    doc.entities = {entity("car", 26, {0, 0.9, 20}, -kPi / 2, {2, 1.5, 4})};
     const Footprint along = footprint(renderer.render(doc, nullptr, bev_options()), kCar);
     doc.entities[0].theta = 0.0;
     const Footprint across = footprint(renderer.render(doc, nullptr, bev_options()), kCar);
@@ -151,7 +154,7 @@ TEST_CASE("A car at x = +5 appears right of centre in the BEV and farther cars a
     SceneRenderer renderer(gl_device());
     scene_schema::EntityDocument doc;
     doc.frame.id = "bev";
-    doc.entities = {entity("car", 26, {5, 0.9, 25}, -M_PI / 2, {2, 1.5, 4})};
+    doc.entities = {entity("car", 26, {5, 0.9, 25}, -kPi / 2, {2, 1.5, 4})};
     const Footprint f = footprint(renderer.render(doc, nullptr, bev_options()), kCar);
     REQUIRE(f.count > 0);
     CHECK(f.centroid_x == Approx(100 + 50).margin(1.0));  // 5 m right of centre
@@ -253,9 +256,9 @@ TEST_CASE("With the project's glTF models each class keeps its semantic colour a
     scene_schema::EntityDocument doc;
     doc.frame.id = "models";
     doc.frame.camera = kCamera;
-    doc.entities = {entity("car", 26, {-3, 0.9, 15}, -M_PI / 2, {1.8, 1.5, 4.2}),
+    doc.entities = {entity("car", 26, {-3, 0.9, 15}, -kPi / 2, {1.8, 1.5, 4.2}),
                     entity("car", 26, {3, 0.9, 15}, 0.0, {1.8, 1.5, 4.2}),
-                    entity("building", 11, {12, -3, 40}, -M_PI / 2, {10, 12, 14})};
+                    entity("building", 11, {12, -3, 40}, -kPi / 2, {10, 12, 14})};
     RenderOptions options;
     options.width_px = kCamera.width_px;
     options.height_px = kCamera.height_px;

@@ -14,6 +14,9 @@
 #include "scene_viewer/gfx/null_device.hpp"
 #include "scene_viewer/render/scene_renderer.hpp"
 #include "scene_viewer/sensors/stereo_sensors.hpp"
+#include "stereoscene/support/angles.hpp"
+
+using stereoscene::support::kPi;
 
 using namespace scene_viewer;
 
@@ -45,7 +48,7 @@ scene_schema::Entity box(const std::string& id, const std::string& cls, int clas
     e.class_name = cls;
     e.class_id = class_id;
     e.x = x, e.y = y, e.z = z;
-    e.theta = -M_PI / 2;  // length along +z
+    e.theta = -kPi / 2;  // length along +z
     e.W = w, e.H = h, e.L = l;
     return e;
 }

@@ -13,6 +13,7 @@
 #include "analyse.hpp"
 #include "cloud_analysis/pipeline/batch.hpp"
 #include "cloud_analysis/stereo/disparity.hpp"
+#include "cloud_analysis/support/select.hpp"
 #include "output.hpp"
 
 namespace cloud_analysis::app {
@@ -22,13 +23,6 @@ using Clock = std::chrono::steady_clock;
 
 double ms_between(Clock::time_point a, Clock::time_point b) {
     return std::chrono::duration<double, std::milli>(b - a).count();
-}
-
-double median(std::vector<double> v) {
-    if (v.empty()) return 0.0;
-    std::sort(v.begin(), v.end());
-    const std::size_t n = v.size();
-    return n % 2 == 1 ? v[n / 2] : 0.5 * (v[n / 2 - 1] + v[n / 2]);
 }
 
 /// One timed configuration: frames from memory or from files, with or without clouds.

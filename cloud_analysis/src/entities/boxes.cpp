@@ -12,11 +12,12 @@
 #include <Eigen/Geometry>
 
 #include "cloud_analysis/support/select.hpp"
+#include "stereoscene/support/angles.hpp"
 
 namespace cloud_analysis {
 namespace {
 
-constexpr double kPi = 3.14159265358979323846;
+using stereoscene::support::kPi;
 /// A straight face longer than this many prior widths cannot be a thing's front or rear.
 constexpr double kFaceWidths = 1.2;
 /// A face along the viewing ray counts when a pixel of disparity moves its far end by at most

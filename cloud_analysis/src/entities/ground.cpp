@@ -7,11 +7,12 @@
 
 #include <Eigen/Eigenvalues>
 #include <Eigen/Geometry>
+#include "stereoscene/support/angles.hpp"
 
 namespace cloud_analysis {
 namespace {
 
-constexpr double kPi = 3.14159265358979323846;
+using stereoscene::support::kPi;
 
 /// Least-squares plane through points (smallest eigenvector of the covariance), normal up.
 bool refine_plane(const std::vector<Eigen::Vector3d>& pts, Eigen::Vector3d& normal, double& d) {

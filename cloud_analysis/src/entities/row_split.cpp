@@ -6,8 +6,10 @@
 #include <limits>
 #include <numeric>
 
-#include "cloud_analysis/support/angles.hpp"
 #include "cloud_analysis/support/select.hpp"
+#include "stereoscene/support/angles.hpp"
+
+using stereoscene::support::wrap_angle;
 
 namespace cloud_analysis::instances {
 namespace {
@@ -29,7 +31,7 @@ constexpr int kClearGapBins = 2;
 /// The longest run of occupied 0.1 m bins inside a gap that a walk of cuts crosses (stray points
 /// smeared into the gap off the thing before it).
 constexpr int kGapIslandBins = 3;
-constexpr double kHalfPi = 1.57079632679489661923;
+using stereoscene::support::kHalfPi;
 
 /// The points' coordinates along the unit direction (dir_x, dir_z) and their range.
 struct Projection {

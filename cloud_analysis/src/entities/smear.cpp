@@ -5,6 +5,10 @@
 #include <limits>
 
 #include "cloud_analysis/entities/suppression.hpp"
+#include "stereoscene/support/angles.hpp"
+
+using stereoscene::support::kPi;
+using stereoscene::support::radians;
 
 namespace cloud_analysis::instances {
 namespace {
@@ -16,7 +20,7 @@ namespace {
 /// same bins, up to rounding within ~1e-15 of a boundary.
 class AzimuthBins {
   public:
-    static constexpr double kBinRad = 0.5 * 3.14159265358979323846 / 180.0;
+    static constexpr double kBinRad = radians(0.5);
     static constexpr long kBins = 360;  // |atan2| <= pi is at most 360 bins either side
 
     AzimuthBins() {

@@ -3,6 +3,7 @@
 #include <algorithm>
 #include <cmath>
 #include <utility>
+#include "stereoscene/support/angles.hpp"
 
 namespace cloud_analysis::instances {
 
@@ -147,7 +148,7 @@ void turn_overlapping_objects(std::vector<Candidate>& candidates,
                               const std::vector<Eigen::Vector3f>& pts, BoxFitOptions fit,
                               const std::optional<GroundPlane>& ground) {
     constexpr double kOverlapShare = 0.25;  // a quarter of a box on another's ground
-    constexpr double kHalfPi = 1.57079632679489661923;
+    using stereoscene::support::kHalfPi;
     const auto others = [&](std::size_t k) {
         std::vector<Footprint> out;
         for (std::size_t j = 0; j < candidates.size(); ++j) {

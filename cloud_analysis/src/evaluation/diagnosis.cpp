@@ -6,7 +6,10 @@
 #include <stdexcept>
 
 #include "cloud_analysis/io/io.hpp"
+#include "stereoscene/support/angles.hpp"
 #include "stereoscene/support/number_text.hpp"
+
+using stereoscene::support::kPi;
 
 namespace cloud_analysis {
 namespace {
@@ -226,8 +229,8 @@ std::vector<Diagnosis> diagnose_entities(
                        est.id + " covers " + pct(covered_share(ref, est)) + " of it (box " +
                            box_size(est) + " m vs " + box_size(ref) + " m, centre " +
                            fixed_text(m.bev_centre_error_m, 2) + " m off, heading " +
-                           fixed_text(m.heading_error_rad * 180.0 / M_PI, 0) +
-                           " deg off, BEV IoU " + fixed_text(m.bev_iou, 2) + ")"});
+                           fixed_text(m.heading_error_rad * 180.0 / kPi, 0) + " deg off, BEV IoU " +
+                           fixed_text(m.bev_iou, 2) + ")"});
     }
     for (const auto e : ev.spurious) out.push_back(spurious_reason(e, reference, estimate, ev, l));
     return out;

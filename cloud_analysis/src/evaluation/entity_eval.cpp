@@ -13,6 +13,7 @@
 #include "cloud_analysis/io/io.hpp"
 #include "scene_schema/entities.hpp"
 #include "scene_schema/json_text.hpp"
+#include "stereoscene/support/angles.hpp"
 #include "stereoscene/support/file_read.hpp"
 
 namespace cloud_analysis {
@@ -41,7 +42,7 @@ double inside_share(const scene_schema::Entity& a, const scene_schema::Entity& b
     return area > 0.0 ? convex_intersection_area(footprint(a), footprint(b)) / area : 0.0;
 }
 
-constexpr double kPi = 3.14159265358979323846;
+using stereoscene::support::kPi;
 constexpr std::size_t kAll = kDistanceBinEdges_m.size();
 
 std::string fmt(double v) {
@@ -145,13 +146,6 @@ double ClassBinScore::precision() const {
 
 double ClassBinScore::good_iou_fraction() const {
     return reference == 0 ? 1.0 : static_cast<double>(good_iou) / static_cast<double>(reference);
-}
-
-double median(std::vector<double> values) {
-    if (values.empty()) return 0.0;
-    const std::size_t n = values.size();
-    std::sort(values.begin(), values.end());
-    return n % 2 == 1 ? values[n / 2] : 0.5 * (values[n / 2 - 1] + values[n / 2]);
 }
 
 ClassBinScore EntityEvaluation::within(const std::string& class_name, double max_range_m) const {

@@ -1,6 +1,6 @@
 #include "cloud_analysis/evaluation/kitti_labels.hpp"
 
-#include "cloud_analysis/support/angles.hpp"
+#include "stereoscene/support/angles.hpp"
 #include "stereoscene/support/atomic_file.hpp"
 #include "stereoscene/support/file_read.hpp"
 
@@ -13,6 +13,8 @@
 #include <stdexcept>
 
 #include <Eigen/Core>
+
+using stereoscene::support::wrap_angle;
 
 namespace cloud_analysis {
 

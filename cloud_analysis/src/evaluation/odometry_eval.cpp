@@ -5,11 +5,12 @@
 #include <stdexcept>
 
 #include <Eigen/LU>
+#include "stereoscene/support/angles.hpp"
 
 namespace cloud_analysis {
 namespace {
 
-constexpr double kDegPerRad = 57.29577951308232;
+using stereoscene::support::kDegPerRad;
 
 /// Rotation angle of a pose, radians (devkit rotationError).
 double rotation_angle(const odometry::Pose& T) {

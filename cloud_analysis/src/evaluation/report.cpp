@@ -6,7 +6,10 @@
 #include <sstream>
 
 #include "cloud_analysis/evaluation/diagnosis.hpp"
+#include "stereoscene/support/angles.hpp"
 #include "stereoscene/support/number_text.hpp"
+
+using stereoscene::support::kPi;
 
 namespace cloud_analysis {
 namespace {
@@ -118,7 +121,7 @@ nlohmann::json matches_json(const EntityComparison& c, const EntityEvaluation& e
              {"centre_error_m", m.centre_error_m},
              {"bev_centre_error_m", m.bev_centre_error_m},
              {"size_error_m", {m.size_error_m.x(), m.size_error_m.y(), m.size_error_m.z()}},
-             {"heading_error_deg", m.heading_error_rad * 180.0 / 3.14159265358979},
+             {"heading_error_deg", m.heading_error_rad * 180.0 / kPi},
              {"bev_iou", m.bev_iou},
              {"iou_3d", m.iou_3d}});
     }

@@ -8,14 +8,16 @@
 #include <stdexcept>
 
 #include "cloud_analysis/evaluation/kitti_labels.hpp"
-#include "cloud_analysis/support/angles.hpp"
 #include "cloud_analysis/tracking/assignment.hpp"
+#include "stereoscene/support/angles.hpp"
+
+using stereoscene::support::wrap_angle;
 
 namespace cloud_analysis {
 
 namespace {
 
-constexpr double kPi = 3.14159265358979323846;
+using stereoscene::support::kPi;
 constexpr std::size_t kAllBins = kDistanceBinEdges_m.size();
 
 double bev_distance(const scene_schema::Entity& a, const scene_schema::Entity& b) {

@@ -4,11 +4,12 @@
 #include <vector>
 
 #include "cloud_analysis/geometry/scene_geometry.hpp"
+#include "stereoscene/support/angles.hpp"
+
+using stereoscene::support::kDegPerRad;
 
 namespace cloud_analysis::geometry {
 namespace {
-
-constexpr double kRadToDeg = 57.29577951308232;
 
 std::string metres(double value) {
     std::ostringstream s;
@@ -154,8 +155,8 @@ GroundEstimate estimate_ground(const DisparityMap& disparity, const StereoCamera
     out.plane = *plane;
     out.camera_height_m = plane->camera_height_m();
     const Eigen::Vector3d& n = plane->normal;
-    out.pitch_deg = std::asin(std::clamp(-n.z(), -1.0, 1.0)) * kRadToDeg;
-    out.roll_deg = std::atan2(n.x(), -n.y()) * kRadToDeg;
+    out.pitch_deg = std::asin(std::clamp(-n.z(), -1.0, 1.0)) * kDegPerRad;
+    out.roll_deg = std::atan2(n.x(), -n.y()) * kDegPerRad;
     out.horizon_v_px = camera.cy_px - camera.fy_px * n.z() / n.y();
     if (out.camera_height_m < options.min_camera_height_m ||
         out.camera_height_m > options.max_camera_height_m) {

@@ -94,6 +94,13 @@ std::size_t quantile_rank(std::size_t n, double q) {
 
 }  // namespace
 
+double median(std::vector<double> values) {
+    const std::size_t n = values.size();
+    if (n == 0) return 0.0;
+    const auto [lo, hi] = select_two(values, (n - 1) / 2, n / 2);
+    return 0.5 * (lo + hi);
+}
+
 double quantile(std::vector<double>& values, double q) {
     if (values.empty()) return 0.0;
     return select_kth(values, quantile_rank(values.size(), q));

@@ -10,12 +10,13 @@
 
 #include <Eigen/Geometry>
 
+#include "stereoscene/support/angles.hpp"
 #include "stereoscene/support/limits.hpp"
 
 namespace cloud_analysis {
 namespace {
 
-constexpr double kPi = 3.14159265358979323846;
+using stereoscene::support::kPi;
 
 /// An upright box of the scene with its class and surface shade.
 struct Box {

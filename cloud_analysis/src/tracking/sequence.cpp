@@ -6,6 +6,7 @@
 #include <deque>
 #include <set>
 #include <stdexcept>
+#include "stereoscene/support/angles.hpp"
 
 namespace cloud_analysis::tracking {
 
@@ -13,7 +14,7 @@ namespace fs = std::filesystem;
 
 namespace {
 
-constexpr double kPi = 3.14159265358979323846;
+using stereoscene::support::kPi;
 
 }  // namespace
 

@@ -6,14 +6,16 @@
 
 #include <Eigen/LU>
 
-#include "cloud_analysis/support/angles.hpp"
 #include "cloud_analysis/tracking/assignment.hpp"
+#include "stereoscene/support/angles.hpp"
+
+using stereoscene::support::wrap_angle;
 
 namespace cloud_analysis::tracking {
 
 namespace {
 
-constexpr double kPi = 3.14159265358979323846;
+using stereoscene::support::kPi;
 
 /// a or a + pi, whichever is nearer to `reference` (a box's heading is only known modulo pi).
 double align_modulo_pi(double a, double reference) {

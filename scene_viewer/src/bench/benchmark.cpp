@@ -6,6 +6,9 @@
 #include <stdexcept>
 
 #include "scene_viewer/assets/image_io.hpp"
+#include "stereoscene/support/angles.hpp"
+
+using stereoscene::support::kPi;
 
 namespace scene_viewer {
 
@@ -46,13 +49,13 @@ scene_schema::EntityDocument make_benchmark_document(int count) {
     };
     const int rows = (count + 4) / 5;
     const double length = 8.0 * rows + 10.0;
-    add("road", 7, 0.0, 1.625, 0.5 * length, -M_PI / 2, 17.0, 0.05, length);
-    add("sidewalk", 8, -10.0, 1.575, 0.5 * length, -M_PI / 2, 3.0, 0.15, length);
-    add("sidewalk", 8, 10.0, 1.575, 0.5 * length, -M_PI / 2, 3.0, 0.15, length);
+    add("road", 7, 0.0, 1.625, 0.5 * length, -kPi / 2, 17.0, 0.05, length);
+    add("sidewalk", 8, -10.0, 1.575, 0.5 * length, -kPi / 2, 3.0, 0.15, length);
+    add("sidewalk", 8, 10.0, 1.575, 0.5 * length, -kPi / 2, 3.0, 0.15, length);
     for (int i = 0; i < count; ++i) {
         const double x = -6.4 + 3.2 * (i % 5);
         const double z = 8.0 + 8.0 * (i / 5);
-        add("car", 26, x, 0.9, z, -M_PI / 2 + 0.1 * ((i % 3) - 1), 1.8, 1.5, 4.2);
+        add("car", 26, x, 0.9, z, -kPi / 2 + 0.1 * ((i % 3) - 1), 1.8, 1.5, 4.2);
     }
     return doc;
 }

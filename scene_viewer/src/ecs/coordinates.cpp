@@ -3,6 +3,9 @@
 #include <cmath>
 
 #include <glm/gtc/matrix_transform.hpp>
+#include "stereoscene/support/angles.hpp"
+
+using stereoscene::support::kPi;
 
 namespace scene_viewer {
 
@@ -24,7 +27,7 @@ glm::vec3 heading_kitti(double theta_rad) {
 
 float gl_yaw_from_kitti_theta(double theta_rad) {
     // Ry(phi) maps +Z to (sin phi, 0, cos phi); the heading in GL is (cos theta, 0, sin theta).
-    return static_cast<float>(M_PI / 2.0 - theta_rad);
+    return static_cast<float>(kPi / 2.0 - theta_rad);
 }
 
 glm::mat4 fit_bounds_to_unit_cube(const glm::vec3& bounds_min, const glm::vec3& bounds_max) {

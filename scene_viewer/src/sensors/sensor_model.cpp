@@ -3,6 +3,9 @@
 #include <vector>
 
 #include "scene_viewer/sensors/stereo_sensors.hpp"
+#include "stereoscene/support/angles.hpp"
+
+using stereoscene::support::kPi;
 
 namespace scene_viewer {
 
@@ -26,7 +29,7 @@ double unit_open(std::uint64_t bits) {
 double gaussian(std::uint64_t stream, std::uint64_t index) {
     const std::uint64_t a = splitmix64(stream ^ splitmix64(2 * index));
     const std::uint64_t b = splitmix64(stream ^ splitmix64(2 * index + 1));
-    return std::sqrt(-2.0 * std::log(unit_open(a))) * std::cos(2.0 * M_PI * unit_open(b));
+    return std::sqrt(-2.0 * std::log(unit_open(a))) * std::cos(2.0 * kPi * unit_open(b));
 }
 
 /// Normalised 1D Gaussian kernel of radius ceil(3 sigma).

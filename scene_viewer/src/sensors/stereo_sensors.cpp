@@ -8,6 +8,9 @@
 
 #include "scene_viewer/assets/palette.hpp"
 #include "scene_viewer/render/scene_renderer.hpp"
+#include "stereoscene/support/angles.hpp"
+
+using stereoscene::support::kPi;
 
 namespace scene_viewer {
 
@@ -195,7 +198,7 @@ scene_schema::EntityDocument scene_with_underlay(const scene_schema::EntityDocum
     underlay.id = kUnderlayId;
     underlay.class_name = "terrain";
     underlay.class_id = 22;
-    underlay.theta = -M_PI / 2;
+    underlay.theta = -kPi / 2;
     underlay.W = underlay.L = options.underlay_size_m;
     underlay.H = 0.02;
     underlay.y = options.rig.camera_height_m + 0.02;

@@ -9,7 +9,10 @@
 #include "scene_viewer/ecs/coordinates.hpp"
 #include "scene_viewer/ecs/render_options.hpp"
 #include "scene_viewer/views/views.hpp"
+#include "stereoscene/support/angles.hpp"
 #include "stereoscene/support/limits.hpp"
+
+using stereoscene::support::kPi;
 
 namespace scene_viewer {
 
@@ -150,7 +153,7 @@ void add_ego(World& world, const RenderOptions& options, ModelLibrary& models, f
     const EntityId e = world.create();
     const float car_h = 1.5f;
     world.transforms.set(
-        e, Transform{{0.0f, ground_top_y - 0.5f * car_h, -1.0f}, -M_PI / 2, {1.8f, car_h, 4.4f}});
+        e, Transform{{0.0f, ground_top_y - 0.5f * car_h, -1.0f}, -kPi / 2, {1.8f, car_h, 4.4f}});
     MeshRef mesh{*models.find("box"), glm::mat4(1.0f), true};
     glm::vec4 lit_colour = to_colour(kLitEgoColour);
     if (auto m = models.find("class:car")) {

@@ -7,6 +7,9 @@
 
 #include "scene_viewer/assets/palette.hpp"
 #include "scene_viewer/web/viewer_folder.hpp"
+#include "stereoscene/support/angles.hpp"
+
+using stereoscene::support::kPi;
 
 namespace scene_viewer {
 namespace {
@@ -57,7 +60,7 @@ scene_schema::EntityDocument class_template_document(const std::map<std::string,
         e.id = kClassTemplatePrefix + name;
         e.class_name = name;
         e.class_id = id;
-        e.theta = 0.5 * M_PI;  // the page's placement rotates by pi/2 - theta: none
+        e.theta = 0.5 * kPi;  // the page's placement rotates by pi/2 - theta: none
         e.W = e.H = e.L = 1.0;
         document.entities.push_back(std::move(e));
     }

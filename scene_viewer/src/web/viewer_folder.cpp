@@ -15,8 +15,11 @@
 #include "scene_viewer/ecs/coordinates.hpp"
 #include "scene_viewer/render/scene_renderer.hpp"
 #include "scene_viewer/views/views.hpp"
+#include "stereoscene/support/angles.hpp"
 #include "stereoscene/support/asset_dir.hpp"
 #include "stereoscene/support/file_read.hpp"
+
+using stereoscene::support::kPi;
 
 namespace scene_viewer {
 namespace {
@@ -45,7 +48,7 @@ scene_schema::CameraIntrinsics camera_of(const scene_schema::EntityDocument& doc
     k.width_px = defaults.width_px;
     k.height_px = defaults.height_px;
     k.fy_px = 0.5 * k.height_px /
-              std::tan(0.5 * static_cast<double>(defaults.view.fov_y_deg) * M_PI / 180.0);
+              std::tan(0.5 * static_cast<double>(defaults.view.fov_y_deg) * kPi / 180.0);
     k.fx_px = k.fy_px;
     k.cx_px = 0.5 * k.width_px;
     k.cy_px = 0.5 * k.height_px;

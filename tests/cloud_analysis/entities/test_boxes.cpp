@@ -9,13 +9,15 @@
 
 #include "cloud_analysis/entities/boxes.hpp"
 #include "cloud_analysis/entities/cluster.hpp"
-#include "cloud_analysis/support/angles.hpp"
+#include "stereoscene/support/angles.hpp"
+
+using stereoscene::support::wrap_angle;
 
 using namespace cloud_analysis;
 
 namespace {
 
-constexpr double kPi = 3.14159265358979323846;
+using stereoscene::support::kPi;
 /// tan of the angle between the optical axis and the image's right edge in the edge tests.
 const double kRightEdge = std::tan(40.0 * kPi / 180.0);
 

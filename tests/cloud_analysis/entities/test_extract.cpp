@@ -12,12 +12,13 @@
 #include "cloud_analysis/entities/extract.hpp"
 #include "cloud_analysis/entities/row_split.hpp"
 #include "cloud_analysis/entities/suppression.hpp"
+#include "stereoscene/support/angles.hpp"
 
 using namespace cloud_analysis;
 
 namespace {
 
-constexpr double kPi = 3.14159265358979323846;
+using stereoscene::support::kPi;
 
 /// A tiny palette: road, sky, car (thing).
 Palette test_palette() {

@@ -7,6 +7,9 @@
 
 #include "cloud_analysis/entities/candidate.hpp"
 #include "cloud_analysis/entities/extract.hpp"
+#include "stereoscene/support/angles.hpp"
+
+using stereoscene::support::kPi;
 
 using namespace cloud_analysis;
 
@@ -78,7 +81,7 @@ TEST_CASE("two cars parked bumper to bumper are two things when the instance ima
     for (std::size_t k = 0; k < 2; ++k) {
         CHECK(cars[k].z == Approx(10.1 + 4.2 * static_cast<double>(k)).margin(0.3));
         CHECK(cars[k].L == Approx(4.2).margin(0.3));
-        CHECK(std::abs(std::sin(cars[k].theta)) > std::sin(80.0 * 3.14159265358979 / 180.0));
+        CHECK(std::abs(std::sin(cars[k].theta)) > std::sin(80.0 * kPi / 180.0));
     }
 }
 
@@ -147,7 +150,7 @@ TEST_CASE("cars parked side by side seen front-on at an angle head along their e
     const auto cars = s.cars(true);
     REQUIRE(cars.size() == 3);
     for (std::size_t k = 0; k < 3; ++k) {
-        CHECK(std::abs(std::sin(cars[k].theta)) < std::sin(10.0 * 3.14159265358979 / 180.0));
+        CHECK(std::abs(std::sin(cars[k].theta)) < std::sin(10.0 * kPi / 180.0));
         CHECK(cars[k].z == Approx(7.0 + 2.4 * static_cast<double>(k)).margin(0.3));
         CHECK(cars[k].x == Approx(6.5).margin(0.4));
     }

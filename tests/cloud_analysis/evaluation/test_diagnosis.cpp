@@ -4,6 +4,9 @@
 #include <catch2/catch.hpp>
 
 #include "cloud_analysis/evaluation/diagnosis.hpp"
+#include "stereoscene/support/angles.hpp"
+
+using stereoscene::support::kHalfPi;
 
 namespace {
 
@@ -22,7 +25,7 @@ Entity box(const std::string& id, const std::string& cls, double x, double z, do
     e.L = L;
     e.W = W;
     e.H = 1.5;
-    e.theta = -1.5707963267948966;
+    e.theta = -kHalfPi;
     return e;
 }
 

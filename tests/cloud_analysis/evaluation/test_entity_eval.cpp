@@ -10,13 +10,14 @@
 
 #include "cloud_analysis/evaluation/entity_eval.hpp"
 #include "cloud_analysis/evaluation/kitti_labels.hpp"
+#include "stereoscene/support/angles.hpp"
 
 namespace {
 
 using cloud_analysis::EntityEvalOptions;
 using scene_schema::Entity;
 
-constexpr double kPi = 3.14159265358979323846;
+using stereoscene::support::kPi;
 
 Entity box(const std::string& cls, double x, double z, double theta, double W = 2.0, double L = 4.0,
            double H = 1.5, double y = 0.9) {

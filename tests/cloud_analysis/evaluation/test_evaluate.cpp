@@ -7,12 +7,13 @@
 
 #include "cloud_analysis/evaluation/evaluate.hpp"
 #include "cloud_analysis/stereo/calibration.hpp"
+#include "stereoscene/support/angles.hpp"
 
 using namespace cloud_analysis;
 
 namespace {
 
-constexpr double kPi = 3.14159265358979323846;
+using stereoscene::support::kPi;
 
 scene_schema::Entity car_entity(double x, double z, double theta, double L = 4.2, double W = 1.8) {
     scene_schema::Entity e;

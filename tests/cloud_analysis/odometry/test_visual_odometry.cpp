@@ -2,13 +2,16 @@
 #include <random>
 #include <vector>
 
-#include <catch2/catch.hpp>
 #include <Eigen/Geometry>
+#include <catch2/catch.hpp>
 #include <opencv2/core.hpp>
 #include <opencv2/imgproc.hpp>
 
 #include "cloud_analysis/evaluation/odometry_eval.hpp"
 #include "cloud_analysis/odometry/visual_odometry.hpp"
+#include "stereoscene/support/angles.hpp"
+
+using stereoscene::support::kPi;
 
 using namespace cloud_analysis;
 using odometry::Pose;
@@ -91,8 +94,7 @@ TEST_CASE("the camera's motion towards a textured wall is found from the stereo 
     CHECK(m.T_curr_prev(0, 3) == Approx(-0.3).margin(0.03));
     CHECK(m.T_curr_prev(1, 3) == Approx(0.0).margin(0.03));
     CHECK(m.T_curr_prev(2, 3) == Approx(-0.8).margin(0.04));
-    CHECK(Eigen::AngleAxisd(Eigen::Matrix3d(m.T_curr_prev.topLeftCorner<3, 3>())).angle() <
-          0.01);
+    CHECK(Eigen::AngleAxisd(Eigen::Matrix3d(m.T_curr_prev.topLeftCorner<3, 3>())).angle() < 0.01);
     // Chained, the second frame sits 0.8 m ahead in the first frame's world.
     odometry::VisualOdometry vo(c, odometry::OdometryOptions{});
     CHECK(vo.add(prev).isApprox(Pose::Identity()));
@@ -142,7 +144,7 @@ TEST_CASE("odometry scores are KITTI's: a path 2 % too long errs 2 % per metre",
     CHECK(same.path_m == Approx(30.0));
     CHECK(same.translation_pct == Approx(0.0).margin(1e-9));
     CHECK(same.end_point_m == Approx(0.0).margin(1e-9));
-    REQUIRE(same.lengths.size() == 3);  // 5, 10 and 20 m fit in 30 m
+    REQUIRE(same.lengths.size() == 3);      // 5, 10 and 20 m fit in 30 m
     CHECK(same.lengths[0].segments == 26);  // starts 0..25 reach 5 m further
     const OdometryErrors longer = evaluate_odometry(straight(31, 1.02), truth);
     CHECK(longer.translation_pct == Approx(2.0).epsilon(1e-6));
@@ -154,8 +156,7 @@ TEST_CASE("odometry scores are KITTI's: a path 2 % too long errs 2 % per metre",
     std::vector<Pose> turning = truth;
     for (std::size_t i = 0; i < turning.size(); ++i) {
         turning[i].topLeftCorner<3, 3>() =
-            Eigen::AngleAxisd(0.1 * static_cast<double>(i) * 3.14159265358979 / 180.0,
-                              Eigen::Vector3d::UnitY())
+            Eigen::AngleAxisd(0.1 * static_cast<double>(i) * kPi / 180.0, Eigen::Vector3d::UnitY())
                 .toRotationMatrix();
     }
     CHECK(evaluate_odometry(turning, truth).rotation_deg_per_m == Approx(0.1).epsilon(1e-6));

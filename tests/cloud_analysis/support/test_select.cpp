@@ -68,3 +68,16 @@ TEST_CASE("quantile takes rank round(q * (n - 1)), clamps q and is 0 for no valu
     CHECK(lo == 2.0);
     CHECK(hi == 4.0);
 }
+
+TEST_CASE(
+    "median is the middle value, the mean of the two middle ones for an even count, and 0 "
+    "for none",
+    "[select]") {
+    CHECK(cloud_analysis::median({5.0, 1.0, 4.0}) == 4.0);
+    CHECK(cloud_analysis::median({5.0, 1.0, 4.0, 2.0}) == 3.0);
+    CHECK(cloud_analysis::median({7.0}) == 7.0);
+    CHECK(cloud_analysis::median({}) == 0.0);
+    std::vector<double> many(10001);
+    for (std::size_t i = 0; i < many.size(); ++i) many[i] = double((i * 7919) % many.size());
+    CHECK(cloud_analysis::median(many) == 5000.0);
+}

@@ -13,6 +13,9 @@
 #include "cloud_analysis/tracking/kalman.hpp"
 #include "cloud_analysis/tracking/sequence.hpp"
 #include "cloud_analysis/tracking/tracker.hpp"
+#include "stereoscene/support/angles.hpp"
+
+using stereoscene::support::radians;
 
 using namespace cloud_analysis::tracking;
 using scene_schema::Entity;
@@ -20,7 +23,7 @@ using scene_schema::EntityDocument;
 
 namespace {
 
-constexpr double kPi = 3.14159265358979323846;
+using stereoscene::support::kPi;
 
 /// The cheapest total over every partial matching of admissible pairs that keeps as many
 /// admissible pairs as possible (brute force over column permutations).
@@ -237,7 +240,7 @@ TEST_CASE(
         // The camera drives at 15 m/s along its z and turns 0.5 degrees a frame; the parked car
         // stands at (4, 32) in the world, the other car drives at 10 m/s beside the camera's
         // start, along the world's z.
-        const double yaw = 0.5 * kPi / 180.0 * i;
+        const double yaw = radians(0.5) * i;
         const Eigen::Vector2d cam(0.0, 15.0 * t);  // the camera in the world (x, z)
         // World (x, z) -> this camera's (x, z): rotate by -yaw about y after the translation.
         const auto to_camera = [&](double wx, double wz) {

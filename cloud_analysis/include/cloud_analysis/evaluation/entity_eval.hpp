@@ -15,6 +15,8 @@
 #include <Eigen/Core>
 #include <scene_schema/entities.hpp>
 
+#include "cloud_analysis/support/select.hpp"
+
 namespace cloud_analysis {
 
 /// Corners of an entity's footprint in the bird's-eye (x, z) plane, counter-clockwise in
@@ -117,9 +119,6 @@ struct EntityEvaluation {
     /// Stuff entities within max_range_m that sit on a reference thing.
     std::size_t stuff_on_things(double max_range_m) const;
 };
-
-/// Median of values (0 when empty).
-double median(std::vector<double> values);
 
 /// Scores `estimate` against `reference`: per thing class, candidate pairs of the same class
 /// with bird's-eye centre distance <= max_match_distance_m are matched greedily by ascending

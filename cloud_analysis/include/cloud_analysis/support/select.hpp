@@ -21,6 +21,10 @@ double select_kth(std::vector<double>& values, std::size_t k);
 std::pair<double, double> select_two(std::vector<double>& values, std::size_t k_lo,
                                      std::size_t k_hi);
 
+/// The median of `values`: the middle value, or the mean of the two middle values of an even
+/// count; 0 for no values.
+double median(std::vector<double> values);
+
 /// The value at fraction q (clamped to 0..1) of the sorted values: rank round(q * (n - 1));
 /// the values may be reordered. 0 for no values.
 double quantile(std::vector<double>& values, double q);
