@@ -3,6 +3,7 @@
 #include <iostream>
 #include <new>
 #include <string>
+#include <vector>
 
 #include <CLI/CLI.hpp>
 
@@ -14,6 +15,7 @@
 #include "commands/play.hpp"
 #include "commands/render.hpp"
 #include "commands/sensors.hpp"
+#include "stereoscene/support/command_table.hpp"
 #include "stereoscene/support/error_line.hpp"
 #include "stereoscene/support/limit_flags.hpp"
 #include "stereoscene/support/process.hpp"
@@ -21,6 +23,25 @@
 namespace {
 
 using namespace scene_render;
+using stereoscene::support::Command;
+using stereoscene::support::make_command;
+
+/// The subcommands; without one, scene-render renders (the top-level flags).
+std::vector<Command> command_table(CLI::App& app) {
+    return {
+        make_command<GridArgs>(app, add_grid_command,
+                               [](GridArgs& a, CLI::App&) { return run_grid(a); }),
+        make_command<BenchArgs>(app, add_bench_command,
+                                [](BenchArgs& a, CLI::App&) { return run_bench(a); }),
+        make_command<SensorsArgs>(app, add_sensors_command,
+                                  [](SensorsArgs& a, CLI::App&) { return run_sensors(a); }),
+        make_command<PlayArgs>(app, add_play_command,
+                               [](PlayArgs& a, CLI::App&) { return run_play(a); }),
+        make_command<html_command::Options>(
+            app, html_command::add,
+            [](html_command::Options& o, CLI::App&) { return html_command::run(o); }),
+    };
+}
 
 int run(int argc, char** argv) {
     CLI::App app{"scene-render: renders entity files (KITTI camera frame) headless with OpenGL"};
@@ -32,21 +53,10 @@ int run(int argc, char** argv) {
     bool info = false;
     app.add_flag("--info", info, "print the GL vendor, renderer and version, then exit");
     add_view_options(app, render.view);
-    GridArgs grid_args;
-    CLI::App* grid = add_grid_command(app, grid_args);
-    BenchArgs bench_args;
-    CLI::App* bench = add_bench_command(app, bench_args);
-    SensorsArgs sensors_args;
-    CLI::App* sensors = add_sensors_command(app, sensors_args);
-    PlayArgs play_args;
-    CLI::App* play = add_play_command(app, play_args);
-    html_command::Options html_options;
-    CLI::App* html = html_command::add(app, html_options);
+    const std::vector<Command> table = command_table(app);
     stereoscene::support::LimitFlags limit_flags;
     stereoscene::support::add_limit_flags(app, limit_flags, true);
-    for (CLI::App* command : app.get_subcommands([](CLI::App*) { return true; })) {
-        stereoscene::support::add_limit_flags(*command, limit_flags, true);
-    }
+    for (const Command& c : table) stereoscene::support::add_limit_flags(*c.sub, limit_flags, true);
 
     try {
         app.parse(argc, argv);
@@ -57,11 +67,7 @@ int run(int argc, char** argv) {
     stereoscene::support::apply_limit_flags(limit_flags);
 
     if (info) return run_info();
-    if (*html) return html_command::run(html_options);
-    if (*bench) return run_bench(bench_args);
-    if (*sensors) return run_sensors(sensors_args);
-    if (*grid) return run_grid(grid_args);
-    if (*play) return run_play(play_args);
+    if (const Command* c = stereoscene::support::parsed_command(table)) return c->run();
     return run_render(render);
 }
 
