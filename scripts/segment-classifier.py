@@ -159,6 +159,8 @@ def main():
                      f"{a.evaluate_dir} first (same seeds)")
 
     tune_rows = dataset(a.cloud_analysis, tuning, a.max_depth)
+    if not any(r[2] for r in tune_rows):
+        sys.exit("segment-classifier: the tuning scenes hold no car segment to learn from")
     names = sorted({r[0] for r in tune_rows})
     folds = [names[k::4] for k in range(4)]
     best = None

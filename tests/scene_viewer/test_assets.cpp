@@ -291,11 +291,8 @@ TEST_CASE("PNG encoding round-trips through decoding", "[assets]") {
         Catch::StartsWith((kGltfDir / "quad_external.bin").string() + ": cannot decode image"));
 }
 
-TEST_CASE("third-party Kenney models (CC0) load with their external textures", "[assets]") {
-    if (!fs::exists(kThirdPartyDir)) {
-        WARN("shared data absent, third-party models not checked: " << kThirdPartyDir.string());
-        return;
-    }
+TEST_CASE("third-party Kenney models (CC0) load with their external textures", "[assets][shared]") {
+    REQUIRE(fs::is_directory(kThirdPartyDir));
     int loaded = 0;
     for (const auto& entry : fs::recursive_directory_iterator(kThirdPartyDir)) {
         if (entry.path().extension() != ".glb") continue;
