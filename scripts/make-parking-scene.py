@@ -29,6 +29,8 @@ import math
 import random
 import sys
 
+from stereoscene_assets import class_ids
+
 ROAD_TOP_Y = 1.60  # the road's top surface in the camera frame (y down), metres
 ROW_X = 4.9  # parked cars' centre line from the street's centre, metres
 KERB_X = 6.0  # kerb: edge of the road, metres
@@ -44,9 +46,7 @@ FAMILIES = [
 VAN = FAMILIES[4]
 TRUCK = ("truck", "truck", 7.5, 2.40, 3.20)
 BUS = ("bus", "bus", 11.0, 2.55, 3.20)
-CLASS_IDS = {"car": 26, "truck": 27, "bus": 28, "vegetation": 21, "pole": 17, "road": 7,
-             "sidewalk": 8, "building": 11, "wall": 12, "static": 4, "bicycle": 33,
-             "person": 24}
+CLASS_IDS = class_ids("cityscapes")
 SIDEWALK_BACK_X = 9.0  # the sidewalk's far edge (the buildings' side), metres
 
 

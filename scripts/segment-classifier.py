@@ -31,9 +31,11 @@ import tempfile
 import cv2
 import numpy as np
 
+from stereoscene_assets import class_ids
+
 ROOT = os.path.dirname(os.path.dirname(os.path.abspath(__file__)))
 # Cityscapes labelIds (instance PNG: labelId << 8 | n) counted as a car: the entities' class.
-CAR_LABEL_ID = 26
+CAR_LABEL_ID = class_ids("cityscapes")["car"]
 FEATURES = ["top_m", "top_q25_m", "low_m", "width_m", "thickness_m", "depth_m", "near_m",
             "far_m", "green", "occluded", "tall", "cells"]
 
