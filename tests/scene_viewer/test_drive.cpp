@@ -1,6 +1,9 @@
+#include <cmath>
+
 #include <catch2/catch.hpp>
 
 #include "scene_viewer/sensors/drive.hpp"
+#include "stereoscene/support/angles.hpp"
 
 using namespace scene_viewer;
 
@@ -51,4 +54,82 @@ TEST_CASE("a drive's index lists every frame at the frame rate", "[sensors][driv
     options = DriveOptions{};
     options.frames = 0;
     CHECK_THROWS_WITH(options.validate(), "--frames must be between 1 and 100000");
+}
+
+TEST_CASE("a still camera's drive has no poses", "[sensors][drive]") {
+    scene_schema::EntityDocument scene;
+    CHECK_FALSE(EgoMotion{}.moving());
+    CHECK_FALSE(scene_at(scene, 1.0, "f", EgoMotion{}).frame.pose);
+}
+
+TEST_CASE("the ego camera drives straight along +z, or a quarter circle to the right",
+          "[sensors][drive]") {
+    const EgoMotion straight{8.0, 0.0};
+    const auto p = straight.pose_at(2.5);
+    CHECK(p[0] == 1.0);
+    CHECK(p[3] == Approx(0.0).margin(1e-12));
+    CHECK(p[11] == Approx(20.0));
+    // 10 deg/s for 9 s turns 90 degrees on a circle of radius v / w.
+    const EgoMotion curve{10.0, 10.0};
+    const double r = 10.0 / (10.0 * stereoscene::support::kPi / 180.0);
+    const auto q = curve.pose_at(9.0);
+    CHECK(q[0] == Approx(0.0).margin(1e-12));  // cos 90
+    CHECK(q[2] == Approx(1.0));                // the camera's z now points along +x
+    CHECK(q[8] == Approx(-1.0));
+    CHECK(q[3] == Approx(r));   // x = r (1 - cos 90)
+    CHECK(q[11] == Approx(r));  // z = r sin 90
+    CHECK(q[7] == 0.0);         // on the road plane
+}
+
+TEST_CASE("with a moving camera the scene is the world, seen from where the camera is",
+          "[sensors][drive]") {
+    scene_schema::EntityDocument scene;
+    scene_schema::Entity parked;
+    parked.id = "car-1";
+    parked.class_name = "car";
+    parked.class_id = 26;
+    parked.x = 10.0;  // 10 m right of the start, 10 m ahead
+    parked.y = 0.9;
+    parked.z = 10.0;
+    parked.theta = -stereoscene::support::kHalfPi;  // along +z
+    scene_schema::Entity moving = parked;
+    moving.id = "car-2";
+    moving.x = 0.0;
+    moving.z = 0.0;
+    moving.velocity = scene_schema::Velocity{10.0, 0.0};  // crossing to the right
+    scene.entities = {parked, moving};
+
+    // Straight at 5 m/s for 1 s: the parked car is 5 m nearer, nothing else changes.
+    const auto ahead = scene_at(scene, 1.0, "f", EgoMotion{5.0, 0.0});
+    REQUIRE(ahead.frame.pose);
+    CHECK(ahead.entities[0].z == Approx(5.0));
+    CHECK(ahead.entities[0].x == Approx(10.0));
+    CHECK(ahead.entities[0].y == 0.9);
+
+    // After a quarter circle to the right the camera looks along the world's +x: a car that
+    // heads along the world's +z heads to the camera's left, its velocity turns with it.
+    const EgoMotion curve{10.0, 10.0};
+    const auto turned = scene_at(scene, 9.0, "f", curve);
+    const auto& pose = *turned.frame.pose;
+    // The parked car in the camera: R^T (X - t).
+    const double dx = 10.0 - pose[3], dz = 10.0 - pose[11];
+    CHECK(turned.entities[0].x == Approx(pose[0] * dx + pose[8] * dz).margin(1e-9));
+    CHECK(turned.entities[0].z == Approx(pose[2] * dx + pose[10] * dz).margin(1e-9));
+    CHECK(std::abs(std::remainder(turned.entities[0].theta - stereoscene::support::kPi,
+                                  2 * stereoscene::support::kPi)) < 1e-9);
+    CHECK(turned.entities[1].velocity->vx_mps == Approx(0.0).margin(1e-9));
+    CHECK(turned.entities[1].velocity->vz_mps == Approx(10.0));
+    scene_schema::check(turned);
+}
+
+TEST_CASE("poses are written as KITTI odometry text, one 3x4 matrix a line", "[sensors][drive]") {
+    const std::string text =
+        poses_text({EgoMotion{}.pose_at(0.0), EgoMotion{2.0, 0.0}.pose_at(1.0)});
+    CHECK(text ==
+          "1.000000000e+00 0.000000000e+00 0.000000000e+00 0.000000000e+00 0.000000000e+00 "
+          "1.000000000e+00 0.000000000e+00 0.000000000e+00 0.000000000e+00 0.000000000e+00 "
+          "1.000000000e+00 0.000000000e+00\n"
+          "1.000000000e+00 0.000000000e+00 0.000000000e+00 0.000000000e+00 0.000000000e+00 "
+          "1.000000000e+00 0.000000000e+00 0.000000000e+00 0.000000000e+00 0.000000000e+00 "
+          "1.000000000e+00 2.000000000e+00\n");
 }

@@ -43,6 +43,10 @@ CLI::App* add_evaluate_odometry_command(CLI::App& app, EvaluateOdometryArgs& a) 
                     "largest mean translation error, % of the segment length")
         ->check(CLI::NonNegativeNumber)
         ->group(bg);
+    cmd->add_option("--max-rotation-error", a.max_rotation_deg_per_m,
+                    "largest mean rotation error, degrees a metre")
+        ->check(CLI::NonNegativeNumber)
+        ->group(bg);
     cmd->add_option("--max-end-point-error", a.max_end_point_pct,
                     "largest end point error, % of the path")
         ->check(CLI::NonNegativeNumber)
@@ -79,6 +83,11 @@ int run_evaluate_odometry(const EvaluateOdometryArgs& a) {
     if (a.max_translation_pct && !(e.translation_pct <= *a.max_translation_pct)) {
         std::cerr << kTool << ": bar missed: translation error " << fixed_text(e.translation_pct, 2)
                   << " % > " << *a.max_translation_pct << " (--max-translation-error)\n";
+        code = 3;
+    }
+    if (a.max_rotation_deg_per_m && !(e.rotation_deg_per_m <= *a.max_rotation_deg_per_m)) {
+        std::cerr << kTool << ": bar missed: rotation error " << fixed_text(e.rotation_deg_per_m, 4)
+                  << " deg/m > " << *a.max_rotation_deg_per_m << " (--max-rotation-error)\n";
         code = 3;
     }
     if (a.max_end_point_pct && !(e.end_point_pct <= *a.max_end_point_pct)) {

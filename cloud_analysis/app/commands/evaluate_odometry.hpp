@@ -14,11 +14,12 @@ namespace cloud_analysis::app {
 
 /// Flags of `evaluate-odometry`.
 struct EvaluateOdometryArgs {
-    std::filesystem::path poses;                ///< --poses: the estimate, KITTI poses text
-    std::filesystem::path truth;                ///< --truth: the same frames' true poses
-    std::string json;                           ///< --json: also the scores as JSON ("-")
-    std::optional<double> max_translation_pct;  ///< --max-translation-error: bar, %
-    std::optional<double> max_end_point_pct;    ///< --max-end-point-error: bar, % of the path
+    std::filesystem::path poses;                   ///< --poses: the estimate, KITTI poses text
+    std::filesystem::path truth;                   ///< --truth: the same frames' true poses
+    std::string json;                              ///< --json: also the scores as JSON ("-")
+    std::optional<double> max_translation_pct;     ///< --max-translation-error: bar, %
+    std::optional<double> max_end_point_pct;       ///< --max-end-point-error: bar, % of the path
+    std::optional<double> max_rotation_deg_per_m;  ///< --max-rotation-error: bar, deg/m
 };
 
 /// Registers `evaluate-odometry` on app and binds its flags to args.

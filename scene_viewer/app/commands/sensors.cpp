@@ -63,6 +63,13 @@ CLI::App* add_sensors_command(CLI::App& app, SensorsArgs& a) {
                   "render a drive of N frames named 0000000000.. (entities move by their "
                   "velocity), with truth/<frame>.json and truth/sequence.json");
     s->add_option("--fps", a.drive.fps, "frame rate of a drive, Hz")->capture_default_str();
+    s->add_option("--ego-speed", a.drive.ego.speed_mps,
+                  "--frames: the camera drives at this speed along its heading, m/s (the scene "
+                  "is the world, the camera at the first frame); truth/poses.txt holds its poses")
+        ->capture_default_str();
+    s->add_option("--ego-yaw-rate", a.drive.ego.yaw_rate_dps,
+                  "--frames: the camera turns at this rate, degrees a second (+ right)")
+        ->capture_default_str();
     s->add_flag("--resume", a.resume,
                 "--frames: keep the frames whose files are all there (each file is written "
                 "whole, so a killed run leaves them whole) and render the rest");
@@ -112,7 +119,7 @@ int run_drive(SensorsArgs& a, const scene_schema::EntityDocument& scene, Gpu& gp
             names.push_back("truth/" + f.file);
             if (files_complete(a.out, names)) continue;
         }
-        const auto truth = scene_at(scene, *f.timestamp_s, name);
+        const auto truth = scene_at(scene, *f.timestamp_s, name, a.drive.ego);
         std::map<std::string, std::string> files;
         try {
             files = kitti_layout_files(render_stereo_frame(gpu.renderer, truth, a.options), name);
@@ -129,6 +136,12 @@ int run_drive(SensorsArgs& a, const scene_schema::EntityDocument& scene, Gpu& gp
     try {
         scene_schema::write_sequence_file(index,
                                           std::filesystem::path(a.out) / "truth" / "sequence.json");
+        if (a.drive.ego.moving()) {
+            std::vector<std::array<double, 12>> poses;
+            for (const auto& f : index.frames) poses.push_back(a.drive.ego.pose_at(*f.timestamp_s));
+            stereoscene::support::write_file_atomic(
+                std::filesystem::path(a.out) / "truth" / "poses.txt", poses_text(poses));
+        }
     } catch (const std::exception& e) {
         throw Failure{"cannot write the sensor files", e.what(), a.out};
     }
@@ -160,6 +173,8 @@ int run_sensors(SensorsArgs a) {
         }
     } else if (a.resume) {
         usage("only with --frames (a drive)", "--resume");
+    } else if (a.drive.ego.moving()) {
+        usage("only with --frames (a drive)", "--ego-speed/--ego-yaw-rate");
     }
     const auto classes = read_classes(a.boxes, a.classes);
     auto gpu = start_gpu(classes);

@@ -40,7 +40,8 @@ class GlDevice final : public Device {
         u_ = Uniforms{at("u_model"),           at("u_view_projection"), at("u_normal_matrix"),
                       at("u_point_size"),      at("u_colour"),          at("u_lit"),
                       at("u_vertex_colour"),   at("u_textured"),        at("u_texture"),
-                      at("u_light_direction"), at("u_ambient"),         at("u_procedural")};
+                      at("u_light_direction"), at("u_ambient"),         at("u_procedural"),
+                      at("u_texture_frame")};
         glEnable(GL_PROGRAM_POINT_SIZE);
     }
 
@@ -179,6 +180,7 @@ class GlDevice final : public Device {
         const glm::vec3 light = glm::normalize(setup.light_direction);
         glUniform3fv(u_.light_direction, 1, glm::value_ptr(light));
         glUniform1f(u_.ambient, setup.ambient);
+        glUniformMatrix4fv(u_.texture_frame, 1, GL_FALSE, glm::value_ptr(setup.texture_frame));
         glUniform1i(u_.texture, 0);
     }
 
@@ -341,7 +343,7 @@ class GlDevice final : public Device {
     /// Uniform locations of the one program.
     struct Uniforms {
         GLint model, view_projection, normal_matrix, point_size, colour, lit, vertex_colour,
-            textured, texture, light_direction, ambient, procedural;
+            textured, texture, light_direction, ambient, procedural, texture_frame;
     };
     Uniforms u_{};
     std::unordered_map<std::uint32_t, GpuMesh> meshes_;

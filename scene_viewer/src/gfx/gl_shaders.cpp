@@ -44,9 +44,11 @@ uniform int u_textured;
 uniform sampler2D u_texture;
 uniform vec3 u_light_direction;
 uniform float u_ambient;
+uniform mat4 u_texture_frame;
 out vec4 o_colour;
-// Value noise on a lattice hashed from world coordinates (metres): fixed to the surface, so
-// every view of a point sees the same texture (what stereo matching needs).
+// Value noise on a lattice hashed from world coordinates (metres) in u_texture_frame (a drive's
+// world): fixed to the surface, so every view of a point sees the same texture (what stereo
+// matching and odometry need).
 float hash3(vec3 p) {
     p = fract(p * 0.3183099 + vec3(0.71, 0.113, 0.419));
     p *= 17.0;
@@ -67,7 +69,7 @@ void main() {
     if (u_textured != 0) c *= texture(u_texture, v_texcoord);
     if (u_procedural != 0) {
         // Octaves of 0.6 m, 0.2 m, 7 cm and 2.5 cm cells; 0 mean, about +-0.5 range.
-        vec3 p = v_world + vec3(1000.0);
+        vec3 p = (u_texture_frame * vec4(v_world, 1.0)).xyz + vec3(1000.0);
         float n = 0.35 * value_noise(p / 0.6) + 0.3 * value_noise(p / 0.2) +
                   0.2 * value_noise(p / 0.07) + 0.15 * value_noise(p / 0.025) - 0.5;
         c.rgb = clamp(c.rgb * (1.0 + 1.2 * n) + vec3(0.18 * n), 0.0, 1.0);

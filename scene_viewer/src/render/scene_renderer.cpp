@@ -40,6 +40,7 @@ ImageRgba8 SceneRenderer::render_frame() {
     setup.clear_colour = {bg[0] / 255.0f, bg[1] / 255.0f, bg[2] / 255.0f, 0.0f};
     setup.msaa_samples = lit && options_.antialias == Antialias::msaa ? options_.msaa_samples : 0;
     setup.fxaa = lit && options_.antialias == Antialias::fxaa;
+    setup.texture_frame = options_.texture_frame;
     render_world(world_, models_, *device_, setup);
     ImageRgba8 image = device_->read_pixels();
     if (!options_.keep_alpha) {

@@ -4,7 +4,12 @@
 #include <cstdio>
 #include <stdexcept>
 
+#include "stereoscene/support/angles.hpp"
+
 namespace scene_viewer {
+
+using stereoscene::support::radians;
+using stereoscene::support::wrap_angle;
 
 namespace {
 
@@ -13,11 +18,30 @@ bool is_thing(int class_id) { return class_id >= 24 && class_id <= 33; }
 
 }  // namespace
 
+std::array<double, 12> EgoMotion::pose_at(double t_s) const {
+    const double yaw_rate = radians(yaw_rate_dps);
+    const double psi = yaw_rate * t_s;
+    // Heading (sin psi, 0, cos psi); the path integrates speed along it.
+    double x = 0.0, z = speed_mps * t_s;
+    if (std::abs(yaw_rate) > 1e-12) {
+        x = speed_mps / yaw_rate * (1.0 - std::cos(psi));
+        z = speed_mps / yaw_rate * std::sin(psi);
+    }
+    const double c = std::cos(psi), s = std::sin(psi);
+    return {c, 0.0, s, x, 0.0, 1.0, 0.0, 0.0, -s, 0.0, c, z};
+}
+
 void DriveOptions::validate() const {
     if (frames < 1 || frames > 100000) {
         throw std::invalid_argument("--frames must be between 1 and 100000");
     }
     if (!(fps > 0.0 && fps <= 1000.0)) throw std::invalid_argument("--fps must be in (0, 1000]");
+    if (!(std::abs(ego.speed_mps) <= 100.0)) {
+        throw std::invalid_argument("--ego-speed must be within +-100 m/s");
+    }
+    if (!(std::abs(ego.yaw_rate_dps) <= 90.0)) {
+        throw std::invalid_argument("--ego-yaw-rate must be within +-90 deg/s");
+    }
 }
 
 std::string drive_frame_name(int index) {
@@ -27,7 +51,7 @@ std::string drive_frame_name(int index) {
 }
 
 scene_schema::EntityDocument scene_at(const scene_schema::EntityDocument& scene, double t_s,
-                                      const std::string& frame_name) {
+                                      const std::string& frame_name, const EgoMotion& ego) {
     scene_schema::EntityDocument doc = scene;
     doc.frame.id = frame_name;
     doc.frame.timestamp_s = t_s;
@@ -40,7 +64,39 @@ scene_schema::EntityDocument scene_at(const scene_schema::EntityDocument& scene,
         if (is_thing(e.class_id) && !e.track_id) e.track_id = static_cast<std::int64_t>(i);
         if (is_thing(e.class_id) && !e.velocity) e.velocity = scene_schema::Velocity{};
     }
+    if (!ego.moving()) return doc;
+    const auto pose = ego.pose_at(t_s);
+    doc.frame.pose = pose;
+    // X_camera = R^T (X_world - t) with R a turn by psi about +y: on the ground plane
+    // (x, z) -> (c x - s z, s x + c z); headings turn by -psi.
+    const double c = pose[0], s = pose[2], psi = std::atan2(s, c);
+    for (auto& e : doc.entities) {
+        const double dx = e.x - pose[3], dz = e.z - pose[11];
+        e.x = c * dx - s * dz;
+        e.z = s * dx + c * dz;
+        e.theta = wrap_angle(e.theta - psi);
+        if (e.velocity) {
+            const double vx = e.velocity->vx_mps, vz = e.velocity->vz_mps;
+            e.velocity->vx_mps = c * vx - s * vz;
+            e.velocity->vz_mps = s * vx + c * vz;
+        }
+    }
     return doc;
+}
+
+std::string poses_text(const std::vector<std::array<double, 12>>& poses) {
+    std::string text;
+    char number[32];
+    for (const auto& p : poses) {
+        for (int k = 0; k < 12; ++k) {
+            // + 0.0: no "-0" for a zero.
+            std::snprintf(number, sizeof number, "%.9e", p[static_cast<std::size_t>(k)] + 0.0);
+            text += (k == 0 ? "" : " ");
+            text += number;
+        }
+        text += "\n";
+    }
+    return text;
 }
 
 scene_schema::SequenceIndex drive_index(const std::string& id, const DriveOptions& options) {

@@ -7,6 +7,7 @@
 #include <string>
 
 #include "scene_viewer/assets/palette.hpp"
+#include "scene_viewer/ecs/coordinates.hpp"
 #include "scene_viewer/render/scene_renderer.hpp"
 #include "stereoscene/support/angles.hpp"
 
@@ -336,6 +337,15 @@ StereoFrame render_stereo_frame(SceneRenderer& renderer,
     const StereoRig& rig = options.rig;
     const scene_schema::EntityDocument scene = scene_with_underlay(document, options);
     RenderOptions o = rig_render_options(options);
+    if (document.frame.pose) {
+        // A drive's frame: the texture stays fixed in the drive's world. GL world = G X_kitti
+        // with G = gl_from_kitti() its own inverse, so world_GL = G T_world_camera G frame_GL.
+        const auto& T = *document.frame.pose;
+        glm::mat4 t(1.0f);
+        for (int r = 0; r < 3; ++r)
+            for (int c = 0; c < 4; ++c) t[c][r] = static_cast<float>(T[std::size_t(4 * r + c)]);
+        o.texture_frame = gl_from_kitti() * t * gl_from_kitti();
+    }
 
     StereoFrame frame;
     frame.rig = rig;

@@ -5,6 +5,8 @@
 
 #include <string>
 
+#include <glm/glm.hpp>
+
 #include "scene_viewer/ecs/view_spec.hpp"
 
 namespace scene_viewer {
@@ -47,6 +49,7 @@ struct RenderOptions {
     float point_size_px = 2.0f;             ///< point cloud overlay: point size, pixels
     bool keep_alpha = false;                ///< keep alpha 0 where nothing was drawn (compositing)
     bool procedural_texture = false;        ///< lit: world-space noise texture on every surface
+    glm::mat4 texture_frame{1.0f};          ///< GL world -> the noise's frame (FrameSetup)
     /// Throws std::invalid_argument naming the bad field.
     void validate() const;
 };

@@ -46,6 +46,9 @@ struct FrameSetup {
     bool fxaa = false;                               ///< end_frame runs FXAA (msaa_samples <= 1)
     glm::vec3 light_direction{0.3f, 1.0f, 0.4f};     ///< towards the light, GL world frame
     float ambient = 0.35f;                           ///< ambient share of the lit colour, 0..1
+    /// GL world -> the frame the procedural noise is fixed to: a drive's world, so the texture
+    /// stays on the surfaces while the camera moves (identity: this frame's own world).
+    glm::mat4 texture_frame{1.0f};
 };
 
 /// One draw of one mesh.
@@ -58,7 +61,7 @@ struct DrawCall {
     bool lit = true;                  ///< directional + ambient, else flat colour
     bool vertex_colour = false;       ///< multiply by per-vertex colours
     float point_size_px = 1.0f;       ///< for Topology::points
-    bool procedural = false;          ///< modulate by value noise fixed in world space (stereo)
+    bool procedural = false;  ///< modulate by value noise fixed in FrameSetup::texture_frame
 };
 
 /// The backend interface. One frame: begin_frame, draw..., end_frame (MSAA resolve or FXAA pass),

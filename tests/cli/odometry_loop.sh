@@ -1,0 +1,38 @@
+#!/usr/bin/env bash
+# The odometry loop: a street made for a drive with a moving camera
+# (scripts/make-drive-street.py), rendered by scene-render sensors --frames with the same speed
+# and yaw rate (truth/poses.txt), analysed by cloud-analysis batch --odometry, its poses scored
+# by evaluate-odometry with the bars given after the frame count; then the moving camera's bad
+# flags.
+# usage: odometry_loop.sh SCENE_RENDER CLOUD_ANALYSIS PYTHON SPEED YAW_RATE FRAMES [bars...]
+set -euo pipefail
+render=$1 analyse=$2 python=$3 speed=$4 yaw=$5 frames=$6
+shift 6
+root=$(cd "$(dirname "${BASH_SOURCE[0]}")/../.." && pwd)
+d=$(mktemp -d)
+trap 'rm -rf "$d"' EXIT
+
+"$python" "$root/scripts/make-drive-street.py" --seed 3 --speed "$speed" --yaw-rate "$yaw" \
+    --length "$(awk -v v="$speed" -v n="$frames" 'BEGIN { print v * n / 10 }')" -o "$d/street.json"
+"$render" sensors "$d/street.json" --out "$d/drive" --frames "$frames" --fps 10 \
+    --ego-speed "$speed" --ego-yaw-rate "$yaw"
+test "$(wc -l < "$d/drive/truth/poses.txt")" = "$frames"
+grep -q '"pose"' "$d/drive/truth/0000000001.json"
+ls "$d/drive/image_2" | sed 's/\.png$//' > "$d/frames.txt"
+"$analyse" batch --kitti-root "$d/drive" --list "$d/frames.txt" --out-dir "$d/analysed" \
+    --odometry --quiet
+"$analyse" evaluate-odometry --poses "$d/analysed/poses.txt" --truth "$d/drive/truth/poses.txt" \
+    "$@"
+
+# A moving camera needs a drive, and a sane speed.
+set +e
+"$render" sensors "$d/street.json" --out "$d/one" --ego-speed 5 2> "$d/err"
+code=$?
+set -e
+test "$code" = 2 && grep -q -- "--ego-speed" "$d/err" && test ! -e "$d/one"
+set +e
+"$render" sensors "$d/street.json" --out "$d/fast" --frames 2 --ego-speed 500 2> "$d/err"
+code=$?
+set -e
+test "$code" = 2 && grep -q -- "--ego-speed must be within" "$d/err"
+echo "odometry loop: $frames frames at $speed m/s turning $yaw deg/s, bad flags refused"
