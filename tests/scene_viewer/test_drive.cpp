@@ -3,6 +3,7 @@
 #include <catch2/catch.hpp>
 
 #include "scene_viewer/sensors/drive.hpp"
+#include "scene_viewer/views/trails.hpp"
 #include "stereoscene/support/angles.hpp"
 
 using namespace scene_viewer;
@@ -132,4 +133,44 @@ TEST_CASE("poses are written as KITTI odometry text, one 3x4 matrix a line", "[s
           "1.000000000e+00 0.000000000e+00 0.000000000e+00 0.000000000e+00 0.000000000e+00 "
           "1.000000000e+00 0.000000000e+00 0.000000000e+00 0.000000000e+00 0.000000000e+00 "
           "1.000000000e+00 2.000000000e+00\n");
+}
+
+TEST_CASE("with poses, trails stay where things were in the world and the camera's path is one",
+          "[trails][drive]") {
+    // A parked car 10 m ahead of the start, seen from a camera driving 2 m a frame.
+    scene_schema::EntityDocument world;
+    scene_schema::Entity parked;
+    parked.id = "car-1";
+    parked.class_name = "car";
+    parked.class_id = 26;
+    parked.x = 3.0;
+    parked.y = 0.9;
+    parked.z = 10.0;
+    parked.H = 1.5;
+    parked.W = 1.8;
+    parked.L = 4.2;
+    world.entities = {parked};
+    TrailHistory trails(10);
+    const EgoMotion ego{20.0, 0.0};
+    for (int i = 0; i < 3; ++i) trails.remember(scene_at(world, 0.1 * i, "f", ego));
+    const auto now = scene_at(world, 0.3, "f", ego);
+    const auto drawn = trails.with_trails(now);
+    int car_marks = 0, ego_marks = 0;
+    for (const auto& e : drawn.entities) {
+        if (e.class_name != "trail") continue;
+        CHECK(e.y + e.H / 2 == Approx(1.65));  // on the ground
+        if (e.id.rfind("trail-ego-", 0) == 0) {
+            ++ego_marks;
+            CHECK(e.class_id == kEgoClassId);
+            CHECK(e.x == Approx(0.0).margin(1e-9));
+            CHECK(e.z < 0.0);  // behind the camera now
+        } else {
+            ++car_marks;
+            // Every mark of the parked car lies under it now: 10 - 6 = 4 m ahead.
+            CHECK(e.x == Approx(3.0));
+            CHECK(e.z == Approx(4.0));
+        }
+    }
+    CHECK(car_marks == 3);
+    CHECK(ego_marks == 3);
 }

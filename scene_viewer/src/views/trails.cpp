@@ -1,34 +1,70 @@
 #include "scene_viewer/views/trails.hpp"
 
 #include <algorithm>
+#include <array>
 #include <cstring>
+#include <optional>
 
 namespace scene_viewer {
 
+namespace {
+
+using Pose = std::array<double, 12>;
+
+/// R p + t of a row-major 3x4 pose.
+std::array<double, 3> apply(const Pose& T, double x, double y, double z) {
+    return {T[0] * x + T[1] * y + T[2] * z + T[3], T[4] * x + T[5] * y + T[6] * z + T[7],
+            T[8] * x + T[9] * y + T[10] * z + T[11]};
+}
+
+/// R^T (p - t): the inverse of apply.
+std::array<double, 3> apply_inverse(const Pose& T, double x, double y, double z) {
+    x -= T[3];
+    y -= T[7];
+    z -= T[11];
+    return {T[0] * x + T[4] * y + T[8] * z, T[1] * x + T[5] * y + T[9] * z,
+            T[2] * x + T[6] * y + T[10] * z};
+}
+
+}  // namespace
+
 void TrailHistory::remember(const scene_schema::EntityDocument& frame) {
     if (length_ <= 0) return;
+    const auto push = [this](std::int64_t track, const std::array<double, 3>& p, int class_id) {
+        auto& trail = points_[track];
+        trail.push_back({p[0], p[1], p[2], class_id});
+        while (static_cast<int>(trail.size()) > length_) trail.pop_front();
+    };
+    const std::optional<Pose>& pose = frame.frame.pose;
     for (const auto& e : frame.entities) {
         if (!e.track_id) continue;
-        auto& trail = points_[*e.track_id];
-        trail.push_back({e.x, e.y + e.H / 2.0, e.z, e.class_id});
-        while (static_cast<int>(trail.size()) > length_) trail.pop_front();
+        const double y_ground = e.y + e.H / 2.0;
+        push(*e.track_id, pose ? apply(*pose, e.x, y_ground, e.z) : std::array{e.x, y_ground, e.z},
+             e.class_id);
     }
+    // The camera's own path: the point on the ground under it.
+    if (pose) push(kEgoTrack, apply(*pose, 0.0, kEgoGroundBelow_m, 0.0), kEgoClassId);
 }
 
 scene_schema::EntityDocument TrailHistory::with_trails(
     const scene_schema::EntityDocument& frame) const {
     scene_schema::EntityDocument out = frame;
+    const std::optional<Pose>& pose = frame.frame.pose;
     for (const auto& [track, trail] : points_) {
         for (std::size_t k = 0; k < trail.size(); ++k) {
             const Point& p = trail[k];
+            const auto c = pose ? apply_inverse(*pose, p.x, p.y_ground, p.z)
+                                : std::array{p.x, p.y_ground, p.z};
             scene_schema::Entity m;
-            m.id = "trail-" + std::to_string(track) + "-" + std::to_string(k);
+            m.id = (track == kEgoTrack ? std::string("trail-ego-")
+                                       : "trail-" + std::to_string(track) + "-") +
+                   std::to_string(k);
             m.class_name = "trail";
             m.class_id = p.class_id;
-            m.x = p.x;
-            m.z = p.z;
+            m.x = c[0];
+            m.z = c[2];
             m.H = 0.04;
-            m.y = p.y_ground - m.H / 2.0;
+            m.y = c[1] - m.H / 2.0;
             m.W = 0.35;
             m.L = 0.35;
             m.method = "trail";

@@ -2,6 +2,10 @@
 
 /// Track trails for playing a drive: each track's past positions, drawn as small flat markers
 /// of its class colour behind the object (class "trail", which has no model, so it is a box).
+/// When the frames carry poses (frame.pose: a moving camera) the positions are kept in the
+/// drive's world and drawn where they lie as seen from the current camera, so a parked car's
+/// trail is one spot and a moving car's is its path over the ground; the camera's own path is a
+/// trail too (track kEgoTrack, class id kEgoClassId).
 
 #include <cstdint>
 #include <deque>
@@ -12,6 +16,14 @@
 #include "scene_viewer/assets/model.hpp"
 
 namespace scene_viewer {
+
+/// The trail of the camera's own path.
+inline constexpr std::int64_t kEgoTrack = -1;
+/// Its class id: Cityscapes' "ego vehicle".
+inline constexpr int kEgoClassId = 1;
+/// The ground under the camera, metres below it (KITTI's mounting height), where its path is
+/// drawn.
+inline constexpr double kEgoGroundBelow_m = 1.65;
 
 /// Past positions of the tracks, oldest first.
 class TrailHistory {
