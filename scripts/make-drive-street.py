@@ -16,13 +16,10 @@ rate:
 The same arguments give the same file byte for byte.
 """
 import argparse
-import json
 import math
-import os
 import random
-import sys
 
-from stereoscene_assets import class_ids
+from stereoscene_assets import class_ids, write_entity_file
 
 ROAD_TOP_Y = 1.60  # the road's top surface in the camera frame (y down), metres
 KERB = 6.0  # the road's half width, metres
@@ -171,14 +168,7 @@ def main():
     if a.yaw_rate and abs(a.speed / math.radians(a.yaw_rate)) < 2 * (KERB + SIDEWALK + 15):
         p.error("--yaw-rate too large for --speed: the street's radius must be at least "
                 f"{2 * (KERB + SIDEWALK + 15):g} m")
-    text = json.dumps(build_scene(a.seed, a.speed, a.yaw_rate, a.length), indent=2,
-                      sort_keys=True) + "\n"
-    if a.out == "-":
-        sys.stdout.write(text)
-    else:
-        with open(a.out + ".tmp", "w") as f:
-            f.write(text)
-        os.replace(a.out + ".tmp", a.out)
+    write_entity_file(build_scene(a.seed, a.speed, a.yaw_rate, a.length), a.out)
 
 
 if __name__ == "__main__":

@@ -24,12 +24,10 @@ Every car carries its size family in `subclass` (car, van); the truck and the bu
 own classes. docs/evaluation.md "Hard parking streets" describes how they are scored.
 """
 import argparse
-import json
 import math
 import random
-import sys
 
-from stereoscene_assets import class_ids
+from stereoscene_assets import class_ids, write_entity_file
 
 ROAD_TOP_Y = 1.60  # the road's top surface in the camera frame (y down), metres
 ROW_X = 4.9  # parked cars' centre line from the street's centre, metres
@@ -289,15 +287,7 @@ def main():
         p.error("--seed must be >= 0")
     if a.pedestrians and not a.kerbside:
         p.error("--pedestrians needs --kerbside (the people stand where nobody parks)")
-    text = json.dumps(build_scene(a.seed, a.kerbside, a.pedestrians), indent=2,
-                      sort_keys=True) + "\n"
-    if a.out == "-":
-        sys.stdout.write(text)
-    else:
-        with open(a.out + ".tmp", "w") as f:
-            f.write(text)
-        import os
-        os.replace(a.out + ".tmp", a.out)
+    write_entity_file(build_scene(a.seed, a.kerbside, a.pedestrians), a.out)
 
 
 if __name__ == "__main__":
