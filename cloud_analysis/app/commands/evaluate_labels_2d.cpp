@@ -12,10 +12,17 @@ namespace {
 
 namespace fs = std::filesystem;
 
-/// The frames to score: --frame, else every labelled frame (a folder) or the entity file's
-/// own frame (one file; the only frame of a one-frame labels file when the file has no id).
-std::vector<const FrameLabels2d*> frames_to_score(const EvaluateArgs& args, const Labels2d& labels,
-                                                  bool folder) {
+/// A labelled frame and its entity file, read once.
+struct FrameToScore {
+    const FrameLabels2d* labels = nullptr;
+    fs::path file;
+    scene_schema::EntityDocument estimate;
+};
+
+/// The frames to score: --frame, else every labelled frame (a folder of <frame>.json) or the
+/// entity file's own frame (one file; the only frame of a one-frame labels file when the file's
+/// id is not labelled).
+std::vector<FrameToScore> frames_to_score(const EvaluateArgs& args, const Labels2d& labels) {
     auto find = [&](const std::string& id) {
         const FrameLabels2d* f = labels.find(id);
         if (f == nullptr) {
@@ -24,15 +31,28 @@ std::vector<const FrameLabels2d*> frames_to_score(const EvaluateArgs& args, cons
         }
         return f;
     };
-    if (!args.frame.empty()) return {find(args.frame)};
-    if (folder) {
-        std::vector<const FrameLabels2d*> all;
-        for (const auto& f : labels.frames) all.push_back(&f);
-        return all;
+    std::vector<FrameToScore> out;
+    if (!fs::is_directory(args.entities)) {
+        FrameToScore one{nullptr, args.entities, scene_schema::read_file(args.entities)};
+        const std::string id = args.frame.empty() ? one.estimate.frame.id : args.frame;
+        one.labels = args.frame.empty() && labels.find(id) == nullptr && labels.frames.size() == 1
+                         ? &labels.frames.front()
+                         : find(id);
+        out.push_back(std::move(one));
+        return out;
     }
-    const std::string id = scene_schema::read_file(args.entities).frame.id;
-    if (labels.find(id) == nullptr && labels.frames.size() == 1) return {&labels.frames.front()};
-    return {find(id)};
+    std::vector<const FrameLabels2d*> chosen;
+    if (!args.frame.empty()) {
+        chosen.push_back(find(args.frame));
+    } else {
+        for (const auto& f : labels.frames) chosen.push_back(&f);
+    }
+    for (const FrameLabels2d* f : chosen) {
+        const fs::path file = args.entities / (f->frame + ".json");
+        require_input_files({file}, "evaluate");
+        out.push_back({f, file, scene_schema::read_file(file)});
+    }
+    return out;
 }
 
 }  // namespace
@@ -107,14 +127,12 @@ void check_labels_2d_flags(const EvaluateArgs& args) {
 
 void evaluate_labels_2d(const EvaluateArgs& args, EvaluationReport& report) {
     const Labels2d labels = load_labels_2d(args.labels_2d);
-    const bool folder = fs::is_directory(args.entities);
     Labels2dComparison c;
     c.labels_file = args.labels_2d.string();
     c.entities_source = args.entities.string();
-    for (const FrameLabels2d* f : frames_to_score(args, labels, folder)) {
-        const fs::path file = folder ? args.entities / (f->frame + ".json") : args.entities;
-        if (folder) require_input_files({file}, "evaluate");
-        const scene_schema::EntityDocument doc = scene_schema::read_file(file);
+    for (const FrameToScore& f : frames_to_score(args, labels)) {
+        const fs::path& file = f.file;
+        const scene_schema::EntityDocument& doc = f.estimate;
         if (!doc.frame.camera) {
             throw std::runtime_error(
                 "cannot evaluate: the entity file has no frame.camera to "
@@ -129,8 +147,8 @@ void evaluate_labels_2d(const EvaluateArgs& args, EvaluationReport& report) {
                 std::to_string(cam.height_px) + ", the labels' " + std::to_string(labels.width_px) +
                 "x" + std::to_string(labels.height_px) + " (" + file.string() + ")");
         }
-        c.scores.push_back(score_frame_2d(doc.entities, cam, *f, args.match_2d));
-        c.labels.push_back(*f);
+        c.scores.push_back(score_frame_2d(doc.entities, cam, *f.labels, args.match_2d));
+        c.labels.push_back(*f.labels);
         c.estimate.push_back(doc.entities);
     }
     Labels2dBars bars;
