@@ -77,6 +77,44 @@ void add_input_settings_flags(CLI::App& cmd, AnalyseArgs& a) {
         ->group(in);
 }
 
+/// How the disparity range and the pixel settings follow the rig (pipeline/rig_fit.hpp).
+void add_rig_flags(CLI::App& cmd, AnalyseArgs& a, const std::string& sg) {
+    auto& rig = a.options.rig;
+    cmd.add_option("--min-depth", rig.min_depth_m,
+                   "nearest depth to match, metres: sets --num-disparities from the rig "
+                   "(fx B / depth, to a multiple of 16); 0 = --num-disparities (128)")
+        ->capture_default_str()
+        ->group(sg);
+    cmd.add_option("--half-resolution-above", rig.half_resolution_above_px,
+                   "frames with more pixels are analysed at half resolution; 0 = never")
+        ->capture_default_str()
+        ->group(sg);
+    cmd.add_flag("--no-rig-scaling", a.no_rig_scaling,
+                 "keep every pixel setting as written for KITTI's focal length (721.5 px) "
+                 "instead of scaling it to the rig's")
+        ->group(sg);
+}
+
+/// The matcher's post-filters: left-right check, WLS, half-resolution matching.
+void add_post_filter_flags(CLI::App& cmd, DisparityOptions& d, const std::string& sg) {
+    cmd.add_flag("--lr-check", d.lr_check, "drop pixels failing a full left-right check")
+        ->group(sg);
+    cmd.add_option("--lr-max-diff", d.lr_max_diff_px, "left-right tolerance, px")
+        ->capture_default_str()
+        ->group(sg);
+    cmd.add_flag("--wls", d.wls, "WLS filtering (ximgproc): denser, smoother map")->group(sg);
+    cmd.add_option("--downscale", d.downscale,
+                   "match at 1/N resolution (1 or 2) and upsample the disparity")
+        ->capture_default_str()
+        ->group(sg);
+    cmd.add_option("--wls-lambda", d.wls_lambda, "WLS smoothness")
+        ->capture_default_str()
+        ->group(sg);
+    cmd.add_option("--wls-sigma", d.wls_sigma_colour, "WLS edge sensitivity")
+        ->capture_default_str()
+        ->group(sg);
+}
+
 /// Settings of the matcher: preset and cv::StereoSGBM parameters, post-filters.
 void add_disparity_flags(CLI::App& cmd, AnalyseArgs& a) {
     auto& d = a.options.disparity;
@@ -94,20 +132,7 @@ void add_disparity_flags(CLI::App& cmd, AnalyseArgs& a) {
     cmd.add_option("--num-disparities", d.num_disparities,
                    "search range, px, multiple of 16 (default: from --min-depth and the rig)")
         ->group(sg);
-    auto& rig = a.options.rig;
-    cmd.add_option("--min-depth", rig.min_depth_m,
-                   "nearest depth to match, metres: sets --num-disparities from the rig "
-                   "(fx B / depth, to a multiple of 16); 0 = --num-disparities (128)")
-        ->capture_default_str()
-        ->group(sg);
-    cmd.add_option("--half-resolution-above", rig.half_resolution_above_px,
-                   "frames with more pixels are analysed at half resolution; 0 = never")
-        ->capture_default_str()
-        ->group(sg);
-    cmd.add_flag("--no-rig-scaling", a.no_rig_scaling,
-                 "keep every pixel setting as written for KITTI's focal length (721.5 px) "
-                 "instead of scaling it to the rig's")
-        ->group(sg);
+    add_rig_flags(cmd, a, sg);
     cmd.add_option("--block-size", d.block_size, "matching window, px, odd")
         ->capture_default_str()
         ->group(sg);
@@ -143,22 +168,7 @@ void add_disparity_flags(CLI::App& cmd, AnalyseArgs& a) {
     cmd.add_flag("--pad-left,!--no-pad-left", d.pad_left,
                  "pad the views so the left border band (min + num disparities wide) is matched")
         ->group(sg);
-    cmd.add_flag("--lr-check", d.lr_check, "drop pixels failing a full left-right check")
-        ->group(sg);
-    cmd.add_option("--lr-max-diff", d.lr_max_diff_px, "left-right tolerance, px")
-        ->capture_default_str()
-        ->group(sg);
-    cmd.add_flag("--wls", d.wls, "WLS filtering (ximgproc): denser, smoother map")->group(sg);
-    cmd.add_option("--downscale", d.downscale,
-                   "match at 1/N resolution (1 or 2) and upsample the disparity")
-        ->capture_default_str()
-        ->group(sg);
-    cmd.add_option("--wls-lambda", d.wls_lambda, "WLS smoothness")
-        ->capture_default_str()
-        ->group(sg);
-    cmd.add_option("--wls-sigma", d.wls_sigma_colour, "WLS edge sensitivity")
-        ->capture_default_str()
-        ->group(sg);
+    add_post_filter_flags(cmd, d, sg);
 }
 
 /// The choice of matcher and the settings of the project's own SGM.

@@ -161,6 +161,35 @@ nlohmann::json report_json(const BatchArgs& a, const cloud_analysis::BatchReport
     return report;
 }
 
+/// The tracker's flags of `batch --track`.
+void add_tracking_flags(CLI::App& sub, BatchArgs& a) {
+    CLI::App* cmd = &sub;
+    cmd->add_option("--fps", a.track_options.fps,
+                    "--track: frame rate when frames carry no timestamps, Hz")
+        ->capture_default_str();
+    cmd->add_option("--min-hits", a.track_options.tracker.min_hits,
+                    "--track: hits before a track is reported")
+        ->capture_default_str();
+    cmd->add_option("--max-misses", a.track_options.tracker.max_misses,
+                    "--track: frames without a hit before a confirmed track dies")
+        ->capture_default_str();
+    cmd->add_option("--coast", a.track_options.tracker.coast_frames,
+                    "--track: frames a confirmed track missed by the detector is still "
+                    "reported, at its prediction")
+        ->capture_default_str();
+    cmd->add_option("--coast-min-hits", a.track_options.tracker.coast_min_hits,
+                    "--track: only a track hit at least this often coasts")
+        ->capture_default_str();
+    cmd->add_option("--support", a.track_options.tracker.support_frames,
+                    "--track: frames a still track missed by the detector is still reported "
+                    "while a piece of something lies on its footprint (0 = off; see `track`)")
+        ->capture_default_str();
+    cmd->add_option("--gate-chi2", a.track_options.tracker.gate_chi2,
+                    "--track: statistical gate, squared Mahalanobis distance from a track's "
+                    "prediction (0 = off; see `track`)")
+        ->capture_default_str();
+}
+
 }  // namespace
 
 CLI::App* add_batch_command(CLI::App& app, BatchArgs& a) {
@@ -198,30 +227,7 @@ CLI::App* add_batch_command(CLI::App& app, BatchArgs& a) {
     cmd->add_flag("--odometry", a.odometry,
                   "estimate where the camera went from frame to frame (stereo visual odometry): "
                   "<out-dir>/poses.txt (KITTI odometry format) and each entity file's frame.pose");
-    cmd->add_option("--fps", a.track_options.fps,
-                    "--track: frame rate when frames carry no timestamps, Hz")
-        ->capture_default_str();
-    cmd->add_option("--min-hits", a.track_options.tracker.min_hits,
-                    "--track: hits before a track is reported")
-        ->capture_default_str();
-    cmd->add_option("--max-misses", a.track_options.tracker.max_misses,
-                    "--track: frames without a hit before a confirmed track dies")
-        ->capture_default_str();
-    cmd->add_option("--coast", a.track_options.tracker.coast_frames,
-                    "--track: frames a confirmed track missed by the detector is still "
-                    "reported, at its prediction")
-        ->capture_default_str();
-    cmd->add_option("--coast-min-hits", a.track_options.tracker.coast_min_hits,
-                    "--track: only a track hit at least this often coasts")
-        ->capture_default_str();
-    cmd->add_option("--support", a.track_options.tracker.support_frames,
-                    "--track: frames a still track missed by the detector is still reported "
-                    "while a piece of something lies on its footprint (0 = off; see `track`)")
-        ->capture_default_str();
-    cmd->add_option("--gate-chi2", a.track_options.tracker.gate_chi2,
-                    "--track: statistical gate, squared Mahalanobis distance from a track's "
-                    "prediction (0 = off; see `track`)")
-        ->capture_default_str();
+    add_tracking_flags(*cmd, a);
     cmd->add_option("--out-dir", a.out_dir, "output folder: <frame>.json per frame")->required();
     cmd->add_option("--clouds", a.cloud_formats, "also write <frame>.<fmt> clouds: xyz pcd ply")
         ->check(CLI::IsMember({"xyz", "pcd", "ply"}));

@@ -183,6 +183,9 @@ scene_schema::EntityDocument document_of(std::vector<std::vector<scene_schema::E
 }  // namespace
 
 void ExtractOptions::validate() const {
+    const auto fail_if = [](bool bad, const char* message) {
+        if (bad) throw std::invalid_argument(message);
+    };
     if (method != "instances" && method != "centroid" && method != "average" &&
         method != "variance") {
         throw std::invalid_argument(
@@ -190,82 +193,61 @@ void ExtractOptions::validate() const {
     }
     classes.validate();
     ground.validate();
-    if (!(max_range_m > 0.0)) throw std::invalid_argument("max_range_m: must be > 0");
+    fail_if(!(max_range_m > 0.0), "max_range_m: must be > 0");
     if (clustering != "euclidean" && clustering != "image") {
         throw std::invalid_argument("clustering: must be euclidean or image (got '" + clustering +
                                     "')");
     }
-    if (image_radius_px < 1) throw std::invalid_argument("image_radius_px: must be >= 1");
-    if (!(outlier_margin_m >= 0.0)) throw std::invalid_argument("outlier_margin_m: must be >= 0");
-    if (!(shadow_fraction > 0.0 && shadow_fraction <= 1.0)) {
-        throw std::invalid_argument("shadow_fraction: must be in (0, 1]");
-    }
-    if (shadow_radius_px < 0) throw std::invalid_argument("shadow_radius_px: must be >= 0");
-    if (!(near_trim_fraction >= 0.0 && near_trim_fraction < 0.2)) {
-        throw std::invalid_argument("near_trim_fraction: must be in [0, 0.2)");
-    }
-    if (!(van_min_height_m > 0.0 && van_min_height_m < 100.0)) {
-        throw std::invalid_argument("van_min_height_m: must be in (0, 100) metres");
-    }
+    fail_if(image_radius_px < 1, "image_radius_px: must be >= 1");
+    fail_if(!(outlier_margin_m >= 0.0), "outlier_margin_m: must be >= 0");
+    fail_if(!(shadow_fraction > 0.0 && shadow_fraction <= 1.0),
+            "shadow_fraction: must be in (0, 1]");
+    fail_if(shadow_radius_px < 0, "shadow_radius_px: must be >= 0");
+    fail_if(!(near_trim_fraction >= 0.0 && near_trim_fraction < 0.2),
+            "near_trim_fraction: must be in [0, 0.2)");
+    fail_if(!(van_min_height_m > 0.0 && van_min_height_m < 100.0),
+            "van_min_height_m: must be in (0, 100) metres");
     if (!(van_prior_L_m > 0.0 && van_prior_L_m < 100.0 && van_prior_W_m > 0.0 &&
           van_prior_W_m < 100.0)) {
         throw std::invalid_argument("van_prior_L_m, van_prior_W_m: must be in (0, 100) metres");
     }
-    if (!(van_max_L_m >= van_prior_L_m && van_max_L_m < 100.0)) {
-        throw std::invalid_argument("van_max_L_m: must be in [van_prior_L_m, 100) metres");
-    }
+    fail_if(!(van_max_L_m >= van_prior_L_m && van_max_L_m < 100.0),
+            "van_max_L_m: must be in [van_prior_L_m, 100) metres");
     if (!(far_column_length_fraction == 0.0 ||
           (far_column_length_fraction >= 1.0 && far_column_length_fraction <= 3.0))) {
         throw std::invalid_argument("far_column_length_fraction: must be 0 or in [1, 3]");
     }
-    if (!(min_width_px >= 0.0 && min_width_px < 1e6)) {
-        throw std::invalid_argument("min_width_px: must be >= 0");
-    }
-    if (!(strip_beside_width_px >= 0.0 && strip_beside_width_px < 1e6)) {
-        throw std::invalid_argument("strip_beside_width_px: must be >= 0");
-    }
-    if (!(strip_beside_gap_m >= 0.0 && strip_beside_gap_m < 1e6)) {
-        throw std::invalid_argument("strip_beside_gap_m: must be >= 0");
-    }
-    if (!(fragment_height_fraction >= 0.0 && fragment_height_fraction <= 1.0)) {
-        throw std::invalid_argument("fragment_height_fraction: must be in [0, 1]");
-    }
-    if (!(min_height_fraction >= 0.0 && min_height_fraction < 1.0)) {
-        throw std::invalid_argument("min_height_fraction: must be in [0, 1)");
-    }
-    if (!(min_face_share >= 0.0 && min_face_share < 1.0)) {
-        throw std::invalid_argument("min_face_share: must be in [0, 1)");
-    }
-    if (!(fx_px >= 0.0 && fy_px >= 0.0 && fx_px < 1e7 && fy_px < 1e7)) {
-        throw std::invalid_argument("fx_px, fy_px: must be >= 0");
-    }
-    if (!(row_low_fraction >= 0.0 && row_low_fraction < 1.0)) {
-        throw std::invalid_argument("row_low_fraction: must be in [0, 1)");
-    }
-    if (!(row_low_extent_m > 0.0)) throw std::invalid_argument("row_low_extent_m: must be > 0");
-    if (!(row_gap_m >= 0.0)) throw std::invalid_argument("row_gap_m: must be >= 0");
-    if (!(row_valley_depth_m >= 0.0 && row_valley_depth_m < 100.0)) {
-        throw std::invalid_argument("row_valley_depth_m: must be in [0, 100) metres");
-    }
-    if (!(row_valley_min_length_fraction > 0.0 && row_valley_min_length_fraction < 100.0)) {
-        throw std::invalid_argument("row_valley_min_length_fraction: must be in (0, 100)");
-    }
-    if (!(row_valley_min_peak_fraction >= 0.0 && row_valley_min_peak_fraction <= 2.0)) {
-        throw std::invalid_argument("row_valley_min_peak_fraction: must be in [0, 2]");
-    }
-    if (!(row_valley_min_piece_m > 0.0 && row_valley_min_piece_m < 100.0)) {
-        throw std::invalid_argument("row_valley_min_piece_m: must be in (0, 100) metres");
-    }
-    if (!(row_valley_bin_m >= 0.01 && row_valley_bin_m <= 10.0)) {
-        throw std::invalid_argument("row_valley_bin_m: must be in [0.01, 10] metres");
-    }
-    if (!(row_valley_closing_m >= 0.0 && row_valley_closing_m <= 10.0)) {
-        throw std::invalid_argument("row_valley_closing_m: must be in [0, 10] metres");
-    }
-    if (threads < 1) throw std::invalid_argument("threads: must be >= 1");
-    if (!(stuff_on_thing_fraction > 0.0 && stuff_on_thing_fraction <= 1.0)) {
-        throw std::invalid_argument("stuff_on_thing_fraction: must be in (0, 1]");
-    }
+    fail_if(!(min_width_px >= 0.0 && min_width_px < 1e6), "min_width_px: must be >= 0");
+    fail_if(!(strip_beside_width_px >= 0.0 && strip_beside_width_px < 1e6),
+            "strip_beside_width_px: must be >= 0");
+    fail_if(!(strip_beside_gap_m >= 0.0 && strip_beside_gap_m < 1e6),
+            "strip_beside_gap_m: must be >= 0");
+    fail_if(!(fragment_height_fraction >= 0.0 && fragment_height_fraction <= 1.0),
+            "fragment_height_fraction: must be in [0, 1]");
+    fail_if(!(min_height_fraction >= 0.0 && min_height_fraction < 1.0),
+            "min_height_fraction: must be in [0, 1)");
+    fail_if(!(min_face_share >= 0.0 && min_face_share < 1.0), "min_face_share: must be in [0, 1)");
+    fail_if(!(fx_px >= 0.0 && fy_px >= 0.0 && fx_px < 1e7 && fy_px < 1e7),
+            "fx_px, fy_px: must be >= 0");
+    fail_if(!(row_low_fraction >= 0.0 && row_low_fraction < 1.0),
+            "row_low_fraction: must be in [0, 1)");
+    fail_if(!(row_low_extent_m > 0.0), "row_low_extent_m: must be > 0");
+    fail_if(!(row_gap_m >= 0.0), "row_gap_m: must be >= 0");
+    fail_if(!(row_valley_depth_m >= 0.0 && row_valley_depth_m < 100.0),
+            "row_valley_depth_m: must be in [0, 100) metres");
+    fail_if(!(row_valley_min_length_fraction > 0.0 && row_valley_min_length_fraction < 100.0),
+            "row_valley_min_length_fraction: must be in (0, 100)");
+    fail_if(!(row_valley_min_peak_fraction >= 0.0 && row_valley_min_peak_fraction <= 2.0),
+            "row_valley_min_peak_fraction: must be in [0, 2]");
+    fail_if(!(row_valley_min_piece_m > 0.0 && row_valley_min_piece_m < 100.0),
+            "row_valley_min_piece_m: must be in (0, 100) metres");
+    fail_if(!(row_valley_bin_m >= 0.01 && row_valley_bin_m <= 10.0),
+            "row_valley_bin_m: must be in [0.01, 10] metres");
+    fail_if(!(row_valley_closing_m >= 0.0 && row_valley_closing_m <= 10.0),
+            "row_valley_closing_m: must be in [0, 10] metres");
+    fail_if(threads < 1, "threads: must be >= 1");
+    fail_if(!(stuff_on_thing_fraction > 0.0 && stuff_on_thing_fraction <= 1.0),
+            "stuff_on_thing_fraction: must be in (0, 1]");
 }
 
 double min_seen_area_m2(const ClassSettings& s, const ExtractOptions& options) {

@@ -104,6 +104,67 @@ FrameLabels2d frame_of(const nlohmann::json& j, std::size_t index, const std::st
     return f;
 }
 
+/// The entities of a category whose projected box lies in the image.
+std::vector<Scored2d> project_entities(const std::vector<scene_schema::Entity>& entities,
+                                       const scene_schema::CameraIntrinsics& camera) {
+    StereoCamera cam;
+    cam.width_px = camera.width_px;
+    cam.height_px = camera.height_px;
+    cam.fx_px = camera.fx_px;
+    cam.fy_px = camera.fy_px;
+    cam.cx_px = cam.cx_right_px = camera.cx_px;
+    cam.cy_px = camera.cy_px;
+    cam.baseline_m = camera.baseline_m;
+
+    std::vector<Scored2d> out;
+    for (std::size_t i = 0; i < entities.size(); ++i) {
+        const auto category = category_of_class(entities[i].class_name);
+        if (!category) continue;
+        const auto box = projected_box_px(entities[i], cam, cam.width_px, cam.height_px);
+        if (!box) continue;
+        Scored2d s;
+        s.entity = i;
+        s.category = *category;
+        s.box_px = *box;
+        s.range_m = std::hypot(entities[i].x, entities[i].z);
+        out.push_back(s);
+    }
+
+    return out;
+}
+
+/// Pairs of one category that meet the rule (IoU >= min_iou; for a partly hidden label also
+/// cover >= hidden_min_cover with IoU >= hidden_min_iou), taken best IoU first, one to one:
+/// sets each matched entity's label and IoU; returns which labels were taken.
+std::vector<bool> match_one_to_one(std::vector<Scored2d>& scored, const FrameLabels2d& labels,
+                                   const Match2dOptions& options) {
+    std::vector<std::tuple<double, std::size_t, std::size_t>> pairs;
+    for (std::size_t e = 0; e < scored.size(); ++e) {
+        const Eigen::Vector4d& eb = scored[e].box_px;
+        for (std::size_t l = 0; l < labels.objects.size(); ++l) {
+            const Label2d& label = labels.objects[l];
+            if (label.category != scored[e].category) continue;
+            const double iou = rect_iou(eb, label.box_px);
+            const double cover = intersection(eb, label.box_px) / area(label.box_px);
+            const bool meets = iou >= options.min_iou ||
+                               (label.occluded >= 1 && cover >= options.hidden_min_cover &&
+                                iou >= options.hidden_min_iou);
+            if (meets) pairs.emplace_back(iou, e, l);
+        }
+    }
+    std::sort(pairs.begin(), pairs.end(),
+              [](const auto& a, const auto& b) { return std::get<0>(a) > std::get<0>(b); });
+    std::vector<bool> label_taken(labels.objects.size(), false);
+    for (const auto& [iou, e, l] : pairs) {
+        if (scored[e].label || label_taken[l]) continue;
+        scored[e].label = l;
+        scored[e].iou = iou;
+        label_taken[l] = true;
+    }
+
+    return label_taken;
+}
+
 }  // namespace
 
 std::string_view category_name(Category2d category) {
@@ -259,55 +320,11 @@ FrameScore2d score_frame_2d(const std::vector<scene_schema::Entity>& entities,
         camera.height_px <= 0) {
         throw std::invalid_argument("the entities' camera has no focal length or image size");
     }
-    StereoCamera cam;
-    cam.width_px = camera.width_px;
-    cam.height_px = camera.height_px;
-    cam.fx_px = camera.fx_px;
-    cam.fy_px = camera.fy_px;
-    cam.cx_px = cam.cx_right_px = camera.cx_px;
-    cam.cy_px = camera.cy_px;
-    cam.baseline_m = camera.baseline_m;
-
     FrameScore2d score;
     score.frame = labels.frame;
-    for (std::size_t i = 0; i < entities.size(); ++i) {
-        const auto category = category_of_class(entities[i].class_name);
-        if (!category) continue;
-        const auto box = projected_box_px(entities[i], cam, cam.width_px, cam.height_px);
-        if (!box) continue;
-        Scored2d s;
-        s.entity = i;
-        s.category = *category;
-        s.box_px = *box;
-        s.range_m = std::hypot(entities[i].x, entities[i].z);
-        score.entities.push_back(s);
-    }
+    score.entities = project_entities(entities, camera);
 
-    // Pairs that meet the rule, best IoU first, taken one to one.
-    std::vector<std::tuple<double, std::size_t, std::size_t>> pairs;
-    for (std::size_t e = 0; e < score.entities.size(); ++e) {
-        const Eigen::Vector4d& eb = score.entities[e].box_px;
-        for (std::size_t l = 0; l < labels.objects.size(); ++l) {
-            const Label2d& label = labels.objects[l];
-            if (label.category != score.entities[e].category) continue;
-            const double iou = rect_iou(eb, label.box_px);
-            const double cover = intersection(eb, label.box_px) / area(label.box_px);
-            const bool meets = iou >= options.min_iou ||
-                               (label.occluded >= 1 && cover >= options.hidden_min_cover &&
-                                iou >= options.hidden_min_iou);
-            if (meets) pairs.emplace_back(iou, e, l);
-        }
-    }
-    std::sort(pairs.begin(), pairs.end(),
-              [](const auto& a, const auto& b) { return std::get<0>(a) > std::get<0>(b); });
-    std::vector<bool> label_taken(labels.objects.size(), false);
-    for (const auto& [iou, e, l] : pairs) {
-        if (score.entities[e].label || label_taken[l]) continue;
-        score.entities[e].label = l;
-        score.entities[e].iou = iou;
-        label_taken[l] = true;
-    }
-
+    const std::vector<bool> label_taken = match_one_to_one(score.entities, labels, options);
     for (auto& s : score.entities) {
         Counts2d& c = score.counts[static_cast<int>(s.category)];
         double in_dont_care = 0.0;

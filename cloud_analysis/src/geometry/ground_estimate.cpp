@@ -21,50 +21,36 @@ std::string metres(double value) {
 }  // namespace
 
 void GeometryOptions::validate() const {
+    const auto fail_if = [](bool bad, const char* message) {
+        if (bad) throw std::invalid_argument(message);
+    };
     const auto positive = [](double v, const char* name) {
         if (!(v > 0.0)) throw std::invalid_argument(std::string(name) + ": must be > 0");
     };
     positive(ground_max_range_m, "geometry.ground_max_range_m");
     positive(ground_inlier_m, "geometry.ground_inlier_m");
     positive(ground_tolerance_m, "geometry.ground_tolerance_m");
-    if (!(disparity_noise_px >= 0.0)) {
-        throw std::invalid_argument("geometry.disparity_noise_px: must be >= 0");
-    }
+    fail_if(!(disparity_noise_px >= 0.0), "geometry.disparity_noise_px: must be >= 0");
     positive(min_camera_height_m, "geometry.min_camera_height_m");
-    if (!(max_camera_height_m > min_camera_height_m)) {
-        throw std::invalid_argument(
+    fail_if(!(max_camera_height_m > min_camera_height_m),
             "geometry.max_camera_height_m: must be > geometry.min_camera_height_m");
-    }
     positive(max_depth_m, "geometry.max_depth_m");
     positive(max_obstacle_height_m, "geometry.max_obstacle_height_m");
-    if (column_bin_px < 1) throw std::invalid_argument("geometry.column_bin_px: must be >= 1");
+    fail_if(column_bin_px < 1, "geometry.column_bin_px: must be >= 1");
     positive(link_depth_m, "geometry.link_depth_m");
-    if (!(disparity_bin_share > 0.0 && disparity_bin_share < 1.0)) {
-        throw std::invalid_argument("geometry.disparity_bin_share: must be in (0, 1)");
-    }
-    if (min_cell_pixels < 1) throw std::invalid_argument("geometry.min_cell_pixels: must be >= 1");
-    if (blend_rows < 1 || blend_rows > 1000) {
-        throw std::invalid_argument("geometry.blend_rows: must be in [1, 1000]");
-    }
-    if (!(blend_step_px >= 0.0 && blend_step_px < 1e6)) {
-        throw std::invalid_argument("geometry.blend_step_px: must be >= 0");
-    }
-    if (!(top_behind_px > 0.0 && top_behind_px < 1e6)) {
-        throw std::invalid_argument("geometry.top_behind_px: must be > 0");
-    }
-    if (!(foot_ahead_px > 0.0 && foot_ahead_px < 1e6)) {
-        throw std::invalid_argument("geometry.foot_ahead_px: must be > 0");
-    }
-    if (!(split_surface_px >= 0.0 && split_surface_px < 1e6)) {
-        throw std::invalid_argument("geometry.split_surface_px: must be >= 0");
-    }
-    if (!(behind_gap_m >= 0.0 && behind_gap_m < 1e6)) {
-        throw std::invalid_argument("geometry.behind_gap_m: must be >= 0");
-    }
+    fail_if(!(disparity_bin_share > 0.0 && disparity_bin_share < 1.0),
+            "geometry.disparity_bin_share: must be in (0, 1)");
+    fail_if(min_cell_pixels < 1, "geometry.min_cell_pixels: must be >= 1");
+    fail_if(blend_rows < 1 || blend_rows > 1000, "geometry.blend_rows: must be in [1, 1000]");
+    fail_if(!(blend_step_px >= 0.0 && blend_step_px < 1e6), "geometry.blend_step_px: must be >= 0");
+    fail_if(!(top_behind_px > 0.0 && top_behind_px < 1e6), "geometry.top_behind_px: must be > 0");
+    fail_if(!(foot_ahead_px > 0.0 && foot_ahead_px < 1e6), "geometry.foot_ahead_px: must be > 0");
+    fail_if(!(split_surface_px >= 0.0 && split_surface_px < 1e6),
+            "geometry.split_surface_px: must be >= 0");
+    fail_if(!(behind_gap_m >= 0.0 && behind_gap_m < 1e6), "geometry.behind_gap_m: must be >= 0");
     positive(car_min_height_m, "geometry.car_min_height_m");
-    if (!(car_max_height_m > car_min_height_m)) {
-        throw std::invalid_argument("geometry.car_max_height_m: must be > car_min_height_m");
-    }
+    fail_if(!(car_max_height_m > car_min_height_m),
+            "geometry.car_max_height_m: must be > car_min_height_m");
     positive(car_min_width_m, "geometry.car_min_width_m");
     positive(building_min_height_m, "geometry.building_min_height_m");
     positive(pole_max_width_m, "geometry.pole_max_width_m");
@@ -74,38 +60,26 @@ void GeometryOptions::validate() const {
     positive(wall_max_thickness_m, "geometry.wall_max_thickness_m");
     positive(wall_min_width_m, "geometry.wall_min_width_m");
     positive(low_max_height_m, "geometry.low_max_height_m");
-    if (!(min_cell_height_m >= 0.0)) {
-        throw std::invalid_argument("geometry.min_cell_height_m: must be >= 0");
-    }
+    fail_if(!(min_cell_height_m >= 0.0), "geometry.min_cell_height_m: must be >= 0");
     positive(low_cut_m, "geometry.low_cut_m");
-    if (segmentation != "columns" && segmentation != "clusters") {
-        throw std::invalid_argument("geometry.segmentation: must be columns or clusters");
-    }
+    fail_if(segmentation != "columns" && segmentation != "clusters",
+            "geometry.segmentation: must be columns or clusters");
     positive(cluster_distance_m, "geometry.cluster_distance_m");
-    if (!(layer_height_m > car_max_height_m)) {
-        throw std::invalid_argument("geometry.layer_height_m: must be above car_max_height_m");
-    }
-    if (!(continuity_band_m > 0.0)) {
-        throw std::invalid_argument("geometry.continuity_band_m: must be > 0");
-    }
-    if (!(continuity_behind_m >= 0.0 && continuity_behind_m < 1e6)) {
-        throw std::invalid_argument("geometry.continuity_behind_m: must be >= 0");
-    }
-    if (!(continuity_behind_px > 0.0 && continuity_behind_px < 1e6)) {
-        throw std::invalid_argument("geometry.continuity_behind_px: must be > 0");
-    }
-    if (!(continuity_share > 0.0 && continuity_share <= 1.0)) {
-        throw std::invalid_argument("geometry.continuity_share: must be in (0, 1]");
-    }
-    if (green_window_px < 0 || green_window_px > 64) {
-        throw std::invalid_argument("geometry.green_window_px: must be in [0, 64]");
-    }
-    if (!(min_face_share >= 0.0 && min_face_share < 1.0)) {
-        throw std::invalid_argument("geometry.min_face_share: must be in [0, 1)");
-    }
-    if (!(green_fraction > 0.0 && green_fraction <= 1.0)) {
-        throw std::invalid_argument("geometry.green_fraction: must be in (0, 1]");
-    }
+    fail_if(!(layer_height_m > car_max_height_m),
+            "geometry.layer_height_m: must be above car_max_height_m");
+    fail_if(!(continuity_band_m > 0.0), "geometry.continuity_band_m: must be > 0");
+    fail_if(!(continuity_behind_m >= 0.0 && continuity_behind_m < 1e6),
+            "geometry.continuity_behind_m: must be >= 0");
+    fail_if(!(continuity_behind_px > 0.0 && continuity_behind_px < 1e6),
+            "geometry.continuity_behind_px: must be > 0");
+    fail_if(!(continuity_share > 0.0 && continuity_share <= 1.0),
+            "geometry.continuity_share: must be in (0, 1]");
+    fail_if(green_window_px < 0 || green_window_px > 64,
+            "geometry.green_window_px: must be in [0, 64]");
+    fail_if(!(min_face_share >= 0.0 && min_face_share < 1.0),
+            "geometry.min_face_share: must be in [0, 1)");
+    fail_if(!(green_fraction > 0.0 && green_fraction <= 1.0),
+            "geometry.green_fraction: must be in (0, 1]");
 }
 
 GroundEstimate estimate_ground(const DisparityMap& disparity, const StereoCamera& camera,

@@ -341,7 +341,11 @@ double peak_rss_mb() {
     return static_cast<double>(usage.ru_maxrss) / 1024.0;  // ru_maxrss is in KiB on Linux
 }
 
-BatchReport run_batch(const BatchOptions& options, const BatchObserver& observer) {
+namespace {
+
+/// Throws when the batch cannot start: no output folder, a drive whose ids and frames differ in
+/// number, no folder to read frames from.
+void check_batch(const BatchOptions& options) {
     if (!std::filesystem::is_directory(options.out_dir)) {
         throw std::runtime_error("cannot write output: no such folder (" +
                                  options.out_dir.string() + ")");
@@ -355,23 +359,50 @@ BatchReport run_batch(const BatchOptions& options, const BatchObserver& observer
         throw std::runtime_error("cannot read frames: no such folder (" +
                                  options.kitti_root.string() + ")");
     }
-    // A second writer of the same frames is refused before any frame is read.
-    const stereoscene::support::FolderLock lock = [&] {
-        try {
-            return stereoscene::support::FolderLock(options.out_dir, options.lock_name);
-        } catch (const stereoscene::support::FileError& e) {
-            throw std::runtime_error("cannot write output: the folder's lock is " + e.reason() +
-                                     ", another batch is writing these frames (" +
-                                     e.path().string() + ")");
-        }
-    }();
-    const Palette palette = [&] {
-        try {
-            return load_palette(options.run.analyse.palette);
-        } catch (const std::exception& e) {
-            throw std::runtime_error(std::string("cannot read palette: ") + e.what());
-        }
-    }();
+}
+
+/// The output folder's lock: a second writer of the same frames is refused before any frame is
+/// read.
+stereoscene::support::FolderLock lock_output(const BatchOptions& options) {
+    try {
+        return stereoscene::support::FolderLock(options.out_dir, options.lock_name);
+    } catch (const stereoscene::support::FileError& e) {
+        throw std::runtime_error("cannot write output: the folder's lock is " + e.reason() +
+                                 ", another batch is writing these frames (" + e.path().string() +
+                                 ")");
+    }
+}
+
+Palette batch_palette(const BatchOptions& options) {
+    try {
+        return load_palette(options.run.analyse.palette);
+    } catch (const std::exception& e) {
+        throw std::runtime_error(std::string("cannot read palette: ") + e.what());
+    }
+}
+
+/// After the last frame: the drive's sequence index and the poses, then the report's totals.
+void end_batch(const BatchOptions& options, std::optional<tracking::SequenceTracker>& sequence,
+               const std::optional<Odometry>& odo, BatchReport& report, Clock::time_point start,
+               double cpu_start) {
+    if (sequence) {
+        sequence->commit(options.out_dir / "sequence.json",
+                         stereoscene::support::FileSync::kDurable);
+        report.tracking = sequence->report();
+    }
+    if (odo) {
+        stereoscene::support::write_file_atomic(options.out_dir / "poses.txt",
+                                                odometry::format_kitti_poses(odo->poses));
+    }
+    summarize(report, start, cpu_start);
+}
+
+}  // namespace
+
+BatchReport run_batch(const BatchOptions& options, const BatchObserver& observer) {
+    check_batch(options);
+    const stereoscene::support::FolderLock lock = lock_output(options);
+    const Palette palette = batch_palette(options);
     // Made with the first frame's rig (FittedRig).
     std::optional<DisparityMatcher> matcher;
     const FittedRig* matcher_rig = nullptr;
@@ -440,16 +471,7 @@ BatchReport run_batch(const BatchOptions& options, const BatchObserver& observer
         }
     }
     collect();
-    if (sequence) {
-        sequence->commit(options.out_dir / "sequence.json",
-                         stereoscene::support::FileSync::kDurable);
-        report.tracking = sequence->report();
-    }
-    if (odo) {
-        stereoscene::support::write_file_atomic(options.out_dir / "poses.txt",
-                                                odometry::format_kitti_poses(odo->poses));
-    }
-    summarize(report, start, cpu_start);
+    end_batch(options, sequence, odo, report, start, cpu_start);
     return report;
 }
 

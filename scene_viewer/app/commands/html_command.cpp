@@ -152,14 +152,10 @@ CLI::App* add(CLI::App& app, Options& o) {
     return html;
 }
 
-int run(const Options& o) {
-    if (!o.labels.empty() && o.labels.size() != o.inputs.size()) {
-        throw Failure{"bad usage",
-                      std::to_string(o.labels.size()) + " labels for " +
-                          std::to_string(o.inputs.size()) + " inputs",
-                      "--labels", 2};
-    }
-    check_output_folder(o.out_dir, "cannot write the viewer");
+namespace {
+
+/// The page's settings: title, point size, moving points.
+ViewerOptions viewer_options(const Options& o) {
     ViewerOptions viewer;
     viewer.title =
         o.title.empty() ? std::filesystem::path(o.inputs.front()).stem().string() : o.title;
@@ -170,6 +166,11 @@ int run(const Options& o) {
     } catch (const std::invalid_argument& e) {
         throw Failure{"bad usage", e.what(), "--point-size/--moving-points", 2};
     }
+    return viewer;
+}
+
+/// The page, its script and three.js, from --web-dir or the installed assets.
+ViewerAssets viewer_assets(const Options& o) {
     const std::filesystem::path web_dir =
         o.web_dir.empty() ? default_viewer_assets_dir() : std::filesystem::path(o.web_dir);
     ViewerAssets assets;
@@ -179,6 +180,43 @@ int run(const Options& o) {
         throw Failure{"cannot read the viewer's files (scripts/install-deps.sh installs three.js)",
                       e.what(), web_dir.string()};
     }
+    return assets;
+}
+
+/// --cloud (kept in `cloud`, which the scene points to) and --background, into the scene.
+void add_cloud_and_background(const Options& o, ViewerScene& scene,
+                              std::optional<PointCloud>& cloud) {
+    if (!o.cloud.empty()) {
+        try {
+            cloud = read_point_cloud(o.cloud);
+        } catch (const std::exception& e) {
+            throw Failure{"cannot read point cloud", e.what(), "--cloud"};
+        }
+        scene.cloud = &*cloud;
+    }
+    if (!o.background.empty()) {
+        try {
+            const std::vector<unsigned char> png = encode_png(decode_image(o.background), 6);
+            scene.background_bytes.assign(png.begin(), png.end());
+        } catch (const std::exception& e) {
+            throw Failure{"cannot read background image", e.what(), "--background"};
+        }
+        scene.background_name = "left.png";
+    }
+}
+
+}  // namespace
+
+int run(const Options& o) {
+    if (!o.labels.empty() && o.labels.size() != o.inputs.size()) {
+        throw Failure{"bad usage",
+                      std::to_string(o.labels.size()) + " labels for " +
+                          std::to_string(o.inputs.size()) + " inputs",
+                      "--labels", 2};
+    }
+    check_output_folder(o.out_dir, "cannot write the viewer");
+    ViewerOptions viewer = viewer_options(o);
+    const ViewerAssets assets = viewer_assets(o);
     if (o.trail < 0 || o.trail > 100000) usage("must be in 0..100000", "--trail");
     if (!(o.fps >= 0.0 && o.fps <= 1000.0)) usage("must be in (0, 1000]", "--fps");
     const std::optional<std::filesystem::path> index_path = drive_index(o.inputs.front());
@@ -203,23 +241,7 @@ int run(const Options& o) {
             o.labels.empty() ? std::filesystem::path(o.inputs[i]).stem().string() : o.labels[i]));
     }
     std::optional<PointCloud> cloud;
-    if (!o.cloud.empty()) {
-        try {
-            cloud = read_point_cloud(o.cloud);
-        } catch (const std::exception& e) {
-            throw Failure{"cannot read point cloud", e.what(), "--cloud"};
-        }
-        scene.cloud = &*cloud;
-    }
-    if (!o.background.empty()) {
-        try {
-            const std::vector<unsigned char> png = encode_png(decode_image(o.background), 6);
-            scene.background_bytes.assign(png.begin(), png.end());
-        } catch (const std::exception& e) {
-            throw Failure{"cannot read background image", e.what(), "--background"};
-        }
-        scene.background_name = "left.png";
-    }
+    add_cloud_and_background(o, scene, cloud);
     scene.scene_glb = scene_glb(o, scene.layers.front().document);
     if (drive) drive->models_glb = scene_glb(o, class_template_document(drive_classes(*drive)));
     std::map<std::string, std::string> files;

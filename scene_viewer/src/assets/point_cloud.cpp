@@ -238,11 +238,21 @@ PointCloud read_ply(const std::filesystem::path& path, std::istream& in) {
     return cloud;
 }
 
-PointCloud read_pcd(const std::filesystem::path& path, std::istream& in) {
+namespace {
+
+/// A PCD header: its fields as declared, the point count and the DATA kind.
+struct PcdHeader {
     std::vector<std::string> names, types;
     std::vector<int> sizes, counts;
     std::size_t points = 0;
-    std::string data, line;
+    std::string data;
+};
+
+/// Reads the header up to and including its DATA line, checked: FIELDS, SIZE, TYPE and COUNT
+/// agree, each field is F 4/8 or I/U 1/2/4/8 with a COUNT of 1..1024.
+PcdHeader read_pcd_header(const std::filesystem::path& path, std::istream& in) {
+    PcdHeader h;
+    std::string line;
     while (std::getline(in, line)) {
         if (!line.empty() && line.back() == '\r') line.pop_back();
         if (line.empty() || line[0] == '#') continue;
@@ -250,51 +260,60 @@ PointCloud read_pcd(const std::filesystem::path& path, std::istream& in) {
         std::string key, word;
         ls >> key;
         if (key == "FIELDS") {
-            while (ls >> word) names.push_back(word);
+            while (ls >> word) h.names.push_back(word);
         } else if (key == "SIZE") {
             int s;
-            while (ls >> s) sizes.push_back(s);
+            while (ls >> s) h.sizes.push_back(s);
         } else if (key == "TYPE") {
-            while (ls >> word) types.push_back(word);
+            while (ls >> word) h.types.push_back(word);
         } else if (key == "COUNT") {
             int c;
-            while (ls >> c) counts.push_back(c);
+            while (ls >> c) h.counts.push_back(c);
         } else if (key == "POINTS") {
-            ls >> points;
+            ls >> h.points;
         } else if (key == "DATA") {
-            ls >> data;
+            ls >> h.data;
             break;
         }
     }
-    if (counts.empty()) counts.assign(names.size(), 1);
-    if (sizes.size() != names.size() || types.size() != names.size() ||
-        counts.size() != names.size()) {
+    if (h.counts.empty()) h.counts.assign(h.names.size(), 1);
+    if (h.sizes.size() != h.names.size() || h.types.size() != h.names.size() ||
+        h.counts.size() != h.names.size()) {
         fail(path, "PCD header: FIELDS, SIZE, TYPE and COUNT disagree");
     }
     constexpr int kMaxCount = 1024;  // values per field (PCL's histograms use up to 308)
-    for (std::size_t i = 0; i < names.size(); ++i) {
-        const bool is_float = types[i] == "F";
-        const bool size_ok =
-            is_float ? (sizes[i] == 4 || sizes[i] == 8)
-                     : (sizes[i] == 1 || sizes[i] == 2 || sizes[i] == 4 || sizes[i] == 8);
-        if (!size_ok || (!is_float && types[i] != "I" && types[i] != "U")) {
-            fail(path, "PCD header: field '" + names[i] + "' has TYPE " + types[i] + " SIZE " +
-                           std::to_string(sizes[i]) + " (F 4/8, I or U 1/2/4/8)");
+    for (std::size_t i = 0; i < h.names.size(); ++i) {
+        const bool is_float = h.types[i] == "F";
+        const int size = h.sizes[i];
+        const bool size_ok = is_float ? (size == 4 || size == 8)
+                                      : (size == 1 || size == 2 || size == 4 || size == 8);
+        if (!size_ok || (!is_float && h.types[i] != "I" && h.types[i] != "U")) {
+            fail(path, "PCD header: field '" + h.names[i] + "' has TYPE " + h.types[i] + " SIZE " +
+                           std::to_string(size) + " (F 4/8, I or U 1/2/4/8)");
         }
-        if (counts[i] < 1 || counts[i] > kMaxCount) {
-            fail(path, "PCD header: field '" + names[i] + "' COUNT must be 1.." +
+        if (h.counts[i] < 1 || h.counts[i] > kMaxCount) {
+            fail(path, "PCD header: field '" + h.names[i] + "' COUNT must be 1.." +
                            std::to_string(kMaxCount));
         }
     }
+    return h;
+}
+
+}  // namespace
+
+PointCloud read_pcd(const std::filesystem::path& path, std::istream& in) {
+    const PcdHeader h = read_pcd_header(path, in);
+    const std::size_t points = h.points;
+    const std::string& data = h.data;
     std::vector<Field> fields;
     std::vector<std::string> scalar_names;
     int stride = 0;
-    for (std::size_t i = 0; i < names.size(); ++i) {
-        for (int c = 0; c < counts[i]; ++c) {
+    for (std::size_t i = 0; i < h.names.size(); ++i) {
+        for (int c = 0; c < h.counts[i]; ++c) {
             Field f;
-            f.name = c == 0 ? names[i] : names[i] + "_" + std::to_string(c);
-            f.kind = types[i] == "F" ? 'f' : types[i] == "I" ? 'i' : 'u';
-            f.bytes = sizes[i];
+            f.name = c == 0 ? h.names[i] : h.names[i] + "_" + std::to_string(c);
+            f.kind = h.types[i] == "F" ? 'f' : h.types[i] == "I" ? 'i' : 'u';
+            f.bytes = h.sizes[i];
             f.offset = stride;
             stride += f.bytes;
             fields.push_back(f);
