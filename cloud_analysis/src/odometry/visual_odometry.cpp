@@ -109,33 +109,35 @@ VisualOdometry::Pyramid pyramid_of(const cv::Mat& grey, const OdometryOptions& o
     return p;
 }
 
-/// estimate_motion with the two left images' pyramids built.
-MotionEstimate motion(const OdometryFrame& prev, const VisualOdometry::Pyramid& prev_pyramid,
-                      const ImageU8& curr_left, const VisualOdometry::Pyramid& curr_pyramid,
-                      const StereoCamera& camera, const OdometryOptions& options) {
+/// The pixels whose corners may vote: a disparity known well enough, a static class.
+cv::Mat voting_mask(const OdometryFrame& prev, double min_disparity) {
     const int w = prev.left.width_px, h = prev.left.height_px;
-    if (curr_left.width_px != w || curr_left.height_px != h || prev.disparity.width_px != w ||
-        prev.disparity.height_px != h) {
-        throw std::invalid_argument("estimate_motion: images and disparity differ in size");
-    }
     const auto n = static_cast<std::size_t>(w) * static_cast<std::size_t>(h);
-    if (!prev.static_mask.empty() && prev.static_mask.size() != n) {
-        throw std::invalid_argument("estimate_motion: static mask differs in size");
-    }
-    const MatchBorder border = match_border(camera);
-    // Corners only where a point can vote: a disparity known well enough, a static class.
-    const double min_disparity =
-        options.disparity_noise_px / options.max_relative_depth_error + border.offset_px;
     cv::Mat mask(h, w, CV_8U);
     for (std::size_t p = 0; p < n; ++p) {
         const bool near = double{prev.disparity.disparity_px[p]} > min_disparity;
         const bool still = prev.static_mask.empty() || prev.static_mask[p] != 0;
         mask.data[p] = near && still ? 255 : 0;
     }
-    const cv::Mat prev_grey = grey_of(prev.left);
-    const std::vector<cv::Point2f> corners = spread_corners(prev_grey, mask, options);
-    MotionEstimate out;
-    if (corners.size() < static_cast<std::size_t>(options.min_inliers)) return out;
+    return mask;
+}
+
+/// 3D points of the previous frame and their pixels in the current left image.
+struct Correspondences {
+    std::vector<cv::Point3f> object;
+    std::vector<cv::Point2f> image;
+};
+
+/// The corners tracked into the current left image and back (round trip within
+/// max_round_trip_px), each matched across the previous pair (its own sub-pixel disparity, near
+/// the dense one), lifted to 3D with the calibration.
+Correspondences track_corners(const OdometryFrame& prev, const cv::Mat& prev_grey,
+                              const VisualOdometry::Pyramid& prev_pyramid,
+                              const VisualOdometry::Pyramid& curr_pyramid,
+                              const std::vector<cv::Point2f>& corners, const StereoCamera& camera,
+                              const OdometryOptions& options, double min_disparity) {
+    const int w = prev.left.width_px, h = prev.left.height_px;
+    const MatchBorder border = match_border(camera);
     std::vector<cv::Point2f> forward, back;
     std::vector<std::uint8_t> ok_forward, ok_back;
     std::vector<float> error;
@@ -160,8 +162,7 @@ MotionEstimate motion(const OdometryFrame& prev, const VisualOdometry::Pyramid& 
             cv::TermCriteria(cv::TermCriteria::COUNT | cv::TermCriteria::EPS, 30, 0.01),
             cv::OPTFLOW_USE_INITIAL_FLOW);
     }
-    std::vector<cv::Point3f> object;
-    std::vector<cv::Point2f> image;
+    Correspondences out;
     for (std::size_t k = 0; k < corners.size(); ++k) {
         if (!ok_forward[k] || !ok_back[k]) continue;
         if (cv::norm(back[k] - corners[k]) > options.max_round_trip_px) continue;
@@ -186,14 +187,20 @@ MotionEstimate motion(const OdometryFrame& prev, const VisualOdometry::Pyramid& 
         }
         if (!(double{d} > min_disparity)) continue;
         const double z = border.fb_px_m / (double{d} - border.offset_px);
-        object.emplace_back(
+        out.object.emplace_back(
             static_cast<float>((double{corners[k].x} - camera.cx_px) * z / camera.fx_px),
             static_cast<float>((double{corners[k].y} - camera.cy_px) * z / camera.fy_px),
             static_cast<float>(z));
-        image.push_back(f);
+        out.image.push_back(f);
     }
-    out.tracked = static_cast<int>(object.size());
-    if (out.tracked < options.min_inliers) return out;
+    return out;
+}
+
+/// The motion of the correspondences: RANSAC over P3P, then Levenberg-Marquardt on the inliers.
+void solve_motion(const Correspondences& c, const StereoCamera& camera,
+                  const OdometryOptions& options, MotionEstimate& out) {
+    const std::vector<cv::Point3f>& object = c.object;
+    const std::vector<cv::Point2f>& image = c.image;
     const cv::Matx33d K(camera.fx_px, 0.0, camera.cx_px, 0.0, camera.fy_px, camera.cy_px, 0.0, 0.0,
                         1.0);
     cv::Mat rvec, tvec;
@@ -202,7 +209,7 @@ MotionEstimate motion(const OdometryFrame& prev, const VisualOdometry::Pyramid& 
         object, image, K, cv::noArray(), rvec, tvec, false, options.ransac_iterations,
         static_cast<float>(options.ransac_threshold_px), 0.999, inliers, cv::SOLVEPNP_P3P);
     out.inliers = static_cast<int>(inliers.size());
-    if (!found || out.inliers < options.min_inliers) return out;
+    if (!found || out.inliers < options.min_inliers) return;
     std::vector<cv::Point3f> in_object;
     std::vector<cv::Point2f> in_image;
     for (int k : inliers) {
@@ -212,6 +219,34 @@ MotionEstimate motion(const OdometryFrame& prev, const VisualOdometry::Pyramid& 
     cv::solvePnPRefineLM(in_object, in_image, K, cv::noArray(), rvec, tvec);
     out.T_curr_prev = pose_of(rvec, tvec);
     out.valid = out.T_curr_prev.allFinite();
+}
+
+/// estimate_motion with the two left images' pyramids built.
+MotionEstimate motion(const OdometryFrame& prev, const VisualOdometry::Pyramid& prev_pyramid,
+                      const ImageU8& curr_left, const VisualOdometry::Pyramid& curr_pyramid,
+                      const StereoCamera& camera, const OdometryOptions& options) {
+    const int w = prev.left.width_px, h = prev.left.height_px;
+    if (curr_left.width_px != w || curr_left.height_px != h || prev.disparity.width_px != w ||
+        prev.disparity.height_px != h) {
+        throw std::invalid_argument("estimate_motion: images and disparity differ in size");
+    }
+    const auto n = static_cast<std::size_t>(w) * static_cast<std::size_t>(h);
+    if (!prev.static_mask.empty() && prev.static_mask.size() != n) {
+        throw std::invalid_argument("estimate_motion: static mask differs in size");
+    }
+    // Corners only where a point can vote: a disparity known well enough, a static class.
+    const double min_disparity = options.disparity_noise_px / options.max_relative_depth_error +
+                                 match_border(camera).offset_px;
+    const cv::Mat prev_grey = grey_of(prev.left);
+    const std::vector<cv::Point2f> corners =
+        spread_corners(prev_grey, voting_mask(prev, min_disparity), options);
+    MotionEstimate out;
+    if (corners.size() < static_cast<std::size_t>(options.min_inliers)) return out;
+    const Correspondences c = track_corners(prev, prev_grey, prev_pyramid, curr_pyramid, corners,
+                                            camera, options, min_disparity);
+    out.tracked = static_cast<int>(c.object.size());
+    if (out.tracked < options.min_inliers) return out;
+    solve_motion(c, camera, options, out);
     return out;
 }
 
