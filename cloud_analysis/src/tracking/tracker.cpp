@@ -283,10 +283,7 @@ bool seen_in_part(const Track& t, const TrackerOptions& o,
 
 }  // namespace
 
-scene_schema::EntityDocument Tracker::update(const scene_schema::EntityDocument& frame,
-                                             double timestamp_s, TrackerFrameStats* stats) {
-    if (!std::isfinite(timestamp_s)) throw std::invalid_argument("timestamp is not finite");
-    TrackerFrameStats s;
+double Tracker::advance_clock(double timestamp_s, TrackerFrameStats& s) {
     double dt = 0.0;
     if (last_time_s_) {
         dt = timestamp_s - *last_time_s_;
@@ -297,16 +294,12 @@ scene_schema::EntityDocument Tracker::update(const scene_schema::EntityDocument&
         }
     }
     last_time_s_ = timestamp_s;
-    ++frames_since_start_;
-    if (frame.frame.pose && last_pose_) carry(*last_pose_, *frame.frame.pose);
-    last_pose_ = frame.frame.pose;
-    predict(dt);
+    return dt;
+}
 
-    std::vector<int> track_of;
-    associate(frame, track_of);
-    std::vector<char> hit(tracks_.size(), 0);
-    scene_schema::EntityDocument out = frame;
-    out.frame.timestamp_s = timestamp_s;
+void Tracker::take_detections(const scene_schema::EntityDocument& frame, std::vector<int>& track_of,
+                              std::vector<char>& hit, scene_schema::EntityDocument& out,
+                              TrackerFrameStats& s) {
     for (std::size_t i = 0; i < frame.entities.size(); ++i) {
         if (track_of[i] == -2) continue;
         ++s.detections;
@@ -341,6 +334,11 @@ scene_schema::EntityDocument Tracker::update(const scene_schema::EntityDocument&
             ++s.reported;
         }
     }
+}
+
+void Tracker::age_tracks(const scene_schema::EntityDocument& frame,
+                         const std::vector<int>& track_of, const std::vector<char>& hit,
+                         scene_schema::EntityDocument& out, TrackerFrameStats& s) {
     // Misses; tentative tracks die at their first, confirmed ones after max_misses. A
     // confirmed track of at least coast_min_hits hits missed for at most coast_frames frames
     // is reported at its prediction.
@@ -368,6 +366,25 @@ scene_schema::EntityDocument Tracker::update(const scene_schema::EntityDocument&
         alive.push_back(std::move(t));
     }
     tracks_ = std::move(alive);
+}
+
+scene_schema::EntityDocument Tracker::update(const scene_schema::EntityDocument& frame,
+                                             double timestamp_s, TrackerFrameStats* stats) {
+    if (!std::isfinite(timestamp_s)) throw std::invalid_argument("timestamp is not finite");
+    TrackerFrameStats s;
+    const double dt = advance_clock(timestamp_s, s);
+    ++frames_since_start_;
+    if (frame.frame.pose && last_pose_) carry(*last_pose_, *frame.frame.pose);
+    last_pose_ = frame.frame.pose;
+    predict(dt);
+
+    std::vector<int> track_of;
+    associate(frame, track_of);
+    std::vector<char> hit(tracks_.size(), 0);
+    scene_schema::EntityDocument out = frame;
+    out.frame.timestamp_s = timestamp_s;
+    take_detections(frame, track_of, hit, out, s);
+    age_tracks(frame, track_of, hit, out, s);
     if (stats) *stats = s;
     return out;
 }

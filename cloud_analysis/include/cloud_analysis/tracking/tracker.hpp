@@ -141,6 +141,16 @@ class Tracker {
     void carry(const std::array<double, 12>& T_world_prev,
                const std::array<double, 12>& T_world_curr);
     void associate(const scene_schema::EntityDocument& frame, std::vector<int>& track_of);
+    /// The time since the last frame, seconds (0 after a restart: a gap or a step back).
+    double advance_clock(double timestamp_s, TrackerFrameStats& s);
+    /// Updates the matched tracks, starts tracks for the rest, reports the confirmed ones.
+    void take_detections(const scene_schema::EntityDocument& frame, std::vector<int>& track_of,
+                         std::vector<char>& hit, scene_schema::EntityDocument& out,
+                         TrackerFrameStats& s);
+    /// Counts the misses, drops dead tracks, reports coasting ones at their prediction.
+    void age_tracks(const scene_schema::EntityDocument& frame, const std::vector<int>& track_of,
+                    const std::vector<char>& hit, scene_schema::EntityDocument& out,
+                    TrackerFrameStats& s);
     TrackerOptions options_;
     std::vector<Track> tracks_;
     std::optional<double> last_time_s_;
