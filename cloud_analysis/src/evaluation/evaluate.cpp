@@ -184,28 +184,24 @@ std::vector<int> label_border_distance_px(const std::vector<std::uint16_t>& labe
     return d;
 }
 
-CarEvaluation evaluate_cars(const std::vector<scene_schema::Entity>& entities,
-                            const std::vector<GtCar>& gt_cars, const CarMatchOptions& options,
-                            const StereoCamera* camera) {
-    options.validate();
-    CarEvaluation result;
-    std::vector<std::size_t> cars;
-    for (std::size_t i = 0; i < entities.size(); ++i) {
-        const auto& e = entities[i];
-        if (e.class_name != options.car_class) continue;
-        cars.push_back(i);
-        if (std::hypot(e.x, e.z) <= options.max_range_m) ++result.entities_in_range;
-    }
-    // A box over a whole parked row is not a car: its grown footprint must stay small.
-    const auto small_enough = [&options](const scene_schema::Entity& e) {
-        const double grow = 2.0 * options.footprint_margin_m;
-        return (e.L + grow) * (e.W + grow) <= options.max_footprint_area_m2;
-    };
-    // Candidate pairs that satisfy the footprint rule, best inside fraction first.
+namespace {
+
+/// A box over a whole parked row is not a car: its grown footprint must stay small.
+bool small_enough(const scene_schema::Entity& e, const CarMatchOptions& options) {
+    const double grow = 2.0 * options.footprint_margin_m;
+    return (e.L + grow) * (e.W + grow) <= options.max_footprint_area_m2;
+}
+
+/// Pairs of a car entity and a GT car that satisfy the footprint rule, best inside fraction
+/// first.
+std::vector<CarMatch> footprint_pairs(const std::vector<scene_schema::Entity>& entities,
+                                      const std::vector<std::size_t>& cars,
+                                      const std::vector<GtCar>& gt_cars,
+                                      const CarMatchOptions& options) {
     std::vector<CarMatch> candidates;
     for (std::size_t i : cars) {
         const auto& e = entities[i];
-        if (!small_enough(e)) continue;
+        if (!small_enough(e, options)) continue;
         for (std::size_t g = 0; g < gt_cars.size(); ++g) {
             const double f =
                 footprint_inside_fraction(e, gt_cars[g].points_m, options.footprint_margin_m);
@@ -222,38 +218,85 @@ CarEvaluation evaluate_cars(const std::vector<scene_schema::Entity>& entities,
     std::stable_sort(candidates.begin(), candidates.end(), [](const auto& a, const auto& b) {
         return a.inside_fraction > b.inside_fraction;
     });
-    // KITTI's 2D criterion for GT cars the footprint rule cannot judge, after every footprint
-    // pair, so it never takes a car or an entity the footprint rule would match.
-    if (camera) {
-        std::vector<CarMatch> fallback;
-        for (std::size_t i : cars) {
-            const auto& e = entities[i];
-            if (!small_enough(e)) continue;
-            for (std::size_t g = 0; g < gt_cars.size(); ++g) {
-                const GtCar& car = gt_cars[g];
-                if (car.pixel_count > options.fallback_max_points || car.image_pixels.empty())
-                    continue;
-                const auto box =
-                    projected_box_px(e, *camera, car.image_width_px, car.image_height_px);
-                if (!box) continue;
-                const double iou = rect_iou(*box, car.mask_box_px);
-                if (iou < options.fallback_min_iou) continue;
-                CarMatch m;
-                m.entity = i;
-                m.gt = g;
-                m.fallback = true;
-                m.iou_2d = iou;
-                if (car.pixel_count > 0) {
-                    m.inside_fraction =
-                        footprint_inside_fraction(e, car.points_m, options.footprint_margin_m);
-                    m.centre_distance_m =
-                        std::hypot(e.x - car.centroid_m.x(), e.z - car.centroid_m.z());
-                }
-                fallback.push_back(m);
+    return candidates;
+}
+
+/// KITTI's 2D criterion for GT cars the footprint rule cannot judge (at most
+/// fallback_max_points points): projected box against mask rectangle, best IoU first.
+std::vector<CarMatch> fallback_pairs(const std::vector<scene_schema::Entity>& entities,
+                                     const std::vector<std::size_t>& cars,
+                                     const std::vector<GtCar>& gt_cars,
+                                     const CarMatchOptions& options, const StereoCamera& camera) {
+    std::vector<CarMatch> fallback;
+    for (std::size_t i : cars) {
+        const auto& e = entities[i];
+        if (!small_enough(e, options)) continue;
+        for (std::size_t g = 0; g < gt_cars.size(); ++g) {
+            const GtCar& car = gt_cars[g];
+            if (car.pixel_count > options.fallback_max_points || car.image_pixels.empty()) continue;
+            const auto box = projected_box_px(e, camera, car.image_width_px, car.image_height_px);
+            if (!box) continue;
+            const double iou = rect_iou(*box, car.mask_box_px);
+            if (iou < options.fallback_min_iou) continue;
+            CarMatch m;
+            m.entity = i;
+            m.gt = g;
+            m.fallback = true;
+            m.iou_2d = iou;
+            if (car.pixel_count > 0) {
+                m.inside_fraction =
+                    footprint_inside_fraction(e, car.points_m, options.footprint_margin_m);
+                m.centre_distance_m =
+                    std::hypot(e.x - car.centroid_m.x(), e.z - car.centroid_m.z());
             }
+            fallback.push_back(m);
         }
-        std::stable_sort(fallback.begin(), fallback.end(),
-                         [](const auto& a, const auto& b) { return a.iou_2d > b.iou_2d; });
+    }
+    std::stable_sort(fallback.begin(), fallback.end(),
+                     [](const auto& a, const auto& b) { return a.iou_2d > b.iou_2d; });
+    return fallback;
+}
+
+/// True when an unmatched entity's centre projects onto a GT car without GT points (the
+/// footprint rule cannot score it).
+bool on_car_without_points(const scene_schema::Entity& e, const std::vector<GtCar>& gt_cars,
+                           const CarMatchOptions& options, const StereoCamera* camera) {
+    if (!camera || !(e.z > 0.0) || !(camera->fx_px > 0.0)) return false;
+    const long u = std::lround(camera->fx_px * e.x / e.z + camera->cx_px);
+    const long v = std::lround(camera->fy_px * e.y / e.z + camera->cy_px);
+    for (const auto& car : gt_cars) {
+        if (car.pixel_count > options.fallback_max_points || car.image_width_px <= 0 || u < 0 ||
+            u >= car.image_width_px || v < 0) {
+            continue;
+        }
+        const auto px = static_cast<std::uint32_t>(v * car.image_width_px + u);
+        if (std::binary_search(car.image_pixels.begin(), car.image_pixels.end(), px)) {
+            return true;
+        }
+    }
+    return false;
+}
+
+}  // namespace
+
+CarEvaluation evaluate_cars(const std::vector<scene_schema::Entity>& entities,
+                            const std::vector<GtCar>& gt_cars, const CarMatchOptions& options,
+                            const StereoCamera* camera) {
+    options.validate();
+    CarEvaluation result;
+    std::vector<std::size_t> cars;
+    for (std::size_t i = 0; i < entities.size(); ++i) {
+        const auto& e = entities[i];
+        if (e.class_name != options.car_class) continue;
+        cars.push_back(i);
+        if (std::hypot(e.x, e.z) <= options.max_range_m) ++result.entities_in_range;
+    }
+    std::vector<CarMatch> candidates = footprint_pairs(entities, cars, gt_cars, options);
+    // KITTI's 2D criterion after every footprint pair, so it never takes a car or an entity the
+    // footprint rule would match.
+    if (camera) {
+        const std::vector<CarMatch> fallback =
+            fallback_pairs(entities, cars, gt_cars, options, *camera);
         candidates.insert(candidates.end(), fallback.begin(), fallback.end());
     }
     std::vector<char> entity_used(entities.size(), 0), gt_used(gt_cars.size(), 0);
@@ -278,20 +321,8 @@ CarEvaluation evaluate_cars(const std::vector<scene_schema::Entity>& entities,
             for (const auto& m : result.matches) {
                 if (m.entity == i && m.fallback) ++result.fallback_matched;
             }
-        } else if (camera && e.z > 0.0 && camera->fx_px > 0.0) {
-            const long u = std::lround(camera->fx_px * e.x / e.z + camera->cx_px);
-            const long v = std::lround(camera->fy_px * e.y / e.z + camera->cy_px);
-            for (const auto& car : gt_cars) {
-                if (car.pixel_count > options.fallback_max_points || car.image_width_px <= 0 ||
-                    u < 0 || u >= car.image_width_px || v < 0) {
-                    continue;
-                }
-                const auto px = static_cast<std::uint32_t>(v * car.image_width_px + u);
-                if (std::binary_search(car.image_pixels.begin(), car.image_pixels.end(), px)) {
-                    ++result.entities_unscorable;
-                    break;
-                }
-            }
+        } else if (on_car_without_points(e, gt_cars, options, camera)) {
+            ++result.entities_unscorable;
         }
     }
     return result;

@@ -111,65 +111,47 @@ void track_shape(ClassState& s, std::int64_t frame, const TrackedObject& truth,
         std::max({s.score.parked_size_spread_m, r[1] - r[0], r[3] - r[2], r[5] - r[4]});
 }
 
-void score_frame(ClassState& s, std::int64_t frame_index,
-                 const std::vector<const TrackedObject*>& truth,
-                 const std::vector<const TrackedObject*>& hyps, const TrackEvalOptions& options) {
+/// One matched pair: counts, an ID switch or a fragmentation, the velocity error, the shape.
+void score_match(ClassState& s, std::int64_t frame_index, const TrackedObject& gt,
+                 const TrackedObject& hy, const TrackEvalOptions& options) {
     auto& all = s.score.bins[kAllBins];
-    const auto pairs = match_frame(truth, hyps, s, options.max_match_distance_m);
-    std::vector<char> truth_matched(truth.size(), 0), hyp_matched(hyps.size(), 0);
-    for (const auto& [t, h] : pairs) {
-        truth_matched[t] = hyp_matched[h] = 1;
-        const TrackedObject& gt = *truth[t];
-        const TrackedObject& hy = *hyps[h];
-        // Truth that is not owed is left out of the frame, as TrackEval's preprocessing removes
-        // it: a track on it neither counts nor becomes the identity a later switch is from.
-        if (!gt.owed) continue;
-        auto last = s.last_track.find(gt.track_id);
-        const bool switched = last != s.last_track.end() && last->second != hy.track_id;
-        const std::int64_t previous = switched ? last->second : -1;
-        s.last_track[gt.track_id] = hy.track_id;
-        const int bin = std::max(0, distance_bin(bev_range_m(gt.box)));
-        auto& b = s.score.bins[bin];
-        count(b, all, &TrackCounts::truth);
-        count(b, all, &TrackCounts::hypotheses);
-        count(b, all, &TrackCounts::matches);
-        if (switched) {
-            count(b, all, &TrackCounts::id_switches);
-            s.score.events.push_back(event(TrackEvent::Kind::kIdSwitch, frame_index, &gt, &hy));
-            s.score.events.back().previous_track = previous;
-        }
-        auto covered = s.covered.find(gt.track_id);
-        if (covered != s.covered.end() && !covered->second) {
-            count(b, all, &TrackCounts::fragmentations);
-        }
-        s.covered[gt.track_id] = true;
-        if (gt.box.velocity && hy.box.velocity) {
-            const double e = std::hypot(hy.box.velocity->vx_mps - gt.box.velocity->vx_mps,
-                                        hy.box.velocity->vz_mps - gt.box.velocity->vz_mps);
-            (speed(gt.box) > options.moving_speed_mps ? s.score.moving_velocity_errors_mps
-                                                      : s.score.static_velocity_errors_mps)
-                .push_back(e);
-        }
-        track_shape(s, frame_index, gt, hy, options);
+    // Truth that is not owed is left out of the frame, as TrackEval's preprocessing removes
+    // it: a track on it neither counts nor becomes the identity a later switch is from.
+    if (!gt.owed) return;
+    auto last = s.last_track.find(gt.track_id);
+    const bool switched = last != s.last_track.end() && last->second != hy.track_id;
+    const std::int64_t previous = switched ? last->second : -1;
+    s.last_track[gt.track_id] = hy.track_id;
+    const int bin = std::max(0, distance_bin(bev_range_m(gt.box)));
+    auto& b = s.score.bins[bin];
+    count(b, all, &TrackCounts::truth);
+    count(b, all, &TrackCounts::hypotheses);
+    count(b, all, &TrackCounts::matches);
+    if (switched) {
+        count(b, all, &TrackCounts::id_switches);
+        s.score.events.push_back(event(TrackEvent::Kind::kIdSwitch, frame_index, &gt, &hy));
+        s.score.events.back().previous_track = previous;
     }
-    for (std::size_t t = 0; t < truth.size(); ++t) {
-        if (truth_matched[t] || !truth[t]->owed) continue;
-        const int bin = std::max(0, distance_bin(bev_range_m(truth[t]->box)));
-        count(s.score.bins[bin], all, &TrackCounts::truth);
-        count(s.score.bins[bin], all, &TrackCounts::misses);
-        s.score.events.push_back(event(TrackEvent::Kind::kMiss, frame_index, truth[t], nullptr));
-        auto covered = s.covered.find(truth[t]->track_id);
-        if (covered != s.covered.end()) covered->second = false;
+    auto covered = s.covered.find(gt.track_id);
+    if (covered != s.covered.end() && !covered->second) {
+        count(b, all, &TrackCounts::fragmentations);
     }
-    for (std::size_t h = 0; h < hyps.size(); ++h) {
-        if (hyp_matched[h]) continue;
-        const int bin = distance_bin(bev_range_m(hyps[h]->box));
-        if (bin < 0) continue;  // beyond the scored range
-        count(s.score.bins[bin], all, &TrackCounts::hypotheses);
-        count(s.score.bins[bin], all, &TrackCounts::false_positives);
-        s.score.events.push_back(
-            event(TrackEvent::Kind::kFalsePositive, frame_index, nullptr, hyps[h]));
+    s.covered[gt.track_id] = true;
+    if (gt.box.velocity && hy.box.velocity) {
+        const double e = std::hypot(hy.box.velocity->vx_mps - gt.box.velocity->vx_mps,
+                                    hy.box.velocity->vz_mps - gt.box.velocity->vz_mps);
+        (speed(gt.box) > options.moving_speed_mps ? s.score.moving_velocity_errors_mps
+                                                  : s.score.static_velocity_errors_mps)
+            .push_back(e);
     }
+    track_shape(s, frame_index, gt, hy, options);
+}
+
+/// The frame's identity overlaps (for IDF1) and its HOTA similarities.
+void score_identities(ClassState& s, const std::vector<const TrackedObject*>& truth,
+                      const std::vector<const TrackedObject*>& hyps,
+                      const std::vector<std::pair<int, int>>& pairs,
+                      const TrackEvalOptions& options) {
     // Identity overlaps: every owed truth / track pair within the distance, per frame.
     for (const auto* gt : truth) {
         if (!gt->owed) continue;
@@ -204,6 +186,37 @@ void score_frame(ClassState& s, std::int64_t frame_index,
     }
     for (const auto* hy : scored_hyps) frame.tracks.push_back(hy->track_id);
     s.hota_frames.push_back(std::move(frame));
+}
+
+void score_frame(ClassState& s, std::int64_t frame_index,
+                 const std::vector<const TrackedObject*>& truth,
+                 const std::vector<const TrackedObject*>& hyps, const TrackEvalOptions& options) {
+    auto& all = s.score.bins[kAllBins];
+    const auto pairs = match_frame(truth, hyps, s, options.max_match_distance_m);
+    std::vector<char> truth_matched(truth.size(), 0), hyp_matched(hyps.size(), 0);
+    for (const auto& [t, h] : pairs) {
+        truth_matched[t] = hyp_matched[h] = 1;
+        score_match(s, frame_index, *truth[t], *hyps[h], options);
+    }
+    for (std::size_t t = 0; t < truth.size(); ++t) {
+        if (truth_matched[t] || !truth[t]->owed) continue;
+        const int bin = std::max(0, distance_bin(bev_range_m(truth[t]->box)));
+        count(s.score.bins[bin], all, &TrackCounts::truth);
+        count(s.score.bins[bin], all, &TrackCounts::misses);
+        s.score.events.push_back(event(TrackEvent::Kind::kMiss, frame_index, truth[t], nullptr));
+        auto covered = s.covered.find(truth[t]->track_id);
+        if (covered != s.covered.end()) covered->second = false;
+    }
+    for (std::size_t h = 0; h < hyps.size(); ++h) {
+        if (hyp_matched[h]) continue;
+        const int bin = distance_bin(bev_range_m(hyps[h]->box));
+        if (bin < 0) continue;  // beyond the scored range
+        count(s.score.bins[bin], all, &TrackCounts::hypotheses);
+        count(s.score.bins[bin], all, &TrackCounts::false_positives);
+        s.score.events.push_back(
+            event(TrackEvent::Kind::kFalsePositive, frame_index, nullptr, hyps[h]));
+    }
+    score_identities(s, truth, hyps, pairs, options);
 }
 
 /// IDF1 = 2 IDTP / (truth + hypotheses) with the identity matching that maximises IDTP.
