@@ -182,6 +182,79 @@ std::size_t EntityEvaluation::stuff_on_things(double max_range_m) const {
     return n;
 }
 
+namespace {
+
+bool in_range(const scene_schema::Entity& e, const EntityEvalOptions& options) {
+    return bev_range_m(e) <= options.max_range_m && distance_bin(bev_range_m(e)) >= 0;
+}
+
+/// Pairs of the same thing class within the match distance, taken greedily by ascending centre
+/// distance, one to one; marks the references and estimates used.
+std::vector<EntityMatch> match_entities(const std::vector<scene_schema::Entity>& reference,
+                                        const std::vector<scene_schema::Entity>& estimate,
+                                        const EntityEvalOptions& options,
+                                        std::vector<bool>& ref_used, std::vector<bool>& est_used) {
+    std::vector<EntityMatch> matches;
+    struct Candidate {
+        double distance_m;
+        std::size_t r, e;
+    };
+    std::vector<Candidate> candidates;
+    for (std::size_t r = 0; r < reference.size(); ++r) {
+        if (!options.is_thing(reference[r].class_name) || !in_range(reference[r], options))
+            continue;
+        for (std::size_t e = 0; e < estimate.size(); ++e) {
+            if (estimate[e].class_name != reference[r].class_name ||
+                !in_range(estimate[e], options)) {
+                continue;
+            }
+            const double d =
+                std::hypot(estimate[e].x - reference[r].x, estimate[e].z - reference[r].z);
+            if (d <= options.max_match_distance_m) candidates.push_back({d, r, e});
+        }
+    }
+    std::stable_sort(
+        candidates.begin(), candidates.end(),
+        [](const Candidate& a, const Candidate& b) { return a.distance_m < b.distance_m; });
+    for (const auto& c : candidates) {
+        if (ref_used[c.r] || est_used[c.e]) continue;
+        ref_used[c.r] = est_used[c.e] = true;
+        const auto& ref = reference[c.r];
+        const auto& est = estimate[c.e];
+        EntityMatch m;
+        m.reference = c.r;
+        m.estimate = c.e;
+        m.centre_error_m =
+            (Eigen::Vector3d(est.x, est.y, est.z) - Eigen::Vector3d(ref.x, ref.y, ref.z)).norm();
+        m.bev_centre_error_m = c.distance_m;
+        m.size_error_m = Eigen::Vector3d(est.W - ref.W, est.H - ref.H, est.L - ref.L);
+        m.heading_error_rad = heading_error_rad(est.theta, ref.theta);
+        m.bev_iou = bev_iou(ref, est);
+        m.iou_3d = iou_3d(ref, est);
+        matches.push_back(m);
+    }
+    return matches;
+}
+
+/// True when an unmatched estimate counts as spurious: a thing, or stuff lying at least
+/// stuff_overlap inside a reference thing.
+bool offends(const scene_schema::Entity& est, const std::vector<scene_schema::Entity>& reference,
+             const EntityEvalOptions& options) {
+    bool offends = options.is_thing(est.class_name);
+    if (!offends) {
+        for (const auto& ref : reference) {
+            if (options.is_thing(ref.class_name) &&
+                inside_share(est, ref) >= options.stuff_overlap) {
+                offends = true;
+                break;
+            }
+        }
+    }
+    return offends;
+}
+
+}  // namespace
+
 EntityEvaluation evaluate_entities(const std::vector<scene_schema::Entity>& reference,
                                    const std::vector<scene_schema::Entity>& estimate,
                                    const EntityEvalOptions& options,
@@ -206,48 +279,8 @@ EntityEvaluation evaluate_entities(const std::vector<scene_schema::Entity>& refe
         fn(c.bins[static_cast<std::size_t>(bin)]);
         fn(c.bins[kAll]);
     };
-    const auto in_range = [&](const scene_schema::Entity& e) {
-        return bev_range_m(e) <= options.max_range_m && distance_bin(bev_range_m(e)) >= 0;
-    };
-
-    // Candidate pairs of the same thing class, then greedy by ascending centre distance.
-    struct Candidate {
-        double distance_m;
-        std::size_t r, e;
-    };
-    std::vector<Candidate> candidates;
-    for (std::size_t r = 0; r < reference.size(); ++r) {
-        if (!options.is_thing(reference[r].class_name) || !in_range(reference[r])) continue;
-        for (std::size_t e = 0; e < estimate.size(); ++e) {
-            if (estimate[e].class_name != reference[r].class_name || !in_range(estimate[e])) {
-                continue;
-            }
-            const double d =
-                std::hypot(estimate[e].x - reference[r].x, estimate[e].z - reference[r].z);
-            if (d <= options.max_match_distance_m) candidates.push_back({d, r, e});
-        }
-    }
-    std::stable_sort(
-        candidates.begin(), candidates.end(),
-        [](const Candidate& a, const Candidate& b) { return a.distance_m < b.distance_m; });
     std::vector<bool> ref_used(reference.size(), false), est_used(estimate.size(), false);
-    for (const auto& c : candidates) {
-        if (ref_used[c.r] || est_used[c.e]) continue;
-        ref_used[c.r] = est_used[c.e] = true;
-        const auto& ref = reference[c.r];
-        const auto& est = estimate[c.e];
-        EntityMatch m;
-        m.reference = c.r;
-        m.estimate = c.e;
-        m.centre_error_m =
-            (Eigen::Vector3d(est.x, est.y, est.z) - Eigen::Vector3d(ref.x, ref.y, ref.z)).norm();
-        m.bev_centre_error_m = c.distance_m;
-        m.size_error_m = Eigen::Vector3d(est.W - ref.W, est.H - ref.H, est.L - ref.L);
-        m.heading_error_rad = heading_error_rad(est.theta, ref.theta);
-        m.bev_iou = bev_iou(ref, est);
-        m.iou_3d = iou_3d(ref, est);
-        ev.matches.push_back(m);
-    }
+    ev.matches = match_entities(reference, estimate, options, ref_used, est_used);
     // Matches with ignored references only keep their estimate from being spurious.
     ev.matches.erase(std::remove_if(ev.matches.begin(), ev.matches.end(),
                                     [&](const EntityMatch& m) { return ignored(m.reference); }),
@@ -257,7 +290,7 @@ EntityEvaluation evaluate_entities(const std::vector<scene_schema::Entity>& refe
 
     for (std::size_t r = 0; r < reference.size(); ++r) {
         const auto& ref = reference[r];
-        if (!options.is_thing(ref.class_name) || !in_range(ref)) continue;
+        if (!options.is_thing(ref.class_name) || !in_range(ref, options)) continue;
         if (ignored(r)) {
             ev.ignored.push_back(r);
             continue;
@@ -283,18 +316,8 @@ EntityEvaluation evaluate_entities(const std::vector<scene_schema::Entity>& refe
     }
     for (std::size_t e = 0; e < estimate.size(); ++e) {
         const auto& est = estimate[e];
-        if (est_used[e] || !in_range(est)) continue;
-        bool offends = options.is_thing(est.class_name);
-        if (!offends) {
-            for (const auto& ref : reference) {
-                if (options.is_thing(ref.class_name) &&
-                    inside_share(est, ref) >= options.stuff_overlap) {
-                    offends = true;
-                    break;
-                }
-            }
-        }
-        if (!offends) continue;
+        if (est_used[e] || !in_range(est, options)) continue;
+        if (!offends(est, reference, options)) continue;
         ev.spurious.push_back(e);
         add_to(score_of(est.class_name), distance_bin(bev_range_m(est)), [](ClassBinScore& b) {
             ++b.estimate;
