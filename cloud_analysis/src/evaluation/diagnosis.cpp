@@ -283,103 +283,136 @@ std::string classes_in_rect(const InstanceImage& image, const Eigen::Vector4d& r
 
 }  // namespace
 
+namespace {
+
+/// What diagnose_cars knows of the matches.
+struct CarMatchIndex {
+    const std::vector<scene_schema::Entity>& entities;
+    const std::vector<GtCar>& gt;
+    const CarEvaluation& ev;
+    const CarMatchOptions& options;
+    std::vector<long> match_of_gt, match_of_entity;  ///< index into ev.matches, or -1
+    std::string gt_name(std::size_t g) const { return "GT car " + std::to_string(gt[g].instance); }
+};
+
+/// Why GT car g, owed and unmatched, was missed.
+Diagnosis why_missed(const CarMatchIndex& x, std::size_t g) {
+    const auto& [entities, gt, ev, options, match_of_gt, match_of_entity] = x;
+    const GtCar& car = gt[g];
+    const double grow = 2.0 * options.footprint_margin_m;
+    const auto gt_name = [&](std::size_t k) { return x.gt_name(k); };
+    long best = -1;
+    double best_share = 0.0;
+    for (std::size_t i = 0; i < entities.size(); ++i) {
+        if (entities[i].class_name != options.car_class) continue;
+        const double f =
+            footprint_inside_fraction(entities[i], car.points_m, options.footprint_margin_m);
+        if (f > best_share) {
+            best = static_cast<long>(i);
+            best_share = f;
+        }
+    }
+    Diagnosis d{gt_name(g), "", ""};
+    const std::string where = " (" + std::to_string(car.pixel_count) + " GT px at " +
+                              fixed_text(car.range_m(), 1) + " m)";
+    if (best < 0) {
+        d.kind = "no-box";
+        d.reason = "no car box holds any of its points" + where;
+    } else {
+        const auto& e = entities[static_cast<std::size_t>(best)];
+        const long m = match_of_entity[static_cast<std::size_t>(best)];
+        const double area = (e.L + grow) * (e.W + grow);
+        if (area > options.max_footprint_area_m2) {
+            d.kind = "too-large";
+            d.reason = e.id + " holds " + pct(best_share) + " of its points but its grown " +
+                       "footprint is " + fixed_text(area, 1) + " m2 (> " +
+                       fixed_text(options.max_footprint_area_m2, 0) + ")" + where;
+        } else if (m >= 0 && best_share >= options.min_inside_fraction) {
+            d.kind = "merged";
+            d.reason = "merged with " + gt_name(ev.matches[static_cast<std::size_t>(m)].gt) +
+                       " into " + e.id + " (" + box_size(e) + " m box holds " + pct(best_share) +
+                       " of its points)" + where;
+        } else {
+            d.kind = "under-covered";
+            d.reason =
+                e.id + " (" + box_size(e) + " m" +
+                (m >= 0 ? ", matched to " + gt_name(ev.matches[static_cast<std::size_t>(m)].gt)
+                        : std::string()) +
+                ") holds only " + pct(best_share) + " of its points (< " +
+                pct(options.min_inside_fraction) + ")" + where;
+        }
+    }
+    return d;
+}
+
+/// Why car entity e, in range and unmatched, matches nothing: a second box on a car, or a
+/// phantom (with what its image box shows).
+Diagnosis why_spurious(const CarMatchIndex& x, const scene_schema::Entity& e,
+                       const InstanceImage* image, const StereoCamera* camera) {
+    const auto& [entities, gt, ev, options, match_of_gt, match_of_entity] = x;
+    const auto gt_name = [&](std::size_t k) { return x.gt_name(k); };
+    long best = -1;
+    double best_share = 0.0;
+    for (std::size_t g = 0; g < gt.size(); ++g) {
+        const double f = footprint_inside_fraction(e, gt[g].points_m, options.footprint_margin_m);
+        if (f > best_share) {
+            best = static_cast<long>(g);
+            best_share = f;
+        }
+    }
+    Diagnosis d{e.id, "", ""};
+    if (best >= 0 && best_share >= 0.05) {
+        const auto g = static_cast<std::size_t>(best);
+        const long m = match_of_gt[g];
+        d.kind = "duplicate";
+        d.reason =
+            "holds " + pct(best_share) + " of " + gt_name(g) + "'s points (" +
+            (m >= 0 ? "matched by " + entities[ev.matches[static_cast<std::size_t>(m)].entity].id
+                    : std::string(gt[g].pixel_count < options.min_gt_pixels ? "not owed"
+                                                                            : "unmatched")) +
+            ")";
+    } else {
+        d.kind = "phantom";
+        d.reason =
+            "phantom at " + fixed_text(std::hypot(e.x, e.z), 1) + " m, no GT car point inside";
+        if (image && camera) {
+            const auto rect = projected_box_px(e, *camera, image->width_px, image->height_px);
+            if (rect) d.reason += "; its image box shows " + classes_in_rect(*image, *rect);
+        }
+    }
+    return d;
+}
+
+}  // namespace
+
 std::vector<Diagnosis> diagnose_cars(const std::vector<scene_schema::Entity>& entities,
                                      const std::vector<GtCar>& gt, const CarEvaluation& ev,
                                      const CarMatchOptions& options, const InstanceImage* image,
                                      const StereoCamera* camera) {
-    std::vector<long> match_of_gt(gt.size(), -1), match_of_entity(entities.size(), -1);
+    CarMatchIndex x{entities,
+                    gt,
+                    ev,
+                    options,
+                    std::vector<long>(gt.size(), -1),
+                    std::vector<long>(entities.size(), -1)};
     for (std::size_t i = 0; i < ev.matches.size(); ++i) {
-        match_of_gt[ev.matches[i].gt] = static_cast<long>(i);
-        match_of_entity[ev.matches[i].entity] = static_cast<long>(i);
+        x.match_of_gt[ev.matches[i].gt] = static_cast<long>(i);
+        x.match_of_entity[ev.matches[i].entity] = static_cast<long>(i);
     }
-    const auto gt_name = [&](std::size_t g) { return "GT car " + std::to_string(gt[g].instance); };
-    const double grow = 2.0 * options.footprint_margin_m;
     std::vector<Diagnosis> out;
     for (std::size_t g = 0; g < gt.size(); ++g) {
         const GtCar& car = gt[g];
-        if (match_of_gt[g] >= 0 || car.range_m() > options.max_range_m ||
+        if (x.match_of_gt[g] >= 0 || car.range_m() > options.max_range_m ||
             car.pixel_count < options.min_gt_pixels)
             continue;
-        long best = -1;
-        double best_share = 0.0;
-        for (std::size_t i = 0; i < entities.size(); ++i) {
-            if (entities[i].class_name != options.car_class) continue;
-            const double f =
-                footprint_inside_fraction(entities[i], car.points_m, options.footprint_margin_m);
-            if (f > best_share) {
-                best = static_cast<long>(i);
-                best_share = f;
-            }
-        }
-        Diagnosis d{gt_name(g), "", ""};
-        const std::string where = " (" + std::to_string(car.pixel_count) + " GT px at " +
-                                  fixed_text(car.range_m(), 1) + " m)";
-        if (best < 0) {
-            d.kind = "no-box";
-            d.reason = "no car box holds any of its points" + where;
-        } else {
-            const auto& e = entities[static_cast<std::size_t>(best)];
-            const long m = match_of_entity[static_cast<std::size_t>(best)];
-            const double area = (e.L + grow) * (e.W + grow);
-            if (area > options.max_footprint_area_m2) {
-                d.kind = "too-large";
-                d.reason = e.id + " holds " + pct(best_share) + " of its points but its grown " +
-                           "footprint is " + fixed_text(area, 1) + " m2 (> " +
-                           fixed_text(options.max_footprint_area_m2, 0) + ")" + where;
-            } else if (m >= 0 && best_share >= options.min_inside_fraction) {
-                d.kind = "merged";
-                d.reason = "merged with " + gt_name(ev.matches[static_cast<std::size_t>(m)].gt) +
-                           " into " + e.id + " (" + box_size(e) + " m box holds " +
-                           pct(best_share) + " of its points)" + where;
-            } else {
-                d.kind = "under-covered";
-                d.reason =
-                    e.id + " (" + box_size(e) + " m" +
-                    (m >= 0 ? ", matched to " + gt_name(ev.matches[static_cast<std::size_t>(m)].gt)
-                            : std::string()) +
-                    ") holds only " + pct(best_share) + " of its points (< " +
-                    pct(options.min_inside_fraction) + ")" + where;
-            }
-        }
-        out.push_back(d);
+        out.push_back(why_missed(x, g));
     }
     for (std::size_t i = 0; i < entities.size(); ++i) {
         const auto& e = entities[i];
-        if (e.class_name != options.car_class || match_of_entity[i] >= 0 ||
+        if (e.class_name != options.car_class || x.match_of_entity[i] >= 0 ||
             std::hypot(e.x, e.z) > options.max_range_m)
             continue;
-        long best = -1;
-        double best_share = 0.0;
-        for (std::size_t g = 0; g < gt.size(); ++g) {
-            const double f =
-                footprint_inside_fraction(e, gt[g].points_m, options.footprint_margin_m);
-            if (f > best_share) {
-                best = static_cast<long>(g);
-                best_share = f;
-            }
-        }
-        Diagnosis d{e.id, "", ""};
-        if (best >= 0 && best_share >= 0.05) {
-            const auto g = static_cast<std::size_t>(best);
-            const long m = match_of_gt[g];
-            d.kind = "duplicate";
-            d.reason =
-                "holds " + pct(best_share) + " of " + gt_name(g) + "'s points (" +
-                (m >= 0
-                     ? "matched by " + entities[ev.matches[static_cast<std::size_t>(m)].entity].id
-                     : std::string(gt[g].pixel_count < options.min_gt_pixels ? "not owed"
-                                                                             : "unmatched")) +
-                ")";
-        } else {
-            d.kind = "phantom";
-            d.reason =
-                "phantom at " + fixed_text(std::hypot(e.x, e.z), 1) + " m, no GT car point inside";
-            if (image && camera) {
-                const auto rect = projected_box_px(e, *camera, image->width_px, image->height_px);
-                if (rect) d.reason += "; its image box shows " + classes_in_rect(*image, *rect);
-            }
-        }
-        out.push_back(d);
+        out.push_back(why_spurious(x, e, image, camera));
     }
     return out;
 }
