@@ -2,15 +2,13 @@
 
 #include <algorithm>
 #include <cmath>
-#include <cstdint>
-#include <cstring>
 #include <limits>
 #include <stdexcept>
 #include <utility>
 
-#include <Eigen/Eigenvalues>
 #include <Eigen/Geometry>
 
+#include "boxes_internal.hpp"
 #include "cloud_analysis/support/select.hpp"
 #include "stereoscene/support/angles.hpp"
 
@@ -18,11 +16,6 @@ namespace cloud_analysis {
 namespace {
 
 using stereoscene::support::kPi;
-/// A straight face longer than this many prior widths cannot be a thing's front or rear.
-constexpr double kFaceWidths = 1.2;
-/// A face along the viewing ray counts when a pixel of disparity moves its far end by at most
-/// this share of its length.
-constexpr double kAlongRaySmearShare = 0.1;
 /// An axis whose component of an image edge's outward normal is below this runs along the edge.
 constexpr double kEdgeAxisShare = 0.2;
 /// A thing cut by an image edge is not completed beyond it along an axis when this share of the
@@ -87,242 +80,6 @@ std::pair<double, double> weighted_quantiles(WeightedValues& values, double q_lo
     const double rank_hi = std::round(std::clamp(q_hi, 0.0, 1.0) * (total - 1.0));
     return {weighted_rank_value(values.begin(), values.end(), rank_lo),
             weighted_rank_value(values.begin(), values.end(), rank_hi)};
-}
-
-/// Lanes of the closeness score's sums: point i adds to lane i % kLanes, and the lanes are
-/// added in a fixed order, so that the score is the same float whatever the instruction set.
-constexpr std::size_t kLanes = 8;
-
-/// Zhang et al.'s closeness score of the rectangle with axes (ca, sa) and (-sa, ca) around
-/// points (x[i], y[i]): the sum of w[i] / max(distance to the nearest edge, 0.01), w = 1 when
-/// null; c1 and c2 (n each) receive the coordinates along the axes. Also compiled for AVX2,
-/// chosen at load time: the same operations in the same lanes, so the same score, eight
-/// floats at a time instead of four.
-__attribute__((target_clones("avx2", "default"))) float closeness_score(
-    const float* __restrict x, const float* __restrict y, const float* __restrict w, std::size_t n,
-    float ca, float sa, float* __restrict c1, float* __restrict c2) {
-    constexpr float kInf = std::numeric_limits<float>::infinity();
-    float min1[kLanes], max1[kLanes], min2[kLanes], max2[kLanes];
-    for (std::size_t j = 0; j < kLanes; ++j) {
-        min1[j] = kInf;
-        max1[j] = -kInf;
-        min2[j] = kInf;
-        max2[j] = -kInf;
-    }
-    const std::size_t blocks = n / kLanes * kLanes;
-    const auto extend = [&](std::size_t i, std::size_t j) {
-        const float a = x[i] * ca + y[i] * sa;
-        const float b = y[i] * ca - x[i] * sa;
-        c1[i] = a;
-        c2[i] = b;
-        min1[j] = a < min1[j] ? a : min1[j];
-        max1[j] = a > max1[j] ? a : max1[j];
-        min2[j] = b < min2[j] ? b : min2[j];
-        max2[j] = b > max2[j] ? b : max2[j];
-    };
-    for (std::size_t i = 0; i < blocks; i += kLanes) {
-        for (std::size_t j = 0; j < kLanes; ++j) extend(i + j, j);
-    }
-    for (std::size_t i = blocks; i < n; ++i) extend(i, i - blocks);
-    float lo1 = kInf, hi1 = -kInf, lo2 = kInf, hi2 = -kInf;
-    for (std::size_t j = 0; j < kLanes; ++j) {
-        lo1 = std::min(lo1, min1[j]);
-        hi1 = std::max(hi1, max1[j]);
-        lo2 = std::min(lo2, min2[j]);
-        hi2 = std::max(hi2, max2[j]);
-    }
-    // w / (distance to the nearest edge, at least 0.01), kLanes points at a time as one GCC
-    // vector (two SSE registers by default, one AVX2 register in that clone), the rest one by
-    // one into the same lanes.
-    using Lanes = float __attribute__((vector_size(kLanes * sizeof(float))));
-    Lanes sums = {};
-    const Lanes floor = Lanes{} + 0.01f;
-    for (std::size_t i = 0; i < blocks; i += kLanes) {
-        Lanes u1, u2, weight;
-        std::memcpy(&u1, c1 + i, sizeof u1);
-        std::memcpy(&u2, c2 + i, sizeof u2);
-        const Lanes a1 = hi1 - u1, b1 = u1 - lo1, a2 = hi2 - u2, b2 = u2 - lo2;
-        const Lanes d1 = a1 < b1 ? a1 : b1;
-        const Lanes d2 = a2 < b2 ? a2 : b2;
-        const Lanes d = d1 < d2 ? d1 : d2;
-        const Lanes closeness = 1.0f / (d > floor ? d : floor);
-        if (w != nullptr) {
-            std::memcpy(&weight, w + i, sizeof weight);
-            sums += weight * closeness;
-        } else {
-            sums += closeness;
-        }
-    }
-    float sum[kLanes];
-    std::memcpy(sum, &sums, sizeof sum);
-    for (std::size_t i = blocks; i < n; ++i) {
-        const float a1 = hi1 - c1[i], b1 = c1[i] - lo1, a2 = hi2 - c2[i], b2 = c2[i] - lo2;
-        const float d1 = a1 < b1 ? a1 : b1;
-        const float d2 = a2 < b2 ? a2 : b2;
-        const float d = d1 < d2 ? d1 : d2;
-        const float closeness = 1.0f / (d > 0.01f ? d : 0.01f);
-        sum[i - blocks] += w != nullptr ? w[i] * closeness : closeness;
-    }
-    float total = 0.0f;
-    for (std::size_t j = 0; j < kLanes; ++j) total += sum[j];
-    return total;
-}
-
-/// Points relative to their mean, as floats (which keeps micrometres) for closeness_score.
-struct CentredPoints {
-    std::vector<float> x, y, c1, c2;
-    explicit CentredPoints(const std::vector<Eigen::Vector2d>& pts)
-        : x(pts.size()), y(pts.size()), c1(pts.size()), c2(pts.size()) {
-        Eigen::Vector2d mean = Eigen::Vector2d::Zero();
-        for (const auto& p : pts) mean += p;
-        mean /= static_cast<double>(std::max<std::size_t>(pts.size(), 1));
-        for (std::size_t i = 0; i < pts.size(); ++i) {
-            x[i] = static_cast<float>(pts[i].x() - mean.x());
-            y[i] = static_cast<float>(pts[i].y() - mean.y());
-        }
-    }
-    float score(double a, const float* w) {
-        return closeness_score(x.data(), y.data(), w, x.size(), static_cast<float>(std::cos(a)),
-                               static_cast<float>(std::sin(a)), c1.data(), c2.data());
-    }
-};
-
-/// Whether rectangle axis angle `a` lies within `tolerance` of `blocked` modulo 90 degrees
-/// (never when blocked is NaN: nothing blocked).
-bool blocked_angle(double a, double blocked, double tolerance) {
-    if (std::isnan(blocked)) return false;
-    double d = std::fmod(std::abs(a - blocked), kPi / 2.0);
-    return std::min(d, kPi / 2.0 - d) < tolerance;
-}
-
-/// Angle in [0, pi/2) of the first rectangle axis maximising Zhang et al.'s closeness score,
-/// skipping axes within `tolerance` of `blocked` (modulo 90 degrees; NaN: none).
-double best_lshape_angle(const std::vector<Eigen::Vector2d>& pts, double step_deg,
-                         double blocked = std::nan(""), double tolerance = 0.0) {
-    const int steps = std::max(1, static_cast<int>(std::lround(90.0 / step_deg)));
-    CentredPoints centred(pts);
-    double best_angle = 0.0;
-    float best_score = -1.0f;
-    for (int s = 0; s < steps; ++s) {
-        const double a = s * (kPi / 2.0) / steps;
-        if (blocked_angle(a, blocked, tolerance)) continue;
-        const float score = centred.score(a, nullptr);
-        if (score > best_score) {
-            best_score = score;
-            best_angle = a;
-        }
-    }
-    return best_angle;
-}
-
-/// As best_lshape_angle for weighted points (each point's closeness term times its weight),
-/// searched coarse to fine: kCoarseStepDeg steps over 90 degrees, then step_deg steps within
-/// one coarse step of the best (29 passes instead of 90 at 1 degree).
-double best_weighted_lshape_angle(const std::vector<Eigen::Vector2d>& pts,
-                                  const std::vector<float>& weights, double step_deg,
-                                  double blocked = std::nan(""), double tolerance = 0.0) {
-    constexpr double kCoarseStepDeg = 5.0;
-    CentredPoints centred(pts);
-    const double coarse = kCoarseStepDeg * kPi / 180.0;
-    double best_angle = 0.0;
-    float best_score = -1.0f;
-    const auto consider = [&](double a) {
-        if (blocked_angle(a, blocked, tolerance)) return;
-        const float s = centred.score(a, weights.data());
-        if (s > best_score) {
-            best_score = s;
-            best_angle = a;
-        }
-    };
-    for (int k = 0; k < static_cast<int>(std::lround(90.0 / kCoarseStepDeg)); ++k) {
-        consider(k * coarse);
-    }
-    const double centre = best_angle;
-    const double step = std::min(step_deg, kCoarseStepDeg) * kPi / 180.0;
-    const int reach =
-        static_cast<int>(std::lround(kCoarseStepDeg / std::min(step_deg, kCoarseStepDeg)));
-    for (int k = -reach; k <= reach; ++k) {
-        if (k != 0) consider(centre + k * step);
-    }
-    // The score repeats every 90 degrees: wrap into [0, pi/2).
-    double a = std::fmod(best_angle, kPi / 2.0);
-    if (a < 0.0) a += kPi / 2.0;
-    return a;
-}
-
-/// A straight face of points: unit direction, share of the points within the tolerance of
-/// it, and its length (2-98 % extent of those points along it).
-struct Face {
-    Eigen::Vector2d direction;
-    Eigen::Vector2d centre;  ///< mean of the points on it
-    double share = 0.0;
-    double length_m = 0.0;
-};
-
-/// The line through the most points (deterministic RANSAC over point pairs, counted on at
-/// most kFaceSample strided points), refined by the principal axis of its inliers.
-std::optional<Face> dominant_face(const std::vector<Eigen::Vector2d>& pts, double tolerance_m) {
-    constexpr std::size_t kFaceSample = 400;
-    constexpr std::size_t kHypotheses = 64;
-    if (pts.size() < 10) return std::nullopt;
-    const std::size_t stride = pts.size() / kFaceSample + 1;
-    // The strided sample as two coordinate arrays, so that each hypothesis' count is one
-    // vectorised loop (the same operations as normal.dot(p - q) point by point).
-    std::vector<double> sx, sy;
-    for (std::size_t m = 0; m < pts.size(); m += stride) {
-        sx.push_back(pts[m].x());
-        sy.push_back(pts[m].y());
-    }
-    std::size_t best_count = 0;
-    Eigen::Vector2d best_point, best_normal;
-    for (std::size_t k = 0; k < kHypotheses; ++k) {
-        const std::size_t i = (k * 2654435761u) % pts.size();
-        const std::size_t j = (i + pts.size() / 2 + k * 40503u) % pts.size();
-        const Eigen::Vector2d d = pts[j] - pts[i];
-        if (d.norm() < 0.3) continue;
-        const Eigen::Vector2d normal(-d.y() / d.norm(), d.x() / d.norm());
-        const double nx = normal.x(), ny = normal.y(), qx = pts[i].x(), qy = pts[i].y();
-        std::size_t count = 0;
-        for (std::size_t m = 0; m < sx.size(); ++m) {
-            count += std::abs(nx * (sx[m] - qx) + ny * (sy[m] - qy)) <= tolerance_m ? 1 : 0;
-        }
-        if (count > best_count) {
-            best_count = count;
-            best_point = pts[i];
-            best_normal = normal;
-        }
-    }
-    if (best_count == 0) return std::nullopt;
-    std::vector<Eigen::Vector2d> inliers;
-    Eigen::Vector2d mean = Eigen::Vector2d::Zero();
-    for (const auto& p : pts) {
-        if (std::abs(best_normal.dot(p - best_point)) <= tolerance_m) {
-            inliers.push_back(p);
-            mean += p;
-        }
-    }
-    mean /= static_cast<double>(inliers.size());
-    Eigen::Matrix2d cov = Eigen::Matrix2d::Zero();
-    for (const auto& p : inliers) cov += (p - mean) * (p - mean).transpose();
-    const Eigen::SelfAdjointEigenSolver<Eigen::Matrix2d> eig(cov);
-    Face face;
-    face.direction = eig.eigenvectors().col(1);
-    face.centre = mean;
-    face.share = static_cast<double>(inliers.size()) / static_cast<double>(pts.size());
-    std::vector<double> along;
-    along.reserve(inliers.size());
-    for (const auto& p : inliers) along.push_back(face.direction.dot(p));
-    const auto [lo, hi] = quantiles(along, 0.02, 0.98);
-    face.length_m = hi - lo;
-    return face;
-}
-
-/// KITTI yaw of a heading given in ground (x, z) coordinates, front/back resolved to z >= 0.
-double yaw_of(Eigen::Vector2d heading_xz) {
-    if (heading_xz.y() < 0.0 || (heading_xz.y() == 0.0 && heading_xz.x() < 0.0)) {
-        heading_xz = -heading_xz;
-    }
-    return std::atan2(-heading_xz.y(), heading_xz.x());
 }
 
 /// Interval [lo, hi] grown to `size` away from the camera (at coordinate 0 on the axis); on
@@ -468,73 +225,12 @@ OrientedBox assemble_box(const GroundFrame& frame, bool has_ground, const BoxFit
     return box;
 }
 
-}  // namespace
-
-void BoxFitOptions::validate() const {
-    if (prior_L_m < 0.0) throw std::invalid_argument("box.prior_L_m: must be >= 0");
-    if (prior_W_m < 0.0) throw std::invalid_argument("box.prior_W_m: must be >= 0");
-    if (prior_H_m < 0.0) throw std::invalid_argument("box.prior_H_m: must be >= 0");
-    if (!(angle_step_deg > 0.0 && angle_step_deg <= 10.0)) {
-        throw std::invalid_argument("box.angle_step_deg: must be in (0, 10]");
-    }
-    if (!(min_extent_m > 0.0)) throw std::invalid_argument("box.min_extent_m: must be > 0");
-    if (!(trim_fraction >= 0.0 && trim_fraction < 0.2)) {
-        throw std::invalid_argument("box.trim_fraction: must be in [0, 0.2)");
-    }
-    if (!(near_trim_fraction >= trim_fraction && near_trim_fraction < 0.2)) {
-        throw std::invalid_argument("box.near_trim_fraction: must be in [trim_fraction, 0.2)");
-    }
-    if (!(face_tolerance_m > 0.0)) throw std::invalid_argument("box.face_tolerance_m: must be > 0");
-    if (!(disparity_fb_px_m >= 0.0 && disparity_fb_px_m < 1e9)) {
-        throw std::invalid_argument("box.disparity_fb_px_m: must be >= 0");
-    }
-    if (!(face_share >= 0.0 && face_share <= 1.0)) {
-        throw std::invalid_argument("box.face_share: must be in [0, 1]");
-    }
-    if (yaw_rad && !std::isfinite(*yaw_rad)) {
-        throw std::invalid_argument("box.yaw_rad: must be finite");
-    }
-    if (truncation_xz && !(truncation_xz->allFinite() && truncation_xz->norm() > 0.0)) {
-        throw std::invalid_argument("box.truncation_xz: must be finite, not the camera's foot");
-    }
-    if (!(truncation_exclusion_deg >= 0.0 && truncation_exclusion_deg < 45.0)) {
-        throw std::invalid_argument("box.truncation_exclusion_deg: must be in [0, 45)");
-    }
-}
-
-double lshape_yaw(const std::vector<Eigen::Vector2d>& xz_m, double angle_step_deg) {
-    if (xz_m.size() < 2) return 0.0;
-    const double a = best_lshape_angle(xz_m, angle_step_deg);
-    const Eigen::Vector2d e1(std::cos(a), std::sin(a));
-    const Eigen::Vector2d e2(-std::sin(a), std::cos(a));
-    double min1 = 1e300, max1 = -1e300, min2 = 1e300, max2 = -1e300;
-    for (const auto& p : xz_m) {
-        min1 = std::min(min1, p.dot(e1));
-        max1 = std::max(max1, p.dot(e1));
-        min2 = std::min(min2, p.dot(e2));
-        max2 = std::max(max2, p.dot(e2));
-    }
-    return yaw_of(max1 - min1 >= max2 - min2 ? e1 : e2);
-}
-
-OrientedBox fit_upright_box(const std::vector<Eigen::Vector3f>& points_m,
-                            const std::optional<GroundPlane>& ground,
-                            const BoxFitOptions& options) {
-    options.validate();
-    if (points_m.empty()) throw std::invalid_argument("fit_upright_box: no points");
-    const GroundFrame frame(ground);
-    std::vector<Eigen::Vector2d> ab;
-    std::vector<double> heights;
-    ab.reserve(points_m.size());
-    heights.reserve(points_m.size());
-    for (const auto& p : points_m) {
-        const Eigen::Vector3d q = p.cast<double>();
-        ab.push_back(frame.footprint(q));
-        heights.push_back(frame.height(q));
-    }
+/// The angle of the footprint's first axis in the ground frame: the imposed yaw, or the
+/// L-shape search's, skipping axes along the ray of an image edge that cuts the points.
+double footprint_angle(const GroundFrame& frame, const std::vector<Eigen::Vector2d>& ab,
+                       const BoxFitOptions& options) {
     // The angle search costs 90 passes: run it on at most kMaxSearchPoints evenly strided points.
     constexpr std::size_t kMaxSearchPoints = 3000;
-    double angle = 0.0;
     double blocked = std::nan("");
     const double tolerance = options.truncation_exclusion_deg * kPi / 180.0;
     if (options.truncation_xz) {
@@ -544,100 +240,41 @@ OrientedBox fit_upright_box(const std::vector<Eigen::Vector3f>& points_m,
     if (options.yaw_rad) {
         // Heading (cos t, -sin t) in camera x-z, expressed in the ground frame's axes.
         const Eigen::Vector3d heading(std::cos(*options.yaw_rad), 0.0, -std::sin(*options.yaw_rad));
-        angle = std::atan2(frame.ez.dot(heading), frame.ex.dot(heading));
-    } else if (ab.size() > kMaxSearchPoints) {
-        // Points above one another share a footprint position: count them on a fine grid over
-        // the cluster's footprint and search with the counts as weights, which scores like
-        // every point at a fraction of the cost and whatever their order (a strided sample
-        // scored differently and moved headings by degrees).
-        Eigen::Vector2d lo = ab.front(), hi = ab.front();
-        for (const auto& p : ab) {
-            lo = lo.cwiseMin(p);
-            hi = hi.cwiseMax(p);
-        }
-        double cell = 0.02;
-        const auto cells_along = [&](double extent) {
-            return static_cast<std::size_t>(extent / cell) + 1;
-        };
-        while (cells_along(hi.x() - lo.x()) * cells_along(hi.y() - lo.y()) > (1u << 20)) {
-            cell *= 2.0;
-        }
-        const std::size_t na = cells_along(hi.x() - lo.x());
-        const std::size_t nb = cells_along(hi.y() - lo.y());
-        // Counted per cell, then the occupied cells numbered in cell order and summed there:
-        // 4 bytes per grid cell instead of a count and a sum for each. The occupied cells are
-        // listed as they fill and sorted, not found by scanning the grid (smear can stretch
-        // the footprint over 10^5 cells for a few thousand points).
-        std::vector<std::uint32_t> slot(na * nb, 0);
-        std::vector<std::uint32_t> cell_of(ab.size());
-        std::vector<std::uint32_t> occupied;
-        for (std::size_t i = 0; i < ab.size(); ++i) {
-            const auto a = std::min(na - 1, static_cast<std::size_t>((ab[i].x() - lo.x()) / cell));
-            const auto b = std::min(nb - 1, static_cast<std::size_t>((ab[i].y() - lo.y()) / cell));
-            cell_of[i] = static_cast<std::uint32_t>(a * nb + b);
-            if (slot[a * nb + b]++ == 0) occupied.push_back(cell_of[i]);
-        }
-        std::sort(occupied.begin(), occupied.end());
-        std::vector<float> counts(occupied.size());
-        for (std::size_t k = 0; k < occupied.size(); ++k) {
-            counts[k] = static_cast<float>(slot[occupied[k]]);
-            slot[occupied[k]] = static_cast<std::uint32_t>(k);
-        }
-        std::vector<Eigen::Vector2d> cells(counts.size(), Eigen::Vector2d::Zero());
-        for (std::size_t i = 0; i < ab.size(); ++i) cells[slot[cell_of[i]]] += ab[i];
-        for (std::size_t k = 0; k < cells.size(); ++k) {
-            cells[k] /= static_cast<double>(counts[k]);
-        }
-        angle =
-            best_weighted_lshape_angle(cells, counts, options.angle_step_deg, blocked, tolerance);
-    } else {
-        angle = best_lshape_angle(ab, options.angle_step_deg, blocked, tolerance);
+        return std::atan2(frame.ez.dot(heading), frame.ex.dot(heading));
     }
-    // A straight face across the viewing ray (more than 45 degrees from it) holding most of the
-    // points and longer than a width is a long side: its extent comes from pixel columns, and
-    // at range the closeness criterion follows the smear and stray points around it instead.
-    // (Along the ray a face is no evidence: range smear itself lines points up along rays.)
-    bool face_is_length = false;
-    if (!options.yaw_rad && options.face_share > 0.0 && options.prior_W_m > 0.0 &&
-        options.prior_L_m > kFaceWidths * options.prior_W_m) {
-        const auto face = dominant_face(ab, options.face_tolerance_m);
-        const auto sharp = [&](const Face& f) {
-            if (std::abs(f.direction.dot(f.centre.normalized())) < std::sqrt(0.5)) return true;
-            // Along the ray: a face only where a pixel of disparity error moves its far end by
-            // at most a tenth of its length and of the thing's prior length (a long row's side
-            // at 20 m is no one thing's face).
-            const double far = f.centre.norm() + f.length_m / 2.0;
-            return options.disparity_fb_px_m > 0.0 &&
-                   far * far / options.disparity_fb_px_m <=
-                       kAlongRaySmearShare * std::min(f.length_m, options.prior_L_m);
-        };
-        if (face && face->share >= options.face_share &&
-            face->length_m >= kFaceWidths * options.prior_W_m && sharp(*face)) {
-            angle = std::atan2(face->direction.y(), face->direction.x());
-            face_is_length = true;
-        }
+    if (ab.size() > kMaxSearchPoints) {
+        return best_gridded_lshape_angle(ab, options.angle_step_deg, blocked, tolerance);
     }
-    Eigen::Vector2d e1(std::cos(angle), std::sin(angle));
-    Eigen::Vector2d e2(-std::sin(angle), std::cos(angle));
+    return best_lshape_angle(ab, options.angle_step_deg, blocked, tolerance);
+}
+
+/// The cap on the ranges that weigh points over seen surface (see fit_extents), metres.
+double seen_surface_cap_m(const std::vector<Eigen::Vector2d>& ab, const BoxFitOptions& options) {
+    std::vector<double> range;
+    range.reserve(ab.size());
+    for (const auto& p : ab) range.push_back(p.norm());
+    double cap_m =
+        quantile(range, options.trim_fraction) + std::max(options.prior_L_m, options.prior_W_m);
+    if (options.disparity_fb_px_m > 0.0) {
+        cap_m = std::min(
+            cap_m, std::sqrt(kAlongRaySmearShare * options.prior_L_m * options.disparity_fb_px_m));
+    }
+    return cap_m;
+}
+
+/// Extents of the footprint points `ab` along the axes e1, e2 and of their heights (trimmed
+/// quantiles; the heights are reordered).
+Extents fit_extents(const std::vector<Eigen::Vector2d>& ab, std::vector<double>& heights,
+                    const Eigen::Vector2d& e1, const Eigen::Vector2d& e2,
+                    const BoxFitOptions& options) {
     // Coordinates along the axes, each standing for one point or, over seen surface, for its
     // squared range (the surface a pixel spans there). Ranges are capped: a side runs at most
     // the prior's length behind the thing's near end (range smear and the next thing of a row
     // beyond weigh no more than a point there), and where one pixel of disparity moves a point
     // along the ray by more than a tenth of the prior's length, smear, not the pixels' spacing,
-    // shapes the far end (the range at which the face rule above stops trusting faces along the
-    // ray).
-    double cap_m = 0.0;
-    if (options.area_weighted_extents) {
-        std::vector<double> range;
-        range.reserve(ab.size());
-        for (const auto& p : ab) range.push_back(p.norm());
-        cap_m =
-            quantile(range, options.trim_fraction) + std::max(options.prior_L_m, options.prior_W_m);
-        if (options.disparity_fb_px_m > 0.0) {
-            cap_m = std::min(cap_m, std::sqrt(kAlongRaySmearShare * options.prior_L_m *
-                                              options.disparity_fb_px_m));
-        }
-    }
+    // shapes the far end (the range at which long_face_angle's face rule stops trusting faces
+    // along the ray).
+    const double cap_m = options.area_weighted_extents ? seen_surface_cap_m(ab, options) : 0.0;
     // The points' coordinates along the axes: plain, or with weights over seen surface.
     std::vector<double> c1, c2;
     WeightedValues w1, w2;
@@ -686,8 +323,72 @@ OrientedBox fit_upright_box(const std::vector<Eigen::Vector3f>& points_m,
     }
 
     const auto [bottom_seen, top_seen] = quantiles(heights, t, 1.0 - t);
+    return {lo1, hi1, lo2, hi2, bottom_seen, top_seen};
+}
+
+}  // namespace
+
+void BoxFitOptions::validate() const {
+    if (prior_L_m < 0.0) throw std::invalid_argument("box.prior_L_m: must be >= 0");
+    if (prior_W_m < 0.0) throw std::invalid_argument("box.prior_W_m: must be >= 0");
+    if (prior_H_m < 0.0) throw std::invalid_argument("box.prior_H_m: must be >= 0");
+    if (!(angle_step_deg > 0.0 && angle_step_deg <= 10.0)) {
+        throw std::invalid_argument("box.angle_step_deg: must be in (0, 10]");
+    }
+    if (!(min_extent_m > 0.0)) throw std::invalid_argument("box.min_extent_m: must be > 0");
+    if (!(trim_fraction >= 0.0 && trim_fraction < 0.2)) {
+        throw std::invalid_argument("box.trim_fraction: must be in [0, 0.2)");
+    }
+    if (!(near_trim_fraction >= trim_fraction && near_trim_fraction < 0.2)) {
+        throw std::invalid_argument("box.near_trim_fraction: must be in [trim_fraction, 0.2)");
+    }
+    if (!(face_tolerance_m > 0.0)) throw std::invalid_argument("box.face_tolerance_m: must be > 0");
+    if (!(disparity_fb_px_m >= 0.0 && disparity_fb_px_m < 1e9)) {
+        throw std::invalid_argument("box.disparity_fb_px_m: must be >= 0");
+    }
+    if (!(face_share >= 0.0 && face_share <= 1.0)) {
+        throw std::invalid_argument("box.face_share: must be in [0, 1]");
+    }
+    if (yaw_rad && !std::isfinite(*yaw_rad)) {
+        throw std::invalid_argument("box.yaw_rad: must be finite");
+    }
+    if (truncation_xz && !(truncation_xz->allFinite() && truncation_xz->norm() > 0.0)) {
+        throw std::invalid_argument("box.truncation_xz: must be finite, not the camera's foot");
+    }
+    if (!(truncation_exclusion_deg >= 0.0 && truncation_exclusion_deg < 45.0)) {
+        throw std::invalid_argument("box.truncation_exclusion_deg: must be in [0, 45)");
+    }
+}
+
+OrientedBox fit_upright_box(const std::vector<Eigen::Vector3f>& points_m,
+                            const std::optional<GroundPlane>& ground,
+                            const BoxFitOptions& options) {
+    options.validate();
+    if (points_m.empty()) throw std::invalid_argument("fit_upright_box: no points");
+    const GroundFrame frame(ground);
+    std::vector<Eigen::Vector2d> ab;
+    std::vector<double> heights;
+    ab.reserve(points_m.size());
+    heights.reserve(points_m.size());
+    for (const auto& p : points_m) {
+        const Eigen::Vector3d q = p.cast<double>();
+        ab.push_back(frame.footprint(q));
+        heights.push_back(frame.height(q));
+    }
+    double angle = footprint_angle(frame, ab, options);
+    // A straight face across the viewing ray (more than 45 degrees from it) holding most of the
+    // points and longer than a width is a long side: its extent comes from pixel columns, and
+    // at range the closeness criterion follows the smear and stray points around it instead.
+    // (Along the ray a face is no evidence: range smear itself lines points up along rays.)
+    bool face_is_length = false;
+    if (const std::optional<double> face = long_face_angle(ab, options)) {
+        angle = *face;
+        face_is_length = true;
+    }
+    Eigen::Vector2d e1(std::cos(angle), std::sin(angle));
+    Eigen::Vector2d e2(-std::sin(angle), std::cos(angle));
     return assemble_box(frame, ground.has_value(), options, face_is_length, e1, e2,
-                        {lo1, hi1, lo2, hi2, bottom_seen, top_seen});
+                        fit_extents(ab, heights, e1, e2, options));
 }
 
 OrientedBox with_length(const OrientedBox& box, double length_m, bool keep_far_end) {

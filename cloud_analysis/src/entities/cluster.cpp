@@ -234,6 +234,183 @@ double depth_growth(double z_m, double exponent) {
     return exponent == 1.0 ? r : exponent == 2.0 ? r * r : std::pow(r, exponent);
 }
 
+/// Each point's linking distance and its place on the hierarchical grid.
+struct GridPlaces {
+    int levels = 1;                       ///< levels of the grid
+    std::vector<double> radius;           ///< per point: its linking distance, metres
+    std::vector<std::int64_t> base_cell;  ///< per point: its cell (x, y, z) on level 0
+    std::vector<std::uint8_t> level;      ///< per point: its level
+};
+
+/// Hierarchical grid (levels of cell size h0 * 2^l, nested): a point whose linking distance
+/// is r sits in the finest level whose cell is at least r. Two points link within the
+/// smaller of their distances, which is at most the cell size of the level of the point
+/// that has it, so each neighbour of a point lies in the 27 cells around it on some level.
+/// The cells are a little larger than the distances so that rounding cannot lose a link.
+GridPlaces place_on_grid(const std::vector<Eigen::Vector3f>& points_m,
+                         const ClusterOptions& options) {
+    const std::size_t n = points_m.size();
+    const double base_m = options.distance_at_10m_m;
+    int levels = 1;
+    while (base_m * static_cast<double>(1 << (levels - 1)) < options.distance_max_m) ++levels;
+    const double cell0_m = base_m * (1.0 + 1e-5);
+    std::vector<double> radius(n);
+    std::vector<std::int64_t> base_cell(3 * n);
+    std::vector<std::uint8_t> level(n);
+    for (std::size_t i = 0; i < n; ++i) {
+        radius[i] = options.distance_at(double{points_m[i].z()});
+        int l = 0;
+        while (l + 1 < levels && base_m * static_cast<double>(1 << l) < radius[i]) ++l;
+        level[i] = static_cast<std::uint8_t>(l);
+        for (int a = 0; a < 3; ++a)
+            base_cell[3 * i + a] = floor_div(double{points_m[i][a]}, cell0_m, 1.0 / cell0_m);
+    }
+    return GridPlaces{levels, std::move(radius), std::move(base_cell), std::move(level)};
+}
+
+/// A point as the scan of its cell reads it: position, distances and index side by side.
+struct Member {
+    Eigen::Vector3f p;
+    std::uint32_t point;
+    double radius;
+    double cross;  // distance across the ray, horizontally
+};
+
+/// Points of each cell, contiguous (cell_start), in index order; the unvisited ones first
+/// (cell_left counts them) so that visited points leave the candidate lists.
+struct CellMembers {
+    std::vector<std::uint32_t> cell_of;     ///< per point: its cell
+    std::vector<std::uint32_t> cell_start;  ///< per cell: its first slot, then the end
+    std::vector<std::uint32_t> cell_left;   ///< per cell: its unvisited points
+    std::vector<Member> members;            ///< per slot: the point in it
+    std::vector<std::uint32_t> slot_of;     ///< per point: its slot
+};
+
+/// The points of each cell as records (position, distance, index) side by side, so that
+/// scanning a cell reads one contiguous run of memory; cells numbered in `cells`.
+CellMembers sort_into_cells(const std::vector<Eigen::Vector3f>& points_m, const GridPlaces& places,
+                            const ClusterOptions& options, bool anisotropic, LevelCells& cells) {
+    const std::size_t n = points_m.size();
+    std::vector<std::uint32_t> cell_of(n);
+    std::vector<std::uint32_t> cell_count;
+    for (std::size_t i = 0; i < n; ++i) {
+        const int l = places.level[i];
+        const std::int64_t* b = &places.base_cell[3 * i];
+        bool inserted = false;
+        cell_of[i] = cells.find_or_insert(l, floor_shift(b[0], l), floor_shift(b[1], l),
+                                          floor_shift(b[2], l),
+                                          static_cast<std::uint32_t>(cell_count.size()), inserted);
+        if (inserted) cell_count.push_back(0);
+        ++cell_count[cell_of[i]];
+    }
+    std::vector<std::uint32_t> cell_start(cell_count.size() + 1, 0);
+    for (std::size_t c = 0; c < cell_count.size(); ++c) {
+        cell_start[c + 1] = cell_start[c] + cell_count[c];
+    }
+    std::vector<Member> members(n);
+    std::vector<std::uint32_t> slot_of(n);
+    std::vector<std::uint32_t> cell_left(cell_count.size(), 0);
+    for (std::size_t i = 0; i < n; ++i) {
+        const std::uint32_t c = cell_of[i];
+        const std::uint32_t slot = cell_start[c] + cell_left[c]++;
+        const double radius = places.radius[i];
+        const double cross =
+            anisotropic ? options.cross_distance_at(double{points_m[i].z()}) : radius;
+        members[slot] = Member{points_m[i], static_cast<std::uint32_t>(i), radius, cross};
+        slot_of[i] = slot;
+    }
+    return CellMembers{std::move(cell_of), std::move(cell_start), std::move(cell_left),
+                       std::move(members), std::move(slot_of)};
+}
+
+/// Marks point i visited: the last unvisited point of its cell takes its slot.
+inline void remove_unvisited(CellMembers& m, std::uint32_t i) {
+    const std::uint32_t c = m.cell_of[i];
+    const std::uint32_t last = m.cell_start[c] + --m.cell_left[c];
+    const std::uint32_t at = m.slot_of[i];
+    std::swap(m.members[at], m.members[last]);
+    m.slot_of[m.members[at].point] = at;
+    m.slot_of[i] = last;
+}
+
+/// Occupied cells around each base cell on every level, listed once per base cell: list id
+/// holds cells[begin[id]] .. cells[end[id] - 1].
+struct NearCells {
+    LevelCells base_ids;  ///< list of each base cell
+    std::vector<std::uint32_t> begin, end, cells;
+};
+
+/// List (in around) of the cells around point i's base cell, made when first asked for.
+std::uint32_t cells_near(const GridPlaces& places, const LevelCells& cells, std::size_t i,
+                         NearCells& around) {
+    const std::int64_t* b = &places.base_cell[3 * i];
+    bool inserted = false;
+    const std::uint32_t id = around.base_ids.find_or_insert(
+        0, b[0], b[1], b[2], static_cast<std::uint32_t>(around.begin.size()), inserted);
+    if (inserted) {
+        around.begin.push_back(static_cast<std::uint32_t>(around.cells.size()));
+        for (int l = 0; l < places.levels; ++l) {
+            cells.for_each_near(l, floor_shift(b[0], l), floor_shift(b[1], l), floor_shift(b[2], l),
+                                [&](std::uint32_t c) { around.cells.push_back(c); });
+        }
+        around.end.push_back(static_cast<std::uint32_t>(around.cells.size()));
+    }
+    return id;
+}
+
+/// Region growing from each unvisited point in index order; a neighbour joins when closer
+/// than the distance at the nearer depth, i.e. the smaller of the two points' distances.
+/// The visiting order within a cluster depends on the grid; the clusters do not. Returns the
+/// clusters of at least min_points points, in the order of their first point.
+std::vector<std::vector<std::size_t>> grow_clusters(const std::vector<Eigen::Vector3f>& points_m,
+                                                    const GridPlaces& places,
+                                                    const LevelCells& cells, bool anisotropic,
+                                                    std::size_t min_points, CellMembers& m,
+                                                    NearCells& around) {
+    const std::size_t n = points_m.size();
+    std::vector<std::vector<std::size_t>> clusters;
+    std::vector<char> visited(n, 0);
+    std::vector<std::size_t> queue;
+    for (std::size_t seed = 0; seed < n; ++seed) {
+        if (visited[seed]) continue;
+        visited[seed] = 1;
+        remove_unvisited(m, static_cast<std::uint32_t>(seed));
+        queue.assign(1, seed);
+        for (std::size_t head = 0; head < queue.size(); ++head) {
+            const std::size_t i = queue[head];
+            const Eigen::Vector3f p = points_m[i];
+            const double ri = places.radius[i];
+            const double ci = m.members[m.slot_of[i]].cross;  // slot_of follows point i
+            const std::uint32_t id = cells_near(places, cells, i, around);
+            for (std::uint32_t k = around.begin[id]; k < around.end[id];) {
+                const std::uint32_t c = around.cells[k];
+                if (m.cell_left[c] == 0) {  // exhausted for good: drop it from the list
+                    around.cells[k] = around.cells[--around.end[id]];
+                    continue;
+                }
+                ++k;
+                for (std::uint32_t slot = m.cell_start[c];
+                     slot < m.cell_start[c] + m.cell_left[c];) {
+                    const Member& mb = m.members[slot];
+                    const double link = std::min(ri, mb.radius);
+                    const Eigen::Vector3f d = mb.p - p;
+                    if (double{d.squaredNorm()} > link * link ||
+                        (anisotropic && !within_across_ray(p, mb.p, d, std::min(ci, mb.cross)))) {
+                        ++slot;
+                        continue;
+                    }
+                    const std::uint32_t j = mb.point;
+                    visited[j] = 1;
+                    remove_unvisited(m, j);  // moves another unvisited point into this slot
+                    queue.push_back(j);
+                }
+            }
+        }
+        if (queue.size() >= min_points) clusters.push_back(queue);
+    }
+    return clusters;
+}
+
 }  // namespace
 
 void ClusterOptions::validate() const {
@@ -271,141 +448,17 @@ double ClusterOptions::cross_distance_at(double z_m) const {
 std::vector<std::vector<std::size_t>> euclidean_clusters(
     const std::vector<Eigen::Vector3f>& points_m, const ClusterOptions& options) {
     options.validate();
-    std::vector<std::vector<std::size_t>> clusters;
     const std::size_t n = points_m.size();
-    if (n == 0) return clusters;
+    if (n == 0) return {};
     if (n >= CellTable::kNone) throw std::invalid_argument("euclidean_clusters: too many points");
-
-    // Hierarchical grid (levels of cell size h0 * 2^l, nested): a point whose linking distance
-    // is r sits in the finest level whose cell is at least r. Two points link within the
-    // smaller of their distances, which is at most the cell size of the level of the point
-    // that has it, so each neighbour of a point lies in the 27 cells around it on some level.
-    // The cells are a little larger than the distances so that rounding cannot lose a link.
-    const double base_m = options.distance_at_10m_m;
-    int levels = 1;
-    while (base_m * static_cast<double>(1 << (levels - 1)) < options.distance_max_m) ++levels;
-    const double cell0_m = base_m * (1.0 + 1e-5);
-    std::vector<double> radius(n);
-    std::vector<std::int64_t> base_cell(3 * n);
-    std::vector<std::uint8_t> level(n);
-    for (std::size_t i = 0; i < n; ++i) {
-        radius[i] = options.distance_at(double{points_m[i].z()});
-        int l = 0;
-        while (l + 1 < levels && base_m * static_cast<double>(1 << l) < radius[i]) ++l;
-        level[i] = static_cast<std::uint8_t>(l);
-        for (int a = 0; a < 3; ++a)
-            base_cell[3 * i + a] = floor_div(double{points_m[i][a]}, cell0_m, 1.0 / cell0_m);
-    }
-    // Points of each cell, contiguous (cell_start), in index order; the unvisited ones first
-    // (cell_left counts them) so that visited points leave the candidate lists.
-    LevelCells cells(base_cell, n, levels);
-    std::vector<std::uint32_t> cell_of(n);
-    std::vector<std::uint32_t> cell_count;
-    for (std::size_t i = 0; i < n; ++i) {
-        const int l = level[i];
-        bool inserted = false;
-        cell_of[i] = cells.find_or_insert(l, floor_shift(base_cell[3 * i], l),
-                                          floor_shift(base_cell[3 * i + 1], l),
-                                          floor_shift(base_cell[3 * i + 2], l),
-                                          static_cast<std::uint32_t>(cell_count.size()), inserted);
-        if (inserted) cell_count.push_back(0);
-        ++cell_count[cell_of[i]];
-    }
-    std::vector<std::uint32_t> cell_start(cell_count.size() + 1, 0);
-    for (std::size_t c = 0; c < cell_count.size(); ++c) {
-        cell_start[c + 1] = cell_start[c] + cell_count[c];
-    }
-    // The points of each cell as records (position, distance, index) side by side, so that
-    // scanning a cell reads one contiguous run of memory.
-    struct Member {
-        Eigen::Vector3f p;
-        std::uint32_t point;
-        double radius;
-        double cross;  // distance across the ray, horizontally
-    };
+    const GridPlaces places = place_on_grid(points_m, options);
+    LevelCells cells(places.base_cell, n, places.levels);
     const bool anisotropic =
         options.cross_growth.has_value() || options.cross_distance_at_10m_m.has_value();
-    std::vector<Member> members(n);
-    std::vector<std::uint32_t> slot_of(n);
-    std::vector<std::uint32_t> cell_left(cell_count.size(), 0);
-    for (std::size_t i = 0; i < n; ++i) {
-        const std::uint32_t c = cell_of[i];
-        const std::uint32_t slot = cell_start[c] + cell_left[c]++;
-        const double cross =
-            anisotropic ? options.cross_distance_at(double{points_m[i].z()}) : radius[i];
-        members[slot] = Member{points_m[i], static_cast<std::uint32_t>(i), radius[i], cross};
-        slot_of[i] = slot;
-    }
-    const auto remove = [&](std::uint32_t i) {
-        const std::uint32_t c = cell_of[i];
-        const std::uint32_t last = cell_start[c] + --cell_left[c];
-        const std::uint32_t at = slot_of[i];
-        std::swap(members[at], members[last]);
-        slot_of[members[at].point] = at;
-        slot_of[i] = last;
-    };
-
-    // Occupied cells around each base cell on every level, listed once per base cell.
-    LevelCells base_ids(base_cell, n, 1);
-    std::vector<std::uint32_t> near_begin, near_end, near_cells;
-    const auto cells_near = [&](std::size_t i) {
-        const std::int64_t* b = &base_cell[3 * i];
-        bool inserted = false;
-        const std::uint32_t id = base_ids.find_or_insert(
-            0, b[0], b[1], b[2], static_cast<std::uint32_t>(near_begin.size()), inserted);
-        if (inserted) {
-            near_begin.push_back(static_cast<std::uint32_t>(near_cells.size()));
-            for (int l = 0; l < levels; ++l) {
-                cells.for_each_near(l, floor_shift(b[0], l), floor_shift(b[1], l),
-                                    floor_shift(b[2], l),
-                                    [&](std::uint32_t c) { near_cells.push_back(c); });
-            }
-            near_end.push_back(static_cast<std::uint32_t>(near_cells.size()));
-        }
-        return id;
-    };
-
-    // Region growing from each unvisited point in index order; a neighbour joins when closer
-    // than the distance at the nearer depth, i.e. the smaller of the two points' distances.
-    // The visiting order within a cluster depends on the grid; the clusters do not.
-    std::vector<char> visited(n, 0);
-    std::vector<std::size_t> queue;
-    for (std::size_t seed = 0; seed < n; ++seed) {
-        if (visited[seed]) continue;
-        visited[seed] = 1;
-        remove(static_cast<std::uint32_t>(seed));
-        queue.assign(1, seed);
-        for (std::size_t head = 0; head < queue.size(); ++head) {
-            const std::size_t i = queue[head];
-            const Eigen::Vector3f p = points_m[i];
-            const double ri = radius[i];
-            const double ci = members[slot_of[i]].cross;  // slot_of follows point i
-            const std::uint32_t id = cells_near(i);
-            for (std::uint32_t k = near_begin[id]; k < near_end[id];) {
-                const std::uint32_t c = near_cells[k];
-                if (cell_left[c] == 0) {  // exhausted for good: drop it from the list
-                    near_cells[k] = near_cells[--near_end[id]];
-                    continue;
-                }
-                ++k;
-                for (std::uint32_t slot = cell_start[c]; slot < cell_start[c] + cell_left[c];) {
-                    const Member& m = members[slot];
-                    const double link = std::min(ri, m.radius);
-                    const Eigen::Vector3f d = m.p - p;
-                    if (double{d.squaredNorm()} > link * link ||
-                        (anisotropic && !within_across_ray(p, m.p, d, std::min(ci, m.cross)))) {
-                        ++slot;
-                        continue;
-                    }
-                    const std::uint32_t j = m.point;
-                    visited[j] = 1;
-                    remove(j);  // moves another unvisited point into this slot
-                    queue.push_back(j);
-                }
-            }
-        }
-        if (queue.size() >= options.min_points) clusters.push_back(queue);
-    }
+    CellMembers members = sort_into_cells(points_m, places, options, anisotropic, cells);
+    NearCells around{LevelCells(places.base_cell, n, 1), {}, {}, {}};
+    std::vector<std::vector<std::size_t>> clusters =
+        grow_clusters(points_m, places, cells, anisotropic, options.min_points, members, around);
     std::stable_sort(clusters.begin(), clusters.end(),
                      [](const auto& a, const auto& b) { return a.size() > b.size(); });
     return clusters;

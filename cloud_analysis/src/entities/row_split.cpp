@@ -4,17 +4,29 @@
 #include <array>
 #include <cmath>
 #include <limits>
-#include <numeric>
 
 #include "cloud_analysis/support/select.hpp"
+#include "row_split_internal.hpp"
 #include "stereoscene/support/angles.hpp"
 
 using stereoscene::support::wrap_angle;
 
 namespace cloud_analysis::instances {
+
+Projection project(const std::vector<Eigen::Vector3f>& pts, const Indices& idx, double dir_x,
+                   double dir_z) {
+    Projection p;
+    p.along.resize(idx.size());
+    for (std::size_t k = 0; k < idx.size(); ++k) {
+        p.along[k] = double{pts[idx[k]].x()} * dir_x + double{pts[idx[k]].z()} * dir_z;
+        p.lo = std::min(p.lo, p.along[k]);
+        p.hi = std::max(p.hi, p.along[k]);
+    }
+    return p;
+}
+
 namespace {
 
-constexpr double kGapFraction = 0.25;
 /// Boxes wider than this many prior widths are looked at for two things side by side.
 constexpr double kSideBySideWidth = 1.3;
 /// The narrowest gap (0.1 m bins) that parts two things side by side.
@@ -33,30 +45,194 @@ constexpr int kClearGapBins = 2;
 constexpr int kGapIslandBins = 3;
 using stereoscene::support::kHalfPi;
 
-/// The points' coordinates along the unit direction (dir_x, dir_z) and their range.
-struct Projection {
-    std::vector<double> along;
-    double lo = 1e300, hi = -1e300;
-};
-
-Projection project(const std::vector<Eigen::Vector3f>& pts, const Indices& idx, double dir_x,
-                   double dir_z) {
-    Projection p;
-    p.along.resize(idx.size());
-    for (std::size_t k = 0; k < idx.size(); ++k) {
-        p.along[k] = double{pts[idx[k]].x()} * dir_x + double{pts[idx[k]].z()} * dir_z;
-        p.lo = std::min(p.lo, p.along[k]);
-        p.hi = std::max(p.hi, p.along[k]);
-    }
-    return p;
-}
-
 /// A longer pitch for the tall things of a row walked from its near end (vans among cars).
 struct TallPitch {
     GroundPlane ground;         ///< heights are above it
     double min_height_m = 0.0;  ///< a thing whose top (98 % height) reaches this is tall
     double pitch_m = 0.0;       ///< a tall thing's pitch (its length and the row's gap)
 };
+
+/// The bins of split_along's density histogram, metres.
+constexpr double kSplitBin = 0.1;
+
+/// The density histogram of points along a direction, kSplitBin bins from lo: a bin with at
+/// most kGapFraction of the median occupied bin's points is a clear gap.
+struct Density {
+    double lo = 0.0;
+    int bins = 1;
+    std::vector<int> hist;
+    double gap_count = 0.0;
+
+    bool inside(int b) const { return b >= 0 && b < bins; }
+    bool is_gap(int b) const { return hist[static_cast<std::size_t>(b)] <= gap_count; }
+    /// The emptiest bin within r bins of centre.
+    int emptiest(int centre, int r) const {
+        int best = std::clamp(centre, 0, bins - 1);
+        for (int b = std::max(0, centre - r); b <= std::min(bins - 1, centre + r); ++b) {
+            if (hist[static_cast<std::size_t>(b)] < hist[static_cast<std::size_t>(best)]) best = b;
+        }
+        return best;
+    }
+};
+
+Density density_along(const Projection& p) {
+    Density d;
+    d.lo = p.lo;
+    // Density histogram along the direction, 0.1 m bins.
+    d.bins = std::max(1, static_cast<int>(std::ceil((p.hi - p.lo) / kSplitBin)) + 1);
+    d.hist.assign(static_cast<std::size_t>(d.bins), 0);
+    for (double a : p.along) ++d.hist[static_cast<std::size_t>((a - d.lo) / kSplitBin)];
+    std::vector<int> occupied;
+    for (int h : d.hist) {
+        if (h > 0) occupied.push_back(h);
+    }
+    std::nth_element(occupied.begin(), occupied.begin() + occupied.size() / 2, occupied.end());
+    d.gap_count = kGapFraction * occupied[occupied.size() / 2];
+    return d;
+}
+
+/// A walk of cuts from the near end of a row over its density histogram (split_along).
+struct NearEndWalk {
+    const Density& density;
+    const TallPitch* tall;
+    int step, reach;            ///< one prior pitch on, in bins, and the reach around it
+    int tall_step, tall_reach;  ///< the same for a tall thing's pitch
+    /// Heights above the ground per bin, read only by a walk with a tall pitch.
+    std::vector<std::vector<double>> heights;
+    /// Gaps with single-bin islands of stray points merged: per gap bin, the first and last
+    /// bin of its gap (-1 off gaps); read only by a walk with a tall pitch.
+    std::vector<int> gap_first, gap_last;
+
+    /// A cut in a gap wider than the cut: the next thing starts where the gap ends. A few
+    /// stray points in the gap (smear off the thing before it) do not end it: a run of at
+    /// most kGapIslandBins bins with a clear gap beyond it is crossed.
+    int gap_end(int b, int dir) const {
+        for (;;) {
+            while (density.inside(b + dir) && density.is_gap(b + dir)) b += dir;
+            int e = b + dir;
+            for (int n = 0; n < kGapIslandBins && density.inside(e) && !density.is_gap(e); ++n) {
+                e += dir;
+            }
+            int run = 0;
+            for (int f = e; run < kClearGapBins && density.inside(f) && density.is_gap(f);
+                 f += dir) {
+                ++run;
+            }
+            if (e == b + dir || run < kClearGapBins) return b;
+            b = e;
+        }
+    }
+
+    /// Fills gap_first and gap_last from the density's gaps.
+    void merge_gaps() {
+        const int bins = density.bins;
+        gap_first.assign(density.hist.size(), -1);
+        gap_last = gap_first;
+        for (int b = 0; b < bins;) {
+            if (!density.is_gap(b)) {
+                ++b;
+                continue;
+            }
+            int e = b;
+            while (density.inside(e + 1) &&
+                   (density.is_gap(e + 1) || (density.inside(e + 2) && density.is_gap(e + 2)))) {
+                e += density.is_gap(e + 1) ? 1 : 2;
+            }
+            for (int k = b; k <= e; ++k) {
+                gap_first[static_cast<std::size_t>(k)] = b;
+                gap_last[static_cast<std::size_t>(k)] = e;
+            }
+            b = e + 1;
+        }
+    }
+
+    /// Bins of the widest merged gap within [first, last] (each gap counted within it), 0
+    /// when none holds kClearGapBins.
+    int widest_gap(int first, int last) const {
+        first = std::max(first, 0);
+        last = std::min(last, density.bins - 1);
+        int widest = 0;
+        for (int b = first; b <= last; ++b) {
+            const auto k = static_cast<std::size_t>(b);
+            if (gap_first[k] < 0 || (b > first && gap_first[k] == gap_first[k - 1])) continue;
+            const int width = std::min(gap_last[k], last) - std::max(gap_first[k], first) + 1;
+            if (width >= kClearGapBins) widest = std::max(widest, width);
+        }
+        return widest;
+    }
+
+    /// The next cut from the bin `from` in the direction dir: about one pitch on. When the
+    /// points within that pitch are tall and no clear gap (kClearGapBins gap bins in a row)
+    /// lies within reach of one prior pitch on, or a wider one lies within reach of a tall
+    /// thing's pitch, one tall thing's pitch on instead.
+    int next_cut(int from, int dir) const {
+        const int bins = density.bins;
+        const int centre = from + dir * step;
+        if (!tall || tall_step <= step) return density.emptiest(centre, reach);
+        bool clear = false;
+        for (int b = std::max(0, centre - reach), run = 0;
+             b <= std::min(bins - 1, centre + reach) && !clear; ++b) {
+            run = density.is_gap(b) ? run + 1 : 0;
+            clear = run >= kClearGapBins;
+        }
+        std::vector<double> h;
+        for (int b = std::max(0, std::min(from, from + dir * step));
+             b <= std::min(bins - 1, std::max(from, from + dir * step)); ++b) {
+            const auto& in_bin = heights[static_cast<std::size_t>(b)];
+            h.insert(h.end(), in_bin.begin(), in_bin.end());
+        }
+        if (h.empty() || quantile(h, 0.98) < tall->min_height_m) {
+            return density.emptiest(centre, reach);
+        }
+        const int tall_centre = from + dir * tall_step;
+        // A tall thing with a clear gap one car's pitch on: a car's end there unless a wider
+        // gap lies about a van's pitch on (the dip under a van's lower rear, a metre short
+        // of the gap behind it).
+        if (clear && widest_gap(tall_centre - tall_reach, tall_centre + tall_reach) <=
+                         widest_gap(centre - reach, centre + reach)) {
+            return density.emptiest(centre, reach);
+        }
+        return density.emptiest(tall_centre, tall_reach);
+    }
+};
+
+/// The bins of the cuts walked from the near end of the points idx (their projection p and its
+/// density histogram), one prior pitch (step bins, each cut within reach of it) or, with
+/// `tall`, a tall thing's pitch apart.
+std::vector<int> walk_from_near_end(const std::vector<Eigen::Vector3f>& pts, const Indices& idx,
+                                    const Projection& p, const Density& density, int step,
+                                    int reach, const TallPitch* tall) {
+    NearEndWalk walk{density, tall, step, reach, step, reach, {}, {}, {}};
+    if (tall) {
+        walk.tall_step = static_cast<int>(std::lround(tall->pitch_m / kSplitBin));
+        walk.tall_reach = static_cast<int>(0.25 * tall->pitch_m / kSplitBin);
+        walk.heights.resize(density.hist.size());
+        for (std::size_t k = 0; k < p.along.size(); ++k) {
+            walk.heights[static_cast<std::size_t>((p.along[k] - p.lo) / kSplitBin)].push_back(
+                tall->ground.height(pts[idx[k]].cast<double>()));
+        }
+        walk.merge_gaps();
+    }
+    // The walk starts where the bulk of the points starts, not at a stray point smeared
+    // towards the camera: a cut one car length from such a point falls inside the first car.
+    std::vector<double> sorted = p.along;
+    const auto [q_lo, q_hi] = quantiles(sorted, kWalkStartQuantile, 1.0 - kWalkStartQuantile);
+    std::vector<int> cuts;
+    if (std::abs(p.hi) < std::abs(p.lo)) {
+        const int start = static_cast<int>((q_hi - p.lo) / kSplitBin);
+        for (int b = walk.next_cut(start, -1); b >= step / 4;
+             b = walk.next_cut(walk.gap_end(b, -1), -1)) {
+            cuts.push_back(b);
+        }
+    } else {
+        const int start = static_cast<int>((q_lo - p.lo) / kSplitBin);
+        for (int b = walk.next_cut(start, 1); b < density.bins - step / 4;
+             b = walk.next_cut(walk.gap_end(b, 1), 1)) {
+            cuts.push_back(b);
+        }
+    }
+    return cuts;
+}
 
 /// Splits the points of a merged blob along the unit direction (dir_x, dir_z) into pieces of
 /// about `prior_m`, cutting at the emptiest place near each even cut (touching parked cars).
@@ -72,448 +248,31 @@ Split split_along(const std::vector<Eigen::Vector3f>& pts, const Indices& idx, d
                   const TallPitch* tall = nullptr) {
     const int pieces = std::max(2, static_cast<int>(std::lround(extent_m / prior_m)));
     const Projection p = project(pts, idx, dir_x, dir_z);
-    const std::vector<double>& along = p.along;
-    const double lo = p.lo, hi = p.hi;
-    // Density histogram along the direction, 0.1 m bins.
-    const double bin = 0.1;
-    const int bins = std::max(1, static_cast<int>(std::ceil((hi - lo) / bin)) + 1);
-    std::vector<int> hist(static_cast<std::size_t>(bins), 0);
-    for (double a : along) ++hist[static_cast<std::size_t>((a - lo) / bin)];
-    // Heights above the ground per bin, read only by a walk with a tall pitch.
-    std::vector<std::vector<double>> heights(tall && from_near_end ? hist.size() : 0);
-    for (std::size_t k = 0; k < along.size() && !heights.empty(); ++k) {
-        heights[static_cast<std::size_t>((along[k] - lo) / bin)].push_back(
-            tall->ground.height(pts[idx[k]].cast<double>()));
-    }
-    std::vector<int> occupied;
-    for (int h : hist) {
-        if (h > 0) occupied.push_back(h);
-    }
-    std::nth_element(occupied.begin(), occupied.begin() + occupied.size() / 2, occupied.end());
-    const double gap_count = kGapFraction * occupied[occupied.size() / 2];
-    const auto is_gap = [&](int b) { return hist[static_cast<std::size_t>(b)] <= gap_count; };
+    const Density density = density_along(p);
     Split split;
     split.at_gaps = true;
     std::vector<double> cuts;
-    const int reach = static_cast<int>(0.25 * prior_m / bin);
-    // The emptiest bin within r bins of centre.
-    const auto emptiest = [&](int centre, int r) {
-        int best = std::clamp(centre, 0, bins - 1);
-        for (int b = std::max(0, centre - r); b <= std::min(bins - 1, centre + r); ++b) {
-            if (hist[static_cast<std::size_t>(b)] < hist[static_cast<std::size_t>(best)]) best = b;
-        }
-        return best;
-    };
-    const int step = static_cast<int>(std::lround(prior_m / bin));
+    const int reach = static_cast<int>(0.25 * prior_m / kSplitBin);
+    const int step = static_cast<int>(std::lround(prior_m / kSplitBin));
     const auto add_cut = [&](int best) {
-        cuts.push_back(lo + (best + 0.5) * bin);
-        if (!is_gap(best)) split.at_gaps = false;
+        cuts.push_back(p.lo + (best + 0.5) * kSplitBin);
+        if (!density.is_gap(best)) split.at_gaps = false;
     };
     if (from_near_end) {
-        // The walk starts where the bulk of the points starts, not at a stray point smeared
-        // towards the camera: a cut one car length from such a point falls inside the first car.
-        std::vector<double> sorted = along;
-        const auto [q_lo, q_hi] = quantiles(sorted, kWalkStartQuantile, 1.0 - kWalkStartQuantile);
-        // A cut in a gap wider than the cut: the next thing starts where the gap ends. A few
-        // stray points in the gap (smear off the thing before it) do not end it: a run of at
-        // most kGapIslandBins bins with a clear gap beyond it is crossed.
-        const auto inside = [&](int b) { return b >= 0 && b < bins; };
-        const auto gap_end = [&](int b, int dir) {
-            for (;;) {
-                while (inside(b + dir) && is_gap(b + dir)) b += dir;
-                int e = b + dir;
-                for (int n = 0; n < kGapIslandBins && inside(e) && !is_gap(e); ++n) e += dir;
-                int run = 0;
-                for (int f = e; run < kClearGapBins && inside(f) && is_gap(f); f += dir) ++run;
-                if (e == b + dir || run < kClearGapBins) return b;
-                b = e;
-            }
-        };
-        // The next cut from the bin `from` in the direction dir: about one pitch on. When the
-        // points within that pitch are tall and no clear gap (kClearGapBins gap bins in a row)
-        // lies within reach of one prior pitch on, or a wider one lies within reach of a tall
-        // thing's pitch, one tall thing's pitch on instead.
-        const int tall_step = tall ? static_cast<int>(std::lround(tall->pitch_m / bin)) : step;
-        const int tall_reach = tall ? static_cast<int>(0.25 * tall->pitch_m / bin) : reach;
-        // Gaps with single-bin islands of stray points merged: per gap bin, the first and last
-        // bin of its gap (-1 off gaps); read only by a walk with a tall pitch.
-        std::vector<int> gap_first(tall ? hist.size() : 0, -1), gap_last(gap_first);
-        for (int b = 0; tall && b < bins;) {
-            if (!is_gap(b)) {
-                ++b;
-                continue;
-            }
-            int e = b;
-            while (inside(e + 1) && (is_gap(e + 1) || (inside(e + 2) && is_gap(e + 2)))) {
-                e += is_gap(e + 1) ? 1 : 2;
-            }
-            for (int k = b; k <= e; ++k) {
-                gap_first[static_cast<std::size_t>(k)] = b;
-                gap_last[static_cast<std::size_t>(k)] = e;
-            }
-            b = e + 1;
-        }
-        // Bins of the widest merged gap within [first, last] (each gap counted within it), 0
-        // when none holds kClearGapBins.
-        const auto widest_gap = [&](int first, int last) {
-            first = std::max(first, 0);
-            last = std::min(last, bins - 1);
-            int widest = 0;
-            for (int b = first; b <= last; ++b) {
-                const auto k = static_cast<std::size_t>(b);
-                if (gap_first[k] < 0 || (b > first && gap_first[k] == gap_first[k - 1])) continue;
-                const int width = std::min(gap_last[k], last) - std::max(gap_first[k], first) + 1;
-                if (width >= kClearGapBins) widest = std::max(widest, width);
-            }
-            return widest;
-        };
-        const auto next_cut = [&](int from, int dir) {
-            const int centre = from + dir * step;
-            if (!tall || tall_step <= step) return emptiest(centre, reach);
-            bool clear = false;
-            for (int b = std::max(0, centre - reach), run = 0;
-                 b <= std::min(bins - 1, centre + reach) && !clear; ++b) {
-                run = is_gap(b) ? run + 1 : 0;
-                clear = run >= kClearGapBins;
-            }
-            std::vector<double> h;
-            for (int b = std::max(0, std::min(from, from + dir * step));
-                 b <= std::min(bins - 1, std::max(from, from + dir * step)); ++b) {
-                const auto& in_bin = heights[static_cast<std::size_t>(b)];
-                h.insert(h.end(), in_bin.begin(), in_bin.end());
-            }
-            if (h.empty() || quantile(h, 0.98) < tall->min_height_m) {
-                return emptiest(centre, reach);
-            }
-            const int tall_centre = from + dir * tall_step;
-            // A tall thing with a clear gap one car's pitch on: a car's end there unless a wider
-            // gap lies about a van's pitch on (the dip under a van's lower rear, a metre short
-            // of the gap behind it).
-            if (clear && widest_gap(tall_centre - tall_reach, tall_centre + tall_reach) <=
-                             widest_gap(centre - reach, centre + reach)) {
-                return emptiest(centre, reach);
-            }
-            return emptiest(tall_centre, tall_reach);
-        };
-        if (std::abs(hi) < std::abs(lo)) {
-            const int start = static_cast<int>((q_hi - lo) / bin);
-            for (int b = next_cut(start, -1); b >= step / 4; b = next_cut(gap_end(b, -1), -1)) {
-                add_cut(b);
-            }
-        } else {
-            const int start = static_cast<int>((q_lo - lo) / bin);
-            for (int b = next_cut(start, 1); b < bins - step / 4; b = next_cut(gap_end(b, 1), 1)) {
-                add_cut(b);
-            }
-        }
+        for (int b : walk_from_near_end(pts, idx, p, density, step, reach, tall)) add_cut(b);
     }
-    const double piece = (hi - lo) / pieces;
+    const double piece = (p.hi - p.lo) / pieces;
     for (int k = 1; k < pieces && !from_near_end; ++k) {
-        add_cut(emptiest(static_cast<int>(k * piece / bin), reach));
+        add_cut(density.emptiest(static_cast<int>(k * piece / kSplitBin), reach));
     }
     std::sort(cuts.begin(), cuts.end());
     split.parts.resize(cuts.size() + 1);
     for (std::size_t k = 0; k < idx.size(); ++k) {
         const auto part = static_cast<std::size_t>(
-            std::upper_bound(cuts.begin(), cuts.end(), along[k]) - cuts.begin());
+            std::upper_bound(cuts.begin(), cuts.end(), p.along[k]) - cuts.begin());
         split.parts[part].push_back(idx[k]);
     }
     return split;
-}
-
-/// How far, from the camera's side, the tops (95 % height per 0.1 m bin across, bins of at
-/// least 5 points) of the points `members` (indices into across / heights) stay below
-/// low_fraction * their highest top, metres; -1 when fewer than 3 bins are known.
-double low_extent_m(const std::vector<std::size_t>& members, const std::vector<double>& across,
-                    const std::vector<double>& heights, double lo, double hi, bool near_is_lo,
-                    double low_fraction) {
-    constexpr double kBin = 0.1;
-    constexpr std::size_t kMinBinPoints = 5;
-    const int bins = static_cast<int>((hi - lo) / kBin) + 1;
-    if (bins < 3) return -1.0;
-    std::vector<std::vector<double>> in_bin(static_cast<std::size_t>(bins));
-    for (std::size_t k : members) {
-        const int b = static_cast<int>((across[k] - lo) / kBin);
-        if (b < 0 || b >= bins) continue;
-        in_bin[static_cast<std::size_t>(b)].push_back(heights[k]);
-    }
-    std::vector<double> top(static_cast<std::size_t>(bins), -1.0);
-    double highest = 0.0;
-    int known = 0;
-    for (int b = 0; b < bins; ++b) {
-        auto& h = in_bin[static_cast<std::size_t>(b)];
-        if (h.size() < kMinBinPoints) continue;
-        top[static_cast<std::size_t>(b)] = quantile(h, 0.95);
-        highest = std::max(highest, top[static_cast<std::size_t>(b)]);
-        ++known;
-    }
-    if (highest <= 0.0 || known < 3) return -1.0;
-    double low = 0.0;
-    int first = -1;  // the first known bin from the near side: the extent starts there
-    for (int k = 0; k < bins; ++k) {
-        const double t = top[static_cast<std::size_t>(near_is_lo ? k : bins - 1 - k)];
-        if (t < 0.0) continue;
-        if (first < 0) first = k;
-        if (t >= low_fraction * highest) break;
-        low = (k - first + 1) * kBin;
-    }
-    return low;
-}
-
-/// Whether a long blob is a row of things side by side seen front-on (or from behind) rather
-/// than one thing seen side-on: its length along the box heading spans at least two prior
-/// widths, and across the heading, from the camera's side, its top stays below
-/// low_fraction * its highest top for at least low_extent_m (the bonnets in front of the
-/// windscreens), over the whole blob and in most slices one prior width long along it (each
-/// thing of the row has its bonnet: a thing seen side-on under a heading a little off its own
-/// shows its low end across the near side of the blob, but not slice by slice, where its side
-/// shows its roof line).
-bool front_on_row(const std::vector<Eigen::Vector3f>& pts, const Indices& idx,
-                  const OrientedBox& box, const ClassSettings& s, const GroundPlane& ground,
-                  const ExtractOptions& options) {
-    constexpr std::size_t kMinSlicePoints = 50;
-    if (idx.size() < 20) return false;
-    const double c = std::cos(box.theta), sn = std::sin(box.theta);
-    std::vector<double> along, across, heights;
-    along.reserve(idx.size());
-    across.reserve(idx.size());
-    double min_along = std::numeric_limits<double>::infinity(), max_along = -min_along;
-    for (std::size_t i : idx) {
-        along.push_back(double{pts[i].x()} * c - double{pts[i].z()} * sn);
-        across.push_back(double{pts[i].x()} * sn + double{pts[i].z()} * c);
-        min_along = std::min(min_along, along.back());
-        max_along = std::max(max_along, along.back());
-    }
-    // The whole extent bounds the 2-98 % one: most blobs (single things) stop here.
-    if (max_along - min_along < 2.0 * s.prior_W_m) return false;
-    std::vector<double> sorted = along;
-    const auto [along_lo, along_hi] = quantiles(sorted, 0.02, 0.98);
-    if (along_hi - along_lo < 2.0 * s.prior_W_m) return false;
-    sorted = across;
-    const auto [lo, hi] = quantiles(sorted, 0.02, 0.98);
-    const bool near_is_lo = std::abs(lo) <= std::abs(hi);
-    heights.reserve(idx.size());
-    for (std::size_t i : idx) heights.push_back(ground.height(pts[i].cast<double>()));
-    std::vector<std::size_t> all(idx.size());
-    std::iota(all.begin(), all.end(), std::size_t{0});
-    if (low_extent_m(all, across, heights, lo, hi, near_is_lo, options.row_low_fraction) <
-        options.row_low_extent_m) {
-        return false;
-    }
-    const int slices = std::max(1, static_cast<int>((along_hi - along_lo) / s.prior_W_m));
-    const double slice_m = (along_hi - along_lo) / slices;
-    std::vector<std::vector<std::size_t>> in_slice(static_cast<std::size_t>(slices));
-    for (std::size_t k = 0; k < along.size(); ++k) {
-        const int j = static_cast<int>((along[k] - along_lo) / slice_m);
-        if (j >= 0 && j < slices) in_slice[static_cast<std::size_t>(j)].push_back(k);
-    }
-    int seen = 0, low = 0;
-    for (const auto& members : in_slice) {
-        if (members.size() < kMinSlicePoints) continue;
-        const double e =
-            low_extent_m(members, across, heights, lo, hi, near_is_lo, options.row_low_fraction);
-        if (e < 0.0) continue;
-        ++seen;
-        if (e >= options.row_low_extent_m) ++low;
-    }
-    return 2 * low >= seen;
-}
-
-/// The top profile of a blob along its length, in bins from the lowest along-coordinate.
-struct TopProfile {
-    std::vector<double> top;  ///< per bin, its points' 90 % height above the ground after a
-                              ///< closing over `closing` bins either side, metres; -1 unknown
-                              ///< (fewer than 3 points)
-    std::vector<int> count;   ///< points per bin
-};
-
-/// The top profile of the points idx (their along-coordinates `along`) in bins of bin_m from
-/// lo to hi.
-TopProfile top_profile(const std::vector<Eigen::Vector3f>& pts, const Indices& idx,
-                       const std::vector<double>& along, const GroundPlane& ground, double bin_m,
-                       double lo, double hi, int closing) {
-    constexpr double kTopQuantile = 0.9;
-    constexpr std::size_t kMinBinPoints = 3;
-    const int bins = static_cast<int>((hi - lo) / bin_m) + 1;
-    std::vector<std::vector<double>> heights(static_cast<std::size_t>(bins));
-    for (std::size_t k = 0; k < idx.size(); ++k) {
-        const int b = static_cast<int>((along[k] - lo) / bin_m);
-        if (b < 0 || b >= bins) continue;
-        heights[static_cast<std::size_t>(b)].push_back(ground.height(pts[idx[k]].cast<double>()));
-    }
-    std::vector<double> top(static_cast<std::size_t>(bins), -1.0);
-    for (int b = 0; b < bins; ++b) {
-        auto& h = heights[static_cast<std::size_t>(b)];
-        if (h.size() >= kMinBinPoints) top[static_cast<std::size_t>(b)] = quantile(h, kTopQuantile);
-    }
-    // Narrow dips (a sparse bin, a window's reflection) are noise, not the ends of two things:
-    // each known bin takes the highest known top within `closing` bins.
-    std::vector<double> closed = top;
-    for (int b = 0; b < bins; ++b) {
-        if (top[static_cast<std::size_t>(b)] < 0.0) continue;
-        for (int k = std::max(0, b - closing); k <= std::min(bins - 1, b + closing); ++k) {
-            closed[static_cast<std::size_t>(b)] =
-                std::max(closed[static_cast<std::size_t>(b)], top[static_cast<std::size_t>(k)]);
-        }
-    }
-    std::vector<int> count(static_cast<std::size_t>(bins));
-    for (int b = 0; b < bins; ++b) {
-        count[static_cast<std::size_t>(b)] =
-            static_cast<int>(heights[static_cast<std::size_t>(b)].size());
-    }
-    return {closed, count};
-}
-
-/// The cuts (along-coordinates) of a blob at the valleys of its top profile: a thing is a hump
-/// (a car's roof over its lower bonnet and boot), so where the top drops at least depth_m below
-/// the highest top on both sides within `reach` bins, and both those tops reach min_peak_m,
-/// two things meet. Each valley is cut at the emptiest bin of its part below half its depth
-/// (the gap between the two; the one nearest that part's middle among equals): a profile's
-/// shape is smeared along the viewing ray, the gap's emptiness less so. Cuts closer than
-/// min_piece_m to an end or to a deeper cut are dropped.
-std::vector<double> valley_cuts(const TopProfile& profile, double lo, double bin_m, int reach,
-                                double depth_m, double min_peak_m, double min_piece_m) {
-    const std::vector<double>& top = profile.top;
-    const int bins = static_cast<int>(top.size());
-    struct Valley {
-        double at, depth;
-    };
-    std::vector<Valley> valleys;
-    int b = 0;
-    while (b < bins) {
-        // Deepest valley bin of a run of valley bins.
-        int best = -1;
-        double best_depth = 0.0, best_floor = 0.0;
-        for (; b < bins; ++b) {
-            const double t = top[static_cast<std::size_t>(b)];
-            double left = -1.0, right = -1.0;
-            for (int k = std::max(0, b - reach); k < b; ++k) {
-                left = std::max(left, top[static_cast<std::size_t>(k)]);
-            }
-            for (int k = b + 1; k <= std::min(bins - 1, b + reach); ++k) {
-                right = std::max(right, top[static_cast<std::size_t>(k)]);
-            }
-            const double peak = std::min(left, right);
-            const bool valley = t >= 0.0 && peak >= min_peak_m && peak - t >= depth_m;
-            if (!valley) {
-                if (best >= 0) break;
-                continue;
-            }
-            if (best < 0 || peak - t > best_depth) {
-                best = b;
-                best_depth = peak - t;
-                best_floor = t;
-            }
-        }
-        if (best < 0) break;
-        // The part of the valley below half its depth, unknown bins included.
-        const double half = best_floor + 0.5 * best_depth;
-        int first = best, last = best;
-        while (first > 0 && top[static_cast<std::size_t>(first - 1)] < half) --first;
-        while (last + 1 < bins && top[static_cast<std::size_t>(last + 1)] < half) ++last;
-        // Cut at its emptiest bin (the gap), the one nearest its middle among equals.
-        const double middle = 0.5 * (first + last);
-        int at = best;
-        for (int k = first; k <= last; ++k) {
-            const int nk = profile.count[static_cast<std::size_t>(k)];
-            const int na = profile.count[static_cast<std::size_t>(at)];
-            if (nk < na || (nk == na && std::abs(k - middle) < std::abs(at - middle))) at = k;
-        }
-        valleys.push_back({lo + (at + 0.5) * bin_m, best_depth});
-    }
-    // Deepest first, each kept when it leaves pieces of at least min_piece_m.
-    std::sort(valleys.begin(), valleys.end(),
-              [](const Valley& a, const Valley& c) { return a.depth > c.depth; });
-    const double hi = lo + bins * bin_m;
-    std::vector<double> cuts;
-    for (const Valley& v : valleys) {
-        bool fits = v.at - lo >= min_piece_m && hi - v.at >= min_piece_m;
-        for (double c : cuts) fits = fits && std::abs(c - v.at) >= min_piece_m;
-        if (fits) cuts.push_back(v.at);
-    }
-    std::sort(cuts.begin(), cuts.end());
-    return cuts;
-}
-
-/// The cuts of a valley split (sorted along-coordinates of a profile starting at lo in bins of
-/// bin_m) moved off the dense run that a piece holds at one of its cuts when the rest of the
-/// piece is sparse: a piece that is mostly a gap (smear and label bleed at a tree or a pole
-/// between two parked cars, whose few high points make a hump of it) with the first or last
-/// metre of a car beside it. The run (the bins from the cut on holding at least a quarter of
-/// the densest within kSnapRunM of the cut, at most kSnapRunM long) joins the piece beyond the
-/// cut, which is where its car is, when every bin of the rest, kSnapGapM long or more, holds
-/// less than that quarter. The gap's piece keeps only its sparse points.
-void snap_cuts_off_runs(const TopProfile& profile, double lo, double bin_m,
-                        std::vector<double>& cuts) {
-    constexpr double kSnapRunM = 1.5;  // longest run moved: the end of a car, not a car
-    constexpr double kSnapGapM = 1.0;  // shortest sparse rest: a gap, not a sparse car end
-    const int bins = static_cast<int>(profile.count.size());
-    const int run_bins = static_cast<int>(kSnapRunM / bin_m);
-    const auto bin_of = [&](double a) {
-        return std::clamp(static_cast<int>((a - lo) / bin_m), 0, bins - 1);
-    };
-    const auto count = [&](int b) { return profile.count[static_cast<std::size_t>(b)]; };
-    for (std::size_t k = 0; k <= cuts.size(); ++k) {
-        const int b0 = k == 0 ? 0 : bin_of(cuts[k - 1]) + 1;
-        const int b1 = k == cuts.size() ? bins - 1 : bin_of(cuts[k]);
-        if (b1 - b0 < 2) continue;
-        const auto inside = [&](int b) { return b >= b0 && b <= b1; };
-        // Side 0: the run at the piece's far cut (cuts[k]); side 1: at its near cut (cuts[k-1]).
-        for (int side = 0; side < 2; ++side) {
-            if ((side == 0 && k == cuts.size()) || (side == 1 && k == 0)) continue;
-            const int end = side == 0 ? b1 : b0, step = side == 0 ? -1 : 1;
-            int peak = 0;
-            for (int j = 0; j < run_bins && inside(end + step * j); ++j) {
-                peak = std::max(peak, count(end + step * j));
-            }
-            const double floor = kGapFraction * peak;
-            int r = end;
-            while (inside(r + step) && count(r + step) >= floor) r += step;
-            int rest_max = 0, rest = 0;
-            for (int b = r + step; inside(b); b += step) {
-                rest_max = std::max(rest_max, count(b));
-                ++rest;
-            }
-            if (std::abs(r - end) + 1 <= run_bins && rest * bin_m >= kSnapGapM &&
-                rest_max < floor) {
-                if (side == 0) {
-                    cuts[k] = lo + r * bin_m;
-                } else {
-                    cuts[k - 1] = lo + (r + 1) * bin_m;
-                }
-                break;
-            }
-        }
-    }
-    std::sort(cuts.begin(), cuts.end());
-}
-
-/// Pieces of a blob cut along (dir_x, dir_z) at the valleys of its top profile (things parked
-/// end to end, their roofs higher than the ends where they meet); empty without a valley.
-std::vector<Indices> split_at_valleys(const std::vector<Eigen::Vector3f>& pts, const Indices& idx,
-                                      double dir_x, double dir_z, const ClassSettings& s,
-                                      const GroundPlane& ground, const ExtractOptions& options) {
-    if (idx.size() < 20) return {};
-    const std::vector<double> along = project(pts, idx, dir_x, dir_z).along;
-    std::vector<double> sorted = along;
-    const auto [lo, hi] = quantiles(sorted, 0.005, 0.995);
-    const double bin = options.row_valley_bin_m;
-    if (hi - lo < 2.0 * options.row_valley_min_piece_m) return {};
-    const int closing = static_cast<int>(std::lround(options.row_valley_closing_m / bin));
-    const TopProfile profile = top_profile(pts, idx, along, ground, bin, lo, hi, closing);
-    const int reach = std::max(1, static_cast<int>(std::lround(0.5 * s.prior_L_m / bin)));
-    std::vector<double> cuts = valley_cuts(profile, lo, bin, reach, options.row_valley_depth_m,
-                                           options.row_valley_min_peak_fraction * s.prior_H_m,
-                                           options.row_valley_min_piece_m);
-    if (cuts.empty()) return {};
-    snap_cuts_off_runs(profile, lo, bin, cuts);
-    std::vector<Indices> parts(cuts.size() + 1);
-    for (std::size_t k = 0; k < idx.size(); ++k) {
-        const auto part = static_cast<std::size_t>(
-            std::upper_bound(cuts.begin(), cuts.end(), along[k]) - cuts.begin());
-        parts[part].push_back(idx[k]);
-    }
-    return parts;
 }
 
 /// Two pieces of a blob cut along the unit direction (dir_x, dir_z) in its widest clear gap
@@ -590,6 +349,84 @@ std::optional<Split> split_at_gap(const std::vector<Eigen::Vector3f>& pts, const
     return split;
 }
 
+/// Things side by side (a car passing a parked one): a clear gap that leaves each side a
+/// real share of the points parts them before any reading of the blob as one row. Looked
+/// for across the box's heading, when the box is wider than one thing, and across the
+/// viewing ray, where stereo keeps gaps open, for a box that took a heading between the
+/// two things' (their faces at an angle to it): seven directions within 30 degrees of
+/// across the ray to the box. The widest gap of all wins. (Any direction cuts the rows of
+/// parked streets apart at random; a single direction across the ray mixes the long faces
+/// of two cars side by side.)
+std::optional<Split> split_side_by_side(const std::vector<Eigen::Vector3f>& pts, const Indices& idx,
+                                        const OrientedBox& box, const ClassSettings& s) {
+    const double min_width = kSideBySideWidth * s.prior_W_m;
+    std::optional<Split> widest;
+    int widest_bins = 0;
+    // The widest clear gap across the unit direction (dir_x, dir_z) so far.
+    const auto consider = [&](double dir_x, double dir_z, double min_extent) {
+        int bins = 0;
+        auto cut = split_at_gap(pts, idx, dir_x, dir_z, kSideBySideGapBins, min_extent, &bins);
+        if (cut && bins > widest_bins) {
+            widest = std::move(cut);
+            widest_bins = bins;
+        }
+    };
+    // Angle a from +z towards +x: the direction (sin a, cos a).
+    if (box.W_m > min_width) consider(std::sin(box.theta), std::cos(box.theta), 0.0);
+    const double ray = std::atan2(box.centre_m.x(), box.centre_m.z());  // from +z towards +x
+    for (int k = -3; k <= 3; ++k) {
+        const double a = ray + kHalfPi + k * kHalfPi / 9.0;
+        consider(std::sin(a), std::cos(a), min_width);
+    }
+    return widest;
+}
+
+/// Things in line: the widest clear gap within 20 degrees of the box's heading (which smear
+/// skews), each piece holding at least a thing's minimum of points (and the piece nearer
+/// the camera at most max_near_m long, when that is set).
+std::optional<Split> split_in_line(const std::vector<Eigen::Vector3f>& pts, const Indices& idx,
+                                   const OrientedBox& box, const ClassSettings& s,
+                                   double max_near_m = 0.0) {
+    std::optional<Split> cut;
+    int cut_bins = 0;
+    for (int k = -4; k <= 4; ++k) {
+        const double a = box.theta + k * kHalfPi / 18.0;  // a heading: along (cos, -sin)
+        int bins = 0;
+        auto piece =
+            split_at_gap(pts, idx, std::cos(a), -std::sin(a), kSideBySideGapBins, 0.0, &bins,
+                         static_cast<std::size_t>(s.min_points), kInLineOverlap, max_near_m);
+        if (piece && bins > cut_bins) {
+            cut = std::move(piece);
+            cut_bins = bins;
+        }
+    }
+    return cut;
+}
+
+/// Whether a cut along the box's heading parts a piece of a van's height from one lower, or
+/// two lower pieces that each hold a roof (see split_oversized).
+bool parts_van_or_roofs(const std::vector<Eigen::Vector3f>& pts, const Split& cut,
+                        const OrientedBox& box, const ClassSettings& s, const GroundPlane& ground,
+                        const ExtractOptions& options) {
+    const double c = std::cos(box.theta), sn = std::sin(box.theta);
+    int tall_pieces = 0, roofed_pieces = 0;
+    for (const Indices& part : cut.parts) {
+        if (part.empty()) continue;
+        std::vector<double> h;
+        h.reserve(part.size());
+        for (const auto k : part) h.push_back(ground.height(pts[k].cast<double>()));
+        const double top = quantile(h, 0.98);
+        std::vector<double> along = project(pts, part, c, -sn).along;
+        const auto [first, last] = quantiles(along, 0.02, 0.98);
+        if (top >= options.van_min_height_m) ++tall_pieces;
+        if (top >= options.row_valley_min_peak_fraction * s.prior_H_m &&
+            last - first >= 0.5 * s.prior_L_m) {
+            ++roofed_pieces;
+        }
+    }
+    return tall_pieces == 1 || (tall_pieces == 0 && roofed_pieces == 2);
+}
+
 }  // namespace
 
 /// Vertical extent of points (2 % to 98 % height quantiles above the ground, or along -y
@@ -613,34 +450,7 @@ Split split_oversized(const std::vector<Eigen::Vector3f>& pts, const Indices& id
                       bool truncated) {
     if (!s.has_prior()) return {{idx}, false, std::nullopt};
     const double c = std::cos(box.theta), sn = std::sin(box.theta);
-    // Things side by side (a car passing a parked one): a clear gap that leaves each side a
-    // real share of the points parts them before any reading of the blob as one row. Looked
-    // for across the box's heading, when the box is wider than one thing, and across the
-    // viewing ray, where stereo keeps gaps open, for a box that took a heading between the
-    // two things' (their faces at an angle to it): seven directions within 30 degrees of
-    // across the ray to the box. The widest gap of all wins. (Any direction cuts the rows of
-    // parked streets apart at random; a single direction across the ray mixes the long faces
-    // of two cars side by side.)
-    const double min_width = kSideBySideWidth * s.prior_W_m;
-    std::optional<Split> widest;
-    int widest_bins = 0;
-    // The widest clear gap across the unit direction (dir_x, dir_z) so far.
-    const auto consider = [&](double dir_x, double dir_z, double min_extent) {
-        int bins = 0;
-        auto cut = split_at_gap(pts, idx, dir_x, dir_z, kSideBySideGapBins, min_extent, &bins);
-        if (cut && bins > widest_bins) {
-            widest = std::move(cut);
-            widest_bins = bins;
-        }
-    };
-    // Angle a from +z towards +x: the direction (sin a, cos a).
-    if (box.W_m > min_width) consider(std::sin(box.theta), std::cos(box.theta), 0.0);
-    const double ray = std::atan2(box.centre_m.x(), box.centre_m.z());  // from +z towards +x
-    for (int k = -3; k <= 3; ++k) {
-        const double a = ray + kHalfPi + k * kHalfPi / 9.0;
-        consider(std::sin(a), std::cos(a), min_width);
-    }
-    if (widest) return *widest;
+    if (std::optional<Split> widest = split_side_by_side(pts, idx, box, s)) return *widest;
     if (ground && options.row_low_fraction > 0.0 &&
         front_on_row(pts, idx, box, s, *ground, options)) {
         // Side by side: cut along the box's length at the row's pitch; each piece heads across.
@@ -655,25 +465,6 @@ Split split_oversized(const std::vector<Eigen::Vector3f>& pts, const Indices& id
         std::vector<Indices> parts = split_at_valleys(pts, idx, c, -sn, s, *ground, options);
         if (parts.size() > 1) return {std::move(parts), false, std::nullopt};
     }
-    // Things in line: the widest clear gap within 20 degrees of the box's heading (which smear
-    // skews), each piece holding at least a thing's minimum of points (and the piece nearer
-    // the camera at most max_near_m long, when that is set).
-    const auto in_line = [&](double max_near_m = 0.0) {
-        std::optional<Split> cut;
-        int cut_bins = 0;
-        for (int k = -4; k <= 4; ++k) {
-            const double a = box.theta + k * kHalfPi / 18.0;  // a heading: along (cos, -sin)
-            int bins = 0;
-            auto piece =
-                split_at_gap(pts, idx, std::cos(a), -std::sin(a), kSideBySideGapBins, 0.0, &bins,
-                             static_cast<std::size_t>(s.min_points), kInLineOverlap, max_near_m);
-            if (piece && bins > cut_bins) {
-                cut = std::move(piece);
-                cut_bins = bins;
-            }
-        }
-        return cut;
-    };
     const double van_pitch = options.van_prior_L_m + options.row_gap_m;
     if (ground && s.name == options.family_class && box.L_m > van_pitch &&
         box.L_m <= s.split_factor * s.prior_L_m) {
@@ -685,24 +476,8 @@ Split split_oversized(const std::vector<Eigen::Vector3f>& pts, const Indices& id
         // valley cut's peak height over half a car's length. One car seen long by smear has
         // holes of the disparity's sub-pixel steps too, but they leave a short or low piece
         // (its bonnet or its boot) beyond them.
-        if (const std::optional<Split> cut = in_line()) {
-            int tall_pieces = 0, roofed_pieces = 0;
-            for (const Indices& part : cut->parts) {
-                if (part.empty()) continue;
-                std::vector<double> h;
-                h.reserve(part.size());
-                for (const auto k : part) h.push_back(ground->height(pts[k].cast<double>()));
-                const double top = quantile(h, 0.98);
-                std::vector<double> along = project(pts, part, c, -sn).along;
-                const auto [first, last] = quantiles(along, 0.02, 0.98);
-                if (top >= options.van_min_height_m) ++tall_pieces;
-                if (top >= options.row_valley_min_peak_fraction * s.prior_H_m &&
-                    last - first >= 0.5 * s.prior_L_m) {
-                    ++roofed_pieces;
-                }
-            }
-            if (tall_pieces == 1) return *cut;
-            if (tall_pieces == 0 && roofed_pieces == 2) return *cut;
+        if (const std::optional<Split> cut = split_in_line(pts, idx, box, s)) {
+            if (parts_van_or_roofs(pts, *cut, box, s, *ground, options)) return *cut;
         }
     }
     if (box.L_m > s.split_factor * s.prior_L_m) {
@@ -723,8 +498,8 @@ Split split_oversized(const std::vector<Eigen::Vector3f>& pts, const Indices& id
         // (the two in line, their sides seen edge-on as thin as they are) that leaves the cut
         // thing, the piece nearer the camera, no longer than that: a wider gap farther on (a
         // sliver of smear beyond the second thing) would leave both in one piece.
-        if (std::optional<Split> cut =
-                in_line(options.row_valley_min_length_fraction * s.prior_L_m)) {
+        if (std::optional<Split> cut = split_in_line(
+                pts, idx, box, s, options.row_valley_min_length_fraction * s.prior_L_m)) {
             return std::move(*cut);
         }
     }

@@ -1,5 +1,6 @@
+// derive_semantics: the segments' measurements, the classification rules and the class image.
+
 #include <algorithm>
-#include <array>
 #include <cmath>
 #include <numeric>
 #include <stdexcept>
@@ -8,8 +9,8 @@
 #include <utility>
 #include <vector>
 
-#include "cloud_analysis/entities/cluster.hpp"
 #include "cloud_analysis/geometry/scene_geometry.hpp"
+#include "derive_semantics_internal.hpp"
 
 namespace cloud_analysis::geometry {
 namespace {
@@ -32,120 +33,6 @@ struct Classes {
           sky(find_class(p, "sky")),
           other(find_class(p, "static")) {}
 };
-
-/// One u-disparity cell: the obstacle pixels of a column band at one disparity, in one of two
-/// layers: below layer_height_m (where cars are) or above it (crowns, walls' upper floors).
-struct Cell {
-    int count = 0;          ///< obstacle pixels at or above low_cut_m
-    float height_sum = 0;   ///< sum of their heights above the road, metres
-    double d_sum = 0.0;     ///< sum of their disparities, px
-    int green = 0;          ///< of them green
-    int at_cut = 0;         ///< of them within continuity_band_m of the layers' border
-    float top1 = -1e9f;     ///< highest height above the road, metres
-    float top2 = -1e9f;     ///< second highest (robust top)
-    float blend1 = -1e9f;   ///< the same two over its pixels on a blend (on_blend) or at the
-    float blend2 = -1e9f;   ///< foot of a surface above (foot_of_surface_above), which give
-                            ///< its top only when it has no other
-    float low = 1e9f;       ///< lowest height, metres
-    float high = -1e9f;     ///< highest height, metres
-    int top_v = 1 << 30;    ///< row of its highest pixel (smallest v)
-    int top_u = 0;          ///< column of that pixel
-    bool occluded = false;  ///< a nearer surface lies right above that pixel: top unknown
-    int segment = -1;       ///< segment index once linked; -1: sparse (noise)
-    bool is_tall = false;   ///< upper layer, or a lower layer the surface above continues
-    std::array<int, 2> surface{-1, -1};  ///< lower layer: the tall cells one disparity bin
-                                         ///< nearer and farther whose surface it may hold
-                                         ///< (GeometryOptions::split_surface_px), -1: none
-};
-
-/// Cells per (column band, disparity bin): the lower and the upper layer.
-constexpr int kLayers = 2;
-
-/// Heights within this of a tall cell's are its surface's (GeometryOptions::split_surface_px):
-/// one image row spans 0.04 m at 30 m, metres.
-constexpr float kSplitSurfaceMarginM = 0.05f;
-
-/// Whether heights lo to hi lie within tall cell t's (kSplitSurfaceMarginM).
-bool within_heights(const Cell& t, float lo, float hi) {
-    return lo >= t.low - kSplitSurfaceMarginM && hi <= t.high + kSplitSurfaceMarginM;
-}
-
-/// The rig's depth of disparity d and the pixel grid, shared by the passes.
-struct Rig {
-    double fb = 0.0, offset = 0.0, cx = 0.0, cy = 0.0, fx = 0.0, fy = 0.0;
-    explicit Rig(const StereoCamera& c)
-        : fb(c.fx_px * c.baseline_m),
-          offset(c.cx_px - c.cx_right_px),
-          cx(c.cx_px),
-          cy(c.cy_px),
-          fx(c.fx_px),
-          fy(c.fy_px) {}
-};
-
-/// The u-disparity grid and each pixel's place in it.
-struct Grid {
-    int bins_u = 0, bins_d = 0;
-    std::vector<int> bin_of_tenth;   ///< disparity bin of floor(10 d)
-    std::vector<double> bin_centre;  ///< disparity at the centre of each bin, px
-    std::vector<Cell> cells;
-    std::vector<std::int32_t> pixel_cell;  ///< per pixel: its cell, -1 when none
-    std::vector<char> pixel_low;           ///< per pixel: below low_cut_m
-    std::vector<char> pixel_green;         ///< per pixel: green (green_mask)
-    std::vector<float> pixel_height;       ///< per pixel in a cell: height above the road, m
-};
-
-int find_root(std::vector<int>& parent, int i) {
-    while (parent[i] != i) {
-        parent[i] = parent[parent[i]];
-        i = parent[i];
-    }
-    return i;
-}
-
-void unite(std::vector<int>& parent, int a, int b) {
-    a = find_root(parent, a);
-    b = find_root(parent, b);
-    if (a != b) parent[std::max(a, b)] = std::min(a, b);
-}
-
-bool is_green(int r, int g, int b) { return g >= r + 6 && g * 10 >= r * 11 && g * 10 >= b * 11; }
-
-/// Per pixel: whether the mean colour of its (2 radius + 1)^2 window is green (foliage's own
-/// shadows between sunlit leaves are green only on average); all 0 without a colour image.
-std::vector<char> green_mask(const ImageU8& left, int w, int h, int radius) {
-    std::vector<char> mask(static_cast<std::size_t>(w) * h, 0);
-    if (left.channels != 3 || left.empty() || left.width_px != w || left.height_px != h) {
-        return mask;
-    }
-    // Integral image of the three channels, (w + 1) x (h + 1).
-    const std::size_t stride = static_cast<std::size_t>(w) + 1;
-    std::vector<std::array<std::int64_t, 3>> sum(stride * (h + 1), {0, 0, 0});
-    for (int v = 0; v < h; ++v) {
-        std::array<std::int64_t, 3> row{0, 0, 0};
-        for (int u = 0; u < w; ++u) {
-            const std::uint8_t* p = left.at(u, v);
-            for (int c = 0; c < 3; ++c) {
-                row[c] += p[c];
-                sum[(v + 1) * stride + u + 1][c] = sum[v * stride + u + 1][c] + row[c];
-            }
-        }
-    }
-    for (int v = 0; v < h; ++v) {
-        const int v0 = std::max(0, v - radius), v1 = std::min(h, v + radius + 1);
-        for (int u = 0; u < w; ++u) {
-            const int u0 = std::max(0, u - radius), u1 = std::min(w, u + radius + 1);
-            std::array<std::int64_t, 3> m{};
-            for (int c = 0; c < 3; ++c) {
-                m[c] = sum[v1 * stride + u1][c] - sum[v0 * stride + u1][c] -
-                       sum[v1 * stride + u0][c] + sum[v0 * stride + u0][c];
-            }
-            const std::int64_t n = static_cast<std::int64_t>(v1 - v0) * (u1 - u0);
-            mask[static_cast<std::size_t>(v) * w + u] = is_green(
-                static_cast<int>(m[0] / n), static_cast<int>(m[1] / n), static_cast<int>(m[2] / n));
-        }
-    }
-    return mask;
-}
 
 double quantile(std::vector<float>& v, double q) {
     if (v.empty()) return 0.0;
@@ -187,353 +74,6 @@ std::pair<double, double> footprint_extents(const std::vector<Eigen::Vector3d>& 
     }
     const double length = quantile(along, 0.98) - quantile(along, 0.02);
     return {length, quantile(across, 0.98) - quantile(across, 0.02)};
-}
-
-/// Whether pixel (u, v) lies on the matcher's blend between a nearer surface above and a
-/// farther one below (a tree's crown in front of a bus's side): its disparity is below the
-/// column's `rows` rows above and above the column's `rows` rows below, each by more than
-/// `step_px`. Above the road such a ramp is no surface's own (a face is level in its column; a
-/// bonnet, a roof or the road below the camera run the other way), only under an overhang.
-bool on_blend(const DisparityMap& disparity, int u, int v, int rows, double step_px) {
-    const int w = disparity.width_px;
-    if (v < rows || v + rows >= disparity.height_px) return false;
-    const double above = disparity.disparity_px[static_cast<std::size_t>(v - rows) * w + u];
-    const double here = disparity.disparity_px[static_cast<std::size_t>(v) * w + u];
-    const double below = disparity.disparity_px[static_cast<std::size_t>(v + rows) * w + u];
-    return above > 0.0 && below > 0.0 && above - here > step_px && here - below > step_px;
-}
-
-/// Whether lower-layer pixel (u, v), of disparity d, is the foot of a surface in the upper
-/// layer: its column runs up into that layer within `rows` rows, each step of disparity smaller
-/// than `step_px` (the lowest rows of a tree's crown hanging just under the layers' border).
-bool foot_of_surface_above(const DisparityMap& disparity, const std::vector<std::int32_t>& cell_of,
-                           double offset, int u, int v, double d, int rows, double step_px) {
-    const int w = disparity.width_px;
-    double previous = d;
-    for (int k = 1; k <= rows && v - k >= 0; ++k) {
-        const std::size_t q = static_cast<std::size_t>(v - k) * w + u;
-        const double above = double{disparity.disparity_px[q]} - offset;
-        if (!(above > 0.0) || std::abs(above - previous) >= step_px) return false;
-        if (cell_of[q] >= 0 && cell_of[q] % kLayers == 1) return true;
-        previous = above;
-    }
-    return false;
-}
-
-/// Disparity bins 1 px wide, widening to `share` of the disparity near the camera (where 1 px
-/// is a few centimetres of depth and an oblique surface would scatter over many bins).
-void make_bins(double max_d, double share, Grid& g) {
-    const auto tenths = static_cast<std::size_t>(std::max(0.0, max_d) * 10.0) + 2;
-    g.bin_of_tenth.resize(tenths);
-    g.bin_centre.clear();
-    double start = 0.0;
-    std::size_t t = 0;
-    while (t < tenths) {
-        const double width = std::max(1.0, share * start);
-        const double end = start + width;
-        const int bin = static_cast<int>(g.bin_centre.size());
-        for (; t < tenths && static_cast<double>(t) < end * 10.0; ++t) g.bin_of_tenth[t] = bin;
-        g.bin_centre.push_back(start + width / 2.0);
-        start = end;
-    }
-    g.bins_d = static_cast<int>(g.bin_centre.size());
-}
-
-/// Fewest pixels of a dense cell at disparity bin bd, and the pixels within continuity_band_m
-/// of the layers' border that make a surface continue across it.
-std::pair<int, double> cell_thresholds(const Grid& g, const Rig& rig, const GeometryOptions& o,
-                                       int bd) {
-    // Pixels a surface h metres tall fills in a cell at this disparity.
-    const double px_per_m =
-        rig.fy * g.bin_centre[static_cast<std::size_t>(bd)] / rig.fb * o.column_bin_px;
-    return {std::max(o.min_cell_pixels, static_cast<int>(o.min_cell_height_m * px_per_m)),
-            o.continuity_share * o.continuity_band_m * px_per_m};
-}
-
-/// Every cell's kind: tall in the upper layer, and in the lower layer when its surface runs on
-/// across the layers' border (a wall, a trunk: then both layers join when linked). A car under
-/// a tree's crown has a gap there, so its cells stay low and apart from the crown's. A tall
-/// surface at the border between two disparity bins (the matcher's sub-pixel steps put its
-/// rows in either) leaves part of its lower rows in the next bin, in a cell of their own that
-/// does not reach the border: the cell is that surface's when its mean disparity lies within
-/// split_surface_px of a dense, tall, not green lower cell of its column band one bin away and
-/// its heights lie within that cell's (a tree's trunk or crown, green, often stands just
-/// before a car; a car before a wall hides the wall's foot, so its cell reaches lower).
-void mark_kinds(Grid& g, const Rig& rig, const GeometryOptions& o) {
-    const auto index = [&g](int bu, int bd, int layer) {
-        return static_cast<std::size_t>((bu * g.bins_d + bd) * kLayers + layer);
-    };
-    std::vector<char> dense_tall(g.cells.size(), 0);  // dense, tall by continuity, not green
-    for (int bd = 0; bd < g.bins_d; ++bd) {
-        const auto [min_count, at_cut] = cell_thresholds(g, rig, o, bd);
-        for (int bu = 0; bu < g.bins_u; ++bu) {
-            Cell& lower = g.cells[index(bu, bd, 0)];
-            g.cells[index(bu, bd, 1)].is_tall = true;
-            int upper_at_cut = 0;  // the border rows of the surface above, noise spread over bins
-            for (int k = std::max(0, bd - 1); k <= std::min(g.bins_d - 1, bd + 1); ++k) {
-                upper_at_cut += g.cells[index(bu, k, 1)].at_cut;
-            }
-            lower.is_tall = lower.at_cut >= at_cut && upper_at_cut >= at_cut;
-            dense_tall[index(bu, bd, 0)] =
-                lower.is_tall && lower.count >= min_count &&
-                static_cast<double>(lower.green) < o.green_fraction * lower.count;
-        }
-    }
-    if (!(o.split_surface_px > 0.0)) return;
-    for (int bu = 0; bu < g.bins_u; ++bu) {
-        for (int bd = 0; bd < g.bins_d; ++bd) {
-            Cell& c = g.cells[index(bu, bd, 0)];
-            if (c.is_tall || c.count == 0) continue;
-            bool inside = false;
-            for (int side = 0; side < 2; ++side) {
-                const int nd = bd + (side == 0 ? -1 : 1);
-                if (nd < 0 || nd >= g.bins_d || !dense_tall[index(bu, nd, 0)]) continue;
-                const Cell& t = g.cells[index(bu, nd, 0)];
-                if (std::abs(c.d_sum / c.count - t.d_sum / t.count) > o.split_surface_px) continue;
-                c.surface[static_cast<std::size_t>(side)] = static_cast<int>(index(bu, nd, 0));
-                inside = inside || within_heights(t, c.low, c.high);
-            }
-            c.is_tall = inside;
-        }
-    }
-}
-
-/// Pass 1: road pixels labelled, every other pixel above the road counted in its cell; then the
-/// cells' kinds (mark_kinds) and their tops.
-Grid fill_grid(const DisparityMap& disparity, const Rig& rig, const ImageU8& left,
-               const GroundEstimate& ground, const GeometryOptions& o, std::uint16_t road,
-               ClassImage& out) {
-    const int w = disparity.width_px, h = disparity.height_px;
-    double max_d = 0.0;
-    for (const float d : disparity.disparity_px) max_d = std::max(max_d, double{d} - rig.offset);
-    Grid g;
-    g.bins_u = (w + o.column_bin_px - 1) / o.column_bin_px;
-    make_bins(max_d, o.disparity_bin_share, g);
-    g.cells.resize(static_cast<std::size_t>(g.bins_u) * g.bins_d * kLayers);
-    g.pixel_cell.assign(static_cast<std::size_t>(w) * h, -1);
-    g.pixel_low.assign(g.pixel_cell.size(), 0);
-    g.pixel_green.assign(g.pixel_cell.size(), 0);
-    g.pixel_height.assign(g.pixel_cell.size(), 0.0f);
-    const Eigen::Vector3d n = ground.plane.normal;
-    const double plane_d = ground.plane.d;
-    const double min_d = rig.fb / o.max_depth_m;
-    // Height error of a road point at depth z for a disparity error e: h_cam * z * e / (f B).
-    const double slope = o.disparity_noise_px * plane_d / rig.fb;
-    const auto tall_m = static_cast<float>(o.layer_height_m);
-    const auto band_m = static_cast<float>(o.continuity_band_m);
-    const std::vector<char> green_px = green_mask(left, w, h, o.green_window_px);
-    std::vector<std::size_t> lower_at_cut;  // lower-layer pixels near the layers' border
-    for (int v = 0; v < h; ++v) {
-        const std::size_t row = static_cast<std::size_t>(v) * w;
-        const double row_term = n.y() * (v - rig.cy) / rig.fy + n.z();
-        for (int u = 0; u < w; ++u) {
-            const double raw = double{disparity.disparity_px[row + u]};
-            const double d = raw - rig.offset;
-            if (!(raw > 0.0) || !(d > min_d)) continue;
-            const double z = rig.fb / d;
-            const double height = (n.x() * (u - rig.cx) / rig.fx + row_term) * z + plane_d;
-            const double tolerance = o.ground_tolerance_m + slope * z;
-            if (height < -std::max(0.5, 3.0 * tolerance)) continue;  // under the road: mismatch
-            if (height <= tolerance) {
-                out.class_index[row + u] = road;
-                continue;
-            }
-            const float hf = static_cast<float>(std::min(height, o.max_obstacle_height_m));
-            const int upper = hf > tall_m ? 1 : 0;
-            const int cell = ((u / o.column_bin_px) * g.bins_d +
-                              g.bin_of_tenth[static_cast<std::size_t>(d * 10.0)]) *
-                                 kLayers +
-                             upper;
-            g.pixel_cell[row + u] = cell;
-            const bool green = green_px[row + u] != 0;
-            g.pixel_green[row + u] = green ? 1 : 0;
-            if (height < o.low_cut_m) {
-                g.pixel_low[row + u] = 1;
-                continue;
-            }
-            Cell& c = g.cells[static_cast<std::size_t>(cell)];
-            ++c.count;
-            c.d_sum += d;
-            g.pixel_height[row + u] = hf;
-            c.height_sum += hf;
-            if (std::abs(hf - tall_m) <= band_m) {
-                if (upper || !(o.continuity_behind_m > 0.0)) {
-                    ++c.at_cut;
-                } else {
-                    lower_at_cut.push_back(row + u);
-                }
-            }
-            c.green += green ? 1 : 0;
-            c.low = std::min(c.low, hf);
-            c.high = std::max(c.high, hf);
-        }
-    }
-    // A lower cell's border rows continue its own surface only at its depth: at range one bin
-    // spans metres, and the surface seen over a thing's top (a bus's back 1 m beyond a car's
-    // roof at 30 m) shares its cell, pixel-locked a few tenths of a pixel farther. A surface
-    // along the ray spreads over the whole bin, so only pixels farther than both limits drop.
-    for (const std::size_t p : lower_at_cut) {
-        Cell& c = g.cells[static_cast<std::size_t>(g.pixel_cell[p])];
-        const double d = double{disparity.disparity_px[p]} - rig.offset;
-        const double mean_d = c.d_sum / c.count;
-        if (d >= mean_d - o.continuity_behind_px ||
-            rig.fb / d <= rig.fb / mean_d + o.continuity_behind_m) {
-            ++c.at_cut;
-        }
-    }
-    mark_kinds(g, rig, o);
-    // Whether lower-layer pixel height hf of cell c lies within a tall cell whose surface c
-    // holds in part: that surface's pixels, not c's own.
-    const auto on_split_surface = [&g](const Cell& c, float hf) {
-        return std::any_of(c.surface.begin(), c.surface.end(), [&](int j) {
-            return j >= 0 && within_heights(g.cells[static_cast<std::size_t>(j)], hf, hf);
-        });
-    };
-    // Tops second, from the pixels at the cell's depth: at range one disparity bin spans
-    // metres, and the surface just behind a thing (a bus's side above a car's roof, 1-2 px of
-    // disparity farther) shares its bins but not its top, nor does the lowest edge of a tree's
-    // crown a metre in front of a car's end, which runs on up into the upper layer. Pixels on
-    // a blend (on_blend) or at the foot of a surface above, ahead of the cell's mean, count
-    // only in cells that have no other.
-    const auto raise = [](float hf, float& top, float& second) {
-        if (hf > top) {
-            second = top;
-            top = hf;
-        } else if (hf > second) {
-            second = hf;
-        }
-    };
-    for (int v = 0; v < h; ++v) {
-        const std::size_t row = static_cast<std::size_t>(v) * w;
-        for (int u = 0; u < w; ++u) {
-            const std::int32_t cell = g.pixel_cell[row + u];
-            if (cell < 0 || g.pixel_low[row + u]) continue;
-            Cell& c = g.cells[static_cast<std::size_t>(cell)];
-            const double d = double{disparity.disparity_px[row + u]} - rig.offset;
-            const double mean_d = c.d_sum / c.count;
-            if (d < mean_d - o.top_behind_px) continue;
-            const float hf = g.pixel_height[row + u];
-            if (hf > c.top2 || hf > c.blend2) {  // else neither pair changes
-                if ((!c.is_tall && on_split_surface(c, hf)) ||
-                    on_blend(disparity, u, v, o.blend_rows, o.blend_step_px) ||
-                    (d > mean_d + o.foot_ahead_px &&
-                     foot_of_surface_above(disparity, g.pixel_cell, rig.offset, u, v, d,
-                                           o.blend_rows, o.blend_step_px))) {
-                    raise(hf, c.blend1, c.blend2);
-                } else {
-                    raise(hf, c.top1, c.top2);
-                }
-            }
-            if (v < c.top_v) {
-                c.top_v = v;
-                c.top_u = u;
-            }
-        }
-    }
-    for (Cell& c : g.cells) {
-        if (c.top1 < -1e8f) {
-            c.top1 = c.blend1;
-            c.top2 = c.blend2;
-        }
-    }
-    return g;
-}
-
-/// Whether the first disparity above a cell's highest pixel (within a few rows) is nearer: then
-/// an occluder (a tree's crown over a wall's foot) hides the cell's real top.
-bool top_occluded(const DisparityMap& disparity, const Cell& c, double cell_d) {
-    const int w = disparity.width_px;
-    for (int v = c.top_v - 1; v >= std::max(0, c.top_v - 6); --v) {
-        const double d = double{disparity.disparity_px[static_cast<std::size_t>(v) * w + c.top_u]};
-        if (!(d > 0.0)) continue;
-        return d > cell_d * 1.15 + 1.0;
-    }
-    return false;
-}
-
-/// Pass 2a: the dense cells, each its own root (-1 for sparse cells), and whether a nearer
-/// surface hides each one's top.
-std::vector<int> dense_cells(Grid& g, const DisparityMap& disparity, const Rig& rig,
-                             const GeometryOptions& o) {
-    std::vector<int> parent(g.cells.size(), -1);
-    for (int bd = 0; bd < g.bins_d; ++bd) {
-        const int min_count = cell_thresholds(g, rig, o, bd).first;
-        for (int bu = 0; bu < g.bins_u; ++bu) {
-            for (int layer = 0; layer < kLayers; ++layer) {
-                const int i = (bu * g.bins_d + bd) * kLayers + layer;
-                Cell& c = g.cells[static_cast<std::size_t>(i)];
-                if (c.count < min_count) continue;
-                parent[static_cast<std::size_t>(i)] = i;
-                c.occluded = top_occluded(disparity, c, g.bin_centre[static_cast<std::size_t>(bd)]);
-            }
-        }
-    }
-    return parent;
-}
-
-/// Pass 2b: each dense cell (dense_cells) linked to the dense cells of the same kind in the next
-/// two column bands within link_depth_m; returns each dense cell's root (-1 for sparse cells).
-std::vector<int> link_cells(Grid& g, const DisparityMap& disparity, const Rig& rig,
-                            const GeometryOptions& o) {
-    std::vector<int> parent = dense_cells(g, disparity, rig, o);
-    for (int bu = 0; bu < g.bins_u; ++bu) {
-        for (int bd = 0; bd < g.bins_d; ++bd) {
-            const double dd = g.bin_centre[static_cast<std::size_t>(bd)];
-            const double bin_width = std::max(1.0, o.disparity_bin_share * dd);
-            const int reach = std::clamp(
-                static_cast<int>(std::ceil(o.link_depth_m * dd * dd / rig.fb / bin_width)), 1, 6);
-            for (int layer = 0; layer < kLayers; ++layer) {
-                const int i = (bu * g.bins_d + bd) * kLayers + layer;
-                if (parent[static_cast<std::size_t>(i)] < 0) continue;
-                const bool tall = g.cells[static_cast<std::size_t>(i)].is_tall;
-                for (int du = 0; du <= 2 && bu + du < g.bins_u; ++du) {
-                    for (int k = -reach; k <= reach; ++k) {
-                        const int nd = bd + k;
-                        if (nd < 0 || nd >= g.bins_d) continue;
-                        for (int nl = 0; nl < kLayers; ++nl) {
-                            const int j = ((bu + du) * g.bins_d + nd) * kLayers + nl;
-                            if (j <= i && du == 0) continue;
-                            if (parent[static_cast<std::size_t>(j)] >= 0 &&
-                                g.cells[static_cast<std::size_t>(j)].is_tall == tall) {
-                                unite(parent, i, j);
-                            }
-                        }
-                    }
-                }
-            }
-        }
-    }
-    return parent;
-}
-
-/// The alternative to link_cells (GeometryOptions::segmentation "clusters"): the dense cells,
-/// as 3D points (x, mean height, z), grouped by Euclidean clustering with the
-/// extractor's depth-grown distance, whatever their kind (docs/entities.md compares the two).
-std::vector<int> cluster_cells(Grid& g, const DisparityMap& disparity, const Rig& rig,
-                               const GeometryOptions& o) {
-    const std::vector<int> dense = dense_cells(g, disparity, rig, o);
-    std::vector<Eigen::Vector3f> centres;
-    std::vector<int> ids;
-    for (int i = 0; i < static_cast<int>(g.cells.size()); ++i) {
-        if (dense[static_cast<std::size_t>(i)] < 0) continue;
-        const Cell& c = g.cells[static_cast<std::size_t>(i)];
-        const int column_bin = i / kLayers;
-        const double z = rig.fb / g.bin_centre[static_cast<std::size_t>(column_bin % g.bins_d)];
-        const double u = ((column_bin / g.bins_d) + 0.5) * o.column_bin_px;
-        centres.emplace_back(static_cast<float>((u - rig.cx) * z / rig.fx),
-                             c.height_sum / static_cast<float>(c.count), static_cast<float>(z));
-        ids.push_back(i);
-    }
-    ClusterOptions co;
-    co.distance_at_10m_m = o.cluster_distance_m;
-    co.growth = 1.0;
-    co.distance_max_m = 4.0 * o.cluster_distance_m;
-    std::vector<int> parent(g.cells.size(), -1);
-    for (const auto& cluster : euclidean_clusters(centres, co)) {
-        const int root = ids[cluster.front()];
-        for (const std::size_t k : cluster) parent[static_cast<std::size_t>(ids[k])] = root;
-    }
-    return parent;
 }
 
 /// Statistics of one linked segment, gathered from its cells.
@@ -693,45 +233,20 @@ void label_sky(const Grid* g, int w, double horizon_v, std::uint16_t sky, ClassI
     }
 }
 
-}  // namespace
+/// Without a road: sky wherever the disparity is missing (nothing when the palette has no
+/// sky), every other pixel void.
+void label_without_ground(const DisparityMap& disparity, std::uint16_t sky, ClassImage& classes) {
+    for (std::size_t p = 0; p < classes.class_index.size(); ++p) {
+        if (!(disparity.disparity_px[p] > 0.0f)) classes.class_index[p] = sky;
+    }
+    if (sky == kVoidClass) classes.class_index.assign(classes.class_index.size(), kVoidClass);
+}
 
-SceneGeometry derive_semantics(const DisparityMap& disparity, const StereoCamera& camera,
-                               const ImageU8& left, const Palette& palette,
-                               const GeometryOptions& o) {
-    o.validate();
-    const int w = disparity.width_px, h = disparity.height_px;
-    if (!left.empty() && (left.width_px != w || left.height_px != h)) {
-        throw std::invalid_argument("left image and disparity differ in size");
-    }
-    if (!(camera.baseline_m > 0.0) || !(camera.fx_px > 0.0) || !(camera.fy_px > 0.0)) {
-        throw std::invalid_argument("camera: fx, fy and baseline must be > 0");
-    }
-    const Classes cls(palette);
-    const Rig rig(camera);
-    SceneGeometry out;
-    out.classes.width_px = w;
-    out.classes.height_px = h;
-    out.classes.class_index.assign(static_cast<std::size_t>(w) * h, kVoidClass);
-    out.ground = estimate_ground(disparity, camera, o);
-    if (!out.ground.found) {
-        out.warnings.push_back("no ground found: " + out.ground.problem +
-                               "; only sky is labelled, no objects");
-        for (std::size_t p = 0; p < out.classes.class_index.size(); ++p) {
-            if (!(disparity.disparity_px[p] > 0.0f)) out.classes.class_index[p] = cls.sky;
-        }
-        if (cls.sky == kVoidClass)
-            out.classes.class_index.assign(out.classes.class_index.size(), kVoidClass);
-        return out;
-    }
-    Grid grid = fill_grid(disparity, rig, left, out.ground, o, cls.road, out.classes);
-    std::vector<int> parent = o.segmentation == "clusters" ? cluster_cells(grid, disparity, rig, o)
-                                                           : link_cells(grid, disparity, rig, o);
-    std::vector<SegmentStats> stats = gather_segments(grid, parent, rig, w, o);
-    std::vector<std::uint16_t> segment_class(stats.size(), kVoidClass);
-    for (std::size_t s = 0; s < stats.size(); ++s) {
-        out.segments.push_back(classify(stats[s], cls, o));
-        segment_class[s] = out.segments.back().class_index;
-    }
+/// Each pixel of a segment: its segment's index, class (segment_class) and image box; a pixel
+/// below low_cut_m in no segment: sidewalk or terrain.
+void label_segment_pixels(const Grid& grid, const Classes& cls,
+                          const std::vector<std::uint16_t>& segment_class, int w,
+                          SceneGeometry& out) {
     out.segment_of_pixel.assign(grid.pixel_cell.size(), -1);
     for (std::size_t p = 0; p < grid.pixel_cell.size(); ++p) {
         const std::int32_t cell = grid.pixel_cell[p];
@@ -757,8 +272,10 @@ SceneGeometry derive_semantics(const DisparityMap& disparity, const StereoCamera
             out.classes.class_index[p] = grid.pixel_green[p] ? cls.terrain : cls.sidewalk;
         }
     }
-    label_sky(&grid, w, out.ground.horizon_v_px, cls.sky, out.classes);
-    // Largest first; the pixels' indices follow.
+}
+
+/// Largest first; the pixels' indices follow.
+void sort_segments(SceneGeometry& out) {
     std::vector<std::size_t> order(out.segments.size());
     std::iota(order.begin(), order.end(), std::size_t{0});
     std::stable_sort(order.begin(), order.end(), [&](std::size_t a, std::size_t b) {
@@ -775,6 +292,46 @@ SceneGeometry derive_semantics(const DisparityMap& disparity, const StereoCamera
     for (std::int32_t& s : out.segment_of_pixel) {
         if (s >= 0) s = rank[static_cast<std::size_t>(s)];
     }
+}
+
+}  // namespace
+
+SceneGeometry derive_semantics(const DisparityMap& disparity, const StereoCamera& camera,
+                               const ImageU8& left, const Palette& palette,
+                               const GeometryOptions& o) {
+    o.validate();
+    const int w = disparity.width_px, h = disparity.height_px;
+    if (!left.empty() && (left.width_px != w || left.height_px != h)) {
+        throw std::invalid_argument("left image and disparity differ in size");
+    }
+    if (!(camera.baseline_m > 0.0) || !(camera.fx_px > 0.0) || !(camera.fy_px > 0.0)) {
+        throw std::invalid_argument("camera: fx, fy and baseline must be > 0");
+    }
+    const Classes cls(palette);
+    const Rig rig(camera);
+    SceneGeometry out;
+    out.classes.width_px = w;
+    out.classes.height_px = h;
+    out.classes.class_index.assign(static_cast<std::size_t>(w) * h, kVoidClass);
+    out.ground = estimate_ground(disparity, camera, o);
+    if (!out.ground.found) {
+        out.warnings.push_back("no ground found: " + out.ground.problem +
+                               "; only sky is labelled, no objects");
+        label_without_ground(disparity, cls.sky, out.classes);
+        return out;
+    }
+    Grid grid = fill_grid(disparity, rig, left, out.ground, o, cls.road, out.classes);
+    std::vector<int> parent = o.segmentation == "clusters" ? cluster_cells(grid, disparity, rig, o)
+                                                           : link_cells(grid, disparity, rig, o);
+    std::vector<SegmentStats> stats = gather_segments(grid, parent, rig, w, o);
+    std::vector<std::uint16_t> segment_class(stats.size(), kVoidClass);
+    for (std::size_t s = 0; s < stats.size(); ++s) {
+        out.segments.push_back(classify(stats[s], cls, o));
+        segment_class[s] = out.segments.back().class_index;
+    }
+    label_segment_pixels(grid, cls, segment_class, w, out);
+    label_sky(&grid, w, out.ground.horizon_v_px, cls.sky, out.classes);
+    sort_segments(out);
     return out;
 }
 

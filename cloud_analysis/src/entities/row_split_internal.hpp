@@ -1,0 +1,44 @@
+#pragma once
+
+// What row_split.cpp (the cuts of a blob) and row_profiles.cpp (the height profiles that say
+// where a row's things meet) share.
+
+#include <vector>
+
+#include <Eigen/Core>
+
+#include "cloud_analysis/entities/row_split.hpp"
+
+namespace cloud_analysis::instances {
+
+/// A bin holding at most this share of the median occupied bin's points is a clear gap.
+constexpr double kGapFraction = 0.25;
+
+/// The points' coordinates along the unit direction (dir_x, dir_z) and their range.
+struct Projection {
+    std::vector<double> along;
+    double lo = 1e300, hi = -1e300;
+};
+
+Projection project(const std::vector<Eigen::Vector3f>& pts, const Indices& idx, double dir_x,
+                   double dir_z);
+
+/// Whether a long blob is a row of things side by side seen front-on (or from behind) rather
+/// than one thing seen side-on: its length along the box heading spans at least two prior
+/// widths, and across the heading, from the camera's side, its top stays below
+/// low_fraction * its highest top for at least low_extent_m (the bonnets in front of the
+/// windscreens), over the whole blob and in most slices one prior width long along it (each
+/// thing of the row has its bonnet: a thing seen side-on under a heading a little off its own
+/// shows its low end across the near side of the blob, but not slice by slice, where its side
+/// shows its roof line).
+bool front_on_row(const std::vector<Eigen::Vector3f>& pts, const Indices& idx,
+                  const OrientedBox& box, const ClassSettings& s, const GroundPlane& ground,
+                  const ExtractOptions& options);
+
+/// Pieces of a blob cut along (dir_x, dir_z) at the valleys of its top profile (things parked
+/// end to end, their roofs higher than the ends where they meet); empty without a valley.
+std::vector<Indices> split_at_valleys(const std::vector<Eigen::Vector3f>& pts, const Indices& idx,
+                                      double dir_x, double dir_z, const ClassSettings& s,
+                                      const GroundPlane& ground, const ExtractOptions& options);
+
+}  // namespace cloud_analysis::instances
