@@ -73,8 +73,8 @@ std::vector<Candidate> suppress_nested(std::vector<Candidate> candidates) {
         for (const auto& k : kept) {
             const double dx = c.box.centre_m.x() - k.box.centre_m.x();
             const double dz = c.box.centre_m.z() - k.box.centre_m.z();
-            const double along = dx * std::cos(k.box.theta) - dz * std::sin(k.box.theta);
-            const double across = dx * std::sin(k.box.theta) + dz * std::cos(k.box.theta);
+            const BoxAxes axes(k.box.theta);
+            const double along = axes.along(dx, dz), across = axes.across(dx, dz);
             if (std::abs(along) < k.box.L_m / 2.0 && std::abs(across) < k.box.W_m / 2.0) {
                 nested = true;
                 break;
@@ -87,21 +87,20 @@ std::vector<Candidate> suppress_nested(std::vector<Candidate> candidates) {
 
 double Footprint::distance_m(double px, double pz) const {
     const double dx = px - x, dz = pz - z;
-    const double along = std::max(std::abs(dx * c - dz * s) - half_L, 0.0);
-    const double across = std::max(std::abs(dx * s + dz * c) - half_W, 0.0);
+    const double along = std::max(std::abs(axes.along(dx, dz)) - half_L, 0.0);
+    const double across = std::max(std::abs(axes.across(dx, dz)) - half_W, 0.0);
     return std::hypot(along, across);
 }
 
 Footprint footprint_of(const OrientedBox& box) {
-    return {box.centre_m.x(),    box.centre_m.z(), std::cos(box.theta),
-            std::sin(box.theta), box.L_m / 2.0,    box.W_m / 2.0};
+    return {box.centre_m.x(), box.centre_m.z(), BoxAxes(box.theta), box.L_m / 2.0, box.W_m / 2.0};
 }
 
 std::vector<Footprint> footprints_of(const std::vector<scene_schema::Entity>& things) {
     std::vector<Footprint> out;
     out.reserve(things.size());
     for (const auto& t : things) {
-        out.push_back({t.x, t.z, std::cos(t.theta), std::sin(t.theta), t.L / 2.0, t.W / 2.0});
+        out.push_back({t.x, t.z, BoxAxes(t.theta), t.L / 2.0, t.W / 2.0});
     }
     return out;
 }
@@ -123,8 +122,8 @@ double share_inside(double x0, double z0, double theta, double L, double W,
             const double x = x0 + a * c + b * sn, z = z0 - a * sn + b * c;
             for (const auto& t : things) {
                 const double dx = x - t.x, dz = z - t.z;
-                if (std::abs(dx * t.c - dz * t.s) <= t.half_L &&
-                    std::abs(dx * t.s + dz * t.c) <= t.half_W) {
+                if (std::abs(t.axes.along(dx, dz)) <= t.half_L &&
+                    std::abs(t.axes.across(dx, dz)) <= t.half_W) {
                     ++inside;
                     break;
                 }

@@ -1,4 +1,5 @@
 #include "cloud_analysis/evaluation/evaluate.hpp"
+#include "cloud_analysis/support/box_axes.hpp"
 
 #include <algorithm>
 #include <cmath>
@@ -77,15 +78,14 @@ double CarEvaluation::mean_centre_distance_m() const {
 double footprint_inside_fraction(const scene_schema::Entity& entity,
                                  const std::vector<Eigen::Vector3f>& points_m, double margin_m) {
     if (points_m.empty()) return 0.0;
-    // Heading (cos t, -sin t) and its normal in the (x, z) plane.
-    const double c = std::cos(entity.theta), s = std::sin(entity.theta);
+    const BoxAxes axes(entity.theta);
     const double half_l = entity.L / 2.0 + margin_m, half_w = entity.W / 2.0 + margin_m;
     std::size_t inside = 0;
     for (const auto& p : points_m) {
         const double dx = double{p.x()} - entity.x, dz = double{p.z()} - entity.z;
-        const double along = dx * c - dz * s;
-        const double across = dx * s + dz * c;
-        if (std::abs(along) <= half_l && std::abs(across) <= half_w) ++inside;
+        if (std::abs(axes.along(dx, dz)) <= half_l && std::abs(axes.across(dx, dz)) <= half_w) {
+            ++inside;
+        }
     }
     return static_cast<double>(inside) / static_cast<double>(points_m.size());
 }

@@ -1,4 +1,5 @@
 #include "cloud_analysis/tracking/tracker.hpp"
+#include "cloud_analysis/support/box_axes.hpp"
 
 #include <algorithm>
 #include <cmath>
@@ -263,7 +264,7 @@ bool seen_in_part(const Track& t, const TrackerOptions& o,
         std::hypot(t.motion.vx_mps(), t.motion.vz_mps()) > o.still_max_speed_mps) {
         return false;
     }
-    const double c = std::cos(t.theta_rad), sn = std::sin(t.theta_rad);
+    const BoxAxes axes(t.theta_rad);
     for (std::size_t i = 0; i < frame.entities.size(); ++i) {
         const auto& e = frame.entities[i];
         if (!in(o.support_classes, e.class_name) ||
@@ -272,7 +273,7 @@ bool seen_in_part(const Track& t, const TrackerOptions& o,
             continue;
         }
         const double dx = e.x - t.motion.x_m(), dz = e.z - t.motion.z_m();
-        const double along = dx * c - dz * sn, across = dx * sn + dz * c;  // heading (cos, -sin)
+        const double along = axes.along(dx, dz), across = axes.across(dx, dz);
         if (std::abs(along) <= 0.5 * t.L + o.support_margin_m &&
             std::abs(across) <= 0.5 * t.W + o.support_margin_m) {
             return true;

@@ -11,6 +11,7 @@
 #include <scene_schema/entities.hpp>
 
 #include "cloud_analysis/entities/candidate.hpp"
+#include "cloud_analysis/support/box_axes.hpp"
 
 namespace cloud_analysis::instances {
 
@@ -63,7 +64,9 @@ std::vector<Candidate> suppress_nested(std::vector<Candidate> candidates);
 
 /// A thing's bird's-eye footprint: centre, heading's cosine and sine, half length and width.
 struct Footprint {
-    double x, z, c, s, half_L, half_W;
+    double x, z;            ///< centre, metres
+    BoxAxes axes;           ///< its heading
+    double half_L, half_W;  ///< half length and width, metres
     /// Bird's-eye distance of the point (x, z) from the footprint, metres; 0 inside.
     double distance_m(double px, double pz) const;
 };
