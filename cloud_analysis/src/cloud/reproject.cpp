@@ -147,6 +147,96 @@ class RowReprojector {
     double max_range_sq_ = 0.0;
 };
 
+/// A point reproject_by_class keeps: its position, pixel and class.
+struct Taken {
+    Eigen::Vector3f xyz;
+    std::uint32_t pixel;
+    std::uint16_t cls;
+};
+
+/// The points reproject_by_class keeps, per row stripe, and how many.
+struct StripePoints {
+    int stripes = 1;                        ///< row stripes
+    std::size_t slots = 1;                  ///< per stripe: one per class, then one for all
+    std::vector<std::vector<Taken>> taken;  ///< per stripe: the points kept, in pixel order
+    std::vector<std::size_t> count;         ///< per stripe and slot: points
+};
+
+/// The first pass of reproject_by_class: over the pixels in parallel row stripes, each
+/// stripe's points that `selection` keeps (and its points of every class).
+StripePoints take_points(const RowReprojector& rows, const ClassSelection& selection) {
+    const int h = rows.height();
+    const std::size_t k_count = selection.column_mask.size();
+    const double max_depth = selection.max_depth_m;
+    // The extractor's own tests on a point of class cls at column u (as points_by_class makes
+    // them on the cloud).
+    const auto selected = [&](int u, std::uint16_t cls) {
+        return cls < k_count && (static_cast<std::uint32_t>(u) & selection.column_mask[cls]) == 0;
+    };
+    const auto in_depth = [&](const Eigen::Vector3f& p) {
+        return p.z() > 0.0f && double{p.z()} < max_depth && p.allFinite();
+    };
+    const int stripes = std::max(1, std::min(h, 16));
+    const auto first_row = [&](int s) { return static_cast<int>(std::int64_t{h} * s / stripes); };
+    // Per stripe and class (the last slot: every point of the stripe).
+    const std::size_t slots = k_count + 1;
+    StripePoints kept{stripes, slots,
+                      std::vector<std::vector<Taken>>(static_cast<std::size_t>(stripes)),
+                      std::vector<std::size_t>(static_cast<std::size_t>(stripes) * slots, 0)};
+    auto& taken = kept.taken;
+    auto& count = kept.count;
+    cv::parallel_for_(cv::Range(0, stripes), [&](const cv::Range& range) {
+        for (int s = range.start; s < range.end; ++s) {
+            auto& mine = taken[static_cast<std::size_t>(s)];
+            mine.reserve(static_cast<std::size_t>(first_row(s + 1) - first_row(s)) *
+                         static_cast<std::size_t>(rows.width()));
+            std::size_t* n = count.data() + static_cast<std::size_t>(s) * slots;
+            for (int v = first_row(s); v < first_row(s + 1); ++v) {
+                const std::size_t row = rows.row_start(v);
+                n[k_count] += rows.count_points(v);
+                rows.for_each_point(
+                    v, selected, [&](int u, double y_num, double w_h, std::uint16_t cls) {
+                        const Eigen::Vector3f p = rows.point(u, y_num, w_h);
+                        if (!in_depth(p)) return;
+                        ++n[cls];
+                        mine.push_back(
+                            {p, static_cast<std::uint32_t>(row + static_cast<std::size_t>(u)),
+                             cls});
+                    });
+            }
+        }
+    });
+    return kept;
+}
+
+/// Counts become offsets: per class, stripes in order. Returns the slots' totals.
+std::vector<std::size_t> counts_to_offsets(StripePoints& kept) {
+    const std::size_t slots = kept.slots;
+    std::vector<std::size_t>& count = kept.count;
+    std::vector<std::size_t> total(slots, 0);
+    for (std::size_t s = 0; s < static_cast<std::size_t>(kept.stripes); ++s) {
+        for (std::size_t k = 0; k < slots; ++k) {
+            total[k] += std::exchange(count[s * slots + k], total[k]);
+        }
+    }
+    return total;
+}
+
+/// The second pass of reproject_by_class: copies the points kept to their classes (sized),
+/// each stripe's from its offsets (counts_to_offsets) on, stripes in parallel.
+void copy_to_classes(StripePoints& kept, const std::vector<char>& keep_pixels, ClassPoints& out) {
+    const std::size_t slots = kept.slots;
+    cv::parallel_for_(cv::Range(0, kept.stripes), [&](const cv::Range& range) {
+        for (int s = range.start; s < range.end; ++s) {
+            std::size_t* at = kept.count.data() + static_cast<std::size_t>(s) * slots;
+            for (const Taken& t : kept.taken[static_cast<std::size_t>(s)]) {
+                if (keep_pixels[t.cls]) out.pixel[t.cls][at[t.cls]] = t.pixel;
+                out.xyz_m[t.cls][at[t.cls]++] = t.xyz;
+            }
+        }
+    });
+}
+
 }  // namespace
 
 Eigen::Matrix4d reprojection_matrix(const StereoCamera& c) {
@@ -263,50 +353,10 @@ ClassPoints reproject_by_class(const DisparityMap& disparity, const StereoCamera
     const RowReprojector rows(disparity, camera, classes, options);
     const int h = rows.height();
     const std::size_t k_count = selection.column_mask.size();
-    const double max_depth = selection.max_depth_m;
-    // The extractor's own tests on a point of class cls at column u (as points_by_class makes
-    // them on the cloud).
-    const auto selected = [&](int u, std::uint16_t cls) {
-        return cls < k_count && (static_cast<std::uint32_t>(u) & selection.column_mask[cls]) == 0;
-    };
-    const auto in_depth = [&](const Eigen::Vector3f& p) {
-        return p.z() > 0.0f && double{p.z()} < max_depth && p.allFinite();
-    };
     // One pass over the pixels in parallel row stripes keeps each stripe's selected points (and
     // counts its points of every class); a second one copies them to their classes, stripes in
     // order: every class comes out in pixel order.
-    struct Taken {
-        Eigen::Vector3f xyz;
-        std::uint32_t pixel;
-        std::uint16_t cls;
-    };
-    const int stripes = std::max(1, std::min(h, 16));
-    const auto first_row = [&](int s) { return static_cast<int>(std::int64_t{h} * s / stripes); };
-    std::vector<std::vector<Taken>> taken(static_cast<std::size_t>(stripes));
-    // Per stripe and class (the last slot: every point of the stripe).
-    const std::size_t slots = k_count + 1;
-    std::vector<std::size_t> count(static_cast<std::size_t>(stripes) * slots, 0);
-    cv::parallel_for_(cv::Range(0, stripes), [&](const cv::Range& range) {
-        for (int s = range.start; s < range.end; ++s) {
-            auto& mine = taken[static_cast<std::size_t>(s)];
-            mine.reserve(static_cast<std::size_t>(first_row(s + 1) - first_row(s)) *
-                         static_cast<std::size_t>(rows.width()));
-            std::size_t* n = count.data() + static_cast<std::size_t>(s) * slots;
-            for (int v = first_row(s); v < first_row(s + 1); ++v) {
-                const std::size_t row = rows.row_start(v);
-                n[k_count] += rows.count_points(v);
-                rows.for_each_point(
-                    v, selected, [&](int u, double y_num, double w_h, std::uint16_t cls) {
-                        const Eigen::Vector3f p = rows.point(u, y_num, w_h);
-                        if (!in_depth(p)) return;
-                        ++n[cls];
-                        mine.push_back(
-                            {p, static_cast<std::uint32_t>(row + static_cast<std::size_t>(u)),
-                             cls});
-                    });
-            }
-        }
-    });
+    StripePoints kept = take_points(rows, selection);
     ClassPoints out;
     out.width_px = rows.width();
     out.height_px = h;
@@ -319,27 +369,13 @@ ClassPoints reproject_by_class(const DisparityMap& disparity, const StereoCamera
     for (std::size_t k = 0; k < k_count; ++k) {
         out.weight[k] = std::size_t{selection.column_mask[k]} + 1;
     }
-    // Counts become offsets: per class, stripes in order.
-    std::vector<std::size_t> total(slots, 0);
-    for (std::size_t s = 0; s < static_cast<std::size_t>(stripes); ++s) {
-        for (std::size_t k = 0; k < slots; ++k) {
-            total[k] += std::exchange(count[s * slots + k], total[k]);
-        }
-    }
+    const std::vector<std::size_t> total = counts_to_offsets(kept);
     out.cloud_points = total[k_count];
     for (std::size_t k = 0; k < k_count; ++k) {
         out.xyz_m[k].resize(total[k]);
         if (selection.keep_pixels[k]) out.pixel[k].resize(total[k]);
     }
-    cv::parallel_for_(cv::Range(0, stripes), [&](const cv::Range& range) {
-        for (int s = range.start; s < range.end; ++s) {
-            std::size_t* at = count.data() + static_cast<std::size_t>(s) * slots;
-            for (const Taken& t : taken[static_cast<std::size_t>(s)]) {
-                if (selection.keep_pixels[t.cls]) out.pixel[t.cls][at[t.cls]] = t.pixel;
-                out.xyz_m[t.cls][at[t.cls]++] = t.xyz;
-            }
-        }
-    });
+    copy_to_classes(kept, selection.keep_pixels, out);
     return out;
 }
 

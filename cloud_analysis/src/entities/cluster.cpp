@@ -411,6 +411,88 @@ std::vector<std::vector<std::size_t>> grow_clusters(const std::vector<Eigen::Vec
     return clusters;
 }
 
+/// The voxel grid of voxel_m <= 0: every point a voxel of its own.
+void voxel_per_point(const std::vector<Eigen::Vector3f>& points_m, VoxelGrid& v) {
+    const std::size_t n = points_m.size();
+    v.centroid_m = points_m;
+    v.count.assign(n, 1);
+    for (std::size_t i = 0; i < n; ++i) v.voxel_of[i] = static_cast<std::uint32_t>(i);
+}
+
+/// Sums the points of each voxel (cells of edge[b], inverse[b] = 1 / edge[b], in depth band b:
+/// b doubling depths at or below z), numbered in the order of their first points: returns the
+/// sums, fills v.count with the voxels' points and v.voxel_of (sized) with each point's voxel.
+std::vector<Eigen::Vector3d> sum_voxels(const std::vector<Eigen::Vector3f>& points_m,
+                                        const std::vector<double>& doubling_depths_m,
+                                        const std::vector<double>& edge,
+                                        const std::vector<double>& inverse, VoxelGrid& v) {
+    const std::size_t n = points_m.size();
+    const auto band_of = [&](float z) {
+        std::size_t b = 0;
+        while (b < doubling_depths_m.size() && double{z} >= doubling_depths_m[b]) ++b;
+        return b;
+    };
+    CellTable index(std::min<std::size_t>(n, 1 << 16));
+    std::vector<Eigen::Vector3d> sums;
+    std::vector<std::uint32_t>& counts = v.count;
+    // Points arrive in pixel order, so runs of them share a voxel. A run's voxel (band, cells
+    // cx, cy, cz) keeps its sum and count in registers until the run ends: the same additions
+    // in the same order as into sums[last]. A point lies in the run's cell when it is in the
+    // run's band and its scaled coordinate is more than 1e-6 inside the cell on every axis,
+    // exactly where floor_div would return that cell without dividing.
+    const auto inside = [](double q, std::int64_t c) {
+        const double above = q - static_cast<double>(c);
+        return above > 1e-6 && above < 1.0 - 1e-6;
+    };
+    const auto wrap = [](std::int64_t c) {
+        return static_cast<std::uint64_t>(c + (1 << 19)) & 0xFFFFF;
+    };
+    std::int64_t cx = 0, cy = 0, cz = 0;
+    std::size_t band = 0;
+    std::uint64_t last_key = ~std::uint64_t{0};
+    std::uint32_t last = 0;
+    Eigen::Vector3d run_sum = Eigen::Vector3d::Zero();
+    std::uint32_t run_count = 0;
+    for (std::size_t i = 0; i < n; ++i) {
+        const Eigen::Vector3f& p = points_m[i];
+        const std::size_t b = band_of(p.z());
+        const double inv = inverse[b];
+        const double qx = double{p.x()} * inv, qy = double{p.y()} * inv, qz = double{p.z()} * inv;
+        if (!(b == band && inside(qx, cx) && inside(qy, cy) && inside(qz, cz)) ||
+            last_key == ~std::uint64_t{0}) {
+            band = b;
+            cx = floor_div(double{p.x()}, edge[b], inv);
+            cy = floor_div(double{p.y()}, edge[b], inv);
+            cz = floor_div(double{p.z()}, edge[b], inv);
+            const std::uint64_t key =
+                (std::uint64_t{b} << 60) | (wrap(cx) << 40) | (wrap(cy) << 20) | wrap(cz);
+            if (key != last_key) {
+                if (last_key != ~std::uint64_t{0}) {
+                    sums[last] = run_sum;
+                    counts[last] = run_count;
+                }
+                bool inserted = false;
+                last = index.find_or_insert(key, static_cast<std::uint32_t>(sums.size()), inserted);
+                if (inserted) {
+                    sums.emplace_back(Eigen::Vector3d::Zero());
+                    counts.push_back(0);
+                }
+                run_sum = sums[last];
+                run_count = counts[last];
+                last_key = key;
+            }
+        }
+        run_sum += p.cast<double>();
+        ++run_count;
+        v.voxel_of[i] = last;
+    }
+    if (n > 0) {
+        sums[last] = run_sum;
+        counts[last] = run_count;
+    }
+    return sums;
+}
+
 }  // namespace
 
 void ClusterOptions::validate() const {
@@ -477,9 +559,7 @@ VoxelGrid voxelize(const std::vector<Eigen::Vector3f>& points_m, double voxel_m,
     }
     v.voxel_of.resize(n);
     if (voxel_m <= 0.0) {
-        v.centroid_m = points_m;
-        v.count.assign(n, 1);
-        for (std::size_t i = 0; i < n; ++i) v.voxel_of[i] = static_cast<std::uint32_t>(i);
+        voxel_per_point(points_m, v);
         return v;
     }
     // Edge and its inverse per depth band (band b: b doubling depths at or below z).
@@ -487,69 +567,9 @@ VoxelGrid voxelize(const std::vector<Eigen::Vector3f>& points_m, double voxel_m,
     for (std::size_t b = 1; b < edge.size(); ++b) edge[b] = 2.0 * edge[b - 1];
     std::vector<double> inverse(edge.size());
     for (std::size_t b = 0; b < edge.size(); ++b) inverse[b] = 1.0 / edge[b];
-    const auto band_of = [&](float z) {
-        std::size_t b = 0;
-        while (b < doubling_depths_m.size() && double{z} >= doubling_depths_m[b]) ++b;
-        return b;
-    };
-    CellTable index(std::min<std::size_t>(n, 1 << 16));
-    std::vector<Eigen::Vector3d> sums;
-    std::vector<std::uint32_t>& counts = v.count;
-    // Points arrive in pixel order, so runs of them share a voxel. A run's voxel (band, cells
-    // cx, cy, cz) keeps its sum and count in registers until the run ends: the same additions
-    // in the same order as into sums[last]. A point lies in the run's cell when it is in the
-    // run's band and its scaled coordinate is more than 1e-6 inside the cell on every axis,
-    // exactly where floor_div would return that cell without dividing.
-    const auto inside = [](double q, std::int64_t c) {
-        const double above = q - static_cast<double>(c);
-        return above > 1e-6 && above < 1.0 - 1e-6;
-    };
-    const auto wrap = [](std::int64_t c) {
-        return static_cast<std::uint64_t>(c + (1 << 19)) & 0xFFFFF;
-    };
-    std::int64_t cx = 0, cy = 0, cz = 0;
-    std::size_t band = 0;
-    std::uint64_t last_key = ~std::uint64_t{0};
-    std::uint32_t last = 0;
-    Eigen::Vector3d run_sum = Eigen::Vector3d::Zero();
-    std::uint32_t run_count = 0;
-    for (std::size_t i = 0; i < n; ++i) {
-        const Eigen::Vector3f& p = points_m[i];
-        const std::size_t b = band_of(p.z());
-        const double inv = inverse[b];
-        const double qx = double{p.x()} * inv, qy = double{p.y()} * inv, qz = double{p.z()} * inv;
-        if (!(b == band && inside(qx, cx) && inside(qy, cy) && inside(qz, cz)) ||
-            last_key == ~std::uint64_t{0}) {
-            band = b;
-            cx = floor_div(double{p.x()}, edge[b], inv);
-            cy = floor_div(double{p.y()}, edge[b], inv);
-            cz = floor_div(double{p.z()}, edge[b], inv);
-            const std::uint64_t key =
-                (std::uint64_t{b} << 60) | (wrap(cx) << 40) | (wrap(cy) << 20) | wrap(cz);
-            if (key != last_key) {
-                if (last_key != ~std::uint64_t{0}) {
-                    sums[last] = run_sum;
-                    counts[last] = run_count;
-                }
-                bool inserted = false;
-                last = index.find_or_insert(key, static_cast<std::uint32_t>(sums.size()), inserted);
-                if (inserted) {
-                    sums.emplace_back(Eigen::Vector3d::Zero());
-                    counts.push_back(0);
-                }
-                run_sum = sums[last];
-                run_count = counts[last];
-                last_key = key;
-            }
-        }
-        run_sum += p.cast<double>();
-        ++run_count;
-        v.voxel_of[i] = last;
-    }
-    if (n > 0) {
-        sums[last] = run_sum;
-        counts[last] = run_count;
-    }
+    const std::vector<Eigen::Vector3d> sums =
+        sum_voxels(points_m, doubling_depths_m, edge, inverse, v);
+    const std::vector<std::uint32_t>& counts = v.count;
     v.centroid_m.reserve(sums.size());
     for (std::size_t k = 0; k < sums.size(); ++k) {
         v.centroid_m.push_back((sums[k] / static_cast<double>(counts[k])).cast<float>());

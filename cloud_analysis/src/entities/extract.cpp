@@ -96,6 +96,118 @@ void close_gaps(ClassPoints& out, const std::vector<char>& keep_pixels,
     }
 }
 
+/// Column of pixel p, for pixels mostly in increasing order: the row's first pixel is
+/// found by a division only when p leaves the row.
+inline std::uint32_t column_of(std::uint32_t p, std::uint32_t width, std::uint32_t& row_start) {
+    if (p - row_start >= width) row_start = p / width * width;
+    return p - row_start;
+}
+
+/// What the first pass of points_by_class finds in each chunk of the cloud.
+struct ChunkScan {
+    /// Per chunk and class: its points (an upper bound once the columns are thinned), then the
+    /// slot its first one is written to.
+    std::vector<std::vector<std::size_t>> start;
+    std::vector<std::uint32_t> last_pixel;  ///< per chunk: its largest pixel
+    std::vector<std::uint32_t> first_col;   ///< per chunk: its leftmost column
+    std::vector<std::uint32_t> last_col;    ///< per chunk: its rightmost column
+};
+
+/// The first pass of points_by_class over the cloud's `chunks` chunks (in parallel): each
+/// chunk's points of every class and its pixels' extent (when has_pixels).
+ChunkScan scan_chunks(const LabeledCloud& cloud, std::size_t classes, std::size_t chunks,
+                      bool has_pixels, std::uint32_t width) {
+    ChunkScan scan;
+    auto& start = scan.start;
+    auto& last_pixel = scan.last_pixel;
+    auto& first_col = scan.first_col;
+    auto& last_col = scan.last_col;
+    start.assign(chunks, std::vector<std::size_t>(classes, 0));
+    last_pixel.assign(chunks, 0);
+    first_col.assign(chunks, std::numeric_limits<std::uint32_t>::max());
+    last_col.assign(chunks, 0);
+    for_each_chunk(cloud.size(), chunks, [&](std::size_t c, std::size_t first, std::size_t last) {
+        // Every point of each class (an upper bound once the columns are thinned).
+        auto& size = start[c];
+        for (std::size_t i = first; i < last; ++i) {
+            const auto k = cloud.class_index[i];
+            if (k < classes) ++size[k];
+        }
+        std::uint32_t row_start = 0;
+        for (std::size_t i = first; has_pixels && i < last; ++i) {
+            last_pixel[c] = std::max(last_pixel[c], cloud.pixel[i]);
+            const std::uint32_t u = column_of(cloud.pixel[i], width, row_start);
+            first_col[c] = std::min(first_col[c], u);
+            last_col[c] = std::max(last_col[c], u);
+        }
+    });
+    return scan;
+}
+
+/// Gives `out` the cloud's pixel grid (size, the columns holding points, depth edges and
+/// instances) when every pixel lies on it; whether it does.
+bool take_grid(ClassPoints& out, const LabeledCloud& cloud, const ChunkScan& scan, bool has_pixels,
+               std::uint32_t width) {
+    const auto& last_pixel = scan.last_pixel;
+    const bool grid = has_pixels && cloud.width_px > 0 && cloud.height_px > 0 &&
+                      *std::max_element(last_pixel.begin(), last_pixel.end()) <
+                          static_cast<std::uint64_t>(cloud.width_px) * cloud.height_px;
+    if (grid) {
+        out.width_px = cloud.width_px;
+        out.height_px = cloud.height_px;
+        out.first_column = static_cast<int>(
+            std::min(*std::min_element(scan.first_col.begin(), scan.first_col.end()), width - 1));
+        out.last_column =
+            static_cast<int>(*std::max_element(scan.last_col.begin(), scan.last_col.end()));
+        out.depth_edge = cloud.depth_edge;
+        out.instance_id = cloud.instance_id;
+    }
+    return grid;
+}
+
+/// Sizes each class's points (and its pixels, when kept) for every point of the class, and
+/// turns start[c][k] from chunk c's points of class k into the slot of the first one.
+void size_classes(ClassPoints& out, const std::vector<char>& keep_pixels,
+                  std::vector<std::vector<std::size_t>>& start) {
+    const std::size_t chunks = start.size();
+    // Sized for every point of the class, written by index, then cut to the points kept.
+    for (std::size_t k = 0; k < out.xyz_m.size(); ++k) {
+        std::size_t total = 0;
+        for (std::size_t c = 0; c < chunks; ++c) total += std::exchange(start[c][k], total);
+        out.xyz_m[k].resize(total);
+        if (keep_pixels[k]) out.pixel[k].resize(total);
+    }
+}
+
+/// The second pass of points_by_class over the cloud's chunks (in parallel): each chunk writes
+/// its points of every class kept (columns by column_mask, depths by the selection) from slot
+/// end[c][k] on, and leaves end[c][k] past its last one.
+void write_points(ClassPoints& out, const LabeledCloud& cloud, const ClassSelection& selection,
+                  const std::vector<std::uint32_t>& column_mask, std::uint32_t width, bool grid,
+                  std::vector<std::vector<std::size_t>>& end) {
+    const std::size_t classes = column_mask.size();
+    auto& per_class = out.xyz_m;
+    auto& per_class_pixels = out.pixel;
+    const auto taken = [&](std::size_t i, std::uint16_t k, std::uint32_t& row_start) {
+        return column_mask[k] == 0 ||
+               (column_of(cloud.pixel[i], width, row_start) & column_mask[k]) == 0;
+    };
+    const double max_depth = selection.max_depth_m;
+    const std::size_t chunks = end.size();
+    for_each_chunk(cloud.size(), chunks, [&](std::size_t c, std::size_t first, std::size_t last) {
+        auto& at = end[c];
+        std::uint32_t row_start = 0;
+        for (std::size_t i = first; i < last; ++i) {
+            const auto k = cloud.class_index[i];
+            const auto& p = cloud.xyz_m[i];
+            if (k >= classes || !taken(i, k, row_start)) continue;
+            if (!(p.z() > 0.0f && double{p.z()} < max_depth) || !p.allFinite()) continue;
+            if (selection.keep_pixels[k]) per_class_pixels[k][at[k]] = grid ? cloud.pixel[i] : 0;
+            per_class[k][at[k]++] = p;
+        }
+    });
+}
+
 /// The entity of a class by one of the thesis's one-per-class extractors ("centroid",
 /// "average", "variance"); each of `pts` stands for `step` points of the cloud.
 scene_schema::Entity thesis_entity(const ClassInfo& info, const std::vector<Eigen::Vector3f>& pts,
@@ -281,10 +393,8 @@ ClassPoints points_by_class(const LabeledCloud& cloud, const ClassSelection& sel
     ClassPoints out;
     out.cloud_points = cloud.size();
     out.border = cloud.border;
-    auto& per_class = out.xyz_m;
-    auto& per_class_pixels = out.pixel;
-    per_class.resize(classes);
-    per_class_pixels.resize(classes);
+    out.xyz_m.resize(classes);
+    out.pixel.resize(classes);
     // Split on `chunks` threads over contiguous point ranges (each chunk writes its points of a
     // class after the previous chunks' ones, so the order is the points' order): count, size,
     // write, then close the gaps the range check left.
@@ -297,68 +407,12 @@ ClassPoints points_by_class(const LabeledCloud& cloud, const ClassSelection& sel
     out.weight.resize(classes);
     for (std::size_t k = 0; k < classes; ++k) out.weight[k] = std::size_t{column_mask[k]} + 1;
     const auto width = static_cast<std::uint32_t>(std::max(cloud.width_px, 1));
-    // Column of pixel p, for pixels mostly in increasing order: the row's first pixel is
-    // found by a division only when p leaves the row.
-    const auto column_of = [width](std::uint32_t p, std::uint32_t& row_start) {
-        if (p - row_start >= width) row_start = p / width * width;
-        return p - row_start;
-    };
-    const auto taken = [&](std::size_t i, std::uint16_t k, std::uint32_t& row_start) {
-        return column_mask[k] == 0 || (column_of(cloud.pixel[i], row_start) & column_mask[k]) == 0;
-    };
-    std::vector<std::vector<std::size_t>> start(chunks, std::vector<std::size_t>(classes, 0));
-    std::vector<std::uint32_t> last_pixel(chunks, 0);
-    std::vector<std::uint32_t> first_col(chunks, std::numeric_limits<std::uint32_t>::max()),
-        last_col(chunks, 0);
-    for_each_chunk(cloud.size(), chunks, [&](std::size_t c, std::size_t first, std::size_t last) {
-        // Every point of each class (an upper bound once the columns are thinned).
-        auto& size = start[c];
-        for (std::size_t i = first; i < last; ++i) {
-            const auto k = cloud.class_index[i];
-            if (k < classes) ++size[k];
-        }
-        std::uint32_t row_start = 0;
-        for (std::size_t i = first; has_pixels && i < last; ++i) {
-            last_pixel[c] = std::max(last_pixel[c], cloud.pixel[i]);
-            const std::uint32_t u = column_of(cloud.pixel[i], row_start);
-            first_col[c] = std::min(first_col[c], u);
-            last_col[c] = std::max(last_col[c], u);
-        }
-    });
-    const bool grid = has_pixels && cloud.width_px > 0 && cloud.height_px > 0 &&
-                      *std::max_element(last_pixel.begin(), last_pixel.end()) <
-                          static_cast<std::uint64_t>(cloud.width_px) * cloud.height_px;
-    if (grid) {
-        out.width_px = cloud.width_px;
-        out.height_px = cloud.height_px;
-        out.first_column = static_cast<int>(
-            std::min(*std::min_element(first_col.begin(), first_col.end()), width - 1));
-        out.last_column = static_cast<int>(*std::max_element(last_col.begin(), last_col.end()));
-        out.depth_edge = cloud.depth_edge;
-        out.instance_id = cloud.instance_id;
-    }
-    // Sized for every point of the class, written by index, then cut to the points kept.
-    for (std::size_t k = 0; k < classes; ++k) {
-        std::size_t total = 0;
-        for (std::size_t c = 0; c < chunks; ++c) total += std::exchange(start[c][k], total);
-        per_class[k].resize(total);
-        if (selection.keep_pixels[k]) per_class_pixels[k].resize(total);
-    }
-    std::vector<std::vector<std::size_t>> end = start;
-    const double max_depth = selection.max_depth_m;
-    for_each_chunk(cloud.size(), chunks, [&](std::size_t c, std::size_t first, std::size_t last) {
-        auto& at = end[c];
-        std::uint32_t row_start = 0;
-        for (std::size_t i = first; i < last; ++i) {
-            const auto k = cloud.class_index[i];
-            const auto& p = cloud.xyz_m[i];
-            if (k >= classes || !taken(i, k, row_start)) continue;
-            if (!(p.z() > 0.0f && double{p.z()} < max_depth) || !p.allFinite()) continue;
-            if (selection.keep_pixels[k]) per_class_pixels[k][at[k]] = grid ? cloud.pixel[i] : 0;
-            per_class[k][at[k]++] = p;
-        }
-    });
-    close_gaps(out, selection.keep_pixels, start, end);
+    ChunkScan scan = scan_chunks(cloud, classes, chunks, has_pixels, width);
+    const bool grid = take_grid(out, cloud, scan, has_pixels, width);
+    size_classes(out, selection.keep_pixels, scan.start);
+    std::vector<std::vector<std::size_t>> end = scan.start;
+    write_points(out, cloud, selection, column_mask, width, grid, end);
+    close_gaps(out, selection.keep_pixels, scan.start, end);
     return out;
 }
 

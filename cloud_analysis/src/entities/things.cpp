@@ -152,41 +152,35 @@ void complete_candidate(Candidate& c, const std::vector<Eigen::Vector3f>& pts,
     c.range_m /= static_cast<double>(c.members.size());
 }
 
-/// The candidates of thing cluster number `cluster`: its points without smear, fitted, split
-/// when oversized (at most three levels: side by side, rows, their pieces) and refitted. Pieces cut
-/// at clear gaps keep the cluster's shadow group (`cluster`); other pieces get groups of their own,
-/// (cluster + 1) * 2^32 + k, unique over the class. The points the smear filter drops are
-/// clustered again: a thing behind another, joined to it by smear, is a cluster of its own.
-std::vector<Candidate> candidates_of_cluster(const std::vector<Eigen::Vector3f>& pts,
-                                             const std::vector<std::uint32_t>& pixels,
-                                             const PixelGrid& grid, Indices members,
-                                             std::size_t cluster, const ClassSettings& s,
-                                             const ClassFit& class_fit,
-                                             const std::optional<GroundPlane>& ground,
-                                             const ExtractOptions& options) {
+/// Work items: points, split depth, shadow group, imposed heading.
+using WorkItem = std::tuple<Indices, int, std::size_t, std::optional<double>>;
+
+/// What the steps of candidates_of_cluster share: its inputs, the box fit (each piece sets
+/// its heading and truncation), the work items left, the next group number and the
+/// candidates made.
+struct ClusterPieces {
+    const std::vector<Eigen::Vector3f>& pts;
+    const std::vector<std::uint32_t>& pixels;
+    const PixelGrid& grid;
+    std::size_t cluster;
+    const ClassSettings& s;
+    const std::optional<GroundPlane>& ground;
+    const ExtractOptions& options;
+    BoxFitOptions fit;
+    std::size_t next_group;
+    std::vector<WorkItem> work;
     std::vector<Candidate> candidates;
-    BoxFitOptions fit = class_fit.box;
-    fit.disparity_fb_px_m = grid.border.fb_px_m;
-    Indices behind;
-    Indices on_edge;
-    members = off_depth_edges(pixels, grid, std::move(members), s, on_edge);
-    members = drop_outliers(pts, members, s, ground, options.outlier_margin_m, &behind);
-    std::size_t next_group = (cluster + 1) << 32;
-    // Work items: points, split depth, shadow group, imposed heading.
-    std::vector<std::tuple<Indices, int, std::size_t, std::optional<double>>> work = {
-        {std::move(members), 0, cluster, std::nullopt}};
-    if (behind.size() >= static_cast<std::size_t>(s.min_points)) {
-        // What lies farther than a thing behind the nearest points of the cluster is smear or
-        // another thing behind it, joined to it by smear: clustered again on its own, each
-        // piece is a thing of its own (shadow suppression then drops the smear).
+
+    /// Queues the pieces of `behind` (points of the cluster farther than a thing behind its
+    /// nearest points) clustered again on their own, each in a group of its own.
+    void queue_behind(const Indices& behind, const ClusterOptions& co) {
         std::vector<Eigen::Vector3f> far_pts;
         std::vector<std::uint32_t> far_pixels;
         for (std::size_t i : behind) {
             far_pts.push_back(pts[i]);
             if (pixels.size() >= pts.size()) far_pixels.push_back(pixels[i]);
         }
-        for (const Indices& c :
-             thing_clusters(far_pts, far_pixels, grid, s, class_fit.cluster, options)) {
+        for (const Indices& c : thing_clusters(far_pts, far_pixels, grid, s, co, options)) {
             if (c.size() < static_cast<std::size_t>(s.min_points)) continue;
             Indices piece;
             for (std::size_t k : c) piece.push_back(behind[k]);
@@ -194,16 +188,20 @@ std::vector<Candidate> candidates_of_cluster(const std::vector<Eigen::Vector3f>&
             work.emplace_back(std::move(piece), 0, next_group++, std::nullopt);
         }
     }
-    // Queues the pieces of a split one level deeper; false when it did not split.
-    const auto queue_pieces = [&work, &next_group](Split split, int depth, std::size_t group) {
+
+    /// Queues the pieces of a split one level deeper; false when it did not split.
+    bool queue_pieces(Split split, int depth, std::size_t group) {
         if (split.parts.size() < 2) return false;
         for (auto& piece : split.parts) {
             work.emplace_back(std::move(piece), depth + 1, split.at_gaps ? group : next_group++,
                               split.yaw_rad);
         }
         return true;
-    };
-    const auto fit_pieces = [&] {
+    }
+
+    /// Fits the work items until none is left: each one is split again when oversized or made
+    /// a candidate.
+    void fit_pieces() {
         while (!work.empty()) {
             auto [part, depth, group, yaw] = std::move(work.back());
             work.pop_back();
@@ -244,17 +242,45 @@ std::vector<Candidate> candidates_of_cluster(const std::vector<Eigen::Vector3f>&
             complete_candidate(c, pts, member_pts, box.H_m, final_fit, s, ground, options);
             candidates.push_back(std::move(c));
         }
-    };
-    fit_pieces();
-    give_back_edge_points(pts, on_edge, candidates);
+    }
+};
+
+/// The candidates of thing cluster number `cluster`: its points without smear, fitted, split
+/// when oversized (at most three levels: side by side, rows, their pieces) and refitted. Pieces cut
+/// at clear gaps keep the cluster's shadow group (`cluster`); other pieces get groups of their own,
+/// (cluster + 1) * 2^32 + k, unique over the class. The points the smear filter drops are
+/// clustered again: a thing behind another, joined to it by smear, is a cluster of its own.
+std::vector<Candidate> candidates_of_cluster(const std::vector<Eigen::Vector3f>& pts,
+                                             const std::vector<std::uint32_t>& pixels,
+                                             const PixelGrid& grid, Indices members,
+                                             std::size_t cluster, const ClassSettings& s,
+                                             const ClassFit& class_fit,
+                                             const std::optional<GroundPlane>& ground,
+                                             const ExtractOptions& options) {
+    ClusterPieces p{
+        pts, pixels, grid, cluster, s, ground, options, class_fit.box, (cluster + 1) << 32, {}, {}};
+    p.fit.disparity_fb_px_m = grid.border.fb_px_m;
+    Indices behind;
+    Indices on_edge;
+    members = off_depth_edges(pixels, grid, std::move(members), s, on_edge);
+    members = drop_outliers(pts, members, s, ground, options.outlier_margin_m, &behind);
+    p.work = {{std::move(members), 0, cluster, std::nullopt}};
+    if (behind.size() >= static_cast<std::size_t>(s.min_points)) {
+        // What lies farther than a thing behind the nearest points of the cluster is smear or
+        // another thing behind it, joined to it by smear: clustered again on its own, each
+        // piece is a thing of its own (shadow suppression then drops the smear).
+        p.queue_behind(behind, class_fit.cluster);
+    }
+    p.fit_pieces();
+    give_back_edge_points(pts, on_edge, p.candidates);
     // Two faint pieces of a row end to end are one thing cut in two (a car behind a van, its
     // first metre left to the van's piece); joined, they are fitted as one, not split again.
-    std::vector<Indices> joined = join_faint_pieces(pts, candidates, s, options);
+    std::vector<Indices> joined = join_faint_pieces(pts, p.candidates, s, options);
     if (!joined.empty()) {
-        for (Indices& part : joined) work.emplace_back(std::move(part), 4, cluster, std::nullopt);
-        fit_pieces();
+        for (Indices& part : joined) p.work.emplace_back(std::move(part), 4, cluster, std::nullopt);
+        p.fit_pieces();
     }
-    return candidates;
+    return std::move(p.candidates);
 }
 
 /// The members in the largest of their clusters (thing_clusters): an object's surface is

@@ -104,6 +104,28 @@ void census_row(const std::uint8_t* img, std::size_t stride, int w, int h, int y
     }
 }
 
+/// Throws std::invalid_argument unless `range` and the image size suit the sgm matcher.
+void check_range(const SgmRange& range, int width, int height) {
+    if (range.min_disparity < 0) bad("min_disparity", "must be >= 0 for the sgm matcher");
+    if (range.num_disparities < 16 || range.num_disparities % 16 != 0 ||
+        range.num_disparities > kMaxDisparities) {
+        bad("num_disparities", "must be a multiple of 16, 16..256 for the sgm matcher");
+    }
+    if (range.uniqueness_ratio < 0 || range.uniqueness_ratio > 99) {
+        bad("uniqueness_ratio", "must be 0..99");
+    }
+    if (width <= 0 || height <= 0) bad("images", "must not be empty");
+}
+
+/// Sets every pixel of the `width` x `height` map `out` to `value`.
+void fill_map(std::int16_t* out, std::size_t out_stride, int width, int height,
+              std::int16_t value) {
+    for (int y = 0; y < height; ++y) {
+        std::fill(out + static_cast<std::size_t>(y) * out_stride,
+                  out + static_cast<std::size_t>(y) * out_stride + width, value);
+    }
+}
+
 }  // namespace
 
 bool sgm_has_avx2() {
@@ -150,6 +172,14 @@ struct SgmMatcher::Impl {
     std::vector<StripeBuffers> stripes;
     std::size_t cells = 0;
 
+    /// The census of both views and the right view's grey rows reversed (rows in parallel);
+    /// the left view kept for the call.
+    void census_views(const std::uint8_t* left, const std::uint8_t* right, std::size_t stride,
+                      int width, int height);
+    /// The row kernels' settings on stripe s's working rows, reserved for rows `width` pixels
+    /// wide of which `pixels` are matched (`volume` cost cells).
+    SgmRow stripe_row(std::size_t s, int width, int x_begin, const SgmRange& range,
+                      std::size_t pixels, std::size_t volume);
     void match_stripe(SgmRow row, int height, int y0, int y1, int warm_from, const SgmRange& range,
                       std::int16_t* out, std::size_t out_stride) const;
 };
@@ -225,49 +255,78 @@ void SgmMatcher::Impl::match_stripe(SgmRow row, int height, int y0, int y1, int 
     }
 }
 
+void SgmMatcher::Impl::census_views(const std::uint8_t* left, const std::uint8_t* right,
+                                    std::size_t stride, int width, int height) {
+    const std::size_t plane = static_cast<std::size_t>(width) * height;
+    census_left.resize(plane);
+    census_right_rev.resize(plane);
+    grey_right_rev.resize(plane);
+    grey_left = left;
+    grey_stride = stride;
+    cv::parallel_for_(cv::Range(0, height), [&](const cv::Range& rows) {
+        std::vector<std::uint8_t> planes(4 * static_cast<std::size_t>(width));
+        for (int y = rows.start; y < rows.end; ++y) {
+            const std::size_t at = static_cast<std::size_t>(y) * width;
+            census_row(left, stride, width, height, y, planes.data(), census_left.data() + at,
+                       false);
+            census_row(right, stride, width, height, y, planes.data(), census_right_rev.data() + at,
+                       true);
+            std::reverse_copy(right + static_cast<std::size_t>(y) * stride,
+                              right + static_cast<std::size_t>(y) * stride + width,
+                              grey_right_rev.data() + at);
+        }
+    });
+}
+
+SgmRow SgmMatcher::Impl::stripe_row(std::size_t s, int width, int x_begin, const SgmRange& range,
+                                    std::size_t pixels, std::size_t volume) {
+    StripeBuffers& b = stripes[s];
+    b.ring.reserve(volume * static_cast<std::size_t>(options.window));
+    b.column_sum.reserve(volume);
+    b.cost.reserve(volume);
+    b.sum.reserve(volume);
+    b.top.reserve(volume);
+    b.top_min.reserve(pixels);
+    b.right_cost.reserve(static_cast<std::size_t>(width));
+    b.disparity.reserve(static_cast<std::size_t>(width));
+    b.right_disp.reserve(static_cast<std::size_t>(width));
+    SgmRow row;
+    row.width = width;
+    row.x_begin = x_begin;
+    row.num_disparities = range.num_disparities;
+    row.min_disparity = range.min_disparity;
+    row.p1 = static_cast<std::uint16_t>(options.p1);
+    row.p2 = static_cast<std::uint16_t>(options.p2);
+    row.ring = b.ring.data();
+    row.column_sum = b.column_sum.data();
+    row.radius = options.window / 2;
+    row.intensity_cap = options.intensity_cap;
+    row.cost = b.cost.data();
+    row.sum = b.sum.data();
+    row.top = b.top.data();
+    row.top_min = b.top_min.data();
+    row.uniqueness_ratio = range.uniqueness_ratio;
+    row.equiangular = options.subpixel == "equiangular";
+    row.disparity = b.disparity.data();
+    row.right_cost = b.right_cost.data();
+    row.right_disp = b.right_disp.data();
+    return row;
+}
+
 void SgmMatcher::compute(const std::uint8_t* left, const std::uint8_t* right, std::size_t stride,
                          int width, int height, int first_column, const SgmRange& range,
                          std::int16_t* out, std::size_t out_stride) {
     Impl& m = *impl_;
-    if (range.min_disparity < 0) bad("min_disparity", "must be >= 0 for the sgm matcher");
-    if (range.num_disparities < 16 || range.num_disparities % 16 != 0 ||
-        range.num_disparities > kMaxDisparities) {
-        bad("num_disparities", "must be a multiple of 16, 16..256 for the sgm matcher");
-    }
-    if (range.uniqueness_ratio < 0 || range.uniqueness_ratio > 99) {
-        bad("uniqueness_ratio", "must be 0..99");
-    }
-    if (width <= 0 || height <= 0) bad("images", "must not be empty");
+    check_range(range, width, height);
     const std::int16_t invalid = static_cast<std::int16_t>((range.min_disparity - 1) * 16);
     const int nd = range.num_disparities;
     const int x_begin = std::max(first_column, range.min_disparity + nd - 1);
     m.cells = 0;
     if (x_begin >= width) {
-        for (int y = 0; y < height; ++y) {
-            std::fill(out + static_cast<std::size_t>(y) * out_stride,
-                      out + static_cast<std::size_t>(y) * out_stride + width, invalid);
-        }
+        fill_map(out, out_stride, width, height, invalid);
         return;
     }
-    const std::size_t plane = static_cast<std::size_t>(width) * height;
-    m.census_left.resize(plane);
-    m.census_right_rev.resize(plane);
-    m.grey_right_rev.resize(plane);
-    m.grey_left = left;
-    m.grey_stride = stride;
-    cv::parallel_for_(cv::Range(0, height), [&](const cv::Range& rows) {
-        std::vector<std::uint8_t> planes(4 * static_cast<std::size_t>(width));
-        for (int y = rows.start; y < rows.end; ++y) {
-            const std::size_t at = static_cast<std::size_t>(y) * width;
-            census_row(left, stride, width, height, y, planes.data(), m.census_left.data() + at,
-                       false);
-            census_row(right, stride, width, height, y, planes.data(),
-                       m.census_right_rev.data() + at, true);
-            std::reverse_copy(right + static_cast<std::size_t>(y) * stride,
-                              right + static_cast<std::size_t>(y) * stride + width,
-                              m.grey_right_rev.data() + at);
-        }
-    });
+    m.census_views(left, right, stride, width, height);
 
     const int n = std::min(m.options.stripes, height);
     if (static_cast<int>(m.stripes.size()) < n) m.stripes.resize(static_cast<std::size_t>(n));
@@ -279,36 +338,8 @@ void SgmMatcher::compute(const std::uint8_t* left, const std::uint8_t* right, st
     }
     cv::parallel_for_(cv::Range(0, n), [&](const cv::Range& which) {
         for (int s = which.start; s < which.end; ++s) {
-            StripeBuffers& b = m.stripes[static_cast<std::size_t>(s)];
-            b.ring.reserve(volume * static_cast<std::size_t>(m.options.window));
-            b.column_sum.reserve(volume);
-            b.cost.reserve(volume);
-            b.sum.reserve(volume);
-            b.top.reserve(volume);
-            b.top_min.reserve(pixels);
-            b.right_cost.reserve(static_cast<std::size_t>(width));
-            b.disparity.reserve(static_cast<std::size_t>(width));
-            b.right_disp.reserve(static_cast<std::size_t>(width));
-            SgmRow row;
-            row.width = width;
-            row.x_begin = x_begin;
-            row.num_disparities = nd;
-            row.min_disparity = range.min_disparity;
-            row.p1 = static_cast<std::uint16_t>(m.options.p1);
-            row.p2 = static_cast<std::uint16_t>(m.options.p2);
-            row.ring = b.ring.data();
-            row.column_sum = b.column_sum.data();
-            row.radius = m.options.window / 2;
-            row.intensity_cap = m.options.intensity_cap;
-            row.cost = b.cost.data();
-            row.sum = b.sum.data();
-            row.top = b.top.data();
-            row.top_min = b.top_min.data();
-            row.uniqueness_ratio = range.uniqueness_ratio;
-            row.equiangular = m.options.subpixel == "equiangular";
-            row.disparity = b.disparity.data();
-            row.right_cost = b.right_cost.data();
-            row.right_disp = b.right_disp.data();
+            const SgmRow row =
+                m.stripe_row(static_cast<std::size_t>(s), width, x_begin, range, pixels, volume);
             const int y0 = s * height / n, y1 = (s + 1) * height / n;
             m.match_stripe(row, height, y0, y1, std::max(0, y0 - m.options.warmup_rows), range, out,
                            out_stride);
