@@ -1,6 +1,7 @@
 #include "scene_schema/sequence.hpp"
 
 #include <cerrno>
+#include <cstdio>
 #include <cstring>
 #include <fstream>
 #include <sstream>
@@ -153,6 +154,20 @@ std::filesystem::path frame_file(const std::filesystem::path& index_path,
 
 bool is_sequence_index(const json& document) {
     return document.is_object() && document.contains("frames") && !document.contains("entities");
+}
+
+std::string format_kitti_poses(const std::vector<std::array<double, 12>>& poses) {
+    std::string text;
+    char number[32];
+    for (const auto& p : poses) {
+        for (std::size_t k = 0; k < 12; ++k) {
+            // + 0.0: no "-0" for a zero.
+            std::snprintf(number, sizeof number, "%.9e", p[k] + 0.0);
+            text += number;
+            text += k == 11 ? '\n' : ' ';
+        }
+    }
+    return text;
 }
 
 }  // namespace scene_schema

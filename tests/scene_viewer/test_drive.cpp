@@ -124,8 +124,8 @@ TEST_CASE("with a moving camera the scene is the world, seen from where the came
 }
 
 TEST_CASE("poses are written as KITTI odometry text, one 3x4 matrix a line", "[sensors][drive]") {
-    const std::string text =
-        poses_text({EgoMotion{}.pose_at(0.0), EgoMotion{2.0, 0.0}.pose_at(1.0)});
+    const std::string text = scene_schema::format_kitti_poses(
+        {EgoMotion{}.pose_at(0.0), EgoMotion{2.0, 0.0}.pose_at(1.0)});
     CHECK(text ==
           "1.000000000e+00 0.000000000e+00 0.000000000e+00 0.000000000e+00 0.000000000e+00 "
           "1.000000000e+00 0.000000000e+00 0.000000000e+00 0.000000000e+00 0.000000000e+00 "

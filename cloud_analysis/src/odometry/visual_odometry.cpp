@@ -15,6 +15,7 @@
 #include <opencv2/video/tracking.hpp>
 
 #include "cloud_analysis/io/mat_view.hpp"
+#include "scene_schema/sequence.hpp"
 
 namespace cloud_analysis::odometry {
 namespace {
@@ -297,19 +298,17 @@ Pose VisualOdometry::add(OdometryFrame frame) {
     return T_world_prev_;
 }
 
+std::array<double, 12> row_major(const Pose& T) {
+    std::array<double, 12> a{};
+    for (std::size_t k = 0; k < 12; ++k) a[k] = T(static_cast<int>(k / 4), static_cast<int>(k % 4));
+    return a;
+}
+
 std::string format_kitti_poses(const std::vector<Pose>& poses) {
-    std::string out;
-    char number[32];
-    for (const Pose& T : poses) {
-        for (int r = 0; r < 3; ++r) {
-            for (int c = 0; c < 4; ++c) {
-                std::snprintf(number, sizeof number, "%.9e", T(r, c));
-                out += number;
-                out += r == 2 && c == 3 ? '\n' : ' ';
-            }
-        }
-    }
-    return out;
+    std::vector<std::array<double, 12>> rows;
+    rows.reserve(poses.size());
+    for (const Pose& T : poses) rows.push_back(row_major(T));
+    return scene_schema::format_kitti_poses(rows);
 }
 
 std::vector<Pose> parse_kitti_poses(std::string_view text, const std::string& origin) {

@@ -129,11 +129,7 @@ std::string frame_entities(const FinishJob& job, const BatchOptions& options,
     std::optional<double> time;
     if (job.position < options.drive.size()) time = options.drive[job.position].timestamp_s;
     if (time) doc.frame.timestamp_s = time;
-    if (pose) {
-        std::array<double, 12> row_major{};
-        for (int k = 0; k < 12; ++k) row_major[static_cast<std::size_t>(k)] = (*pose)(k / 4, k % 4);
-        doc.frame.pose = row_major;
-    }
+    if (pose) doc.frame.pose = odometry::row_major(*pose);
     if (sequence != nullptr) {
         doc = sequence->track(doc, static_cast<std::int64_t>(job.position),
                               job.stem.filename().string() + ".json", time);

@@ -1,5 +1,6 @@
 #include "sensors.hpp"
 
+#include "scene_schema/sequence.hpp"
 #include "stereoscene/support/atomic_file.hpp"
 #include "stereoscene/support/file_read.hpp"
 
@@ -140,7 +141,8 @@ int run_drive(SensorsArgs& a, const scene_schema::EntityDocument& scene, Gpu& gp
             std::vector<std::array<double, 12>> poses;
             for (const auto& f : index.frames) poses.push_back(a.drive.ego.pose_at(*f.timestamp_s));
             stereoscene::support::write_file_atomic(
-                std::filesystem::path(a.out) / "truth" / "poses.txt", poses_text(poses));
+                std::filesystem::path(a.out) / "truth" / "poses.txt",
+                scene_schema::format_kitti_poses(poses));
         }
     } catch (const std::exception& e) {
         throw Failure{"cannot write the sensor files", e.what(), a.out};

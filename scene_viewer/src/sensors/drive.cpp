@@ -84,21 +84,6 @@ scene_schema::EntityDocument scene_at(const scene_schema::EntityDocument& scene,
     return doc;
 }
 
-std::string poses_text(const std::vector<std::array<double, 12>>& poses) {
-    std::string text;
-    char number[32];
-    for (const auto& p : poses) {
-        for (int k = 0; k < 12; ++k) {
-            // + 0.0: no "-0" for a zero.
-            std::snprintf(number, sizeof number, "%.9e", p[static_cast<std::size_t>(k)] + 0.0);
-            text += (k == 0 ? "" : " ");
-            text += number;
-        }
-        text += "\n";
-    }
-    return text;
-}
-
 scene_schema::SequenceIndex drive_index(const std::string& id, const DriveOptions& options) {
     scene_schema::SequenceIndex index;
     index.id = id;

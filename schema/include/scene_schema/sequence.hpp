@@ -3,6 +3,7 @@
 /// The sequence index (schema 1.1): the ordered frames of a drive, each an entity file, with
 /// their capture times. Specified in schema/sequence.schema.json and docs/format.md.
 
+#include <array>
 #include <cstdint>
 #include <filesystem>
 #include <optional>
@@ -59,5 +60,9 @@ std::filesystem::path frame_file(const std::filesystem::path& index_path,
 
 /// True when the JSON document is a sequence index (it has "frames" and no "entities").
 bool is_sequence_index(const nlohmann::json& document);
+
+/// A drive's poses (frame.pose, row-major 3x4 [R | t]) as KITTI odometry text: one pose a line,
+/// 12 numbers "%.9e" apart by spaces (a zero is written 0, never -0).
+std::string format_kitti_poses(const std::vector<std::array<double, 12>>& poses);
 
 }  // namespace scene_schema

@@ -11,6 +11,7 @@
 /// libviso2 (Geiger, Ziegler, Stiller, "StereoScan", IV 2011) without its own matcher. Pixels of
 /// thing classes (cars, people: what may move) do not vote. See docs/odometry.md.
 
+#include <array>
 #include <cstdint>
 #include <memory>
 #include <optional>
@@ -109,6 +110,9 @@ class VisualOdometry {
 /// KITTI odometry poses text: per frame one line of the 3x4 matrix [R | t] of T_world_camera,
 /// row-major, 12 numbers.
 std::string format_kitti_poses(const std::vector<Pose>& poses);
+
+/// The row-major 3x4 [R | t] of a pose (frame.pose).
+std::array<double, 12> row_major(const Pose& T);
 
 /// Parses that text; throws std::runtime_error "<origin>, line N: <reason>".
 std::vector<Pose> parse_kitti_poses(std::string_view text, const std::string& origin);

@@ -48,9 +48,6 @@ std::string drive_frame_name(int index);
 scene_schema::EntityDocument scene_at(const scene_schema::EntityDocument& scene, double t_s,
                                       const std::string& frame_name, const EgoMotion& ego = {});
 
-/// KITTI odometry text of poses: one row-major 3x4 matrix a line, 12 numbers.
-std::string poses_text(const std::vector<std::array<double, 12>>& poses);
-
 /// The sequence index of a drive's truth files (truth/<frame>.json beside it).
 scene_schema::SequenceIndex drive_index(const std::string& id, const DriveOptions& options);
 
