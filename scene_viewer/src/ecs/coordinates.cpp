@@ -47,4 +47,11 @@ glm::mat4 box_world_matrix(const glm::vec3& centre_kitti, double theta_rad,
     return glm::scale(m, whl_m);
 }
 
+glm::dmat4 kitti_pose_matrix(const std::array<double, 12>& T) {
+    glm::dmat4 m(1.0);  // column-major: m[column][row]
+    for (std::size_t r = 0; r < 3; ++r)
+        for (std::size_t c = 0; c < 4; ++c) m[c][r] = T[4 * r + c];
+    return m;
+}
+
 }  // namespace scene_viewer

@@ -340,11 +340,8 @@ StereoFrame render_stereo_frame(SceneRenderer& renderer,
     if (document.frame.pose) {
         // A drive's frame: the texture stays fixed in the drive's world. GL world = G X_kitti
         // with G = gl_from_kitti() its own inverse, so world_GL = G T_world_camera G frame_GL.
-        const auto& T = *document.frame.pose;
-        glm::mat4 t(1.0f);
-        for (int r = 0; r < 3; ++r)
-            for (int c = 0; c < 4; ++c) t[c][r] = static_cast<float>(T[std::size_t(4 * r + c)]);
-        o.texture_frame = gl_from_kitti() * t * gl_from_kitti();
+        o.texture_frame =
+            gl_from_kitti() * glm::mat4(kitti_pose_matrix(*document.frame.pose)) * gl_from_kitti();
     }
 
     StereoFrame frame;

@@ -5,25 +5,16 @@
 #include <cstring>
 #include <optional>
 
+#include "scene_viewer/ecs/coordinates.hpp"
+
 namespace scene_viewer {
 
 namespace {
 
-using Pose = std::array<double, 12>;
-
-/// R p + t of a row-major 3x4 pose.
-std::array<double, 3> apply(const Pose& T, double x, double y, double z) {
-    return {T[0] * x + T[1] * y + T[2] * z + T[3], T[4] * x + T[5] * y + T[6] * z + T[7],
-            T[8] * x + T[9] * y + T[10] * z + T[11]};
-}
-
-/// R^T (p - t): the inverse of apply.
-std::array<double, 3> apply_inverse(const Pose& T, double x, double y, double z) {
-    x -= T[3];
-    y -= T[7];
-    z -= T[11];
-    return {T[0] * x + T[4] * y + T[8] * z, T[1] * x + T[5] * y + T[9] * z,
-            T[2] * x + T[6] * y + T[10] * z};
+/// The point (x, y, z) moved by the 4x4 matrix T.
+std::array<double, 3> apply(const glm::dmat4& T, double x, double y, double z) {
+    const glm::dvec4 p = T * glm::dvec4(x, y, z, 1.0);
+    return {p.x, p.y, p.z};
 }
 
 }  // namespace
@@ -35,26 +26,32 @@ void TrailHistory::remember(const scene_schema::EntityDocument& frame) {
         trail.push_back({p[0], p[1], p[2], class_id});
         while (static_cast<int>(trail.size()) > length_) trail.pop_front();
     };
-    const std::optional<Pose>& pose = frame.frame.pose;
+    std::optional<glm::dmat4> world_from_camera;
+    if (frame.frame.pose) world_from_camera = kitti_pose_matrix(*frame.frame.pose);
     for (const auto& e : frame.entities) {
         if (!e.track_id) continue;
         const double y_ground = e.y + e.H / 2.0;
-        push(*e.track_id, pose ? apply(*pose, e.x, y_ground, e.z) : std::array{e.x, y_ground, e.z},
+        push(*e.track_id,
+             world_from_camera ? apply(*world_from_camera, e.x, y_ground, e.z)
+                               : std::array{e.x, y_ground, e.z},
              e.class_id);
     }
     // The camera's own path: the point on the ground under it.
-    if (pose) push(kEgoTrack, apply(*pose, 0.0, kEgoGroundBelow_m, 0.0), kEgoClassId);
+    if (world_from_camera) {
+        push(kEgoTrack, apply(*world_from_camera, 0.0, kEgoGroundBelow_m, 0.0), kEgoClassId);
+    }
 }
 
 scene_schema::EntityDocument TrailHistory::with_trails(
     const scene_schema::EntityDocument& frame) const {
     scene_schema::EntityDocument out = frame;
-    const std::optional<Pose>& pose = frame.frame.pose;
+    std::optional<glm::dmat4> camera_from_world;
+    if (frame.frame.pose) camera_from_world = glm::inverse(kitti_pose_matrix(*frame.frame.pose));
     for (const auto& [track, trail] : points_) {
         for (std::size_t k = 0; k < trail.size(); ++k) {
             const Point& p = trail[k];
-            const auto c = pose ? apply_inverse(*pose, p.x, p.y_ground, p.z)
-                                : std::array{p.x, p.y_ground, p.z};
+            const auto c = camera_from_world ? apply(*camera_from_world, p.x, p.y_ground, p.z)
+                                             : std::array{p.x, p.y_ground, p.z};
             scene_schema::Entity m;
             m.id = (track == kEgoTrack ? std::string("trail-ego-")
                                        : "trail-" + std::to_string(track) + "-") +

@@ -4,6 +4,8 @@
 /// (x right, y down, z forward, metres); the renderer's world is the OpenGL camera frame of that
 /// same camera (x right, y up, z backward). The conversion happens here and nowhere else.
 
+#include <array>
+
 #include <glm/glm.hpp>
 
 namespace scene_viewer {
@@ -25,6 +27,10 @@ float gl_yaw_from_kitti_theta(double theta_rad);
 /// Maps a model's axis-aligned bounds onto the unit cube [-0.5, 0.5]^3 (centre, then scale each
 /// axis by 1 / extent; a flat axis keeps scale 1).
 glm::mat4 fit_bounds_to_unit_cube(const glm::vec3& bounds_min, const glm::vec3& bounds_max);
+
+/// A drive's pose (frame.pose: the row-major 3x4 [R | t] of T_world_camera, KITTI frames) as a
+/// 4x4 matrix: camera-frame points to the drive's world, both in KITTI axes.
+glm::dmat4 kitti_pose_matrix(const std::array<double, 12>& T_world_camera);
 
 /// World matrix of an upright box: translate to the centre (KITTI metres), yaw (KITTI theta),
 /// scale the unit cube to W (x), H (y), L (z). The result maps model-frame points into the GL
