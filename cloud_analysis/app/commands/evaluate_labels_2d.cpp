@@ -2,6 +2,7 @@
 
 #include <filesystem>
 #include <stdexcept>
+#include <utility>
 
 #include <scene_schema/entities.hpp>
 
@@ -130,9 +131,9 @@ void evaluate_labels_2d(const EvaluateArgs& args, EvaluationReport& report) {
     Labels2dComparison c;
     c.labels_file = args.labels_2d.string();
     c.entities_source = args.entities.string();
-    for (const FrameToScore& f : frames_to_score(args, labels)) {
+    for (FrameToScore& f : frames_to_score(args, labels)) {
         const fs::path& file = f.file;
-        const scene_schema::EntityDocument& doc = f.estimate;
+        scene_schema::EntityDocument& doc = f.estimate;
         if (!doc.frame.camera) {
             throw std::runtime_error(
                 "cannot evaluate: the entity file has no frame.camera to "
@@ -149,7 +150,7 @@ void evaluate_labels_2d(const EvaluateArgs& args, EvaluationReport& report) {
         }
         c.scores.push_back(score_frame_2d(doc.entities, cam, *f.labels, args.match_2d));
         c.labels.push_back(*f.labels);
-        c.estimate.push_back(doc.entities);
+        c.estimate.push_back(std::move(doc.entities));
     }
     Labels2dBars bars;
     bars.category = *category_of_class(args.bars.class_name);

@@ -327,14 +327,18 @@ FrameScore2d score_frame_2d(const std::vector<scene_schema::Entity>& entities,
     const std::vector<bool> label_taken = match_one_to_one(score.entities, labels, options);
     for (auto& s : score.entities) {
         Counts2d& c = score.counts[static_cast<int>(s.category)];
-        double in_dont_care = 0.0;
-        for (const auto& region : labels.dont_care) {
-            in_dont_care = std::max(in_dont_care, intersection(s.box_px, region) / area(s.box_px));
-        }
+        const auto in_dont_care = [&] {
+            for (const auto& region : labels.dont_care) {
+                if (intersection(s.box_px, region) / area(s.box_px) >= options.dont_care_cover) {
+                    return true;
+                }
+            }
+            return false;
+        };
         if (s.label) {
             const bool owed = label_owed(labels.objects[*s.label], options);
             s.outcome = owed ? Scored2d::Outcome::correct : Scored2d::Outcome::ignored;
-        } else if (in_dont_care >= options.dont_care_cover || s.range_m > options.max_range_m) {
+        } else if (s.range_m > options.max_range_m || in_dont_care()) {
             s.outcome = Scored2d::Outcome::ignored;
         } else {
             s.outcome = Scored2d::Outcome::false_entity;
