@@ -16,6 +16,8 @@ packages=(
     libegl-dev libopengl-dev libegl-mesa0 libgl1-mesa-dri
     # real clients used by the tests: JSON Schema validator, CloudCompare, PCL tools
     python3 python3-jsonschema python3-numpy cloudcompare pcl-tools
+    # GNU time: the peak memory of each run of the bad-input corpus
+    time
     # the Debian package (cpack's DEB generator reads library dependencies with dpkg-shlibdeps)
     dpkg-dev
     # plots for docs/performance.md

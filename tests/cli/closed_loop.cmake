@@ -6,21 +6,7 @@
 # not meet the closed loop's bars yet is listed below with the bars it meets today, as a
 # regression guard (STEREOSCENE_CLOSED_LOOP_BARS_<scene>), and docs/evaluation.md ("Closed loop",
 # "Hard parking streets") says what is missing; raise its bars as the extractor improves.
-#
-# Run as a script (cmake -DEXE=... -DARGS="a|b" -DCODE=n [-DSTDERR=regex] -P closed_loop.cmake)
-# it runs the command once and checks its exit code and stderr.
-if(CMAKE_SCRIPT_MODE_FILE)
-    string(REPLACE "|" ";" args "${ARGS}")
-    execute_process(COMMAND ${EXE} ${args} RESULT_VARIABLE code ERROR_VARIABLE err
-        OUTPUT_QUIET)
-    if(NOT code STREQUAL "${CODE}")
-        message(FATAL_ERROR "exit code ${code}, expected ${CODE}\nstderr: ${err}")
-    endif()
-    if(DEFINED STDERR AND NOT err MATCHES "${STDERR}")
-        message(FATAL_ERROR "stderr does not match '${STDERR}': ${err}")
-    endif()
-    return()
-endif()
+
 include_guard(GLOBAL)
 
 set(STEREOSCENE_CLOSED_LOOP_SAMPLES ${PROJECT_SOURCE_DIR}/samples/rendered CACHE PATH
@@ -229,9 +215,8 @@ add_test(NAME "evaluate --reference scores a file against itself with every bar 
         --reference ${_syn}/truth.json ${STEREOSCENE_CLOSED_LOOP_BARS})
 function(closed_loop_cli_test name)
     cmake_parse_arguments(T "" "CODE;STDERR" "ARGS" ${ARGN})
-    string(REPLACE ";" "|" args "${T_ARGS}")
-    add_test(NAME "${name}" COMMAND ${CMAKE_COMMAND} -DEXE=$<TARGET_FILE:cloud-analysis>
-        "-DARGS=${args}" -DCODE=${T_CODE} "-DSTDERR=${T_STDERR}" -P ${CMAKE_CURRENT_LIST_FILE})
+    add_test(NAME "${name}" COMMAND bash ${STEREOSCENE_EXPECT} --code ${T_CODE}
+        --stderr "${T_STDERR}" -- $<TARGET_FILE:cloud-analysis> ${T_ARGS})
 endfunction()
 closed_loop_cli_test("evaluate exits 3 and names the bar when a bar is missed"
     ARGS evaluate --entities ${_syn}/expected_entities.json --reference ${_syn}/truth.json
@@ -300,7 +285,7 @@ if(EXISTS ${_street}/visibility/000000.json)
             --reference ${PROJECT_SOURCE_DIR}/samples/rendered/scenes/street.json
             --min-visible-fraction 0.25 --kitti-root ${_street} --frame 000000 --json -
         CODE 0
-        STDERR "not scored \\(visible fraction < 0.25\\): \\[{\"id\":\"car-4\".*unfiltered \\(every reference scored\\): car within 30 m recall 6/6")
+        STDERR "not scored \\(visible fraction < 0.25\\): \\[\\{\"id\":\"car-4\".*unfiltered \\(every reference scored\\): car within 30 m recall 6/6")
 endif()
 
 # The same scenes through other rigs (scene-render sensors --preset; docs/cli.md "Any stereo

@@ -1,8 +1,7 @@
-# CLI tests of scene-render: run the real binary (see render_cli_check.cmake). Each test writes
+# CLI tests of scene-render: run the real binary through tests/cli/expect.sh. Each test writes
 # into its own folder so parallel runs do not see each other's temporary files.
 include_guard(GLOBAL)
 
-set(_render_check ${CMAKE_CURRENT_LIST_DIR}/render_cli_check.cmake)
 set(_render_out ${CMAKE_CURRENT_BINARY_DIR}/render_cli_out)
 set(_street ${PROJECT_SOURCE_DIR}/samples/baselines/street.json)
 set(_bad ${PROJECT_SOURCE_DIR}/tests/scene_viewer/data/bad_width.json)
@@ -10,14 +9,18 @@ file(MAKE_DIRECTORY ${_render_out})
 
 function(render_cli_test name)
     cmake_parse_arguments(T "" "CODE;STDERR;STDOUT;OUTPUT;OUTPUT_EXISTS;MAGIC" "ARGS" ${ARGN})
-    string(REPLACE ";" "|" args "${T_ARGS}")
-    set(defs -DEXE=$<TARGET_FILE:scene-render> "-DARGS=${args}" -DCODE=${T_CODE})
-    foreach(key STDERR STDOUT OUTPUT OUTPUT_EXISTS MAGIC)
+    set(checks --code ${T_CODE})
+    foreach(key STDERR STDOUT OUTPUT MAGIC)
         if(DEFINED T_${key})
-            list(APPEND defs "-D${key}=${T_${key}}")
+            string(TOLOWER ${key} flag)
+            list(APPEND checks --${flag} "${T_${key}}")
         endif()
     endforeach()
-    add_test(NAME "scene-render ${name}" COMMAND ${CMAKE_COMMAND} ${defs} -P ${_render_check})
+    if(DEFINED T_OUTPUT_EXISTS)
+        list(APPEND checks --exists ${T_OUTPUT_EXISTS})
+    endif()
+    add_test(NAME "scene-render ${name}" COMMAND bash ${STEREOSCENE_EXPECT} ${checks} --
+        $<TARGET_FILE:scene-render> ${T_ARGS})
 endfunction()
 
 render_cli_test("--help exits 0 and names the views" ARGS --help CODE 0

@@ -1,51 +1,6 @@
-# CLI tests of `scene-render sensors`: run the real binary. Included from tests/cli/CMakeLists.txt;
-# the same file is also the check script (cmake -P) that each test runs.
-if(CMAKE_SCRIPT_MODE_FILE)
-    # -DEXE=... -DARGS="a|b|c" -DCODE=<exit code> -DOUT=<output folder> [-DSTDERR=<regex>]
-    # [-DFILES="image_2/000000.png|..."]: with FILES, each must exist and be a PNG (or text);
-    # without, the output folder must be empty or absent after the run.
-    string(REPLACE "|" ";" args "${ARGS}")
-    file(REMOVE_RECURSE "${OUT}")
-    execute_process(COMMAND ${EXE} ${args} RESULT_VARIABLE code OUTPUT_VARIABLE out
-        ERROR_VARIABLE err)
-    if(NOT code STREQUAL "${CODE}")
-        message(FATAL_ERROR "exit code ${code}, expected ${CODE}\nstderr: ${err}")
-    endif()
-    if(DEFINED STDERR AND NOT err MATCHES "${STDERR}")
-        message(FATAL_ERROR "stderr does not match '${STDERR}': ${err}")
-    endif()
-    if(NOT code STREQUAL "0")
-        string(REGEX MATCHALL "\n" lines "${err}")
-        list(LENGTH lines line_count)
-        if(NOT line_count EQUAL 1 OR NOT err MATCHES "^scene-render: error: ")
-            message(FATAL_ERROR "expected one 'scene-render: error:' line, got: ${err}")
-        endif()
-    endif()
-    file(GLOB_RECURSE written LIST_DIRECTORIES false "${OUT}/*" "${OUT}/.*")
-    if(DEFINED FILES)
-        string(REPLACE "|" ";" files "${FILES}")
-        foreach(f ${files})
-            if(NOT EXISTS "${OUT}/${f}")
-                message(FATAL_ERROR "missing output ${OUT}/${f}")
-            endif()
-            if(f MATCHES "\\.png$")
-                file(READ "${OUT}/${f}" magic LIMIT 8 HEX)
-                if(NOT magic STREQUAL "89504e470d0a1a0a")
-                    message(FATAL_ERROR "${OUT}/${f} is not a PNG")
-                endif()
-            endif()
-        endforeach()
-        list(LENGTH written written_count)
-        list(LENGTH files files_count)
-        if(NOT written_count EQUAL files_count)
-            message(FATAL_ERROR "expected ${files_count} files, found: ${written}")
-        endif()
-    elseif(written)
-        message(FATAL_ERROR "a failed run left files behind: ${written}")
-    endif()
-    return()
-endif()
-
+# CLI tests of `scene-render sensors`: run the real binary through tests/cli/expect.sh, each
+# into its own output folder, which must hold exactly the files named (or nothing after a
+# failure). Included from tests/cli/CMakeLists.txt.
 include_guard(GLOBAL)
 if(NOT TARGET scene-render)
     return()
@@ -56,17 +11,15 @@ set(_sensors_bad ${PROJECT_SOURCE_DIR}/tests/scene_viewer/data/bad_width.json)
 
 function(sensors_cli_test name folder)
     cmake_parse_arguments(T "" "CODE;STDERR;FILES" "ARGS" ${ARGN})
-    string(REPLACE ";" "|" args "${T_ARGS}")
-    set(defs -DEXE=$<TARGET_FILE:scene-render> "-DARGS=${args}" -DCODE=${T_CODE}
-        -DOUT=${_sensors_out}/${folder})
+    set(checks --code ${T_CODE} --folder ${_sensors_out}/${folder})
     if(DEFINED T_STDERR)
-        list(APPEND defs "-DSTDERR=${T_STDERR}")
+        list(APPEND checks --stderr "${T_STDERR}")
     endif()
     if(DEFINED T_FILES)
-        list(APPEND defs "-DFILES=${T_FILES}")
+        list(APPEND checks --files "${T_FILES}")
     endif()
-    add_test(NAME "scene-render sensors ${name}" COMMAND ${CMAKE_COMMAND} ${defs}
-        -P ${CMAKE_CURRENT_FUNCTION_LIST_FILE})
+    add_test(NAME "scene-render sensors ${name}" COMMAND bash ${STEREOSCENE_EXPECT} ${checks} --
+        $<TARGET_FILE:scene-render> ${T_ARGS})
 endfunction()
 
 sensors_cli_test("on an invalid scene exits 1 and writes nothing" bad
