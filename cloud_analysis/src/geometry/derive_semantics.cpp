@@ -10,6 +10,7 @@
 #include <vector>
 
 #include "cloud_analysis/geometry/scene_geometry.hpp"
+#include "cloud_analysis/support/select.hpp"
 #include "derive_semantics_internal.hpp"
 
 namespace cloud_analysis::geometry {
@@ -33,13 +34,6 @@ struct Classes {
           sky(find_class(p, "sky")),
           other(find_class(p, "static")) {}
 };
-
-double quantile(std::vector<float>& v, double q) {
-    if (v.empty()) return 0.0;
-    const std::size_t k = std::min(v.size() - 1, static_cast<std::size_t>(q * (v.size() - 1)));
-    std::nth_element(v.begin(), v.begin() + static_cast<std::ptrdiff_t>(k), v.end());
-    return double{v[k]};
-}
 
 /// Extents of a weighted footprint (x, z, weight) along its main axis and across it (2-98 %),
 /// metres.
@@ -65,15 +59,16 @@ std::pair<double, double> footprint_extents(const std::vector<Eigen::Vector3d>& 
     }
     axis.normalize();
     const Eigen::Vector2d normal(-axis.y(), axis.x());
-    std::vector<float> along, across;
+    std::vector<double> along, across;
     along.reserve(pts.size());
     across.reserve(pts.size());
     for (const auto& p : pts) {
-        along.push_back(static_cast<float>(axis.dot(p.head<2>() - mean)));
-        across.push_back(static_cast<float>(normal.dot(p.head<2>() - mean)));
+        along.push_back(axis.dot(p.head<2>() - mean));
+        across.push_back(normal.dot(p.head<2>() - mean));
     }
-    const double length = quantile(along, 0.98) - quantile(along, 0.02);
-    return {length, quantile(across, 0.98) - quantile(across, 0.02)};
+    const auto [along_lo, along_hi] = quantiles(along, 0.02, 0.98);
+    const auto [across_lo, across_hi] = quantiles(across, 0.02, 0.98);
+    return {along_hi - along_lo, across_hi - across_lo};
 }
 
 /// Statistics of one linked segment, gathered from its cells.
@@ -83,9 +78,9 @@ struct SegmentStats {
                                     ///< border at their depth, or left of it
     bool tall = false;
     bool truncated = false;  ///< a cell at the image's right edge or the matcher's left border
-    std::vector<float> tops, lows, depths;
-    std::vector<float> tops_behind;  ///< tops of lower cells far behind the segment's nearest
-                                     ///< cell of their column band (behind_gap_m)
+    std::vector<double> tops, lows, depths;
+    std::vector<double> tops_behind;  ///< tops of lower cells far behind the segment's nearest
+                                      ///< cell of their column band (behind_gap_m)
     std::vector<Eigen::Vector3d> footprint;  ///< (x, z, pixels) of each cell
 };
 
@@ -124,7 +119,7 @@ std::vector<SegmentStats> gather_segments(Grid& g, std::vector<int>& parent, con
         if (u_lo <= rig.offset + d + kEdgeColumns) {
             st.border_pixels += static_cast<std::size_t>(c.count);
         }
-        st.depths.push_back(static_cast<float>(z));
+        st.depths.push_back(z);
         st.footprint.emplace_back((u - rig.cx) * z / rig.fx, z, c.count);
     }
     // Tops last: a lower cell farther than behind_gap_m beyond the segment's nearest lower
@@ -162,9 +157,9 @@ Segment classify(SegmentStats& st, const Classes& cls, const GeometryOptions& o)
     seg.pixels = st.pixels;
     // The top is the segment's own cells' (unless it is tall, or most cells lie far behind);
     // the spread below reads every cell.
-    std::vector<float> all = st.tops;
+    std::vector<double> all = st.tops;
     all.insert(all.end(), st.tops_behind.begin(), st.tops_behind.end());
-    std::vector<float>& own = st.tall || st.tops.size() < st.tops_behind.size() ? all : st.tops;
+    std::vector<double>& own = st.tall || st.tops.size() < st.tops_behind.size() ? all : st.tops;
     seg.cells = all.size();
     seg.top_m = quantile(own, 0.97);
     seg.top_q25_m = quantile(all, 0.25);

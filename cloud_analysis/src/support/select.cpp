@@ -87,9 +87,9 @@ double select_kth(std::vector<double>& values, std::size_t k) {
 
 namespace {
 
-/// Rank round(q * (n - 1)) of n > 0 values, q clamped to 0..1.
+/// Rank floor(q * (n - 1)) of n > 0 values, q clamped to 0..1.
 std::size_t quantile_rank(std::size_t n, double q) {
-    return static_cast<std::size_t>(std::clamp(q, 0.0, 1.0) * static_cast<double>(n - 1) + 0.5);
+    return static_cast<std::size_t>(std::clamp(q, 0.0, 1.0) * static_cast<double>(n - 1));
 }
 
 }  // namespace

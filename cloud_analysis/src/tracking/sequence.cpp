@@ -15,6 +15,7 @@ namespace fs = std::filesystem;
 namespace {
 
 using stereoscene::support::kPi;
+using stereoscene::support::wrap_angle;
 
 }  // namespace
 
@@ -130,7 +131,7 @@ SequenceTrackReport track_files(const scene_schema::SequenceIndex& index,
         for (const std::int64_t id : sequence.turned()) {
             for (std::size_t k = 0; k + 1 < held.size(); ++k) {
                 for (auto& e : held[k].first.entities) {
-                    if (e.track_id == id) e.theta = std::remainder(e.theta + kPi, 2.0 * kPi);
+                    if (e.track_id == id) e.theta = wrap_angle(e.theta + kPi);
                 }
             }
         }

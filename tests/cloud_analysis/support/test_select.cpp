@@ -51,12 +51,12 @@ TEST_CASE("select_kth and select_two give the sorted array's values on large arr
     }
 }
 
-TEST_CASE("quantile takes rank round(q * (n - 1)), clamps q and is 0 for no values", "[select]") {
+TEST_CASE("quantile takes rank floor(q * (n - 1)), clamps q and is 0 for no values", "[select]") {
     std::vector<double> v = {5.0, 1.0, 4.0, 2.0, 3.0};
     CHECK(quantile(v, 0.0) == 1.0);
     CHECK(quantile(v, 0.5) == 3.0);
-    CHECK(quantile(v, 0.62) == 3.0);  // 0.62 * 4 = 2.48 -> rank 2
-    CHECK(quantile(v, 0.63) == 4.0);  // 2.52 -> rank 3
+    CHECK(quantile(v, 0.74) == 3.0);  // 0.74 * 4 = 2.96 -> rank 2
+    CHECK(quantile(v, 0.75) == 4.0);  // 3.00 -> rank 3
     CHECK(quantile(v, 1.0) == 5.0);
     CHECK(quantile(v, 7.0) == 5.0);
     CHECK(quantile(v, -1.0) == 1.0);

@@ -25,7 +25,7 @@ std::pair<double, double> select_two(std::vector<double>& values, std::size_t k_
 /// count; 0 for no values.
 double median(std::vector<double> values);
 
-/// The value at fraction q (clamped to 0..1) of the sorted values: rank round(q * (n - 1));
+/// The value at fraction q (clamped to 0..1) of the sorted values: rank floor(q * (n - 1));
 /// the values may be reordered. 0 for no values.
 double quantile(std::vector<double>& values, double q);
 
