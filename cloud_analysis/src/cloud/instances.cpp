@@ -246,4 +246,14 @@ void mark_object_outlines(std::vector<std::uint8_t>& depth_edge, const InstanceM
     }
 }
 
+std::vector<float> depth_of(const DisparityMap& disparity, const MatchBorder& border) {
+    std::vector<float> out(disparity.disparity_px.size(), 0.0f);
+    if (!(border.fb_px_m > 0.0)) return out;
+    for (std::size_t p = 0; p < out.size(); ++p) {
+        const double d = double{disparity.disparity_px[p]} - border.offset_px;
+        if (d > 0.0) out[p] = static_cast<float>(border.fb_px_m / d);
+    }
+    return out;
+}
+
 }  // namespace cloud_analysis

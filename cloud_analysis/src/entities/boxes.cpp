@@ -153,6 +153,25 @@ void complete_at_edge(double& lo, double& hi, double size, const Eigen::Vector2d
     }
 }
 
+/// complete_at_edge for an image edge. For an occluder (`occluder`): the end beside it is either
+/// the thing's own or hidden behind it, and nothing in the points tells which, so the missing
+/// length is shared between growing beyond the cut and away from the camera (the centre that
+/// is off by at most half the missing length either way).
+void complete_cut(double& lo, double& hi, double size, const Eigen::Vector2d& e, double other_lo,
+                  double other_hi, const Eigen::Vector2d& e_other, const Eigen::Vector2d& outward,
+                  bool occluder) {
+    double beyond_lo = lo, beyond_hi = hi;
+    complete_at_edge(beyond_lo, beyond_hi, size, e, other_lo, other_hi, e_other, outward);
+    if (!occluder) {
+        lo = beyond_lo;
+        hi = beyond_hi;
+        return;
+    }
+    complete_away(lo, hi, size);
+    lo = 0.5 * (lo + beyond_lo);
+    hi = 0.5 * (hi + beyond_hi);
+}
+
 /// Extents of the points along the footprint axes and of their heights (trimmed quantiles).
 struct Extents {
     double lo1, hi1;               ///< along e1, metres from the camera's foot
@@ -178,7 +197,8 @@ OrientedBox assemble_box(const GroundFrame& frame, bool has_ground, const BoxFit
             const Eigen::Vector2d centre = ((lo1 + hi1) / 2.0) * e1 + ((lo2 + hi2) / 2.0) * e2;
             const Eigen::Vector2d ray = centre.normalized();
             // A face cut by the image's edge may be a side running out of the image.
-            swap = options.short_face_is_end && !options.truncation_xz
+            swap = options.short_face_is_end &&
+                           !(options.truncation_xz && options.truncation_side == 0)
                        ? (hi2 - lo2) < (hi1 - lo1)
                        : std::abs(ray.dot(e2)) > std::abs(ray.dot(e1));
         }
@@ -197,12 +217,26 @@ OrientedBox assemble_box(const GroundFrame& frame, bool has_ground, const BoxFit
                                                                    options.truncation_xz->y()))
                                         .normalized();
         Eigen::Vector2d outward(-ray.y(), ray.x());
-        if (outward.dot(frame.footprint(Eigen::Vector3d(0.0, 0.0, 1.0))) > 0.0) outward = -outward;
+        if (options.truncation_side != 0) {
+            // Towards the hidden side: a point beside the cut, left or right of it in the image.
+            const Eigen::Vector2d cut = *options.truncation_xz;
+            const Eigen::Vector2d beside =
+                cut +
+                options.truncation_side * 0.1 * Eigen::Vector2d(cut.y(), -cut.x()).normalized();
+            const Eigen::Vector2d towards =
+                frame.footprint(Eigen::Vector3d(beside.x(), 0.0, beside.y())) -
+                frame.footprint(Eigen::Vector3d(cut.x(), 0.0, cut.y()));
+            if (outward.dot(towards) < 0.0) outward = -outward;
+        } else if (outward.dot(frame.footprint(Eigen::Vector3d(0.0, 0.0, 1.0))) > 0.0) {
+            outward = -outward;
+        }
         if (options.prior_L_m > 0.0) {
-            complete_at_edge(lo1, hi1, options.prior_L_m, e1, lo2, hi2, e2, outward);
+            complete_cut(lo1, hi1, options.prior_L_m, e1, lo2, hi2, e2, outward,
+                         options.truncation_side != 0);
         }
         if (options.prior_W_m > 0.0) {
-            complete_at_edge(lo2, hi2, options.prior_W_m, e2, lo1, hi1, e1, outward);
+            complete_cut(lo2, hi2, options.prior_W_m, e2, lo1, hi1, e1, outward,
+                         options.truncation_side != 0);
         }
     } else {
         if (options.prior_L_m > 0.0) complete_away(lo1, hi1, options.prior_L_m);
@@ -233,7 +267,8 @@ double footprint_angle(const GroundFrame& frame, const std::vector<Eigen::Vector
     constexpr std::size_t kMaxSearchPoints = 3000;
     double blocked = std::nan("");
     const double tolerance = options.truncation_exclusion_deg * kPi / 180.0;
-    if (options.truncation_xz) {
+    if (options.truncation_xz && options.truncation_side == 0) {
+        // An image edge (not an occluder) lines the points up along its ray.
         const Eigen::Vector3d ray(options.truncation_xz->x(), 0.0, options.truncation_xz->y());
         blocked = std::atan2(frame.ez.dot(ray), frame.ex.dot(ray));
     }
@@ -354,6 +389,9 @@ void BoxFitOptions::validate() const {
     }
     if (truncation_xz && !(truncation_xz->allFinite() && truncation_xz->norm() > 0.0)) {
         throw std::invalid_argument("box.truncation_xz: must be finite, not the camera's foot");
+    }
+    if (truncation_side < -1 || truncation_side > 1) {
+        throw std::invalid_argument("box.truncation_side: must be -1, 0 or 1");
     }
     if (!(truncation_exclusion_deg >= 0.0 && truncation_exclusion_deg < 45.0)) {
         throw std::invalid_argument("box.truncation_exclusion_deg: must be in [0, 45)");

@@ -161,6 +161,13 @@ bool take_grid(ClassPoints& out, const LabeledCloud& cloud, const ChunkScan& sca
             static_cast<int>(*std::max_element(scan.last_col.begin(), scan.last_col.end()));
         out.depth_edge = cloud.depth_edge;
         out.instance_id = cloud.instance_id;
+        if (!cloud.instance_id.empty()) {
+            out.depth_m.assign(cloud.instance_id.size(), 0.0f);
+            for (std::size_t i = 0; i < cloud.size(); ++i) {
+                if (cloud.pixel[i] < out.depth_m.size())
+                    out.depth_m[cloud.pixel[i]] = cloud.xyz_m[i].z();
+            }
+        }
     }
     return grid;
 }
@@ -443,6 +450,7 @@ scene_schema::EntityDocument extract_entities(const ClassPoints& points, const P
     if (grid.valid() && points.instance_id.size() == static_cast<std::size_t>(grid.width_px) *
                                                          static_cast<std::size_t>(grid.height_px)) {
         grid.instance_id = &points.instance_id;
+        if (points.depth_m.size() == points.instance_id.size()) grid.depth_m = &points.depth_m;
     }
 
     // The ground plane is the first task, fitted beside the clustering of the classes (which

@@ -276,6 +276,8 @@ AnalyseResult analyse(const LoadedInputs& in, const AnalyseOptions& options,
     if (!r.instances.empty()) {
         const bool points = options.class_points_only.has_value();
         (points ? r.points.instance_id : r.cloud.instance_id) = r.instances.id;
+        (points ? r.points.depth_m : r.cloud.depth_m) =
+            depth_of(r.disparity, points ? r.points.border : r.cloud.border);
         mark_object_outlines(points ? r.points.depth_edge : r.cloud.depth_edge, r.instances,
                              r.disparity, points ? r.points.border : r.cloud.border,
                              options.reproject.depth_edge_step_m,

@@ -583,3 +583,36 @@ TEST_CASE("with_length keeps the end nearer the camera or the farther one in pla
     CHECK(with_length(box, 7.0, false).centre_m.z() == Approx(20.5).margin(1e-9));
     CHECK(with_length(box, 6.0, true).centre_m == box.centre_m);
 }
+
+TEST_CASE("a thing cut by something in front of it shares its missing length between both ends",
+          "[boxes]") {
+    // The left side of a car parked on the right (x = 3), seen from z = 9 to 12.6: 3.6 m of a
+    // 4.4 m prior, 0.8 m missing.
+    std::vector<Eigen::Vector3f> pts;
+    for (float y = 0.3f; y <= 1.5f; y += 0.05f) {
+        for (float z = 9.0f; z <= 12.6f; z += 0.05f) pts.emplace_back(3.0f, y, z);
+        for (float x = 3.0f; x <= 4.8f; x += 0.05f) pts.emplace_back(x, y, 12.6f);
+    }
+    BoxFitOptions o;
+    o.prior_L_m = 4.4;
+    o.prior_W_m = 1.8;
+    // No cut: the hidden part lies away from the camera, the near end stays.
+    const OrientedBox away = fit_upright_box(pts, flat_ground(1.65), o);
+    CHECK(away.L_m == Approx(4.4).margin(0.05));
+    CHECK(away.centre_m.z() == Approx(9.0 + 2.2).margin(0.15));
+    // Something nearer stands right of the near end in the image (an occluder's cut, side +1;
+    // the near end of a thing on the right lies further right): half the missing length goes
+    // beyond the cut, towards the camera.
+    o.truncation_xz = Eigen::Vector2d(3.0, 9.0);
+    o.truncation_side = 1;
+    const OrientedBox cut = fit_upright_box(pts, flat_ground(1.65), o);
+    CHECK(cut.L_m == Approx(away.L_m).margin(0.01));
+    CHECK(cut.centre_m.z() == Approx(away.centre_m.z() - 0.4).margin(0.05));
+    CHECK(yaw_error_mod_pi(cut.theta, away.theta) < 1e-6);
+    // The same cut at the image's edge (side 0): all of it beyond the cut, none away.
+    o.truncation_side = 0;
+    CHECK(fit_upright_box(pts, flat_ground(1.65), o).centre_m.z() ==
+          Approx(away.centre_m.z() - 0.8).margin(0.1));
+    o.truncation_side = 2;
+    CHECK_THROWS_WITH(o.validate(), Catch::Contains("truncation_side"));
+}

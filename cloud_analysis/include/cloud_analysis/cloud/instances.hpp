@@ -70,4 +70,8 @@ void mark_object_outlines(std::vector<std::uint8_t>& depth_edge, const InstanceM
                           const DisparityMap& disparity, const MatchBorder& border, double step_m,
                           int columns);
 
+/// Per pixel of `disparity`, its depth fb / (d - offset) of `border`, metres; 0 where the
+/// disparity is missing or at most the offset, or the border is unknown.
+std::vector<float> depth_of(const DisparityMap& disparity, const MatchBorder& border);
+
 }  // namespace cloud_analysis

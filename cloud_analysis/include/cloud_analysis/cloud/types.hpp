@@ -76,6 +76,9 @@ struct LabeledCloud {
     /// Per pixel (v * width_px + u): the object the pixel belongs to in an instance image
     /// (InstanceMap::id, 0 = none); empty without an instance image.
     std::vector<std::uint32_t> instance_id;
+    /// Per pixel, with an instance image: the depth of its disparity, metres (0 = none;
+    /// depth_of in instances.hpp): what stands in front of an object where its outline ends.
+    std::vector<float> depth_m;
     std::size_t size() const { return xyz_m.size(); }
 };
 
@@ -101,6 +104,9 @@ struct ClassPoints {
     /// Per pixel of the grid: the object the pixel belongs to (LabeledCloud::instance_id, 0 =
     /// none); empty without an instance image.
     std::vector<std::uint32_t> instance_id;
+    /// Per pixel of the grid, with an instance image: the depth of its disparity, metres
+    /// (LabeledCloud::depth_m); empty otherwise.
+    std::vector<float> depth_m;
 };
 
 }  // namespace cloud_analysis

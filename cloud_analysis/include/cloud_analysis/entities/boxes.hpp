@@ -67,6 +67,11 @@ struct BoxFitOptions {
     /// truncation_exclusion_deg of that ray, and the prior completes each side beyond the image
     /// edge (where the hidden part is), not away from the camera.
     std::optional<Eigen::Vector2d> truncation_xz;
+    /// The side of truncation_xz's ray the hidden part lies on, as seen in the image: -1 left
+    /// (smaller columns), +1 right, 0 away from the optical axis (an image edge). A thing whose
+    /// outline ends where something nearer stands in front of it is cut there the same way, but
+    /// its points do not line up along the cut: no axis is skipped for it.
+    int truncation_side = 0;
     double truncation_exclusion_deg = 20.0;  ///< that exclusion, degrees, [0, 45)
     /// Throws std::invalid_argument naming the bad field.
     void validate() const;

@@ -39,6 +39,9 @@ struct PixelGrid {
     /// Per pixel, the object of an instance image (ClassPoints::instance_id, 0 = none); null
     /// without one.
     const std::vector<std::uint32_t>* instance_id = nullptr;
+    /// Per pixel, the depth of its point, metres (0 = none; ClassPoints::depth_m); null
+    /// without an instance image.
+    const std::vector<float>* depth_m = nullptr;
     bool valid() const { return width_px > 0 && height_px > 0; }
 };
 
