@@ -1,9 +1,11 @@
 #include "cloud_analysis/stereo/disparity.hpp"
 
 #include <algorithm>
+#include <array>
 #include <chrono>
 #include <cmath>
 #include <stdexcept>
+#include <vector>
 
 #include <opencv2/calib3d.hpp>
 #include <opencv2/core.hpp>
@@ -11,6 +13,7 @@
 #include <opencv2/ximgproc/disparity_filter.hpp>
 
 #include "cloud_analysis/io/mat_view.hpp"
+#include "cloud_analysis/support/select.hpp"
 
 namespace cloud_analysis {
 namespace {
@@ -327,6 +330,7 @@ DisparityScore score_disparity(const DisparityMap& estimate, const DisparityMap&
     DisparityScore s;
     std::size_t outliers_valid = 0;
     double abs_sum = 0.0;
+    std::array<std::vector<double>, 3> signed_errors;
     for (std::size_t i = 0; i < ground_truth.disparity_px.size(); ++i) {
         const float gt = ground_truth.disparity_px[i];
         if (!(gt > 0.0f)) continue;
@@ -334,9 +338,18 @@ DisparityScore score_disparity(const DisparityMap& estimate, const DisparityMap&
         const float est = estimate.disparity_px[i];
         if (!(est > 0.0f)) continue;
         ++s.est_pixels;
-        const double err = std::abs(static_cast<double>(est) - static_cast<double>(gt));
+        const double signed_err = static_cast<double>(est) - static_cast<double>(gt);
+        const double err = std::abs(signed_err);
         abs_sum += err;
         if (err > 3.0 && err > 0.05 * static_cast<double>(gt)) ++outliers_valid;
+        if (err <= 3.0) {
+            const auto& bands = DisparityScore::kBiasBandsPx;
+            const std::size_t band = gt < bands[0] ? 0 : gt < bands[1] ? 1 : 2;
+            signed_errors[band].push_back(signed_err);
+        }
+    }
+    for (std::size_t b = 0; b < signed_errors.size(); ++b) {
+        s.bias_px[b] = median(std::move(signed_errors[b]));
     }
     const std::size_t outliers_all = outliers_valid + (s.gt_pixels - s.est_pixels);
     if (s.gt_pixels > 0) {

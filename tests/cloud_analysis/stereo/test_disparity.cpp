@@ -86,6 +86,19 @@ TEST_CASE("KITTI D1-all counts errors over 3 px and 5 % and missing estimates", 
     CHECK(s.d1_valid == Approx(0.5));
     CHECK(s.epe_px == Approx(4.0));
     CHECK(s.density == Approx(2.0 / 3.0));
+    // Errors over 3 px are left out of the bias: every band is empty here.
+    CHECK(s.bias_px[0] == 0.0);
+    CHECK(s.bias_px[2] == 0.0);
+}
+
+TEST_CASE("the disparity bias is the median signed error by band of true disparity",
+          "[disparity]") {
+    DisparityMap gt{6, 1, {10.0f, 20.0f, 22.0f, 30.0f, 60.0f, 80.0f}};
+    DisparityMap est{6, 1, {9.5f, 19.5f, 21.0f, 30.25f, 61.0f, 90.0f}};
+    const DisparityScore s = score_disparity(est, gt);
+    CHECK(s.bias_px[0] == Approx(-0.5));  // -0.5, -0.5, -1.0
+    CHECK(s.bias_px[1] == Approx(0.25));  // +0.25
+    CHECK(s.bias_px[2] == Approx(1.0));   // +1.0; the 10 px error is left out
 }
 
 TEST_CASE("KITTI disparity PNGs round-trip at 1/256 px", "[disparity][io]") {
