@@ -3,7 +3,7 @@
 #include <algorithm>
 #include <array>
 #include <cmath>
-#include <unordered_map>
+#include <map>
 
 namespace cloud_analysis::instances {
 
@@ -35,10 +35,12 @@ std::optional<Eigen::Vector2d> truncation_point(const std::vector<Eigen::Vector3
                              : Eigen::Vector2d(right / static_cast<double>(n_right));
 }
 
-std::optional<std::pair<Eigen::Vector2d, int>> occlusion_cut(
-    const std::vector<Eigen::Vector3f>& pts, const std::vector<std::uint32_t>& pixels,
-    const PixelGrid& grid, const Indices& members, std::uint32_t instance) {
+std::optional<OcclusionCut> occlusion_cut(const std::vector<Eigen::Vector3f>& pts,
+                                          const std::vector<std::uint32_t>& pixels,
+                                          const PixelGrid& grid, const Indices& members,
+                                          std::uint32_t instance, Indices* bleed) {
     constexpr int kScanColumns = 12;
+    constexpr std::size_t kBleedColumns = 8;
     constexpr std::size_t kMinRows = 5;
     constexpr double kDisparityNoisePx = 0.5;  // a step this many disparity noises deep, at least
     constexpr double kMinStepM = 0.3;
@@ -46,60 +48,69 @@ std::optional<std::pair<Eigen::Vector2d, int>> occlusion_cut(
         pixels.size() < pts.size()) {
         return std::nullopt;
     }
-    const int w = grid.width_px;
-    // Per image row, the object's outermost member points on the left and the right.
-    std::unordered_map<int, std::pair<std::size_t, std::size_t>> ends;
-    for (std::size_t i : members) {
-        const int v = static_cast<int>(pixels[i] / static_cast<std::uint32_t>(w));
-        const auto u = [&](std::size_t k) { return pixels[k] % static_cast<std::uint32_t>(w); };
-        const auto [it, added] = ends.try_emplace(v, i, i);
-        if (added) continue;
-        if (u(i) < u(it->second.first)) it->second.first = i;
-        if (u(i) > u(it->second.second)) it->second.second = i;
-    }
+    const auto w = static_cast<std::uint32_t>(grid.width_px);
     const double fb = grid.border.fb_px_m > 0.0 ? grid.border.fb_px_m : 0.0;
-    // Whether the first depth step beyond the member's pixel, stepping `dir` past the object's
-    // own pixels and pixels at its depth (its labels may fall short of its outline), is
-    // nearer; `seen` when there is a step within kScanColumns.
-    const auto occluded = [&](std::size_t i, int dir, bool& seen) {
-        const int v = static_cast<int>(pixels[i] / static_cast<std::uint32_t>(w));
-        const int u0 = static_cast<int>(pixels[i] % static_cast<std::uint32_t>(w));
-        const double z = pts[i].z();
-        const double step =
-            std::max(kMinStepM, 2.0 * (fb > 0.0 ? kDisparityNoisePx * z * z / fb : 0.0));
+    const auto step_at = [&](double z) {
+        return std::max(kMinStepM, 2.0 * (fb > 0.0 ? kDisparityNoisePx * z * z / fb : 0.0));
+    };
+    // Per image row, the members by column.
+    std::map<std::uint32_t, std::vector<std::pair<std::uint32_t, std::size_t>>> rows_of;
+    for (std::size_t i : members) rows_of[pixels[i] / w].emplace_back(pixels[i] % w, i);
+    // Whether the first depth step beyond column u0 of row v, stepping `dir` past the object's
+    // own pixels and pixels at depth z (its labels may fall short of its outline), is nearer;
+    // `seen` when there is a step within kScanColumns.
+    const auto occluded = [&](std::uint32_t v, std::uint32_t u0, double z, int dir, bool& seen) {
         for (int k = 1; k <= kScanColumns; ++k) {
-            const int u = u0 + dir * k;
-            if (u < 0 || u >= w) return false;
-            const std::size_t p = static_cast<std::size_t>(v) * static_cast<std::size_t>(w) +
-                                  static_cast<std::size_t>(u);
+            const long u = static_cast<long>(u0) + dir * k;
+            if (u < 0 || u >= static_cast<long>(w)) return false;
+            const std::size_t p = std::size_t{v} * w + static_cast<std::size_t>(u);
             if ((*grid.instance_id)[p] == instance) continue;
             const double zn = (*grid.depth_m)[p];
-            if (!(zn > 0.0) || std::abs(zn - z) <= step) continue;
+            if (!(zn > 0.0) || std::abs(zn - z) <= step_at(z)) continue;
             seen = true;
             return zn < z;
         }
         return false;
     };
     std::array<Eigen::Vector2d, 2> sum = {Eigen::Vector2d::Zero(), Eigen::Vector2d::Zero()};
-    std::array<std::size_t, 2> cut = {0, 0}, rows = {0, 0};
-    for (const auto& [v, lr] : ends) {
+    std::array<std::size_t, 2> cut = {0, 0}, seen_rows = {0, 0};
+    for (auto& [v, row] : rows_of) {
+        std::sort(row.begin(), row.end());
         for (int side = 0; side < 2; ++side) {
-            const std::size_t i = side == 0 ? lr.first : lr.second;
+            // From the outline inwards: members with a nearer thing's disparity (foreground
+            // fattening and labels past the outline) end at the first step to a farther depth
+            // between neighbouring members within kBleedColumns.
+            const auto at = [&](std::size_t k) {
+                return side == 0 ? row[k] : row[row.size() - 1 - k];
+            };
+            std::size_t first = 0;
+            for (std::size_t k = 0; k + 1 < row.size() && k < kBleedColumns; ++k) {
+                const double z0 = pts[at(k).second].z(), z1 = pts[at(k + 1).second].z();
+                if (z1 - z0 > step_at(z1)) {
+                    first = k + 1;
+                    break;
+                }
+            }
+            const auto [u, i] = at(first);
             bool seen = false;
-            const bool hidden = occluded(i, side == 0 ? -1 : 1, seen);
-            rows[side] += seen ? 1 : 0;
+            const bool hidden = occluded(v, u, pts[i].z(), side == 0 ? -1 : 1, seen);
+            seen_rows[side] += seen ? 1 : 0;
             if (!hidden) continue;
             ++cut[side];
             sum[side] += Eigen::Vector2d(pts[i].x(), pts[i].z());
+            if (bleed != nullptr) {
+                for (std::size_t k = 0; k < first; ++k) bleed->push_back(at(k).second);
+            }
         }
     }
+    if (bleed != nullptr) std::sort(bleed->begin(), bleed->end());
     const auto is_cut = [&](int side) {
-        return cut[side] >= kMinRows && 2 * cut[side] > rows[side];
+        return cut[side] >= kMinRows && 2 * cut[side] > seen_rows[side];
     };
     if (is_cut(0) == is_cut(1)) return std::nullopt;
     const int side = is_cut(0) ? 0 : 1;
-    return std::make_pair(Eigen::Vector2d(sum[side] / static_cast<double>(cut[side])),
-                          side == 0 ? -1 : 1);
+    return OcclusionCut{Eigen::Vector2d(sum[side] / static_cast<double>(cut[side])),
+                        side == 0 ? -1 : 1};
 }
 
 }  // namespace cloud_analysis::instances

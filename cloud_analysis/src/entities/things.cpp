@@ -5,6 +5,8 @@
 #include <atomic>
 #include <cmath>
 #include <cstdint>
+#include <cstdlib>
+#include <iterator>
 #include <limits>
 #include <memory>
 #include <tuple>
@@ -303,9 +305,19 @@ std::vector<Candidate> candidates_of_instance(const std::vector<Eigen::Vector3f>
     if (members.size() < static_cast<std::size_t>(std::max(s.min_points, 1))) return {};
     fit.truncation_xz = truncation_point(pts, pixels, grid, members);
     if (!fit.truncation_xz) {
-        if (const auto hidden = occlusion_cut(pts, pixels, grid, members, instance)) {
-            fit.truncation_xz = hidden->first;
-            fit.truncation_side = hidden->second;
+        Indices bleed;
+        if (const auto hidden = occlusion_cut(pts, pixels, grid, members, instance, &bleed)) {
+            fit.truncation_xz = hidden->xz;
+            fit.truncation_side = hidden->side;
+            // Pixels past its outline that took the nearer thing's depth are not its surface.
+            if (members.size() >=
+                bleed.size() + static_cast<std::size_t>(std::max(s.min_points, 1))) {
+                std::sort(members.begin(), members.end());
+                Indices kept;
+                std::set_difference(members.begin(), members.end(), bleed.begin(), bleed.end(),
+                                    std::back_inserter(kept));
+                members = std::move(kept);
+            }
         }
     }
     const std::vector<Eigen::Vector3f> member_pts = gather(pts, members);

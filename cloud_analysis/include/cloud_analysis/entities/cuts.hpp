@@ -6,7 +6,6 @@
 
 #include <cstdint>
 #include <optional>
-#include <utility>
 #include <vector>
 
 #include <Eigen/Core>
@@ -25,16 +24,25 @@ std::optional<Eigen::Vector2d> truncation_point(const std::vector<Eigen::Vector3
                                                 const std::vector<std::uint32_t>& pixels,
                                                 const PixelGrid& grid, const Indices& members);
 
-/// Where an object of the instance image is cut by something standing in front of it (depths
-/// from PixelGrid::depth_m): per image row, the first pixel beyond the object's outermost
-/// member, past its own pixels and pixels at its own depth (its labels may fall short of its
-/// outline), that lies a step deeper or nearer (0.3 m, or two disparity noises of 0.5 px) within
-/// 12 columns. The side (left -1, right +1) where most of at least 5 such rows are nearer, when
-/// only one is, with the camera-frame (x, z) mean of those rows' outermost members; nullopt
-/// otherwise or without depths. Its hidden part may lie beyond that cut (Hoiem, Efros, Hebert,
-/// "Recovering Occlusion Boundaries", IJCV 2011: an outline is owned by the nearer surface).
-std::optional<std::pair<Eigen::Vector2d, int>> occlusion_cut(
-    const std::vector<Eigen::Vector3f>& pts, const std::vector<std::uint32_t>& pixels,
-    const PixelGrid& grid, const Indices& members, std::uint32_t instance);
+/// Where an object of the instance image is cut by something standing in front of it.
+struct OcclusionCut {
+    Eigen::Vector2d xz;  ///< camera-frame (x, z) mean of the cut rows' outline points
+    int side = 0;        ///< the side the hidden part lies on in the image: -1 left, +1 right
+};
+
+/// The occlusion cut of an object of the instance image (depths from PixelGrid::depth_m): per
+/// image row and side, the object's outline is its outermost member past those with a nearer
+/// thing's disparity (up to the first step to a farther depth between neighbouring members
+/// within 8 columns: foreground fattening, labels past the outline); the row is cut when the
+/// first pixel beyond it, past the object's own pixels and pixels at its depth, within 12
+/// columns, is a step nearer (0.3 m, or two disparity noises of 0.5 px). The side where most of
+/// at least 5 such rows are cut, when only one is; nullopt otherwise or without depths.
+/// `bleed`, when given, receives the members before the outline on the cut rows (sorted). The
+/// hidden part may lie beyond the cut (Hoiem, Efros, Hebert, "Recovering Occlusion
+/// Boundaries", IJCV 2011: an outline is owned by the nearer surface).
+std::optional<OcclusionCut> occlusion_cut(const std::vector<Eigen::Vector3f>& pts,
+                                          const std::vector<std::uint32_t>& pixels,
+                                          const PixelGrid& grid, const Indices& members,
+                                          std::uint32_t instance, Indices* bleed = nullptr);
 
 }  // namespace cloud_analysis::instances
