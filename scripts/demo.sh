@@ -124,6 +124,28 @@ command -v ffmpeg >/dev/null && video=(--video "$drive/drive-camera.mp4")
     --strip "$drive/drive-bev-strip.png" --strip-frames 4
 note "drive: BEV strip with track trails" "$drive/drive-bev-strip.png"
 
+# 3c. A moving camera: a street made for a drive, rendered while the car drives 8 m/s turning
+#     4 degrees a second (half size, 20 frames), analysed with odometry and tracking in one
+#     batch, its poses scored against the truth, then played in the drive's world: a BEV with
+#     the car's path and the tracks over the ground.
+echo "== moving drive: sensors --ego-speed, batch --odometry --track, evaluate-odometry, play" >&2
+moving="$out/moving-drive"
+rm -rf "$moving"
+mkdir -p "$moving"
+/usr/bin/python3 "$STEREOSCENE_ROOT/scripts/make-drive-street.py" --seed 3 --speed 8 \
+    --yaw-rate 4 --length 16 -o "$moving/street.json"
+"$render" sensors "$moving/street.json" --out "$moving/sensors" --frames 20 --fps 10 \
+    --ego-speed 8 --ego-yaw-rate 4 --size 621x188
+ls "$moving/sensors/image_2" | sed 's/\.png$//' > "$moving/frames.txt"
+"$analyse" batch --kitti-root "$moving/sensors" --list "$moving/frames.txt" \
+    --out-dir "$moving/analysed" --odometry --track --quiet
+"$analyse" evaluate-odometry --poses "$moving/analysed/poses.txt" \
+    --truth "$moving/sensors/truth/poses.txt" > "$moving/odometry.txt"
+note "moving drive: odometry scores" "$moving/odometry.txt"
+"$render" play "$moving/analysed" --out-dir "$moving/bev" --view bev --size 320x320 --trail 20 \
+    --strip "$moving/drive-bev-strip.png" --strip-frames 4
+note "moving drive: BEV strip, path and tracks in the world" "$moving/drive-bev-strip.png"
+
 # 4. A real KITTI frame, when the shared data is beside the project (never bundled).
 kitti="$STEREOSCENE_ROOT/../shared/data/kitti15"
 if [ -d "$kitti/image_2" ]; then
