@@ -85,7 +85,14 @@
             return group;
         }
 
-        // --- trails: each track's ground contact points, drawn for the last trail_frames ---
+        // --- trails: each track's ground contact points, drawn for the last trail_frames. In a
+        // drive with poses (drive.world) the points lie in the drive's world and the group
+        // holding them is moved into the camera of the frame shown, so trails stay on the ground
+        // as the car drives; the car's own path is a track of its own. ---
+        const trailGroup = new THREE.Group();
+        trailGroup.matrixAutoUpdate = false;
+        ctx.scene.add(trailGroup);
+        const flip = new THREE.Matrix4().makeScale(1, -1, -1);  // KITTI axes <-> the page's
         const trails = drive.tracks.map((track) => {
             const positions = new Float32Array(track.points.length * 3);
             track.points.forEach(([, x, yBottom, z], i) => {
@@ -99,7 +106,7 @@
             }));
             line.frustumCulled = false;
             line.visible = false;
-            ctx.scene.add(line);
+            trailGroup.add(line);
             return { frames: track.points.map((p) => p[0]), line };
         });
         let trailsOn = drive.trail_frames > 0;
@@ -115,6 +122,12 @@
         }
 
         function updateTrails(position) {
+            if (drive.world) {
+                const cameraFromWorld = new THREE.Matrix4().fromArray(
+                    frames[position].camera_from_world);
+                trailGroup.matrix.copy(flip).multiply(cameraFromWorld).multiply(flip);
+                trailGroup.matrixWorldNeedsUpdate = true;
+            }
             for (const t of trails) {
                 const begin = lowerBound(t.frames, position - drive.trail_frames + 1);
                 const end = lowerBound(t.frames, position + 1);
@@ -272,6 +285,18 @@
             onChange,
             /// Trails drawn in the frame shown.
             visibleTrails: () => trails.filter((t) => t.line.visible).length,
+            /// The page coordinates of the last point of each trail drawn (the world moved into
+            /// the camera of the frame shown).
+            trailEnds() {
+                trailGroup.updateMatrixWorld(true);
+                return trails.filter((t) => t.line.visible).map((t) => {
+                    const a = t.line.geometry.attributes.position;
+                    const range = t.line.geometry.drawRange;
+                    const k = range.start + range.count - 1;
+                    const p = new THREE.Vector3(a.getX(k), a.getY(k), a.getZ(k));
+                    return p.applyMatrix4(t.line.matrixWorld).toArray();
+                });
+            },
             setTrails(on) {
                 trailsOn = on;
                 if (shown >= 0) updateTrails(shown);

@@ -1,6 +1,7 @@
 #include <catch2/catch.hpp>
 
 #include <algorithm>
+#include <array>
 #include <cstdint>
 #include <cstring>
 #include <filesystem>
@@ -9,6 +10,7 @@
 
 #include <nlohmann/json.hpp>
 #include <scene_viewer/ecs/coordinates.hpp>
+#include <scene_viewer/views/trails.hpp>
 #include <scene_viewer/views/views.hpp>
 #include <scene_viewer/web/viewer_folder.hpp>
 
@@ -279,6 +281,51 @@ TEST_CASE("a drive's frames are scripts of their own, with trails and extent in 
     std::set<std::string> names;
     for (const auto& c : data.at("classes")) names.insert(c.at("name").get<std::string>());
     CHECK(names == std::set<std::string>{"car", "road"});
+}
+
+TEST_CASE("a drive with poses gives its trails in the world, each frame's camera and its path",
+          "[web]") {
+    ViewerDrive drive = two_frame_drive();
+    // The camera drives 2 m forward between the frames; the car stays where it was.
+    drive.frames[0].document.frame.pose =
+        std::array<double, 12>{1, 0, 0, 0, 0, 1, 0, 0, 0, 0, 1, 0};
+    drive.frames[1].document.frame.pose =
+        std::array<double, 12>{1, 0, 0, 0, 0, 1, 0, 0, 0, 0, 1, 2};
+    drive.frames[1].document.entities[0].z = drive.frames[0].document.entities[0].z - 2.0;
+    ViewerScene scene;
+    scene.layers.push_back({"drive", drive.frames[0].document});
+    scene.scene_glb = {'g', 'l', 'T', 'F'};
+    scene.drive = &drive;
+    ViewerAssets assets{"three", "{{DATA_SCRIPTS}}", "css", {}};
+    const std::string script =
+        viewer_files(scene, assets, ViewerOptions{}).at("data/scene-data.js");
+    const auto d = nlohmann::json::parse(
+                       script.substr(script.find('{'), script.rfind('}') - script.find('{') + 1))
+                       .at("drive");
+    CHECK(d.at("world") == true);
+    // Column-major camera_from_world: the second camera sees the world 2 m nearer.
+    CHECK(d.at("frames")[1].at("camera_from_world")[14] == Approx(-2.0));
+    CHECK(d.at("frames")[0].at("camera_from_world")[14] == Approx(0.0));
+    REQUIRE(d.at("tracks").size() == 2);
+    for (const auto& track : d.at("tracks")) {
+        const auto& points = track.at("points");
+        REQUIRE(points.size() == 2);
+        if (track.at("class") == kEgoClassName) {
+            // The ground under the camera, 1.65 m below it, 2 m on in the world.
+            CHECK(points[1][2] == Approx(kEgoGroundBelow_m));
+            CHECK(points[1][3] == Approx(2.0));
+        } else {
+            // A car that did not move: one place in the world in both frames.
+            CHECK(points[1][3] == Approx(points[0][3].get<double>()));
+        }
+    }
+    // Without a pose on every frame the trails stay in each frame's camera.
+    drive.frames[1].document.frame.pose.reset();
+    const std::string still = viewer_files(scene, assets, ViewerOptions{}).at("data/scene-data.js");
+    CHECK(
+        nlohmann::json::parse(still.substr(still.find('{'), still.rfind('}') - still.find('{') + 1))
+            .at("drive")
+            .at("world") == false);
 }
 
 TEST_CASE("class templates leave ground out and place the unit box without rotation", "[web]") {

@@ -6,6 +6,8 @@
 #include <stdexcept>
 
 #include "scene_viewer/assets/palette.hpp"
+#include "scene_viewer/ecs/coordinates.hpp"
+#include "scene_viewer/views/trails.hpp"
 #include "scene_viewer/web/viewer_folder.hpp"
 #include "stereoscene/support/angles.hpp"
 
@@ -79,15 +81,39 @@ nlohmann::json drive_json(const ViewerDrive& drive) {
     nlohmann::json frames = nlohmann::json::array();
     std::map<std::int64_t, nlohmann::json> tracks;
     double min_x = -2.0, max_x = 2.0, min_z = -4.0, max_z = 4.0;  // bev_view_fitting's floor
+    // With a pose on every frame, trails lie in the drive's world (the first frame's camera)
+    // and each frame says where its camera is; the camera's own path is a track too.
+    const bool world = std::all_of(drive.frames.begin(), drive.frames.end(),
+                                   [](const auto& f) { return f.document.frame.pose.has_value(); });
+    const auto add_point = [&](std::int64_t id, const std::string& cls, std::size_t i,
+                               const glm::dvec4& p) {
+        nlohmann::json& track = tracks[id];
+        if (track.is_null()) track = {{"class", cls}, {"points", nlohmann::json::array()}};
+        track["points"].push_back({i, p.x, p.y, p.z});
+    };
     for (std::size_t i = 0; i < drive.frames.size(); ++i) {
         const ViewerDriveFrame& f = drive.frames[i];
         const double t = f.timestamp_s ? *f.timestamp_s : static_cast<double>(f.index) / drive.fps;
-        frames.push_back({{"index", f.index},
-                          {"time", t},
-                          {"name", f.name},
-                          {"script", frame_stem(i) + ".js"},
-                          {"image", image_file(f, i)},
-                          {"entities", f.document.entities.size()}});
+        nlohmann::json frame = {{"index", f.index},
+                                {"time", t},
+                                {"name", f.name},
+                                {"script", frame_stem(i) + ".js"},
+                                {"image", image_file(f, i)},
+                                {"entities", f.document.entities.size()}};
+        const glm::dmat4 world_from_camera =
+            world ? kitti_pose_matrix(*f.document.frame.pose) : glm::dmat4(1.0);
+        if (world) {
+            // Column-major 4x4 (three.js Matrix4.fromArray): the world seen from this camera.
+            const glm::dmat4 camera_from_world = glm::inverse(world_from_camera);
+            nlohmann::json m = nlohmann::json::array();
+            for (int c = 0; c < 4; ++c) {
+                for (int r = 0; r < 4; ++r) m.push_back(camera_from_world[c][r]);
+            }
+            frame["camera_from_world"] = std::move(m);
+            add_point(kEgoTrack, kEgoClassName, i,
+                      world_from_camera * glm::dvec4(0.0, kEgoGroundBelow_m, 0.0, 1.0));
+        }
+        frames.push_back(std::move(frame));
         for (const auto& e : f.document.entities) {
             const double r = 0.5 * std::hypot(e.W, e.L);
             min_x = std::min(min_x, e.x - r);
@@ -95,11 +121,9 @@ nlohmann::json drive_json(const ViewerDrive& drive) {
             min_z = std::min(min_z, e.z - r);
             max_z = std::max(max_z, e.z + r);
             if (!e.track_id) continue;
-            nlohmann::json& track = tracks[*e.track_id];
-            if (track.is_null())
-                track = {{"class", e.class_name}, {"points", nlohmann::json::array()}};
             // Ground contact: the box's bottom (KITTI y grows downwards).
-            track["points"].push_back({i, e.x, e.y + 0.5 * e.H, e.z});
+            add_point(*e.track_id, e.class_name, i,
+                      world_from_camera * glm::dvec4(e.x, e.y + 0.5 * e.H, e.z, 1.0));
         }
     }
     nlohmann::json track_list = nlohmann::json::array();
@@ -110,6 +134,7 @@ nlohmann::json drive_json(const ViewerDrive& drive) {
     return {{"id", drive.id},
             {"fps", drive.fps},
             {"trail_frames", drive.trail_frames},
+            {"world", world},
             {"frames", frames},
             {"tracks", track_list},
             {"extent", {min_x, max_x, min_z, max_z}},

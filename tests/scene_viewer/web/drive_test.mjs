@@ -9,6 +9,8 @@
 //   - play runs at the drive's clock (not faster, at most a few seconds slower) and stops at
 //     the end; the trails of the tracks in the frame are drawn;
 //   - with --backgrounds, each frame shows its own left image;
+//   - a drive with a moving camera draws its trails in the drive's world: each ends where its
+//     thing stands in the frame shown, the camera's path under the camera;
 //   - no error logged, no request outside the folder (served by a static web server).
 // usage: node drive_test.mjs SCENE_RENDER DRIVE_SCENE.json OUT_DIR NODE_MODULES CHROMIUM
 // Exit 0 pass, 1 fail, 77 skipped (chromium or the npm packages missing).
@@ -112,6 +114,37 @@ async function playTiming(page) {
     if (result.trails < 1) fail('no track trail is drawn at the last frame');
 }
 
+/// A drive with a moving camera (sensors --ego-speed: its truth carries poses): the trails lie in
+/// the drive's world, so at the last frame each trail ends where its thing stands in that
+/// frame, and the camera's own path ends on the ground under the camera.
+async function worldTrails(context) {
+    const moving = path.join(outDir, 'moving');
+    run(['sensors', driveScene, '--out', moving, '--frames', String(kFrames), '--fps',
+         String(kFps), '--size', '621x188', '--ego-speed', '6', '--ego-yaw-rate', '5']);
+    const { dir, frames } = objectsDrive(path.join(moving, 'truth'));
+    const viewerDir = path.join(outDir, 'viewer-moving');
+    run(['html', dir, '--out', viewerDir]);
+    const { page, report } = await openViewer(context, viewerDir, '?ui=0');
+    const result = await page.evaluate(async (last) => {
+        await window.viewer.drive.show(last);
+        return { world: window.SCENE_VIEWER_DATA.drive.world, ends: window.viewer.drive.trailEnds() };
+    }, frames.length - 1);
+    if (result.world !== true) fail('a drive with poses is not drawn in its world');
+    // Where the page draws a KITTI ground point (x, y_ground, z) of the frame shown.
+    const page3 = (x, y, z) => [x, -y + 0.05, -z];
+    const expected = [page3(0, 1.65, 0)];  // the camera's path: the ground under it
+    for (const e of frames[frames.length - 1].doc.entities) {
+        if (e.track_id !== undefined) expected.push(page3(e.x, e.y + 0.5 * e.H, e.z));
+    }
+    console.log(`moving drive: ${result.ends.length} trails drawn at the last frame`);
+    if (result.ends.length < 2) fail('the moving drive draws no trail besides the camera path');
+    for (const end of result.ends) {
+        const off = Math.min(...expected.map((q) => Math.hypot(...q.map((v, k) => v - end[k]))));
+        if (off > 0.1) fail(`a trail ends at ${end.map((v) => v.toFixed(2))}, ${off.toFixed(2)} m from any thing`);
+    }
+    checkReport(report);
+}
+
 async function driveTest() {
     const sensors = path.join(outDir, 'sensors');
     run(['sensors', driveScene, '--out', sensors, '--frames', String(kFrames), '--fps',
@@ -150,6 +183,7 @@ async function driveTest() {
         console.log(`frame 3 shows ${src.src} (${src.width} px wide)`);
         if (src.src !== 'frames/000003.png' || src.width !== 621) fail('frame 3 shows ' + JSON.stringify(src));
         checkReport(images.report);
+        await worldTrails(context);
     } finally {
         server.close();
         await context.close();

@@ -19,8 +19,9 @@ namespace scene_viewer {
 
 /// The trail of the camera's own path.
 inline constexpr std::int64_t kEgoTrack = -1;
-/// Its class id: Cityscapes' "ego vehicle".
+/// Its class id and name: Cityscapes' "ego vehicle".
 inline constexpr int kEgoClassId = 1;
+inline constexpr const char* kEgoClassName = "ego vehicle";
 /// The ground under the camera, metres below it (KITTI's mounting height), where its path is
 /// drawn.
 inline constexpr double kEgoGroundBelow_m = 1.65;
