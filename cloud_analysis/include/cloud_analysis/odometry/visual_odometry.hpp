@@ -35,7 +35,7 @@ struct OdometryOptions {
     double corner_cell_px = 32.0;    ///< corners are kept strongest first per square cell of this
                                      ///< side, the same number in each: spread over the image, px,
                                      ///< >= 4
-    int track_window_px = 11;        ///< Lucas-Kanade window side, px, odd, >= 5
+    int track_window_px = 7;        ///< Lucas-Kanade window side, px, odd, >= 5
     int track_levels = 3;            ///< image pyramid levels above the image, [0, 8]
     double max_round_trip_px = 1.0;  ///< forward-backward track error kept, px, > 0
     double max_stereo_gap_px = 1.0;  ///< a corner's match across the pair: off its row, or
