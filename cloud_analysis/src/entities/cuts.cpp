@@ -40,7 +40,7 @@ std::optional<OcclusionCut> occlusion_cut(const std::vector<Eigen::Vector3f>& pt
                                           const PixelGrid& grid, const Indices& members,
                                           std::uint32_t instance, Indices* bleed) {
     constexpr int kScanColumns = 12;
-    constexpr std::size_t kBleedColumns = 8;
+    constexpr std::size_t kBleedMembers = 8;
     constexpr std::size_t kMinRows = 5;
     constexpr double kDisparityNoisePx = 0.5;  // a step this many disparity noises deep, at least
     constexpr double kMinStepM = 0.3;
@@ -79,12 +79,12 @@ std::optional<OcclusionCut> occlusion_cut(const std::vector<Eigen::Vector3f>& pt
         for (int side = 0; side < 2; ++side) {
             // From the outline inwards: members with a nearer thing's disparity (foreground
             // fattening and labels past the outline) end at the first step to a farther depth
-            // between neighbouring members within kBleedColumns.
+            // between neighbouring members among the kBleedMembers outermost.
             const auto at = [&](std::size_t k) {
                 return side == 0 ? row[k] : row[row.size() - 1 - k];
             };
             std::size_t first = 0;
-            for (std::size_t k = 0; k + 1 < row.size() && k < kBleedColumns; ++k) {
+            for (std::size_t k = 0; k + 1 < row.size() && k < kBleedMembers; ++k) {
                 const double z0 = pts[at(k).second].z(), z1 = pts[at(k + 1).second].z();
                 if (z1 - z0 > step_at(z1)) {
                     first = k + 1;
@@ -103,7 +103,11 @@ std::optional<OcclusionCut> occlusion_cut(const std::vector<Eigen::Vector3f>& pt
             }
         }
     }
-    if (bleed != nullptr) std::sort(bleed->begin(), bleed->end());
+    if (bleed != nullptr) {
+        // A short row's two ends may share members.
+        std::sort(bleed->begin(), bleed->end());
+        bleed->erase(std::unique(bleed->begin(), bleed->end()), bleed->end());
+    }
     const auto is_cut = [&](int side) {
         return cut[side] >= kMinRows && 2 * cut[side] > seen_rows[side];
     };

@@ -33,7 +33,7 @@ struct OcclusionCut {
 /// The occlusion cut of an object of the instance image (depths from PixelGrid::depth_m): per
 /// image row and side, the object's outline is its outermost member past those with a nearer
 /// thing's disparity (up to the first step to a farther depth between neighbouring members
-/// within 8 columns: foreground fattening, labels past the outline); the row is cut when the
+/// among the 8 outermost: foreground fattening, labels past the outline); the row is cut when the
 /// first pixel beyond it, past the object's own pixels and pixels at its depth, within 12
 /// columns, is a step nearer (0.3 m, or two disparity noises of 0.5 px). The side where most of
 /// at least 5 such rows are cut, when only one is; nullopt otherwise or without depths.
