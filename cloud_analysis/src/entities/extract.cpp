@@ -161,13 +161,7 @@ bool take_grid(ClassPoints& out, const LabeledCloud& cloud, const ChunkScan& sca
             static_cast<int>(*std::max_element(scan.last_col.begin(), scan.last_col.end()));
         out.depth_edge = cloud.depth_edge;
         out.instance_id = cloud.instance_id;
-        if (!cloud.instance_id.empty()) {
-            out.depth_m.assign(cloud.instance_id.size(), 0.0f);
-            for (std::size_t i = 0; i < cloud.size(); ++i) {
-                if (cloud.pixel[i] < out.depth_m.size())
-                    out.depth_m[cloud.pixel[i]] = cloud.xyz_m[i].z();
-            }
-        }
+        out.depth_m = cloud.depth_m;
     }
     return grid;
 }
