@@ -223,8 +223,7 @@ void mark_object_outlines(std::vector<std::uint8_t>& depth_edge, const InstanceM
     for (auto& [id, d] : disparities) {
         auto mid = d.begin() + static_cast<std::ptrdiff_t>(d.size() / 2);
         std::nth_element(d.begin(), mid, d.end());
-        const double own = double{*mid} - border.offset_px;
-        if (own > 0.0) depth_m[id] = border.fb_px_m / own;
+        if (const double z = border.depth_m(double{*mid}); z > 0.0) depth_m[id] = z;
     }
     if (depth_m.size() < 2) return;
     if (depth_edge.size() != n) depth_edge.assign(n, 0);
@@ -250,8 +249,7 @@ std::vector<float> depth_of(const DisparityMap& disparity, const MatchBorder& bo
     std::vector<float> out(disparity.disparity_px.size(), 0.0f);
     if (!(border.fb_px_m > 0.0)) return out;
     for (std::size_t p = 0; p < out.size(); ++p) {
-        const double d = double{disparity.disparity_px[p]} - border.offset_px;
-        if (d > 0.0) out[p] = static_cast<float>(border.fb_px_m / d);
+        out[p] = static_cast<float>(border.depth_m(double{disparity.disparity_px[p]}));
     }
     return out;
 }

@@ -187,7 +187,7 @@ Correspondences track_corners(const OdometryFrame& prev, const cv::Mat& prev_gre
             d = own;
         }
         if (!(double{d} > min_disparity)) continue;
-        const double z = border.fb_px_m / (double{d} - border.offset_px);
+        const double z = border.depth_m(double{d});
         out.object.emplace_back(
             static_cast<float>((double{corners[k].x} - camera.cx_px) * z / camera.fx_px),
             static_cast<float>((double{corners[k].y} - camera.cy_px) * z / camera.fy_px),

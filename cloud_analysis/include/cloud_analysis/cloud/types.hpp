@@ -53,6 +53,12 @@ struct MatchBorder {
     double left_column(double z_m) const {
         return fb_px_m > 0.0 && z_m > 0.0 ? offset_px + fb_px_m / z_m : 0.0;
     }
+    /// The depth of disparity d: fb_px_m / (d - offset_px), metres; 0 when d is at most the
+    /// offset or the rig is unknown.
+    double depth_m(double disparity_px) const {
+        const double d = disparity_px - offset_px;
+        return fb_px_m > 0.0 && d > 0.0 ? fb_px_m / d : 0.0;
+    }
 };
 
 /// The matching border of a rig.
