@@ -29,7 +29,7 @@ cd "$work/elsewhere"
 analyse=("$bin/cloud-analysis" --left "$sample/left.png" --right "$sample/right.png"
     --semantic "$sample/semantic.png" --calib "$sample/calib.yaml" --frame synthetic-street)
 "${analyse[@]}" -o entities.json
-count() { grep -c '^      "class": ' "$1" || true; }
+count() { python3 -c 'import json, sys; print(len(json.load(open(sys.argv[1]))["entities"]))' "$1"; }
 got=$(count entities.json) expected=$(count "$sample/expected_entities.json")
 [ "$got" = "$expected" ] && [ "$got" -gt 0 ] || fail "$got entities, the sample expects $expected"
 bash "$expect" --code 0 --output "$PWD/render.png" -- \

@@ -115,13 +115,14 @@ void report_analysis(const LoadedRun& run, const cloud_analysis::AnalyseResult& 
     }
     if (run.gt_disparity) {
         const auto s = cloud_analysis::score_disparity(r.disparity, *run.gt_disparity);
+        const auto& bands = cloud_analysis::DisparityScore::kBiasBandsPx;
         std::fprintf(stderr,
                      "%s: disparity vs %s: D1-all %.2f %%, D1-valid %.2f %%, EPE %.3f px, "
-                     "density %.2f %% (%zu GT px), bias %+.2f / %+.2f / %+.2f px (d < 25 / "
-                     "25-50 / >= 50 px)\n",
+                     "density %.2f %% (%zu GT px), bias %+.2f / %+.2f / %+.2f px (d < %g / "
+                     "%g-%g / >= %g px)\n",
                      kTool, a.gt_disparity.string().c_str(), 100.0 * s.d1_all, 100.0 * s.d1_valid,
                      s.epe_px, 100.0 * s.density, s.gt_pixels, s.bias_px[0], s.bias_px[1],
-                     s.bias_px[2]);
+                     s.bias_px[2], bands[0], bands[0], bands[1], bands[1]);
     }
 }
 
