@@ -74,6 +74,12 @@ std::pair<double, double> footprint_extents(const std::vector<Eigen::Vector3d>& 
 /// Statistics of one linked segment, gathered from its cells.
 struct SegmentStats {
     std::size_t pixels = 0, green = 0, occluded = 0, tall_pixels = 0;
+    double edges = 0.0, level_edges = 0.0;  ///< Cell::edges, Cell::level_edges
+    /// The same per column band (index u / column_bin_px), and the pixels there.
+    std::vector<double> band_edges, band_level_edges, band_pixels;
+    /// Per column band: whether its pixels may be a car's (horizontal_edge_bands); empty when
+    /// every band may.
+    std::vector<char> band_car;
     std::size_t border_pixels = 0;  ///< in cells within kEdgeColumns of the matcher's left
                                     ///< border at their depth, or left of it
     bool tall = false;
@@ -105,9 +111,18 @@ std::vector<SegmentStats> gather_segments(Grid& g, std::vector<int>& parent, con
         st.pixels += static_cast<std::size_t>(c.count);
         st.tall_pixels += c.is_tall ? static_cast<std::size_t>(c.count) : 0;
         st.green += static_cast<std::size_t>(c.green);
+        const int column_bin = i / kLayers;
+        st.edges += c.edges;
+        st.level_edges += c.level_edges;
+        const auto band = static_cast<std::size_t>(column_bin / g.bins_d);
+        st.band_edges.resize(static_cast<std::size_t>(g.bins_u), 0.0);
+        st.band_level_edges.resize(static_cast<std::size_t>(g.bins_u), 0.0);
+        st.band_pixels.resize(static_cast<std::size_t>(g.bins_u), 0.0);
+        st.band_edges[band] += c.edges;
+        st.band_level_edges[band] += c.level_edges;
+        st.band_pixels[band] += c.count;
         st.occluded += c.occluded ? static_cast<std::size_t>(c.count) : 0;
         st.lows.push_back(c.low);
-        const int column_bin = i / kLayers;
         const double d = g.bin_centre[static_cast<std::size_t>(column_bin % g.bins_d)];
         const double z = rig.fb / d;
         const double u = ((column_bin / g.bins_d) + 0.5) * o.column_bin_px;
@@ -151,8 +166,41 @@ std::vector<SegmentStats> gather_segments(Grid& g, std::vector<int>& parent, con
     return stats;
 }
 
+/// Whether a car candidate has a car's horizontal edges: at least car_min_edge_share of
+/// its gradient energy lies in them. When the whole segment falls short, the column bands
+/// where a window edge_window_m wide at its depth reaches that share are marked as the car's
+/// (a car merged with the bush or post box beside it; a window without texture holds no
+/// evidence and passes); false when none does. True, marking none, without a left image or
+/// with the test off.
+bool mark_car_bands(SegmentStats& st, bool has_image, double depth_m, double fx,
+                    const GeometryOptions& o) {
+    if (!has_image || !(o.car_min_edge_share > 0.0)) return true;
+    if (st.level_edges >= o.car_min_edge_share * st.edges) return true;
+    const std::size_t bands = st.band_edges.size();
+    const auto r = static_cast<std::size_t>(
+        std::lround(0.5 * o.edge_window_m * fx / std::max(depth_m, 1.0) / o.column_bin_px));
+    std::vector<double> energy(bands + 1, 0.0), horizontal(bands + 1, 0.0);
+    for (std::size_t b = 0; b < bands; ++b) {
+        energy[b + 1] = energy[b] + st.band_edges[b];
+        horizontal[b + 1] = horizontal[b] + st.band_level_edges[b];
+    }
+    st.band_car.assign(bands, 0);
+    bool any = false;
+    for (std::size_t b = 0; b < bands; ++b) {
+        if (!(st.band_pixels[b] > 0.0)) continue;
+        const std::size_t lo = b > r ? b - r : 0, hi = std::min(bands, b + r + 1);
+        const double e = energy[hi] - energy[lo];
+        if (horizontal[hi] - horizontal[lo] >= o.car_min_edge_share * e) {
+            st.band_car[b] = 1;
+            any = true;
+        }
+    }
+    return any;
+}
+
 /// The rules: a class for a segment from its height, width and green share.
-Segment classify(SegmentStats& st, const Classes& cls, const GeometryOptions& o) {
+Segment classify(SegmentStats& st, const Classes& cls, bool has_image, double fx,
+                 const GeometryOptions& o) {
     Segment seg;
     seg.pixels = st.pixels;
     // The top is the segment's own cells' (unless it is tall, or most cells lie far behind);
@@ -174,6 +222,9 @@ Segment classify(SegmentStats& st, const Classes& cls, const GeometryOptions& o)
     seg.green = st.pixels ? static_cast<double>(st.green) / st.pixels : 0.0;
     seg.occluded = st.pixels ? static_cast<double>(st.occluded) / st.pixels : 0.0;
     seg.tall = st.tall;
+    if (has_image) {
+        seg.horizontal_edges = st.edges > 0.0 ? st.level_edges / st.edges : 0.0;
+    }
     const auto set = [&](std::uint16_t c, const char* label) {
         seg.class_index = c;
         seg.label = label;
@@ -207,7 +258,8 @@ Segment classify(SegmentStats& st, const Classes& cls, const GeometryOptions& o)
         // facade by the image's left edge, matched metres behind itself), or a sliver.
         set(cls.other, "static");
     } else if (seg.top_m >= o.car_min_height_m && seg.top_m <= o.car_max_height_m &&
-               seg.low_m < o.low_max_height_m) {
+               seg.low_m < o.low_max_height_m &&
+               mark_car_bands(st, has_image, seg.depth_m, fx, o)) {
         set(cls.car, "car");
     } else {
         set(cls.other, "static");
@@ -240,7 +292,8 @@ void label_without_ground(const DisparityMap& disparity, std::uint16_t sky, Clas
 /// Each pixel of a segment: its segment's index, class (segment_class) and image box; a pixel
 /// below low_cut_m in no segment: sidewalk or terrain.
 void label_segment_pixels(const Grid& grid, const Classes& cls,
-                          const std::vector<std::uint16_t>& segment_class, int w,
+                          const std::vector<std::uint16_t>& segment_class,
+                          const std::vector<SegmentStats>& stats, int w, int column_bin_px,
                           SceneGeometry& out) {
     out.segment_of_pixel.assign(grid.pixel_cell.size(), -1);
     for (std::size_t p = 0; p < grid.pixel_cell.size(); ++p) {
@@ -260,9 +313,17 @@ void label_segment_pixels(const Grid& grid, const Classes& cls,
             seg.u1 = std::max(seg.u1, u);
             seg.v0 = std::min(seg.v0, v);
             seg.v1 = std::max(seg.v1, v);
-            // Green pixels of a car segment are the hedge or bush it touches.
-            const std::uint16_t c = segment_class[static_cast<std::size_t>(s)];
-            out.classes.class_index[p] = c == cls.car && grid.pixel_green[p] ? cls.vegetation : c;
+            // A car segment's bands without a car's horizontal edges are clutter beside it;
+            // its green pixels are the hedge or bush it touches.
+            std::uint16_t c = segment_class[static_cast<std::size_t>(s)];
+            const std::vector<char>& bands = stats[static_cast<std::size_t>(s)].band_car;
+            if (c == cls.car && grid.pixel_green[p]) {
+                c = cls.vegetation;
+            } else if (c == cls.car && !bands.empty() &&
+                       !bands[static_cast<std::size_t>(u / column_bin_px)]) {
+                c = cls.other;
+            }
+            out.classes.class_index[p] = c;
         } else if (grid.pixel_low[p]) {
             out.classes.class_index[p] = grid.pixel_green[p] ? cls.terrain : cls.sidewalk;
         }
@@ -320,11 +381,12 @@ SceneGeometry derive_semantics(const DisparityMap& disparity, const StereoCamera
                                                            : link_cells(grid, disparity, rig, o);
     std::vector<SegmentStats> stats = gather_segments(grid, parent, rig, w, o);
     std::vector<std::uint16_t> segment_class(stats.size(), kVoidClass);
+    const bool has_image = !left.empty() && left.width_px == w && left.height_px == h;
     for (std::size_t s = 0; s < stats.size(); ++s) {
-        out.segments.push_back(classify(stats[s], cls, o));
+        out.segments.push_back(classify(stats[s], cls, has_image, rig.fx, o));
         segment_class[s] = out.segments.back().class_index;
     }
-    label_segment_pixels(grid, cls, segment_class, w, out);
+    label_segment_pixels(grid, cls, segment_class, stats, w, o.column_bin_px, out);
     label_sky(&grid, w, out.ground.horizon_v_px, cls.sky, out.classes);
     sort_segments(out);
     return out;

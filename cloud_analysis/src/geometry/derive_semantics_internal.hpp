@@ -19,6 +19,8 @@ struct Cell {
     float height_sum = 0;   ///< sum of their heights above the road, metres
     double d_sum = 0.0;     ///< sum of their disparities, px
     int green = 0;          ///< of them green
+    float edges = 0;        ///< grey-level gradient magnitude summed over all its pixels not
+    float level_edges = 0;  ///< green; of it, in horizontal edges (within 20 degrees of vertical)
     int at_cut = 0;         ///< of them within continuity_band_m of the layers' border
     float top1 = -1e9f;     ///< highest height above the road, metres
     float top2 = -1e9f;     ///< second highest (robust top)

@@ -76,6 +76,9 @@ void GeometryOptions::validate() const {
             "geometry.continuity_share: must be in (0, 1]");
     fail_if(green_window_px < 0 || green_window_px > 64,
             "geometry.green_window_px: must be in [0, 64]");
+    fail_if(!(car_min_edge_share >= 0.0 && car_min_edge_share < 1.0),
+            "geometry.car_min_edge_share: must be in [0, 1)");
+    positive(edge_window_m, "geometry.edge_window_m");
     fail_if(!(min_face_share >= 0.0 && min_face_share < 1.0),
             "geometry.min_face_share: must be in [0, 1)");
     fail_if(!(green_fraction > 0.0 && green_fraction <= 1.0),

@@ -26,6 +26,7 @@ std::string segments_json(const SceneGeometry& g, const std::string& frame_id) {
                             {"far_m", s.far_m},
                             {"green", s.green},
                             {"occluded", s.occluded},
+                            {"horizontal_edges", s.horizontal_edges},
                             {"tall", s.tall}});
     }
     const nlohmann::json doc = {{"frame", frame_id},

@@ -67,6 +67,33 @@ std::vector<char> green_mask(const ImageU8& left, int w, int h, int radius) {
     return mask;
 }
 
+/// The left image in grey (ITU-R 601 luma), empty without an image of the disparity's size.
+std::vector<std::uint8_t> grey_of(const ImageU8& left, int w, int h) {
+    std::vector<std::uint8_t> grey;
+    if (left.empty() || left.width_px != w || left.height_px != h) return grey;
+    if (left.channels == 1) return left.data;
+    grey.resize(static_cast<std::size_t>(w) * h);
+    const std::uint8_t* p = left.data.data();
+    for (std::size_t i = 0; i < grey.size(); ++i, p += 3) {
+        grey[i] = static_cast<std::uint8_t>((77 * p[0] + 150 * p[1] + 29 * p[2] + 128) >> 8);
+    }
+    return grey;
+}
+
+/// Adds the 3x3 Sobel gradient of grey pixel (u, v) (not on the image's border) to a cell's
+/// edge energy, and to its horizontal edges when the gradient points within 20 degrees of
+/// vertical.
+void add_edge(const std::vector<std::uint8_t>& grey, int w, int u, int v, Cell& c) {
+    constexpr float kTan20 = 0.36397f;
+    const std::uint8_t* p = grey.data() + static_cast<std::size_t>(v) * w + u;
+    const int gx = (p[-w + 1] + 2 * p[1] + p[w + 1]) - (p[-w - 1] + 2 * p[-1] + p[w - 1]);
+    const int gy = (p[w - 1] + 2 * p[w] + p[w + 1]) - (p[-w - 1] + 2 * p[-w] + p[-w + 1]);
+    const auto fx = static_cast<float>(gx), fy = static_cast<float>(gy);
+    const float magnitude = std::sqrt(fx * fx + fy * fy);
+    c.edges += magnitude;
+    if (std::abs(fx) <= kTan20 * std::abs(fy)) c.level_edges += magnitude;
+}
+
 /// Whether pixel (u, v) lies on the matcher's blend between a nearer surface above and a
 /// farther one below (a tree's crown in front of a bus's side): its disparity is below the
 /// column's `rows` rows above and above the column's `rows` rows below, each by more than
@@ -209,6 +236,7 @@ std::vector<std::size_t> count_pixels(const DisparityMap& disparity, const Rig& 
     const auto tall_m = static_cast<float>(o.layer_height_m);
     const auto band_m = static_cast<float>(o.continuity_band_m);
     const std::vector<char> green_px = green_mask(left, w, h, o.green_window_px);
+    const std::vector<std::uint8_t> grey = grey_of(left, w, h);
     std::vector<std::size_t> lower_at_cut;  // lower-layer pixels near the layers' border
     for (int v = 0; v < h; ++v) {
         const std::size_t row = static_cast<std::size_t>(v) * w;
@@ -234,6 +262,9 @@ std::vector<std::size_t> count_pixels(const DisparityMap& disparity, const Rig& 
             g.pixel_cell[row + u] = cell;
             const bool green = green_px[row + u] != 0;
             g.pixel_green[row + u] = green ? 1 : 0;
+            if (!green && !grey.empty() && u > 0 && v > 0 && u + 1 < w && v + 1 < h) {
+                add_edge(grey, w, u, v, g.cells[static_cast<std::size_t>(cell)]);
+            }
             if (height < o.low_cut_m) {
                 g.pixel_low[row + u] = 1;
                 continue;

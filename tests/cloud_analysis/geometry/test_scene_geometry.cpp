@@ -1,5 +1,6 @@
 #include <algorithm>
 #include <cmath>
+#include <cstdint>
 #include <functional>
 #include <string>
 #include <utility>
@@ -88,6 +89,35 @@ void check_car_only_with_rule(const DisparityMap& d, const StereoCamera& cam,
     without(o);
     CHECK(class_at(derive_semantics(d, cam, ImageU8{}, palette, o), palette, px.first, px.second) !=
           "car");
+}
+
+/// A grey image of the rig's size, 120 everywhere but in the image box of the face from
+/// (x0, up0) to (x1, up1) at depth z, where `grey(u, v)` paints it.
+ImageU8 textured(const StereoCamera& c, double x0, double up0, double x1, double up1, double z,
+                 const std::function<int(int, int)>& grey, ImageU8 left = {}) {
+    if (left.empty()) {
+        left.width_px = c.width_px;
+        left.height_px = c.height_px;
+        left.channels = 1;
+        left.data.assign(static_cast<std::size_t>(c.width_px) * c.height_px, 120);
+    }
+    const auto [u0, v0] = pixel_of(c, x0, up1, z);
+    const auto [u1, v1] = pixel_of(c, x1, up0, z);
+    for (int v = v0; v <= v1; ++v) {
+        for (int u = u0; u <= u1; ++u) {
+            left.data[static_cast<std::size_t>(v) * c.width_px + u] =
+                static_cast<std::uint8_t>(std::clamp(grey(u, v), 0, 255));
+        }
+    }
+    return left;
+}
+
+/// Stripes 4 px wide: horizontal (a car's bumper, sills, window line), or upright (posts).
+int horizontal_stripes(int, int v) { return (v / 4) % 2 ? 60 : 180; }
+int upright_stripes(int u, int) { return (u / 4) % 2 ? 20 : 230; }
+/// An isotropic texture (grass, leaves): a fixed pseudo-random grey per pixel.
+int speckle(int u, int v) {
+    return static_cast<int>((u * 7919u + v * 104729u) * 2654435761u >> 24);
 }
 
 }  // namespace
@@ -503,6 +533,57 @@ TEST_CASE("the green pixels of a car segment are vegetation, by their window's m
     CHECK(class_at(g, palette, cu, cv) == "car");
 }
 
+TEST_CASE(
+    "a car-shaped surface is a car by its horizontal edges, not with upright or "
+    "isotropic texture",
+    "[geometry]") {
+    const StereoCamera cam = kitti_rig();
+    const auto palette = cloud_analysis::load_palette("cityscapes");
+    const DisparityMap d = render(cam, 1.65, with_car_from_behind({}, 10.0));
+    const auto [cu, cv] = pixel_of(cam, 0.0, 0.8, 10.0);
+    const auto class_with = [&](int (*grey)(int, int), const GeometryOptions& o) {
+        const ImageU8 left = textured(cam, -1.0, 0.0, 0.8, 1.5, 10.0, grey);
+        return class_at(derive_semantics(d, cam, left, palette, o), palette, cu, cv);
+    };
+    CHECK(class_with(horizontal_stripes, {}) == "car");
+    CHECK(class_with(upright_stripes, {}) == "static");
+    CHECK(class_with(speckle, {}) == "static");
+    GeometryOptions off;
+    off.car_min_edge_share = 0.0;
+    CHECK(class_with(speckle, off) == "car");
+    // Without an image, or on a plain one, nothing speaks against the car.
+    CHECK(class_at(derive_semantics(d, cam, ImageU8{}, palette, {}), palette, cu, cv) == "car");
+    const ImageU8 plain = textured(cam, -1.0, 0.0, 0.8, 1.5, 10.0, [](int, int) { return 120; });
+    CHECK(class_at(derive_semantics(d, cam, plain, palette, {}), palette, cu, cv) == "car");
+    // The segment table reports the share.
+    const SceneGeometry g = derive_semantics(
+        d, cam, textured(cam, -1.0, 0.0, 0.8, 1.5, 10.0, upright_stripes), palette, {});
+    const auto s = g.segment_of_pixel[static_cast<std::size_t>(cv) * cam.width_px + cu];
+    REQUIRE(s >= 0);
+    CHECK(g.segments[static_cast<std::size_t>(s)].horizontal_edges < 0.1);
+}
+
+TEST_CASE("a car merged with upright clutter beside it keeps its own bands as car", "[geometry]") {
+    const StereoCamera cam = kitti_rig();
+    const auto palette = cloud_analysis::load_palette("cityscapes");
+    // Fence posts 2 m wide right beside the car, as deep and as high as its back: one segment,
+    // most of its gradient energy in upright edges.
+    const DisparityMap d = render(cam, 1.65, with_car_from_behind({{0.8, 2.8, 10.0, 1.0}}, 10.0));
+    ImageU8 left = textured(cam, -1.0, 0.0, 0.8, 1.5, 10.0,
+                            [](int, int v) { return (v / 4) % 2 ? 100 : 140; });
+    left = textured(cam, 0.85, 0.0, 2.8, 1.0, 10.0, upright_stripes, left);
+    const SceneGeometry g = derive_semantics(d, cam, left, palette, {});
+    const auto [cu, cv] = pixel_of(cam, -0.5, 0.8, 10.0);
+    const auto [fu, fv] = pixel_of(cam, 2.3, 0.8, 10.0);
+    REQUIRE(g.segment_of_pixel[static_cast<std::size_t>(cv) * cam.width_px + cu] ==
+            g.segment_of_pixel[static_cast<std::size_t>(fv) * cam.width_px + fu]);
+    // The whole segment falls short of a car's share: its car bands are found one by one.
+    const auto s = g.segment_of_pixel[static_cast<std::size_t>(cv) * cam.width_px + cu];
+    CHECK(g.segments[static_cast<std::size_t>(s)].horizontal_edges < 0.3);
+    CHECK(class_at(g, palette, cu, cv) == "car");
+    CHECK(class_at(g, palette, fu, fv) == "static");
+}
+
 TEST_CASE("a wall filling the view or a wrong baseline gives no ground and a warning",
           "[geometry]") {
     StereoCamera cam = kitti_rig();
@@ -562,6 +643,12 @@ TEST_CASE("geometry options name the bad field", "[geometry]") {
     o = GeometryOptions{};
     o.green_window_px = -1;
     CHECK_THROWS_WITH(o.validate(), Catch::Contains("green_window_px"));
+    o = GeometryOptions{};
+    o.car_min_edge_share = 1.0;
+    CHECK_THROWS_WITH(o.validate(), Catch::Contains("car_min_edge_share"));
+    o = GeometryOptions{};
+    o.edge_window_m = 0.0;
+    CHECK_THROWS_WITH(o.validate(), Catch::Contains("edge_window_m"));
     o = GeometryOptions{};
     o.segmentation = "stixels";
     CHECK_THROWS_WITH(o.validate(), Catch::Contains("segmentation"));

@@ -93,6 +93,16 @@ struct GeometryOptions {
     double car_max_height_m = 2.2;         ///< ... and this above the road (below layer_height_m:
                                            ///< a segment reaching it meets a surface above), m
     double car_min_width_m = 1.2;          ///< narrower objects are persons or poles, metres
+    double car_min_edge_share = 0.28;      ///< a car's back and sides are bands of horizontal
+                                           ///< edges (bumper, sills, window line, roof): at
+                                           ///< least this share of its pixels' grey-level
+                                           ///< gradient energy points within 20 degrees of
+                                           ///< vertical. An isotropic texture (grass, leaves,
+                                           ///< a porous hedge) holds 0.22, upright posts and
+                                           ///< trunks less; [0, 1), 0 = off. A segment falling
+                                           ///< short keeps as car the column bands where a
+                                           ///< window ...
+    double edge_window_m = 1.2;            ///< ... this wide at its depth reaches it, metres > 0
     double building_min_height_m = 2.6;    ///< taller objects are buildings (or trees), metres
     double wall_top_spread_m = 0.2;        ///< a segment whose tops (25th-97th percentile) vary
                                            ///< less than this is no car: one upright face (a
@@ -146,6 +156,9 @@ struct Segment {
     double far_m = 0.0;                      ///< 95 % of its cells' distances, metres
     double green = 0.0;                      ///< share of green pixels, [0, 1]
     double occluded = 0.0;                   ///< share of pixels whose top a nearer surface hides
+    double horizontal_edges = -1.0;          ///< share of its pixels' gradient energy in
+                                             ///< horizontal edges (car_min_edge_share), -1
+                                             ///< without a left image
     bool tall = false;                       ///< most pixels in cells of a surface reaching
                                              ///< above layer_height_m
     int u0 = 0, v0 = 0, u1 = -1, v1 = -1;    ///< image box of its pixels (inclusive), px
