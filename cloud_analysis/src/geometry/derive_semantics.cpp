@@ -112,14 +112,14 @@ std::vector<SegmentStats> gather_segments(Grid& g, std::vector<int>& parent, con
         st.tall_pixels += c.is_tall ? static_cast<std::size_t>(c.count) : 0;
         st.green += static_cast<std::size_t>(c.green);
         const int column_bin = i / kLayers;
-        st.edges += c.edges;
-        st.level_edges += c.level_edges;
+        st.edges += static_cast<double>(c.edges);
+        st.level_edges += static_cast<double>(c.level_edges);
         const auto band = static_cast<std::size_t>(column_bin / g.bins_d);
         st.band_edges.resize(static_cast<std::size_t>(g.bins_u), 0.0);
         st.band_level_edges.resize(static_cast<std::size_t>(g.bins_u), 0.0);
         st.band_pixels.resize(static_cast<std::size_t>(g.bins_u), 0.0);
-        st.band_edges[band] += c.edges;
-        st.band_level_edges[band] += c.level_edges;
+        st.band_edges[band] += static_cast<double>(c.edges);
+        st.band_level_edges[band] += static_cast<double>(c.level_edges);
         st.band_pixels[band] += c.count;
         st.occluded += c.occluded ? static_cast<std::size_t>(c.count) : 0;
         st.lows.push_back(c.low);

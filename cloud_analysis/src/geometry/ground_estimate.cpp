@@ -79,6 +79,7 @@ void GeometryOptions::validate() const {
     fail_if(!(car_min_edge_share >= 0.0 && car_min_edge_share < 1.0),
             "geometry.car_min_edge_share: must be in [0, 1)");
     positive(edge_window_m, "geometry.edge_window_m");
+    fail_if(edge_step_px < 1 || edge_step_px > 64, "geometry.edge_step_px: must be in [1, 64]");
     fail_if(!(min_face_share >= 0.0 && min_face_share < 1.0),
             "geometry.min_face_share: must be in [0, 1)");
     fail_if(!(green_fraction > 0.0 && green_fraction <= 1.0),

@@ -37,55 +37,91 @@ std::vector<char> green_mask(const ImageU8& left, int w, int h, int radius) {
     if (left.channels != 3 || left.empty() || left.width_px != w || left.height_px != h) {
         return mask;
     }
-    // Integral image of the three channels, (w + 1) x (h + 1).
-    const std::size_t stride = static_cast<std::size_t>(w) + 1;
-    std::vector<std::array<std::int64_t, 3>> sum(stride * (h + 1), {0, 0, 0});
+    // Box sums, separable: per row over the window's columns (at most 129 * 255 per channel),
+    // then per column over the window's rows, slid down the image.
+    const std::size_t row_len = static_cast<std::size_t>(w) * 3;
+    std::vector<std::int32_t> across(row_len * h);
     for (int v = 0; v < h; ++v) {
-        std::array<std::int64_t, 3> row{0, 0, 0};
+        const std::uint8_t* p = left.at(0, v);
+        std::int32_t* out = across.data() + v * row_len;
+        std::array<std::int32_t, 3> sum{0, 0, 0};
+        for (int u = 0; u < std::min(w, radius); ++u) {
+            for (int c = 0; c < 3; ++c) sum[c] += p[u * 3 + c];
+        }
         for (int u = 0; u < w; ++u) {
-            const std::uint8_t* p = left.at(u, v);
             for (int c = 0; c < 3; ++c) {
-                row[c] += p[c];
-                sum[(v + 1) * stride + u + 1][c] = sum[v * stride + u + 1][c] + row[c];
+                if (u + radius < w) sum[c] += p[(u + radius) * 3 + c];
+                if (u - radius - 1 >= 0) sum[c] -= p[(u - radius - 1) * 3 + c];
+                out[u * 3 + c] = sum[c];
             }
         }
     }
+    std::vector<std::int32_t> down(row_len, 0);
+    for (int v = 0; v < std::min(h, radius); ++v) {
+        for (std::size_t k = 0; k < row_len; ++k) down[k] += across[v * row_len + k];
+    }
     for (int v = 0; v < h; ++v) {
-        const int v0 = std::max(0, v - radius), v1 = std::min(h, v + radius + 1);
+        if (v + radius < h) {
+            const std::int32_t* add = across.data() + (v + radius) * row_len;
+            for (std::size_t k = 0; k < row_len; ++k) down[k] += add[k];
+        }
+        if (v - radius - 1 >= 0) {
+            const std::int32_t* sub = across.data() + (v - radius - 1) * row_len;
+            for (std::size_t k = 0; k < row_len; ++k) down[k] -= sub[k];
+        }
+        const int rows = std::min(h, v + radius + 1) - std::max(0, v - radius);
+        char* m = mask.data() + static_cast<std::size_t>(v) * w;
         for (int u = 0; u < w; ++u) {
-            const int u0 = std::max(0, u - radius), u1 = std::min(w, u + radius + 1);
-            std::array<std::int64_t, 3> m{};
-            for (int c = 0; c < 3; ++c) {
-                m[c] = sum[v1 * stride + u1][c] - sum[v0 * stride + u1][c] -
-                       sum[v1 * stride + u0][c] + sum[v0 * stride + u0][c];
-            }
-            const std::int64_t n = static_cast<std::int64_t>(v1 - v0) * (u1 - u0);
-            mask[static_cast<std::size_t>(v) * w + u] = is_green(
-                static_cast<int>(m[0] / n), static_cast<int>(m[1] / n), static_cast<int>(m[2] / n));
+            // The mean colour, floored; a double quotient of these integers floors exactly and
+            // costs less than an integer division.
+            const double n = rows * (std::min(w, u + radius + 1) - std::max(0, u - radius));
+            const std::int32_t* s = down.data() + u * 3;
+            m[u] = is_green(static_cast<int>(s[0] / n), static_cast<int>(s[1] / n),
+                            static_cast<int>(s[2] / n));
         }
     }
     return mask;
 }
 
-/// The left image in grey (ITU-R 601 luma), empty without an image of the disparity's size.
-std::vector<std::uint8_t> grey_of(const ImageU8& left, int w, int h) {
+/// The left image in grey (ITU-R 601 luma), averaged over step x step boxes: the grid the
+/// edges are read on. Empty without an image of the disparity's size.
+struct EdgeGrid {
     std::vector<std::uint8_t> grey;
-    if (left.empty() || left.width_px != w || left.height_px != h) return grey;
-    if (left.channels == 1) return left.data;
-    grey.resize(static_cast<std::size_t>(w) * h);
-    const std::uint8_t* p = left.data.data();
-    for (std::size_t i = 0; i < grey.size(); ++i, p += 3) {
-        grey[i] = static_cast<std::uint8_t>((77 * p[0] + 150 * p[1] + 29 * p[2] + 128) >> 8);
+    int w = 0, h = 0, step = 1;
+};
+
+EdgeGrid edge_grid(const ImageU8& left, int w, int h, int step) {
+    EdgeGrid e;
+    if (left.empty() || left.width_px != w || left.height_px != h) return e;
+    e.step = std::max(1, step);
+    e.w = w / e.step;
+    e.h = h / e.step;
+    e.grey.resize(static_cast<std::size_t>(e.w) * e.h);
+    const int n = e.step * e.step;
+    for (int y = 0; y < e.h; ++y) {
+        for (int x = 0; x < e.w; ++x) {
+            int sum = 0;
+            for (int v = y * e.step; v < (y + 1) * e.step; ++v) {
+                const std::uint8_t* p = left.at(x * e.step, v);
+                for (int k = 0; k < e.step; ++k, p += left.channels) {
+                    sum += left.channels == 1 ? 256 * p[0] : 77 * p[0] + 150 * p[1] + 29 * p[2];
+                }
+            }
+            e.grey[static_cast<std::size_t>(y) * e.w + x] =
+                static_cast<std::uint8_t>((sum + 128 * n) / (256 * n));
+        }
     }
-    return grey;
+    return e;
 }
 
-/// Adds the 3x3 Sobel gradient of grey pixel (u, v) (not on the image's border) to a cell's
-/// edge energy, and to its horizontal edges when the gradient points within 20 degrees of
-/// vertical.
-void add_edge(const std::vector<std::uint8_t>& grey, int w, int u, int v, Cell& c) {
+/// Adds the 3x3 Sobel gradient of the edge grid at pixel (u, v) (not on the grid's border) to a
+/// cell's edges, and to its level edges when the gradient points within 20 degrees of vertical.
+void add_edge(const EdgeGrid& e, int u, int v, Cell& c) {
     constexpr float kTan20 = 0.36397f;
-    const std::uint8_t* p = grey.data() + static_cast<std::size_t>(v) * w + u;
+    const int x = u / e.step, y = v / e.step;
+    if (x < 1 || y < 1 || x + 1 >= e.w || y + 1 >= e.h) return;
+    const int w = e.w;
+    const std::uint8_t* p = e.grey.data() + static_cast<std::size_t>(y) * w + x;
     const int gx = (p[-w + 1] + 2 * p[1] + p[w + 1]) - (p[-w - 1] + 2 * p[-1] + p[w - 1]);
     const int gy = (p[w - 1] + 2 * p[w] + p[w + 1]) - (p[-w - 1] + 2 * p[-w] + p[-w + 1]);
     const auto fx = static_cast<float>(gx), fy = static_cast<float>(gy);
@@ -236,7 +272,7 @@ std::vector<std::size_t> count_pixels(const DisparityMap& disparity, const Rig& 
     const auto tall_m = static_cast<float>(o.layer_height_m);
     const auto band_m = static_cast<float>(o.continuity_band_m);
     const std::vector<char> green_px = green_mask(left, w, h, o.green_window_px);
-    const std::vector<std::uint8_t> grey = grey_of(left, w, h);
+    const EdgeGrid edges = edge_grid(left, w, h, o.edge_step_px);
     std::vector<std::size_t> lower_at_cut;  // lower-layer pixels near the layers' border
     for (int v = 0; v < h; ++v) {
         const std::size_t row = static_cast<std::size_t>(v) * w;
@@ -262,8 +298,8 @@ std::vector<std::size_t> count_pixels(const DisparityMap& disparity, const Rig& 
             g.pixel_cell[row + u] = cell;
             const bool green = green_px[row + u] != 0;
             g.pixel_green[row + u] = green ? 1 : 0;
-            if (!green && !grey.empty() && u > 0 && v > 0 && u + 1 < w && v + 1 < h) {
-                add_edge(grey, w, u, v, g.cells[static_cast<std::size_t>(cell)]);
+            if (!green && !edges.grey.empty()) {
+                add_edge(edges, u, v, g.cells[static_cast<std::size_t>(cell)]);
             }
             if (height < o.low_cut_m) {
                 g.pixel_low[row + u] = 1;

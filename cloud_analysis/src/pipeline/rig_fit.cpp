@@ -94,7 +94,7 @@ const std::set<std::string>& rig_scaled_fields() {
         // reprojection
         "depth_edge_rows",
         // stereo-only segmentation
-        "column_bin_px", "min_cell_pixels", "green_window_px", "blend_rows",
+        "column_bin_px", "min_cell_pixels", "green_window_px", "blend_rows", "edge_step_px",
         // entity extraction and the class config's per-class minimum
         "image_radius_px", "shadow_radius_px", "min_width_px", "strip_beside_width_px",
         "min_points"};
@@ -153,6 +153,7 @@ RigFit fit_to_rig(const AnalyseOptions& analyse, const ExtractOptions& extract,
         if (!given("min_cell_pixels")) g.min_cell_pixels = scaled_count(g.min_cell_pixels, s);
         if (!given("green_window_px")) g.green_window_px = scaled_length(g.green_window_px, s);
         if (!given("blend_rows")) g.blend_rows = scaled_length(g.blend_rows, s);
+        if (!given("edge_step_px")) g.edge_step_px = scaled_length(g.edge_step_px, s);
         auto& e = fit.extract;
         if (!given("image_radius_px")) e.image_radius_px = scaled_length(e.image_radius_px, s);
         if (!given("shadow_radius_px")) e.shadow_radius_px = scaled_length(e.shadow_radius_px, s);

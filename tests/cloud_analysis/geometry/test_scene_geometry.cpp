@@ -563,6 +563,23 @@ TEST_CASE(
     CHECK(g.segments[static_cast<std::size_t>(s)].horizontal_edges < 0.1);
 }
 
+TEST_CASE("edges are read at the rig's scale: pixel speckle averages out over wider boxes",
+          "[geometry]") {
+    const StereoCamera cam = kitti_rig();
+    const auto palette = cloud_analysis::load_palette("cityscapes");
+    const DisparityMap d = render(cam, 1.65, with_car_from_behind({}, 10.0));
+    const auto [cu, cv] = pixel_of(cam, 0.0, 0.8, 10.0);
+    // Horizontal stripes 8 px high under strong upright stripes 2 px wide, which 2 x 2 boxes
+    // turn into a 1 px alternation a 3x3 Sobel does not see.
+    const ImageU8 left = textured(cam, -1.0, 0.0, 0.8, 1.5, 10.0, [](int u, int v) {
+        return ((v / 8) % 2 ? 100 : 150) + ((u / 2) % 2 ? 60 : -60);
+    });
+    GeometryOptions o;
+    CHECK(class_at(derive_semantics(d, cam, left, palette, o), palette, cu, cv) == "static");
+    o.edge_step_px = 2;
+    CHECK(class_at(derive_semantics(d, cam, left, palette, o), palette, cu, cv) == "car");
+}
+
 TEST_CASE("a car merged with upright clutter beside it keeps its own bands as car", "[geometry]") {
     const StereoCamera cam = kitti_rig();
     const auto palette = cloud_analysis::load_palette("cityscapes");
@@ -649,6 +666,9 @@ TEST_CASE("geometry options name the bad field", "[geometry]") {
     o = GeometryOptions{};
     o.edge_window_m = 0.0;
     CHECK_THROWS_WITH(o.validate(), Catch::Contains("edge_window_m"));
+    o = GeometryOptions{};
+    o.edge_step_px = 0;
+    CHECK_THROWS_WITH(o.validate(), Catch::Contains("edge_step_px"));
     o = GeometryOptions{};
     o.segmentation = "stixels";
     CHECK_THROWS_WITH(o.validate(), Catch::Contains("segmentation"));

@@ -87,6 +87,7 @@ TEST_CASE("pixel settings scale with the focal length, counts with its square", 
         CHECK(fit.analyse.reproject.depth_edge_rows == 3 * options.reproject.depth_edge_rows);
         CHECK(fit.analyse.geometry.column_bin_px == 3 * options.geometry.column_bin_px);
         CHECK(fit.analyse.geometry.min_cell_pixels == 9 * options.geometry.min_cell_pixels);
+        CHECK(fit.analyse.geometry.edge_step_px == 3 * options.geometry.edge_step_px);
         CHECK(fit.extract.shadow_radius_px == 3 * extract.shadow_radius_px);
         CHECK(fit.extract.strip_beside_width_px == Approx(3 * extract.strip_beside_width_px));
         CHECK(fit.extract.classes.find("car").min_points ==
@@ -95,6 +96,7 @@ TEST_CASE("pixel settings scale with the focal length, counts with its square", 
     SECTION("a fifth of the focal length keeps lengths and counts at least 1") {
         const RigFit fit = fit_to_rig(options, extract, rig(621, 188, 721.5377 / 5, 0.54));
         CHECK(fit.analyse.geometry.min_cell_pixels == 1);
+        CHECK(fit.analyse.geometry.edge_step_px == 1);
         CHECK(fit.extract.image_radius_px == 1);
     }
     SECTION("settings the user gave stay as given") {

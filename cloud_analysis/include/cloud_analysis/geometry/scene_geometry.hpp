@@ -103,6 +103,9 @@ struct GeometryOptions {
                                            ///< short keeps as car the column bands where a
                                            ///< window ...
     double edge_window_m = 1.2;            ///< ... this wide at its depth reaches it, metres > 0
+    int edge_step_px = 1;                  ///< edges are read on the grey image averaged over
+                                           ///< boxes this wide (the detail a 3x3 Sobel sees at
+                                           ///< KITTI's focal length), px, >= 1
     double building_min_height_m = 2.6;    ///< taller objects are buildings (or trees), metres
     double wall_top_spread_m = 0.2;        ///< a segment whose tops (25th-97th percentile) vary
                                            ///< less than this is no car: one upright face (a
