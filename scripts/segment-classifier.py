@@ -37,7 +37,7 @@ ROOT = os.path.dirname(os.path.dirname(os.path.abspath(__file__)))
 # Cityscapes labelIds (instance PNG: labelId << 8 | n) counted as a car: the entities' class.
 CAR_LABEL_ID = class_ids("cityscapes")["car"]
 FEATURES = ["top_m", "top_q25_m", "low_m", "width_m", "thickness_m", "depth_m", "near_m",
-            "far_m", "green", "occluded", "tall", "cells"]
+            "far_m", "green", "occluded", "tall", "cells", "horizontal_edges"]
 
 
 def features(s):
