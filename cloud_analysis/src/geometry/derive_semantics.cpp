@@ -77,8 +77,8 @@ struct SegmentStats {
     double edges = 0.0, level_edges = 0.0;  ///< Cell::edges, Cell::level_edges
     /// The same per column band (index u / column_bin_px), and the pixels there.
     std::vector<double> band_edges, band_level_edges, band_pixels;
-    /// Per column band: whether its pixels may be a car's (horizontal_edge_bands); empty when
-    /// every band may.
+    /// Per column band: whether its pixels may be a car's (mark_car_bands); empty when every
+    /// band may.
     std::vector<char> band_car;
     std::size_t border_pixels = 0;  ///< in cells within kEdgeColumns of the matcher's left
                                     ///< border at their depth, or left of it
@@ -105,6 +105,10 @@ std::vector<SegmentStats> gather_segments(Grid& g, std::vector<int>& parent, con
         if (s < 0) {
             s = static_cast<int>(stats.size());
             stats.emplace_back();
+            const auto bands = static_cast<std::size_t>(g.bins_u);
+            stats.back().band_edges.assign(bands, 0.0);
+            stats.back().band_level_edges.assign(bands, 0.0);
+            stats.back().band_pixels.assign(bands, 0.0);
         }
         c.segment = s;
         SegmentStats& st = stats[static_cast<std::size_t>(s)];
@@ -115,9 +119,6 @@ std::vector<SegmentStats> gather_segments(Grid& g, std::vector<int>& parent, con
         st.edges += static_cast<double>(c.edges);
         st.level_edges += static_cast<double>(c.level_edges);
         const auto band = static_cast<std::size_t>(column_bin / g.bins_d);
-        st.band_edges.resize(static_cast<std::size_t>(g.bins_u), 0.0);
-        st.band_level_edges.resize(static_cast<std::size_t>(g.bins_u), 0.0);
-        st.band_pixels.resize(static_cast<std::size_t>(g.bins_u), 0.0);
         st.band_edges[band] += static_cast<double>(c.edges);
         st.band_level_edges[band] += static_cast<double>(c.level_edges);
         st.band_pixels[band] += c.count;
