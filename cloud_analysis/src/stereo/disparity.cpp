@@ -344,7 +344,8 @@ DisparityScore score_disparity(const DisparityMap& estimate, const DisparityMap&
         if (err > 3.0 && err > 0.05 * static_cast<double>(gt)) ++outliers_valid;
         if (err <= 3.0) {
             const auto& bands = DisparityScore::kBiasBandsPx;
-            const std::size_t band = gt < bands[0] ? 0 : gt < bands[1] ? 1 : 2;
+            const auto g = static_cast<double>(gt);
+            const std::size_t band = g < bands[0] ? 0 : g < bands[1] ? 1 : 2;
             signed_errors[band].push_back(signed_err);
         }
     }
