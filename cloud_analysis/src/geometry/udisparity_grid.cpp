@@ -7,7 +7,11 @@
 #include <utility>
 #include <vector>
 
+#include <opencv2/core.hpp>
+#include <opencv2/imgproc.hpp>
+
 #include "cloud_analysis/entities/cluster.hpp"
+#include "cloud_analysis/io/mat_view.hpp"
 #include "derive_semantics_internal.hpp"
 
 namespace cloud_analysis::geometry {
@@ -83,33 +87,22 @@ std::vector<char> green_mask(const ImageU8& left, int w, int h, int radius) {
     return mask;
 }
 
-/// The left image in grey (ITU-R 601 luma), averaged over step x step boxes: the grid the
-/// edges are read on. Empty without an image of the disparity's size.
+/// The left image in grey (grey_of), averaged over step x step boxes: the grid the edges are
+/// read on. Empty without an image of the disparity's size.
 struct EdgeGrid {
-    std::vector<std::uint8_t> grey;
-    int w = 0, h = 0, step = 1;
+    cv::Mat grey;  ///< CV_8UC1, continuous
+    int step = 1;
 };
 
 EdgeGrid edge_grid(const ImageU8& left, int w, int h, int step) {
     EdgeGrid e;
     if (left.empty() || left.width_px != w || left.height_px != h) return e;
     e.step = std::max(1, step);
-    e.w = w / e.step;
-    e.h = h / e.step;
-    e.grey.resize(static_cast<std::size_t>(e.w) * e.h);
-    const int n = e.step * e.step;
-    for (int y = 0; y < e.h; ++y) {
-        for (int x = 0; x < e.w; ++x) {
-            int sum = 0;
-            for (int v = y * e.step; v < (y + 1) * e.step; ++v) {
-                const std::uint8_t* p = left.at(x * e.step, v);
-                for (int k = 0; k < e.step; ++k, p += left.channels) {
-                    sum += left.channels == 1 ? 256 * p[0] : 77 * p[0] + 150 * p[1] + 29 * p[2];
-                }
-            }
-            e.grey[static_cast<std::size_t>(y) * e.w + x] =
-                static_cast<std::uint8_t>((sum + 128 * n) / (256 * n));
-        }
+    const cv::Mat grey = grey_of(left);
+    if (e.step == 1) {
+        e.grey = grey.isContinuous() ? grey : grey.clone();
+    } else {
+        cv::resize(grey, e.grey, cv::Size(w / e.step, h / e.step), 0.0, 0.0, cv::INTER_AREA);
     }
     return e;
 }
@@ -119,9 +112,9 @@ EdgeGrid edge_grid(const ImageU8& left, int w, int h, int step) {
 void add_edge(const EdgeGrid& e, int u, int v, Cell& c) {
     constexpr float kTan20 = 0.36397f;
     const int x = u / e.step, y = v / e.step;
-    if (x < 1 || y < 1 || x + 1 >= e.w || y + 1 >= e.h) return;
-    const int w = e.w;
-    const std::uint8_t* p = e.grey.data() + static_cast<std::size_t>(y) * w + x;
+    if (x < 1 || y < 1 || x + 1 >= e.grey.cols || y + 1 >= e.grey.rows) return;
+    const int w = e.grey.cols;
+    const std::uint8_t* p = e.grey.ptr<std::uint8_t>(y) + x;
     const int gx = (p[-w + 1] + 2 * p[1] + p[w + 1]) - (p[-w - 1] + 2 * p[-1] + p[w - 1]);
     const int gy = (p[w - 1] + 2 * p[w] + p[w + 1]) - (p[-w - 1] + 2 * p[-w] + p[-w + 1]);
     const auto fx = static_cast<float>(gx), fy = static_cast<float>(gy);

@@ -20,14 +20,6 @@
 namespace cloud_analysis::odometry {
 namespace {
 
-cv::Mat grey_of(const ImageU8& image) {
-    const cv::Mat wrap = mat_view(image);
-    if (image.channels == 1) return wrap;
-    cv::Mat grey;
-    cv::cvtColor(wrap, grey, cv::COLOR_RGB2GRAY);
-    return grey;
-}
-
 Pose pose_of(const cv::Mat& rvec, const cv::Mat& tvec) {
     cv::Mat R;
     cv::Rodrigues(rvec, R);
