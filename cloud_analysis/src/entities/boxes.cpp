@@ -1,6 +1,7 @@
 #include "cloud_analysis/entities/boxes.hpp"
 
 #include <algorithm>
+#include <array>
 #include <cmath>
 #include <limits>
 #include <stdexcept>
@@ -444,47 +445,77 @@ OrientedBox with_length(const OrientedBox& box, double length_m, bool keep_far_e
     return out;
 }
 
-OrientedBox extend_far_end_to_columns(const OrientedBox& box,
-                                      const std::vector<Eigen::Vector3f>& points_m,
-                                      double max_length_m) {
+OrientedBox far_end_to_columns(const OrientedBox& box, const std::vector<Eigen::Vector3f>& points_m,
+                               double max_length_m,
+                               const std::optional<std::array<bool, 2>>& own_outline) {
     constexpr std::size_t kMinPoints = 20;
     // At a grazing angle a the side's position error moves the far end by that error / tan a:
     // at 10 degrees, 5.7 times (5 cm of stereo error across the side, 0.3 m along it).
     constexpr double kMinGrazingSin = 0.1736;  // sin 10 degrees
-    if (points_m.size() < kMinPoints || !(max_length_m > box.L_m)) return box;
+    const std::array<bool, 2> may_shorten = own_outline.value_or(std::array<bool, 2>{false, false});
+    const bool shorten = may_shorten[0] || may_shorten[1];
+    if (points_m.size() < kMinPoints || (!shorten && !(max_length_m > box.L_m))) return box;
     const Eigen::Vector2d c(box.centre_m.x(), box.centre_m.z());
     if (c.norm() < 1e-6) return box;
     const Eigen::Vector2d e1(std::cos(box.theta), -std::sin(box.theta));  // heading, (x, z)
     const Eigen::Vector2d e2(std::sin(box.theta), std::cos(box.theta));
     const double along_ray = e1.dot(c.normalized());
     if (std::abs(along_ray) < std::sqrt(0.5)) return box;
-    const double far = along_ray > 0.0 ? 1.0 : -1.0;  // the far end's direction along e1
-    // The long side facing the camera: its outward normal points back at the camera.
-    const Eigen::Vector2d side = c + (e2.dot(c) > 0.0 ? -0.5 : 0.5) * box.W_m * e2;
-    std::vector<double> slope;
+    const double far = along_ray > 0.0 ? 1.0 : -1.0;        // the far end's direction along e1
+    std::vector<std::pair<double, Eigen::Vector2d>> slope;  // a point's x / z, and the point
+    std::vector<double> along;                              // points' coordinates, far way
     slope.reserve(points_m.size());
-    double farthest = -std::numeric_limits<double>::infinity();  // points' extent, far way
+    along.reserve(points_m.size());
     for (const auto& p : points_m) {
         if (!(p.z() > 0.0f)) continue;
-        slope.push_back(double{p.x()} / double{p.z()});
-        farthest = std::max(farthest, far * (Eigen::Vector2d(p.x(), p.z()) - c).dot(e1));
+        const Eigen::Vector2d q(p.x(), p.z());
+        slope.emplace_back(double{p.x()} / double{p.z()}, q);
+        along.push_back(far * (q - c).dot(e1));
     }
     if (slope.size() < kMinPoints) return box;
     const std::size_t k = std::max<std::size_t>(10, slope.size() / 500);
+    const double farthest = *std::max_element(along.begin(), along.end());
+    // A far end moved inwards keeps the k outermost points along the length behind it.
+    std::nth_element(along.begin(), along.end() - 1 - static_cast<std::ptrdiff_t>(k), along.end());
+    const double floor = *(along.end() - 1 - static_cast<std::ptrdiff_t>(k));
+    const auto by_slope = [](const auto& a, const auto& b) { return a.first < b.first; };
     double best = -std::numeric_limits<double>::infinity();
-    for (const std::size_t rank : {k, slope.size() - 1 - k}) {
-        std::nth_element(slope.begin(), slope.begin() + static_cast<std::ptrdiff_t>(rank),
-                         slope.end());
-        const Eigen::Vector2d ray = Eigen::Vector2d(slope[rank], 1.0).normalized();
+    bool best_may_shorten = false;
+    for (const int side : {0, 1}) {
+        // The k + 1 outermost points on one side of the image (0: left, the lowest x / z), the
+        // outermost ray the last.
+        const auto nth = side == 0 ? slope.begin() + static_cast<std::ptrdiff_t>(k)
+                                   : slope.end() - 1 - static_cast<std::ptrdiff_t>(k);
+        std::nth_element(slope.begin(), nth, slope.end(), by_slope);
+        const Eigen::Vector2d ray = Eigen::Vector2d(nth->first, 1.0).normalized();
         const double cross = ray.x() * e1.y() - ray.y() * e1.x();
         if (std::abs(cross) < kMinGrazingSin) continue;
-        // side + a e1 on the ray: (side + a e1) x ray = 0, and cross = ray x e1.
-        const double a = (side.x() * ray.y() - side.y() * ray.x()) / cross;
-        best = std::max(best, far * a);
+        // The side line: the box's side facing the camera, or, when the outline is the
+        // thing's own, where those points stand (a car's side tapers towards its ends).
+        Eigen::Vector2d line = c + (e2.dot(c) > 0.0 ? -0.5 : 0.5) * box.W_m * e2;
+        if (own_outline) {
+            std::vector<double> offset;
+            const auto first = side == 0 ? slope.begin() : nth;
+            const auto last = side == 0 ? nth + 1 : slope.end();
+            for (auto it = first; it != last; ++it) offset.push_back((it->second - c).dot(e2));
+            const auto mid = offset.begin() + static_cast<std::ptrdiff_t>(offset.size() / 2);
+            std::nth_element(offset.begin(), mid, offset.end());
+            line = c + *mid * e2;
+        }
+        // line + a e1 on the ray: (line + a e1) x ray = 0, and cross = ray x e1.
+        const double a = far * (line.x() * ray.y() - line.y() * ray.x()) / cross;
+        if (a > best) {
+            best = a;
+            best_may_shorten = may_shorten[static_cast<std::size_t>(side)];
+        }
     }
-    const double reach = std::min(best, farthest) - 0.5 * box.L_m;
-    if (!(reach > 0.0)) return box;
-    return with_length(box, std::min(box.L_m + reach, max_length_m), false);
+    if (!std::isfinite(best)) return box;
+    double reach = std::min(best, farthest) - 0.5 * box.L_m;
+    if (reach < 0.0)
+        reach = best_may_shorten ? std::min(0.0, std::max(reach, floor - 0.5 * box.L_m)) : 0.0;
+    if (reach == 0.0) return box;
+    return with_length(box, std::clamp(box.L_m + reach, 0.0, std::max(max_length_m, box.L_m)),
+                       false);
 }
 
 OrientedBox fit_upright_box_weighted(const std::vector<Eigen::Vector3f>& points_m,

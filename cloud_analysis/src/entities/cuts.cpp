@@ -38,7 +38,8 @@ std::optional<Eigen::Vector2d> truncation_point(const std::vector<Eigen::Vector3
 std::optional<OcclusionCut> occlusion_cut(const std::vector<Eigen::Vector3f>& pts,
                                           const std::vector<std::uint32_t>& pixels,
                                           const PixelGrid& grid, const Indices& members,
-                                          std::uint32_t instance, Indices* bleed) {
+                                          std::uint32_t instance, Indices* bleed,
+                                          std::array<bool, 2>* sides_cut) {
     constexpr int kScanColumns = 12;
     constexpr std::size_t kBleedMembers = 8;
     constexpr std::size_t kMinRows = 5;
@@ -111,6 +112,7 @@ std::optional<OcclusionCut> occlusion_cut(const std::vector<Eigen::Vector3f>& pt
     const auto is_cut = [&](int side) {
         return cut[side] >= kMinRows && 2 * cut[side] > seen_rows[side];
     };
+    if (sides_cut != nullptr) *sides_cut = {is_cut(0), is_cut(1)};
     if (is_cut(0) == is_cut(1)) return std::nullopt;
     const int side = is_cut(0) ? 0 : 1;
     return OcclusionCut{Eigen::Vector2d(sum[side] / static_cast<double>(cut[side])),

@@ -84,7 +84,8 @@ OrientedBox own_box(const std::vector<Eigen::Vector3f>& member_pts, const Orient
 void complete_candidate(Candidate& c, const std::vector<Eigen::Vector3f>& pts,
                         const std::vector<Eigen::Vector3f>& member_pts, double fitted_H_m,
                         const BoxFitOptions& final_fit, const ClassSettings& s,
-                        const std::optional<GroundPlane>& ground, const ExtractOptions& options) {
+                        const std::optional<GroundPlane>& ground, const ExtractOptions& options,
+                        const std::optional<std::array<bool, 2>>& own_outline = std::nullopt) {
     if (!options.family_class.empty() && s.name == options.family_class) {
         // A van shows its height: its hidden length is a van's, not a car's.
         c.subclass = "car";
@@ -99,8 +100,9 @@ void complete_candidate(Candidate& c, const std::vector<Eigen::Vector3f>& pts,
     if (s.name == options.family_class && options.far_column_length_fraction > 0.0) {
         // A side seen along the viewing ray: its far end where its pixels end in the image.
         const double prior = c.subclass == "van" ? options.van_prior_L_m : s.prior_L_m;
-        c.box = extend_far_end_to_columns(
-            c.box, member_pts, std::max(c.box.L_m, options.far_column_length_fraction * prior));
+        c.box = far_end_to_columns(c.box, member_pts,
+                                   std::max(c.box.L_m, options.far_column_length_fraction * prior),
+                                   own_outline);
     }
     if (c.subclass == "van" && c.box.L_m > options.van_max_L_m) {
         // Longer than any van: the piece holds the end of the thing before it in its row
@@ -302,9 +304,13 @@ std::vector<Candidate> candidates_of_instance(const std::vector<Eigen::Vector3f>
     members = drop_outliers(pts, members, s, ground, options.outlier_margin_m);
     if (members.size() < static_cast<std::size_t>(std::max(s.min_points, 1))) return {};
     fit.truncation_xz = truncation_point(pts, pixels, grid, members);
+    // The image sides (left, right) where the outline is the object's own: not at the image's
+    // edge, nothing nearer beyond it; there its far end is seen, and its length may be shorter
+    // than the class's prior.
+    std::array<bool, 2> cut = {true, true};
     if (!fit.truncation_xz) {
         Indices bleed;
-        if (const auto hidden = occlusion_cut(pts, pixels, grid, members, instance, &bleed)) {
+        if (const auto hidden = occlusion_cut(pts, pixels, grid, members, instance, &bleed, &cut)) {
             fit.truncation_xz = hidden->xz;
             fit.truncation_side = hidden->side;
             // Pixels past its outline that took the nearer thing's depth are not its surface.
@@ -330,7 +336,8 @@ std::vector<Candidate> candidates_of_instance(const std::vector<Eigen::Vector3f>
     c.instance = instance;
     const BoxFitOptions final_fit = own_box_fit(fit, options);
     c.box = own_box(member_pts, box, fit, final_fit, ground);
-    complete_candidate(c, pts, member_pts, box.H_m, final_fit, s, ground, options);
+    complete_candidate(c, pts, member_pts, box.H_m, final_fit, s, ground, options,
+                       std::array<bool, 2>{!cut[0], !cut[1]});
     // Longer than any thing of its class, the box holds range smear behind the face it shows
     // (far away a pixel of disparity spans metres): the face is kept, the class's length
     // completes it, as for a thing whose far end is hidden.

@@ -221,39 +221,80 @@ TEST_CASE("a side seen along the ray ends where its pixel columns end, not where
     box.centre_m = Eigen::Vector3d(x_side - 0.95, 0.95, z_near + 2.1);
     const auto far_end = [](const OrientedBox& b) { return b.centre_m.z() + b.L_m / 2.0; };
     const auto near_end = [](const OrientedBox& b) { return b.centre_m.z() - b.L_m / 2.0; };
-    const OrientedBox out = extend_far_end_to_columns(box, pts, 6.0);
+    const OrientedBox out = far_end_to_columns(box, pts, 6.0);
     CHECK(far_end(out) == Approx(z_far).margin(0.1));
     CHECK(near_end(out) == Approx(z_near).margin(1e-9));
     CHECK(out.centre_m.x() == Approx(box.centre_m.x()).margin(1e-9));
     CHECK(out.theta == box.theta);
     // At most max_length_m long.
-    CHECK(extend_far_end_to_columns(box, pts, 4.5).L_m == Approx(4.5).margin(1e-9));
+    CHECK(far_end_to_columns(box, pts, 4.5).L_m == Approx(4.5).margin(1e-9));
     // A few stray points at a farther column (smear, label bleed) do not move it.
     for (int k = 0; k < 5; ++k) {
         pts.emplace_back(static_cast<float>(x_side), 1.0f, static_cast<float>(z_far + 2.0));
     }
-    CHECK(far_end(extend_far_end_to_columns(box, pts, 6.0)) == Approx(z_far).margin(0.1));
+    CHECK(far_end(far_end_to_columns(box, pts, 6.0)) == Approx(z_far).margin(0.1));
     // Never beyond the points: a side that ends where the box does leaves it as it is.
     pts.clear();
     side_to(far_end(box));
-    const OrientedBox short_side = extend_far_end_to_columns(box, pts, 6.0);
+    const OrientedBox short_side = far_end_to_columns(box, pts, 6.0);
     CHECK(short_side.L_m == Approx(box.L_m).margin(0.05));
     // A length across the viewing ray (a car crossing ahead) is left alone.
     OrientedBox across = box;
     across.theta = 0.0;
     across.centre_m = Eigen::Vector3d(0.0, 0.95, 11.0);
     CHECK(
-        extend_far_end_to_columns(across, box_faces(0.0, 11.0, 0.0, 4.7, 1.8, 1.4, 1.65, true), 6.0)
-            .L_m == across.L_m);
+        far_end_to_columns(across, box_faces(0.0, 11.0, 0.0, 4.7, 1.8, 1.4, 1.65, true), 6.0).L_m ==
+        across.L_m);
     // The same car 16 m farther: its side's far end seen at 7.5 degrees from the side, where
     // 5 cm of stereo error across the side moves the end by 0.4 m: left as it is.
     OrientedBox far_box = box;
     far_box.centre_m.z() += 16.0;
-    CHECK(extend_far_end_to_columns(
+    CHECK(far_end_to_columns(
               far_box,
               box_faces(x_side - 0.95, z_near + 16.0 + 2.35, -kPi / 2.0, 4.7, 1.9, 1.4, 1.65, true),
               6.0)
               .L_m == far_box.L_m);
+}
+
+TEST_CASE("with its own outline, a side's far end follows the taper and may come nearer",
+          "[boxes]") {
+    // A 3.6 m car parked on the right, 9-12.6 m ahead, sampled as a camera's pixel columns (f
+    // 721 px): its side at x 3.9 m, tapering to 4.0 m over its last 0.4 m. Its box, completed to
+    // a 4.2 m prior, reaches 0.6 m past the car.
+    constexpr double f = 721.0, z_near = 9.0, z_far = 12.6;
+    const auto x_side = [&](double z) {
+        return z < z_far - 0.4 ? 3.9 : 3.9 + (z - z_far + 0.4) / 4.0;
+    };
+    std::vector<Eigen::Vector3f> pts;
+    for (double u = f * 5.8 / z_near; u > f * 3.9 / z_near; u -= 1.0) {
+        add_column(pts, u * z_near / f, z_near);
+    }
+    for (double z = z_near; z <= z_far; z += 0.01) add_column(pts, x_side(z), z);
+    OrientedBox box;
+    box.theta = -kPi / 2.0;  // heading +z, away from the camera
+    box.L_m = 4.2;
+    box.W_m = 1.9;
+    box.H_m = 1.4;
+    box.centre_m = Eigen::Vector3d(3.9 + 0.95, 0.95, z_near + 2.1);
+    const auto far_end = [](const OrientedBox& b) { return b.centre_m.z() + b.L_m / 2.0; };
+    const auto near_end = [](const OrientedBox& b) { return b.centre_m.z() - b.L_m / 2.0; };
+    // Without an instance image: never nearer.
+    CHECK(far_end_to_columns(box, pts, 6.0).L_m == box.L_m);
+    // The outline the car's own on the image's left, where its far end is: the far end where
+    // the outermost column meets the tapered side.
+    const OrientedBox own = far_end_to_columns(box, pts, 6.0, std::array<bool, 2>{true, false});
+    CHECK(far_end(own) == Approx(z_far).margin(0.1));
+    CHECK(near_end(own) == Approx(z_near).margin(1e-9));
+    // Hidden there (something nearer beside the outline): the prior's length stays.
+    CHECK(far_end_to_columns(box, pts, 6.0, std::array<bool, 2>{false, true}).L_m == box.L_m);
+    // A longer box of the same car: through the side the box fits (3.9 m), the outermost column
+    // meets it 0.3 m short of the car's end; through the outermost points, at its end.
+    OrientedBox longer = box;
+    longer.L_m = 3.0;
+    longer.centre_m.z() = z_near + 1.5;
+    CHECK(far_end(far_end_to_columns(longer, pts, 6.0)) < z_far - 0.2);
+    CHECK(far_end(far_end_to_columns(longer, pts, 6.0, std::array<bool, 2>{false, false})) ==
+          Approx(z_far).margin(0.1));
 }
 
 TEST_CASE("the thesis extractors on a uniform box give its centre and size", "[boxes]") {

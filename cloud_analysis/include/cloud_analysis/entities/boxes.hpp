@@ -5,6 +5,7 @@
 /// ground plane, completion with a class size prior away from the camera, and the thesis's
 /// one-box-per-class extractors (centre of mass, average box, variance box).
 
+#include <array>
 #include <optional>
 #include <vector>
 
@@ -97,18 +98,23 @@ OrientedBox fit_upright_box_weighted(const std::vector<Eigen::Vector3f>& points_
 /// farther from it when keep_far_end.
 OrientedBox with_length(const OrientedBox& box, double length_m, bool keep_far_end);
 
-/// The box with the far end of its length moved out to where the outermost pixel column of
-/// its points (the ray of slope x / z that a point's own column gives) meets its long side
-/// facing the camera: a side seen along the viewing ray ends sharply in the image (about 15
-/// columns per metre at 14 m, 4 m aside) while its range is smeared by a metre there, so its
-/// far metre holds too few points for the box's quantiles. Moved only outwards, never beyond
-/// the points' own farthest extent along the length, to a length of at most max_length_m; the
-/// box unchanged when its length runs across the viewing ray (more than 45 degrees from it),
-/// when the outermost ray meets the side at less than 10 degrees, or with fewer than 20 points.
-/// The outermost column is the max(10, n / 500)-th point from the edge (stray points).
-OrientedBox extend_far_end_to_columns(const OrientedBox& box,
-                                      const std::vector<Eigen::Vector3f>& points_m,
-                                      double max_length_m);
+/// The box with the far end of its length moved to where the outermost pixel column of its
+/// points (the ray of slope x / z that a point's own column gives) meets its side: a side seen
+/// along the viewing ray ends sharply in the image (about 15 columns per metre at 14 m, 4 m
+/// aside) while its range is smeared by a metre there, so its far metre holds too few points
+/// for the box's quantiles. The side is the box's side facing the camera. Moved outwards, never
+/// beyond the points' own farthest extent along the length, to a length of at most
+/// max_length_m. With `own_outline` (an instance image: the outermost points are the thing's
+/// own), the side is the line along the heading through the median position of the outermost
+/// points (a car's side tapers towards its ends), and the far end also moves inwards when the
+/// image side it comes from (left, right) is true there (nothing nearer hides the outline), never
+/// in front of the max(10, n / 500)-th farthest point. The box unchanged when its length
+/// runs across the viewing ray (more than 45 degrees from it), when the outermost ray meets
+/// the side at less than 10 degrees, or with fewer than 20 points. The outermost column is the
+/// max(10, n / 500)-th point from the edge (stray points).
+OrientedBox far_end_to_columns(
+    const OrientedBox& box, const std::vector<Eigen::Vector3f>& points_m, double max_length_m,
+    const std::optional<std::array<bool, 2>>& own_outline = std::nullopt);
 
 /// Heading yaw (radians, [-pi, 0]) of the best L-shape footprint of points given in the
 /// (x, z) plane; exposed for tests.

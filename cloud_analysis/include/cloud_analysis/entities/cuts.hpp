@@ -4,6 +4,7 @@
 /// of what stereo sees, or by something nearer standing in front of it (used by the thing
 /// classes of the "instances" extractor, things.cpp).
 
+#include <array>
 #include <cstdint>
 #include <optional>
 #include <vector>
@@ -37,12 +38,14 @@ struct OcclusionCut {
 /// first pixel beyond it, past the object's own pixels and pixels at its depth, within 12
 /// columns, is a step nearer (0.3 m, or two disparity noises of 0.5 px). The side where most of
 /// at least 5 such rows are cut, when only one is; nullopt otherwise or without depths.
-/// `bleed`, when given, receives the members before the outline on the cut rows (sorted). The
+/// `bleed`, when given, receives the members before the outline on the cut rows (sorted);
+/// `sides_cut`, when given, whether each side (left, right) is cut, both included. The
 /// hidden part may lie beyond the cut (Hoiem, Efros, Hebert, "Recovering Occlusion
 /// Boundaries", IJCV 2011: an outline is owned by the nearer surface).
 std::optional<OcclusionCut> occlusion_cut(const std::vector<Eigen::Vector3f>& pts,
                                           const std::vector<std::uint32_t>& pixels,
                                           const PixelGrid& grid, const Indices& members,
-                                          std::uint32_t instance, Indices* bleed = nullptr);
+                                          std::uint32_t instance, Indices* bleed = nullptr,
+                                          std::array<bool, 2>* sides_cut = nullptr);
 
 }  // namespace cloud_analysis::instances

@@ -95,7 +95,7 @@ struct ExtractOptions {
                                ///< it too: it keeps its far end and the van prior's length, m
     double far_column_length_fraction = 1.25;  ///< a box of that class takes the far end of
                                                ///< its side from its outermost pixel column
-                                               ///< (extend_far_end_to_columns), to at most
+                                               ///< (far_end_to_columns), to at most
                                                ///< this * its prior length (car or van),
                                                ///< [1, 3], 0 = off
     double stuff_on_thing_fraction = 0.5;      ///< a stuff entity with more than this share of its
