@@ -452,6 +452,9 @@ OrientedBox far_end_to_columns(const OrientedBox& box, const std::vector<Eigen::
     // At a grazing angle a the side's position error moves the far end by that error / tan a:
     // at 10 degrees, 5.7 times (5 cm of stereo error across the side, 0.3 m along it).
     constexpr double kMinGrazingSin = 0.1736;  // sin 10 degrees
+    // A car's side lies at most this far inside its widest point where it rounds into its
+    // ends; outermost points farther in are range smear or another surface, not the side.
+    constexpr double kMaxTaperM = 0.2;
     const std::array<bool, 2> may_shorten = own_outline.value_or(std::array<bool, 2>{false, false});
     const bool shorten = may_shorten[0] || may_shorten[1];
     if (points_m.size() < kMinPoints || (!shorten && !(max_length_m > box.L_m))) return box;
@@ -491,8 +494,9 @@ OrientedBox far_end_to_columns(const OrientedBox& box, const std::vector<Eigen::
         const double cross = ray.x() * e1.y() - ray.y() * e1.x();
         if (std::abs(cross) < kMinGrazingSin) continue;
         // The side line: the box's side facing the camera, or, when the outline is the
-        // thing's own, where those points stand (a car's side tapers towards its ends).
-        Eigen::Vector2d line = c + (e2.dot(c) > 0.0 ? -0.5 : 0.5) * box.W_m * e2;
+        // thing's own, where those points stand if within a taper of it.
+        const double fitted = (e2.dot(c) > 0.0 ? -0.5 : 0.5) * box.W_m;
+        Eigen::Vector2d line = c + fitted * e2;
         if (own_outline) {
             std::vector<double> offset;
             const auto first = side == 0 ? slope.begin() : nth;
@@ -500,7 +504,7 @@ OrientedBox far_end_to_columns(const OrientedBox& box, const std::vector<Eigen::
             for (auto it = first; it != last; ++it) offset.push_back((it->second - c).dot(e2));
             const auto mid = offset.begin() + static_cast<std::ptrdiff_t>(offset.size() / 2);
             std::nth_element(offset.begin(), mid, offset.end());
-            line = c + *mid * e2;
+            if (std::abs(*mid - fitted) <= kMaxTaperM) line = c + *mid * e2;
         }
         // line + a e1 on the ray: (line + a e1) x ray = 0, and cross = ray x e1.
         const double a = far * (line.x() * ray.y() - line.y() * ray.x()) / cross;

@@ -295,6 +295,13 @@ TEST_CASE("with its own outline, a side's far end follows the taper and may come
     CHECK(far_end(far_end_to_columns(longer, pts, 6.0)) < z_far - 0.2);
     CHECK(far_end(far_end_to_columns(longer, pts, 6.0, std::array<bool, 2>{false, false})) ==
           Approx(z_far).margin(0.1));
+    // Outermost points moved 15 % farther along their rays (range smear behind its end), 0.6 m
+    // inside the side, are no taper: the box's side stands.
+    std::vector<Eigen::Vector3f> smeared;
+    for (const auto& p : pts)
+        smeared.push_back(p.z() > z_far - 0.4 ? Eigen::Vector3f(1.15f * p) : p);
+    CHECK(far_end_to_columns(longer, smeared, 6.0, std::array<bool, 2>{false, false}).L_m ==
+          Approx(far_end_to_columns(longer, smeared, 6.0).L_m).margin(1e-9));
 }
 
 TEST_CASE("the thesis extractors on a uniform box give its centre and size", "[boxes]") {

@@ -106,7 +106,8 @@ OrientedBox with_length(const OrientedBox& box, double length_m, bool keep_far_e
 /// beyond the points' own farthest extent along the length, to a length of at most
 /// max_length_m. With `own_outline` (an instance image: the outermost points are the thing's
 /// own), the side is the line along the heading through the median position of the outermost
-/// points (a car's side tapers towards its ends), and the far end also moves inwards when the
+/// points when that lies within 0.2 m of the box's side (a car's side tapers towards its ends;
+/// farther in, they are range smear), and the far end also moves inwards when the
 /// image side it comes from (left, right) is true there (nothing nearer hides the outline), never
 /// in front of the max(10, n / 500)-th farthest point. The box unchanged when its length
 /// runs across the viewing ray (more than 45 degrees from it), when the outermost ray meets
