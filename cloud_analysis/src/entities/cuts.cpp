@@ -35,6 +35,18 @@ std::optional<Eigen::Vector2d> truncation_point(const std::vector<Eigen::Vector3
                              : Eigen::Vector2d(right / static_cast<double>(n_right));
 }
 
+namespace {
+
+/// The depth step that parts two surfaces at depth z: two disparity noises of 0.5 px, at least
+/// 0.3 m (fb: the rig's focal length times baseline, px m; 0 when unknown).
+double depth_step_m(double z, double fb) {
+    constexpr double kDisparityNoisePx = 0.5;
+    constexpr double kMinStepM = 0.3;
+    return std::max(kMinStepM, 2.0 * (fb > 0.0 ? kDisparityNoisePx * z * z / fb : 0.0));
+}
+
+}  // namespace
+
 std::optional<OcclusionCut> occlusion_cut(const std::vector<Eigen::Vector3f>& pts,
                                           const std::vector<std::uint32_t>& pixels,
                                           const PixelGrid& grid, const Indices& members,
@@ -43,17 +55,13 @@ std::optional<OcclusionCut> occlusion_cut(const std::vector<Eigen::Vector3f>& pt
     constexpr int kScanColumns = 12;
     constexpr std::size_t kBleedMembers = 8;
     constexpr std::size_t kMinRows = 5;
-    constexpr double kDisparityNoisePx = 0.5;  // a step this many disparity noises deep, at least
-    constexpr double kMinStepM = 0.3;
     if (!grid.valid() || grid.depth_m == nullptr || grid.instance_id == nullptr ||
         pixels.size() < pts.size()) {
         return std::nullopt;
     }
     const auto w = static_cast<std::uint32_t>(grid.width_px);
     const double fb = grid.border.fb_px_m > 0.0 ? grid.border.fb_px_m : 0.0;
-    const auto step_at = [&](double z) {
-        return std::max(kMinStepM, 2.0 * (fb > 0.0 ? kDisparityNoisePx * z * z / fb : 0.0));
-    };
+    const auto step_at = [&](double z) { return depth_step_m(z, fb); };
     // Per image row, the members by column.
     std::map<std::uint32_t, std::vector<std::pair<std::uint32_t, std::size_t>>> rows_of;
     for (std::size_t i : members) rows_of[pixels[i] / w].emplace_back(pixels[i] % w, i);
@@ -117,6 +125,46 @@ std::optional<OcclusionCut> occlusion_cut(const std::vector<Eigen::Vector3f>& pt
     const int side = is_cut(0) ? 0 : 1;
     return OcclusionCut{Eigen::Vector2d(sum[side] / static_cast<double>(cut[side])),
                         side == 0 ? -1 : 1};
+}
+
+Indices occluders_inside(const std::vector<Eigen::Vector3f>& pts,
+                         const std::vector<std::uint32_t>& pixels, const PixelGrid& grid,
+                         const Indices& members) {
+    Indices out;
+    if (!grid.valid() || pixels.size() < pts.size()) return out;
+    const auto w = static_cast<std::uint32_t>(grid.width_px);
+    const double fb = grid.border.fb_px_m > 0.0 ? grid.border.fb_px_m : 0.0;
+    std::map<std::uint32_t, std::vector<std::pair<std::uint32_t, std::size_t>>> rows_of;
+    for (std::size_t i : members) rows_of[pixels[i] / w].emplace_back(pixels[i] % w, i);
+    std::vector<std::size_t> starts;  // a row's runs: [starts[r], starts[r + 1])
+    std::vector<double> depth;        // each run's median depth
+    std::vector<double> z;
+    for (auto& [v, row] : rows_of) {
+        std::sort(row.begin(), row.end());
+        starts.assign(1, 0);
+        for (std::size_t k = 1; k < row.size(); ++k) {
+            const double z0 = pts[row[k - 1].second].z(), z1 = pts[row[k].second].z();
+            if (std::abs(z1 - z0) > depth_step_m(std::max(z0, z1), fb)) starts.push_back(k);
+        }
+        if (starts.size() < 3) continue;
+        starts.push_back(row.size());
+        depth.clear();
+        for (std::size_t r = 0; r + 1 < starts.size(); ++r) {
+            z.clear();
+            for (std::size_t k = starts[r]; k < starts[r + 1]; ++k)
+                z.push_back(pts[row[k].second].z());
+            std::nth_element(z.begin(), z.begin() + static_cast<std::ptrdiff_t>(z.size() / 2),
+                             z.end());
+            depth.push_back(z[z.size() / 2]);
+        }
+        for (std::size_t r = 1; r + 1 < depth.size(); ++r) {
+            const double step = depth_step_m(depth[r], fb);
+            if (depth[r - 1] - depth[r] <= step || depth[r + 1] - depth[r] <= step) continue;
+            for (std::size_t k = starts[r]; k < starts[r + 1]; ++k) out.push_back(row[k].second);
+        }
+    }
+    std::sort(out.begin(), out.end());
+    return out;
 }
 
 }  // namespace cloud_analysis::instances

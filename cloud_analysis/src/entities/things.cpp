@@ -292,6 +292,16 @@ std::vector<Candidate> candidates_of_instance(const std::vector<Eigen::Vector3f>
     fit.short_face_is_end = true;
     Indices on_edge;
     members = off_depth_edges(pixels, grid, std::move(members), s, on_edge);
+    // Something standing in front of it inside its outline is not its surface.
+    if (const Indices hidden = occluders_inside(pts, pixels, grid, members);
+        !hidden.empty() &&
+        members.size() >= hidden.size() + static_cast<std::size_t>(std::max(s.min_points, 1))) {
+        std::sort(members.begin(), members.end());
+        Indices kept;
+        std::set_difference(members.begin(), members.end(), hidden.begin(), hidden.end(),
+                            std::back_inserter(kept));
+        members = std::move(kept);
+    }
     const bool family = !options.family_class.empty() && s.name == options.family_class;
     if (s.has_prior()) {
         // The longest thing of the class (a van for the size-family class) spans its diagonal.

@@ -119,6 +119,34 @@ TEST_CASE("an object's pixels that took a farther surface's disparity do not str
     CHECK(cars[0].z == Approx(10.1).margin(0.3));
 }
 
+TEST_CASE("something standing in front of an object inside its outline is not its surface",
+          "[entities][instances]") {
+    // A car parked on the right, rear at 12 m, and a post 0.8 m wide 0.45 m in front of its rear
+    // face, in the middle of it, labelled as the car (labels bled over it). Rows every 2 cm, so
+    // that every image row holds the rear on both sides of the post.
+    Scene s;
+    constexpr float z0 = 12.0f, z_post = 11.55f, x_post = 3.4f, post_w = 0.8f;
+    // Whether the post hides (x, z): the post spans the rays of slope x / z over its width.
+    const auto behind_post = [&](float x, float z) {
+        return x / z >= x_post / z_post && x / z <= (x_post + post_w) / z_post;
+    };
+    for (float y = 0.15f; y <= 1.65f; y += 0.02f) {
+        for (float z = z0; z <= z0 + 4.2f; z += 0.05f) s.add({3.0f, y, z}, 1, 0x1a01);
+        for (float x = 3.0f; x <= 4.8f; x += 0.02f) {
+            if (!behind_post(x, z0)) s.add({x, y, z0}, 1, 0x1a01);
+        }
+        const float y_post = y * z_post / z0;  // the same image row as the rear's point
+        for (float x = x_post; x <= x_post + post_w; x += 0.02f) {
+            s.add({x, y_post, z_post}, 1, 0x1a01);
+        }
+    }
+    const auto cars = s.cars(true);
+    REQUIRE(cars.size() == 1);
+    // Its box starts at its rear, not at the post.
+    CHECK(cars[0].z - cars[0].L / 2.0 == Approx(z0).margin(0.15));
+    CHECK(cars[0].z == Approx(z0 + 2.1).margin(0.2));
+}
+
 TEST_CASE("the densest range window keeps the surface and drops what lies beyond its extent",
           "[entities][instances]") {
     std::vector<Eigen::Vector3f> pts;

@@ -48,4 +48,15 @@ std::optional<OcclusionCut> occlusion_cut(const std::vector<Eigen::Vector3f>& pt
                                           std::uint32_t instance, Indices* bleed = nullptr,
                                           std::array<bool, 2>* sides_cut = nullptr);
 
+/// The members of an object of the instance image that show something standing in front of it
+/// inside its outline (a pole, a trunk, a person, and the labels that bled over them): per image
+/// row, its members by column split into runs where neighbouring members' depths step apart
+/// (0.3 m, or two disparity noises of 0.5 px, as occlusion_cut); a run between two others and
+/// nearer than both by such a step. An object's own surface seen from outside it holds no
+/// nearer island (Hoiem, Efros, Hebert, IJCV 2011: an outline is owned by the nearer surface).
+/// Empty when the pixels are unknown; sorted.
+Indices occluders_inside(const std::vector<Eigen::Vector3f>& pts,
+                         const std::vector<std::uint32_t>& pixels, const PixelGrid& grid,
+                         const Indices& members);
+
 }  // namespace cloud_analysis::instances
