@@ -45,6 +45,15 @@ double depth_step_m(double z, double fb) {
     return std::max(kMinStepM, 2.0 * (fb > 0.0 ? kDisparityNoisePx * z * z / fb : 0.0));
 }
 
+/// An object's members per image row, each row's as (column, member) pairs in member order.
+using MemberRows = std::map<std::uint32_t, std::vector<std::pair<std::uint32_t, std::size_t>>>;
+MemberRows member_rows(const std::vector<std::uint32_t>& pixels, const Indices& members,
+                       std::uint32_t width_px) {
+    MemberRows rows;
+    for (std::size_t i : members) rows[pixels[i] / width_px].emplace_back(pixels[i] % width_px, i);
+    return rows;
+}
+
 }  // namespace
 
 std::optional<OcclusionCut> occlusion_cut(const std::vector<Eigen::Vector3f>& pts,
@@ -63,8 +72,7 @@ std::optional<OcclusionCut> occlusion_cut(const std::vector<Eigen::Vector3f>& pt
     const double fb = grid.border.fb_px_m > 0.0 ? grid.border.fb_px_m : 0.0;
     const auto step_at = [&](double z) { return depth_step_m(z, fb); };
     // Per image row, the members by column.
-    std::map<std::uint32_t, std::vector<std::pair<std::uint32_t, std::size_t>>> rows_of;
-    for (std::size_t i : members) rows_of[pixels[i] / w].emplace_back(pixels[i] % w, i);
+    MemberRows rows_of = member_rows(pixels, members, w);
     // Whether the first depth step beyond column u0 of row v, stepping `dir` past the object's
     // own pixels and pixels at depth z (its labels may fall short of its outline), is nearer;
     // `seen` when there is a step within kScanColumns.
@@ -134,8 +142,7 @@ Indices occluders_inside(const std::vector<Eigen::Vector3f>& pts,
     if (!grid.valid() || pixels.size() < pts.size()) return out;
     const auto w = static_cast<std::uint32_t>(grid.width_px);
     const double fb = grid.border.fb_px_m > 0.0 ? grid.border.fb_px_m : 0.0;
-    std::map<std::uint32_t, std::vector<std::pair<std::uint32_t, std::size_t>>> rows_of;
-    for (std::size_t i : members) rows_of[pixels[i] / w].emplace_back(pixels[i] % w, i);
+    MemberRows rows_of = member_rows(pixels, members, w);
     std::vector<std::size_t> starts;  // a row's runs: [starts[r], starts[r + 1])
     std::vector<double> depth;        // each run's median depth
     std::vector<double> z;

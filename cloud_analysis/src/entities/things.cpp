@@ -278,6 +278,17 @@ Indices largest_piece(const std::vector<Eigen::Vector3f>& pts,
     return kept;
 }
 
+/// The members without `drop` (sorted), sorted; the members as they are when fewer than
+/// `min_left` would remain.
+Indices without(Indices members, const Indices& drop, std::size_t min_left) {
+    if (drop.empty() || members.size() < drop.size() + min_left) return members;
+    std::sort(members.begin(), members.end());
+    Indices kept;
+    std::set_difference(members.begin(), members.end(), drop.begin(), drop.end(),
+                        std::back_inserter(kept));
+    return kept;
+}
+
 /// The candidate of one object of the instance image: its points off depth edges and without
 /// the smear behind it, fitted once and never split (the instance image says where it ends).
 std::vector<Candidate> candidates_of_instance(const std::vector<Eigen::Vector3f>& pts,
@@ -292,16 +303,9 @@ std::vector<Candidate> candidates_of_instance(const std::vector<Eigen::Vector3f>
     fit.short_face_is_end = true;
     Indices on_edge;
     members = off_depth_edges(pixels, grid, std::move(members), s, on_edge);
+    const auto min_points = static_cast<std::size_t>(std::max(s.min_points, 1));
     // Something standing in front of it inside its outline is not its surface.
-    if (const Indices hidden = occluders_inside(pts, pixels, grid, members);
-        !hidden.empty() &&
-        members.size() >= hidden.size() + static_cast<std::size_t>(std::max(s.min_points, 1))) {
-        std::sort(members.begin(), members.end());
-        Indices kept;
-        std::set_difference(members.begin(), members.end(), hidden.begin(), hidden.end(),
-                            std::back_inserter(kept));
-        members = std::move(kept);
-    }
+    members = without(std::move(members), occluders_inside(pts, pixels, grid, members), min_points);
     const bool family = !options.family_class.empty() && s.name == options.family_class;
     if (s.has_prior()) {
         // The longest thing of the class (a van for the size-family class) spans its diagonal.
@@ -312,7 +316,7 @@ std::vector<Candidate> candidates_of_instance(const std::vector<Eigen::Vector3f>
     }
     members = largest_piece(pts, pixels, grid, members, s, class_fit.cluster, options);
     members = drop_outliers(pts, members, s, ground, options.outlier_margin_m);
-    if (members.size() < static_cast<std::size_t>(std::max(s.min_points, 1))) return {};
+    if (members.size() < min_points) return {};
     fit.truncation_xz = truncation_point(pts, pixels, grid, members);
     // The image sides (left, right) where the outline is the object's own: not at the image's
     // edge, nothing nearer beyond it; there its far end is seen, and its length may be shorter
@@ -324,14 +328,7 @@ std::vector<Candidate> candidates_of_instance(const std::vector<Eigen::Vector3f>
             fit.truncation_xz = hidden->xz;
             fit.truncation_side = hidden->side;
             // Pixels past its outline that took the nearer thing's depth are not its surface.
-            if (members.size() >=
-                bleed.size() + static_cast<std::size_t>(std::max(s.min_points, 1))) {
-                std::sort(members.begin(), members.end());
-                Indices kept;
-                std::set_difference(members.begin(), members.end(), bleed.begin(), bleed.end(),
-                                    std::back_inserter(kept));
-                members = std::move(kept);
-            }
+            members = without(std::move(members), bleed, min_points);
         }
     }
     const std::vector<Eigen::Vector3f> member_pts = gather(pts, members);
