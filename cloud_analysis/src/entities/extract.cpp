@@ -340,6 +340,8 @@ void ExtractOptions::validate() const {
     fail_if(!(min_height_fraction >= 0.0 && min_height_fraction < 1.0),
             "min_height_fraction: must be in [0, 1)");
     fail_if(!(min_face_share >= 0.0 && min_face_share < 1.0), "min_face_share: must be in [0, 1)");
+    fail_if(!(family_min_height_m >= 0.0 && family_min_height_m < 1e3),
+            "family_min_height_m: must be >= 0");
     fail_if(!(fx_px >= 0.0 && fy_px >= 0.0 && fx_px < 1e7 && fy_px < 1e7),
             "fx_px, fy_px: must be >= 0");
     fail_if(!(row_low_fraction >= 0.0 && row_low_fraction < 1.0),

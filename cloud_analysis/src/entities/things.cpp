@@ -58,6 +58,16 @@ std::vector<Indices> thing_clusters(const std::vector<Eigen::Vector3f>& pts,
     return points_of(euclidean_clusters(voxels.centroid_m, co), voxels);
 }
 
+/// Whether a thing's box (resting on the ground) is too low to be one: points all near the
+/// ground are mislabelled road, and a thing of the size family whose top stays under
+/// family_min_height_m is a piece of something low.
+bool too_low(const OrientedBox& box, const ClassSettings& s,
+             const std::optional<GroundPlane>& ground, const ExtractOptions& options) {
+    if (!ground) return false;
+    if (s.prior_H_m > 0.0 && box.H_m < options.min_height_fraction * s.prior_H_m) return true;
+    return s.name == options.family_class && box.H_m < options.family_min_height_m;
+}
+
 /// The fit of a thing's own box once no split is left: the splits read the box as fitted; the
 /// thing's own box trims its near end further along the viewing ray and takes its extents over
 /// seen surface (a side seen along the ray holds few points per metre at its far end).
@@ -191,10 +201,7 @@ struct ClusterPieces {
                 continue;
             }
             // A thing whose points all lie near the ground is mislabelled road, not an object.
-            if (s.prior_H_m > 0.0 && ground &&
-                box.H_m < options.min_height_fraction * s.prior_H_m) {
-                continue;
-            }
+            if (too_low(box, s, ground, options)) continue;
             Candidate c;
             c.members = std::move(part);
             c.group = group;
@@ -334,9 +341,7 @@ std::vector<Candidate> candidates_of_instance(const std::vector<Eigen::Vector3f>
     const std::vector<Eigen::Vector3f> member_pts = gather(pts, members);
     const OrientedBox box = fit_upright_box(member_pts, ground, fit);
     // Points all near the ground are no object, whatever the image says.
-    if (s.prior_H_m > 0.0 && ground && box.H_m < options.min_height_fraction * s.prior_H_m) {
-        return {};
-    }
+    if (too_low(box, s, ground, options)) return {};
     Candidate c;
     c.members = std::move(members);
     c.group = cluster;

@@ -14,6 +14,9 @@ scene_schema::EntityDocument entity_document(const LoadedInputs& in, const Analy
     // Fragments and smears too faint to be a thing are dropped, whatever made the class image.
     ExtractOptions options = extract;
     options.min_face_share = run.analyse.geometry.min_face_share;
+    // A car segment's top lies at least car_min_height_m above the road (the geometry's car
+    // rule); a car box cut from one that stays lower is a piece of something low.
+    if (r.geometry) options.family_min_height_m = run.analyse.geometry.car_min_height_m;
     options.fx_px = r.camera.fx_px;
     options.fy_px = r.camera.fy_px;
     scene_schema::EntityDocument doc =

@@ -243,6 +243,39 @@ TEST_CASE("a thing seen over too little of its prior face is dropped, its area t
     CHECK_THROWS_WITH(options.validate(), Catch::Contains("min_face_share"));
 }
 
+TEST_CASE("a car box whose top stays under the family's minimum height is no car", "[entities]") {
+    // Two car-classed blocks 8 m ahead on the road, 1.8 m wide and 3 m long: one 1.4 m tall,
+    // one 0.7 m (a low wall or a hedge the stereo-only rules called a car).
+    LabeledCloud cloud;
+    add_road(cloud);
+    const auto add_block = [&](float x, float height) {
+        for (float y = 1.65f - height; y <= 1.60f; y += 0.02f) {
+            for (float a = 0.0f; a <= 1.8f; a += 0.02f) add_point(cloud, {x + a, y, 8.0f}, 2);
+            for (float z = 8.0f; z <= 11.0f; z += 0.02f) add_point(cloud, {x, y, z}, 2);
+        }
+    };
+    add_block(-4.5f, 1.4f);
+    add_block(2.7f, 0.7f);
+    ExtractOptions options = options_with_bundled_config("instances");
+    const auto cars = [&](const ExtractOptions& o) {
+        std::vector<scene_schema::Entity> out;
+        for (const auto& e : extract_entities(cloud, test_palette(), StereoCamera{}, o).entities) {
+            if (e.class_name == "car") out.push_back(e);
+        }
+        return out;
+    };
+    REQUIRE(cars(options).size() == 2);  // off by default
+    options.family_min_height_m = 0.9;
+    const auto kept = cars(options);
+    REQUIRE(kept.size() == 1);
+    CHECK(kept[0].x < 0.0);
+    CHECK(kept[0].H == Approx(1.4).margin(0.1));
+    options.family_class = "";  // no family class: nothing is held to it
+    CHECK(cars(options).size() == 2);
+    options.family_min_height_m = -0.1;
+    CHECK_THROWS_WITH(options.validate(), Catch::Contains("family_min_height_m"));
+}
+
 TEST_CASE("a gap's few high points between two cars in a row make no car of the next car's end",
           "[entities]") {
     // Two cars' right sides (x = -1.1) end to end 2.4 m apart: the near one's roof, then its

@@ -56,12 +56,15 @@ struct ExtractOptions {
     double strip_beside_gap_m = 1.0;        ///< that other range: at least this far, metres, >= 0
     double min_height_fraction = 0.3;       ///< things lower than this * prior_H_m above the ground
                                             ///< are mislabelled ground, [0, 1)
-    double min_face_share = 0.0;  ///< things seen over less than this share of their smallest
-                                  ///< prior face (W x H) are dropped, each point covering
-                                  ///< (z / fx_px) (z / fy_px) square metres at its own depth z
-                                  ///< (a fragment of a roof or a row, smear, clutter), [0, 1),
-                                  ///< 0 = off (or without fx_px, fy_px)
-    double fx_px = 0.0;           ///< the camera's focal lengths for min_face_share, px
+    double family_min_height_m = 0.0;  ///< things of family_class whose top lies lower than this
+                                       ///< above the ground are none (the stereo-only path sets
+                                       ///< its car rule's car_min_height_m), metres, >= 0, 0 = off
+    double min_face_share = 0.0;       ///< things seen over less than this share of their smallest
+                                       ///< prior face (W x H) are dropped, each point covering
+                                       ///< (z / fx_px) (z / fy_px) square metres at its own depth z
+                                       ///< (a fragment of a roof or a row, smear, clutter), [0, 1),
+                                       ///< 0 = off (or without fx_px, fy_px)
+    double fx_px = 0.0;                ///< the camera's focal lengths for min_face_share, px
     double fy_px = 0.0;
     double row_low_fraction = 0.7;    ///< a thing blob at least two prior widths long whose top
                                       ///< stays below this * its highest top for row_low_extent_m
