@@ -81,12 +81,13 @@ ExtractOptions options_with_bundled_config(const std::string& method) {
     return o;
 }
 
-/// The car entities of a cloud, with the bundled class settings.
-std::vector<scene_schema::Entity> cars_of(const LabeledCloud& cloud) {
+/// The car entities of a cloud with these options (default: the bundled class settings).
+std::vector<scene_schema::Entity> cars_of(
+    const LabeledCloud& cloud,
+    const ExtractOptions& options = options_with_bundled_config("instances")) {
     std::vector<scene_schema::Entity> cars;
-    for (const auto& e : extract_entities(cloud, test_palette(), StereoCamera{},
-                                          options_with_bundled_config("instances"))
-                             .entities) {
+    for (const auto& e :
+         extract_entities(cloud, test_palette(), StereoCamera{}, options).entities) {
         if (e.class_name == "car") cars.push_back(e);
     }
     return cars;
@@ -221,13 +222,7 @@ TEST_CASE("a thing seen over too little of its prior face is dropped, its area t
     add_face(-3.0f, 0.6f, 0.6f);
     add_face(2.5f, 0.8f, 0.7f);
     ExtractOptions options = options_with_bundled_config("instances");
-    const auto cars = [&](const ExtractOptions& o) {
-        std::vector<scene_schema::Entity> out;
-        for (const auto& e : extract_entities(cloud, test_palette(), StereoCamera{}, o).entities) {
-            if (e.class_name == "car") out.push_back(e);
-        }
-        return out;
-    };
+    const auto cars = [&](const ExtractOptions& o) { return cars_of(cloud, o); };
     REQUIRE(cars(options).size() == 2);  // off by default
     options.min_face_share = 0.15;
     options.fx_px = 500.0;
@@ -257,13 +252,7 @@ TEST_CASE("a car box whose top stays under the family's minimum height is no car
     add_block(-4.5f, 1.4f);
     add_block(2.7f, 0.7f);
     ExtractOptions options = options_with_bundled_config("instances");
-    const auto cars = [&](const ExtractOptions& o) {
-        std::vector<scene_schema::Entity> out;
-        for (const auto& e : extract_entities(cloud, test_palette(), StereoCamera{}, o).entities) {
-            if (e.class_name == "car") out.push_back(e);
-        }
-        return out;
-    };
+    const auto cars = [&](const ExtractOptions& o) { return cars_of(cloud, o); };
     REQUIRE(cars(options).size() == 2);  // off by default
     options.family_min_height_m = 0.9;
     const auto kept = cars(options);
