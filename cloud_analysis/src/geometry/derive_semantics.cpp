@@ -74,8 +74,8 @@ std::pair<double, double> footprint_extents(const std::vector<Eigen::Vector3d>& 
 /// Statistics of one linked segment, gathered from its cells.
 struct SegmentStats {
     std::size_t pixels = 0, green = 0, occluded = 0, tall_pixels = 0;
-    double edges = 0.0, level_edges = 0.0;  ///< Cell::edges, Cell::level_edges
-    /// The same per column band (index u / column_bin_px), and the pixels there.
+    /// Cell::edges and Cell::level_edges summed per column band (index u / column_bin_px), and
+    /// the pixels there.
     std::vector<double> band_edges, band_level_edges, band_pixels;
     /// Per column band: whether its pixels may be a car's (mark_car_bands); empty when every
     /// band may.
@@ -116,8 +116,6 @@ std::vector<SegmentStats> gather_segments(Grid& g, std::vector<int>& parent, con
         st.tall_pixels += c.is_tall ? static_cast<std::size_t>(c.count) : 0;
         st.green += static_cast<std::size_t>(c.green);
         const int column_bin = i / kLayers;
-        st.edges += static_cast<double>(c.edges);
-        st.level_edges += static_cast<double>(c.level_edges);
         const auto band = static_cast<std::size_t>(column_bin / g.bins_d);
         st.band_edges[band] += static_cast<double>(c.edges);
         st.band_level_edges[band] += static_cast<double>(c.level_edges);
@@ -176,15 +174,15 @@ std::vector<SegmentStats> gather_segments(Grid& g, std::vector<int>& parent, con
 bool mark_car_bands(SegmentStats& st, bool has_image, double depth_m, double fx,
                     const GeometryOptions& o) {
     if (!has_image || !(o.car_min_edge_share > 0.0)) return true;
-    if (st.level_edges >= o.car_min_edge_share * st.edges) return true;
     const std::size_t bands = st.band_edges.size();
-    const auto r = static_cast<std::size_t>(
-        std::lround(0.5 * o.edge_window_m * fx / std::max(depth_m, 1.0) / o.column_bin_px));
     std::vector<double> energy(bands + 1, 0.0), horizontal(bands + 1, 0.0);
     for (std::size_t b = 0; b < bands; ++b) {
         energy[b + 1] = energy[b] + st.band_edges[b];
         horizontal[b + 1] = horizontal[b] + st.band_level_edges[b];
     }
+    if (horizontal[bands] >= o.car_min_edge_share * energy[bands]) return true;
+    const auto r = static_cast<std::size_t>(
+        std::lround(0.5 * o.edge_window_m * fx / std::max(depth_m, 1.0) / o.column_bin_px));
     st.band_car.assign(bands, 0);
     bool any = false;
     for (std::size_t b = 0; b < bands; ++b) {
@@ -224,7 +222,10 @@ Segment classify(SegmentStats& st, const Classes& cls, bool has_image, double fx
     seg.occluded = st.pixels ? static_cast<double>(st.occluded) / st.pixels : 0.0;
     seg.tall = st.tall;
     if (has_image) {
-        seg.horizontal_edges = st.edges > 0.0 ? st.level_edges / st.edges : 0.0;
+        const double edges = std::accumulate(st.band_edges.begin(), st.band_edges.end(), 0.0);
+        const double level =
+            std::accumulate(st.band_level_edges.begin(), st.band_level_edges.end(), 0.0);
+        seg.horizontal_edges = edges > 0.0 ? level / edges : 0.0;
     }
     const auto set = [&](std::uint16_t c, const char* label) {
         seg.class_index = c;
