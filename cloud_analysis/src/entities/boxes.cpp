@@ -482,6 +482,8 @@ OrientedBox far_end_to_columns(const OrientedBox& box, const std::vector<Eigen::
     std::nth_element(along.begin(), along.end() - 1 - static_cast<std::ptrdiff_t>(k), along.end());
     const double floor = *(along.end() - 1 - static_cast<std::ptrdiff_t>(k));
     const auto by_slope = [](const auto& a, const auto& b) { return a.first < b.first; };
+    // The long side facing the camera, as an offset from the centre along e2.
+    const double fitted = (e2.dot(c) > 0.0 ? -0.5 : 0.5) * box.W_m;
     double best = -std::numeric_limits<double>::infinity();
     bool best_may_shorten = false;
     for (const int side : {0, 1}) {
@@ -493,9 +495,8 @@ OrientedBox far_end_to_columns(const OrientedBox& box, const std::vector<Eigen::
         const Eigen::Vector2d ray = Eigen::Vector2d(nth->first, 1.0).normalized();
         const double cross = ray.x() * e1.y() - ray.y() * e1.x();
         if (std::abs(cross) < kMinGrazingSin) continue;
-        // The side line: the box's side facing the camera, or, when the outline is the
-        // thing's own, where those points stand if within a taper of it.
-        const double fitted = (e2.dot(c) > 0.0 ? -0.5 : 0.5) * box.W_m;
+        // The side line: the box's side, or, when the outline is the thing's own, where those
+        // points stand if within a taper of it.
         Eigen::Vector2d line = c + fitted * e2;
         if (own_outline) {
             std::vector<double> offset;
