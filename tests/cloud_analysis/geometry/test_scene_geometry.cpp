@@ -645,31 +645,22 @@ TEST_CASE("semantic scores count equal pixels and per-class IoU", "[geometry]") 
 }
 
 TEST_CASE("geometry options name the bad field", "[geometry]") {
-    GeometryOptions o;
-    o.column_bin_px = 0;
-    CHECK_THROWS_WITH(o.validate(), Catch::Contains("column_bin_px"));
-    o = GeometryOptions{};
-    o.max_camera_height_m = 0.1;
-    CHECK_THROWS_WITH(o.validate(), Catch::Contains("max_camera_height_m"));
-    o = GeometryOptions{};
-    o.layer_height_m = o.car_max_height_m;
-    CHECK_THROWS_WITH(o.validate(), Catch::Contains("layer_height_m"));
-    o = GeometryOptions{};
-    o.min_face_share = 1.0;
-    CHECK_THROWS_WITH(o.validate(), Catch::Contains("min_face_share"));
-    o = GeometryOptions{};
-    o.green_window_px = -1;
-    CHECK_THROWS_WITH(o.validate(), Catch::Contains("green_window_px"));
-    o = GeometryOptions{};
-    o.car_min_edge_share = 1.0;
-    CHECK_THROWS_WITH(o.validate(), Catch::Contains("car_min_edge_share"));
-    o = GeometryOptions{};
-    o.edge_window_m = 0.0;
-    CHECK_THROWS_WITH(o.validate(), Catch::Contains("edge_window_m"));
-    o = GeometryOptions{};
-    o.edge_step_px = 0;
-    CHECK_THROWS_WITH(o.validate(), Catch::Contains("edge_step_px"));
-    o = GeometryOptions{};
-    o.segmentation = "stixels";
-    CHECK_THROWS_WITH(o.validate(), Catch::Contains("segmentation"));
+    // Each bad value, set on the defaults, and the field the error names.
+    const std::vector<std::pair<std::function<void(GeometryOptions&)>, std::string>> bad = {
+        {[](GeometryOptions& o) { o.column_bin_px = 0; }, "column_bin_px"},
+        {[](GeometryOptions& o) { o.max_camera_height_m = 0.1; }, "max_camera_height_m"},
+        {[](GeometryOptions& o) { o.layer_height_m = o.car_max_height_m; }, "layer_height_m"},
+        {[](GeometryOptions& o) { o.min_face_share = 1.0; }, "min_face_share"},
+        {[](GeometryOptions& o) { o.green_window_px = -1; }, "green_window_px"},
+        {[](GeometryOptions& o) { o.car_min_edge_share = 1.0; }, "car_min_edge_share"},
+        {[](GeometryOptions& o) { o.edge_window_m = 0.0; }, "edge_window_m"},
+        {[](GeometryOptions& o) { o.edge_step_px = 0; }, "edge_step_px"},
+        {[](GeometryOptions& o) { o.segmentation = "stixels"; }, "segmentation"},
+    };
+    for (const auto& [set, field] : bad) {
+        GeometryOptions o;
+        set(o);
+        INFO(field);
+        CHECK_THROWS_WITH(o.validate(), Catch::Contains(field));
+    }
 }
