@@ -104,6 +104,7 @@ cloud_analysis::BatchOptions batch_options(const BatchArgs& a, std::vector<std::
     options.kitti_root = a.kitti_root;
     options.kitti_instances = a.instances;
     options.odometry = a.odometry;
+    options.odometry_options.estimate_disparity_offset = !a.fixed_disparity_offset;
     options.frames = std::move(frames);
     if (!a.drive.empty()) {
         // The share's frames, in the drive's order.
@@ -158,6 +159,7 @@ nlohmann::json report_json(const BatchArgs& a, const cloud_analysis::BatchReport
                              {"frames_with_warnings", warned_frames(r.per_frame).size()},
                              {"per_frame", r.per_frame}};
     if (r.evaluation.frames > 0) report["evaluation"] = r.evaluation.to_json();
+    if (r.disparity_offset_px) report["disparity_offset_px"] = *r.disparity_offset_px;
     return report;
 }
 
@@ -227,6 +229,9 @@ CLI::App* add_batch_command(CLI::App& app, BatchArgs& a) {
     cmd->add_flag("--odometry", a.odometry,
                   "estimate where the camera went from frame to frame (stereo visual odometry): "
                   "<out-dir>/poses.txt (KITTI odometry format) and each entity file's frame.pose");
+    cmd->add_flag("--no-disparity-offset", a.fixed_disparity_offset,
+                  "--odometry: take the disparities as they are (no rig disparity offset "
+                  "estimated from the motion)");
     add_tracking_flags(*cmd, a);
     cmd->add_option("--out-dir", a.out_dir, "output folder: <frame>.json per frame")->required();
     cmd->add_option("--clouds", a.cloud_formats, "also write <frame>.<fmt> clouds: xyz pcd ply")
@@ -306,6 +311,8 @@ void check_batch_flags(const BatchArgs& a) {
                                    "cannot resume: the odometry needs every frame in order");
     if (a.odometry && a.shard.count > 1)
         throw CLI::ValidationError("--odometry", "cannot chain a share of the frames (--shard)");
+    if (a.fixed_disparity_offset && !a.odometry)
+        throw CLI::ValidationError("--no-disparity-offset", "needs --odometry");
     if (a.odometry && a.settings.options.raw)
         throw CLI::ValidationError("--odometry", "needs rectified frames (not --raw)");
     try {
@@ -398,6 +405,11 @@ int run_batch(const BatchArgs& a) {
             label.c_str(), r.tracking->tracked, r.tracking->tracks, r.tracking->restarts,
             r.tracking->tracked ? r.tracking->track_ms / r.tracking->tracked : 0.0,
             (a.out_dir / "sequence.json").string().c_str());
+    }
+    if (!a.quiet && r.disparity_offset_px) {
+        std::fprintf(stderr, "%s: odometry: the rig's disparity offset %+.2f px -> %s\n",
+                     label.c_str(), *r.disparity_offset_px,
+                     (a.out_dir / "poses.txt").string().c_str());
     }
     const auto warned = warned_frames(r.per_frame);
     if (!a.quiet && !warned.empty()) {

@@ -32,20 +32,21 @@ struct BatchArgs {
     std::vector<cloud_analysis::DriveFrame> drive;  ///< the frames of --drive or --pairs
     bool track = false;                             ///< --track: track ids + sequence.json
     bool odometry = false;                          ///< --odometry: poses.txt + frame.pose
-    tracking::SequenceTrackOptions track_options;   ///< --fps, --min-hits, --max-misses
-    std::vector<std::string> frames;                ///< --frames: frame ids
-    std::filesystem::path list;                     ///< --list: file of frame ids, one per line
-    std::filesystem::path out_dir;           ///< --out-dir: <frame>.json (+ clouds) per frame
-    std::vector<std::string> cloud_formats;  ///< --clouds: any of xyz pcd ply
-    bool disparity_kitti = false;            ///< --disparity-kitti: <frame>_disparity.png
-    std::filesystem::path report;            ///< --report: per-frame ms and memory as JSON
-    std::string shard_text;                  ///< --shard: "I/N" (else from SLURM_ARRAY_TASK_*)
-    cloud_analysis::Shard shard;             ///< the share of the list this run does
-    std::size_t list_frames = 0;             ///< frames in the whole list, before sharding
-    bool resume = false;                     ///< --resume: skip frames already complete and valid
-    bool quiet = false;                      ///< --quiet: no progress, no summary line
-    bool evaluate = false;                   ///< --evaluate: score disparity where GT exists
-    double progress_every_s = 10.0;          ///< --progress-every: seconds between log lines
+    bool fixed_disparity_offset = false;  ///< --no-disparity-offset: the disparities as they are
+    tracking::SequenceTrackOptions track_options;  ///< --fps, --min-hits, --max-misses
+    std::vector<std::string> frames;               ///< --frames: frame ids
+    std::filesystem::path list;                    ///< --list: file of frame ids, one per line
+    std::filesystem::path out_dir;                 ///< --out-dir: <frame>.json (+ clouds) per frame
+    std::vector<std::string> cloud_formats;        ///< --clouds: any of xyz pcd ply
+    bool disparity_kitti = false;                  ///< --disparity-kitti: <frame>_disparity.png
+    std::filesystem::path report;                  ///< --report: per-frame ms and memory as JSON
+    std::string shard_text;          ///< --shard: "I/N" (else from SLURM_ARRAY_TASK_*)
+    cloud_analysis::Shard shard;     ///< the share of the list this run does
+    std::size_t list_frames = 0;     ///< frames in the whole list, before sharding
+    bool resume = false;             ///< --resume: skip frames already complete and valid
+    bool quiet = false;              ///< --quiet: no progress, no summary line
+    bool evaluate = false;           ///< --evaluate: score disparity where GT exists
+    double progress_every_s = 10.0;  ///< --progress-every: seconds between log lines
 };
 
 /// Registers `batch` on app and binds its flags to args (which must outlive parsing).

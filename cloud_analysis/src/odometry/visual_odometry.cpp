@@ -3,9 +3,12 @@
 #include <algorithm>
 #include <cmath>
 #include <cstdio>
+#include <optional>
 #include <sstream>
 #include <stdexcept>
 
+#include <Eigen/Cholesky>
+#include <Eigen/Geometry>
 #include <Eigen/LU>
 #include <opencv2/calib3d.hpp>
 #include <opencv2/core.hpp>
@@ -85,6 +88,9 @@ void OdometryOptions::validate() const {
     }
     if (ransac_iterations < 10) throw std::invalid_argument("ransac_iterations: must be >= 10");
     if (min_inliers < 6) throw std::invalid_argument("min_inliers: must be >= 6");
+    if (!(disparity_offset_prior_px > 0.0)) {
+        throw std::invalid_argument("disparity_offset_prior_px: must be > 0");
+    }
 }
 
 /// Image pyramids of Lucas-Kanade (cv::buildOpticalFlowPyramid), kept for the next frame.
@@ -115,11 +121,33 @@ cv::Mat voting_mask(const OdometryFrame& prev, double min_disparity) {
     return mask;
 }
 
-/// 3D points of the previous frame and their pixels in the current left image.
+/// Corners of the previous left image with their disparity, and their pixels in the current
+/// left image.
 struct Correspondences {
-    std::vector<cv::Point3f> object;
+    std::vector<cv::Point2f> corner;
+    std::vector<double> disparity_px;  ///< as measured, before the rig's offset
     std::vector<cv::Point2f> image;
 };
+
+/// The corner of disparity d lifted to 3D with the calibration, d corrected by offset_px.
+Eigen::Vector3d lifted(const cv::Point2f& corner, double disparity_px, const StereoCamera& camera,
+                       double offset_px) {
+    const double z = match_border(camera).depth_m(disparity_px + offset_px);
+    return {(double{corner.x} - camera.cx_px) * z / camera.fx_px,
+            (double{corner.y} - camera.cy_px) * z / camera.fy_px, z};
+}
+
+std::vector<cv::Point3f> object_points(const Correspondences& c, const StereoCamera& camera,
+                                       double offset_px) {
+    std::vector<cv::Point3f> out;
+    out.reserve(c.corner.size());
+    for (std::size_t k = 0; k < c.corner.size(); ++k) {
+        const Eigen::Vector3d p = lifted(c.corner[k], c.disparity_px[k], camera, offset_px);
+        out.emplace_back(static_cast<float>(p.x()), static_cast<float>(p.y()),
+                         static_cast<float>(p.z()));
+    }
+    return out;
+}
 
 /// The corners tracked into the current left image and back (round trip within
 /// max_round_trip_px), each matched across the previous pair (its own sub-pixel disparity, near
@@ -127,10 +155,9 @@ struct Correspondences {
 Correspondences track_corners(const OdometryFrame& prev, const cv::Mat& prev_grey,
                               const VisualOdometry::Pyramid& prev_pyramid,
                               const VisualOdometry::Pyramid& curr_pyramid,
-                              const std::vector<cv::Point2f>& corners, const StereoCamera& camera,
+                              const std::vector<cv::Point2f>& corners,
                               const OdometryOptions& options, double min_disparity) {
     const int w = prev.left.width_px, h = prev.left.height_px;
-    const MatchBorder border = match_border(camera);
     std::vector<cv::Point2f> forward, back;
     std::vector<std::uint8_t> ok_forward, ok_back;
     std::vector<float> error;
@@ -179,45 +206,138 @@ Correspondences track_corners(const OdometryFrame& prev, const cv::Mat& prev_gre
             d = own;
         }
         if (!(double{d} > min_disparity)) continue;
-        const double z = border.depth_m(double{d});
-        out.object.emplace_back(
-            static_cast<float>((double{corners[k].x} - camera.cx_px) * z / camera.fx_px),
-            static_cast<float>((double{corners[k].y} - camera.cy_px) * z / camera.fy_px),
-            static_cast<float>(z));
+        out.corner.push_back(corners[k]);
+        out.disparity_px.push_back(double{d});
         out.image.push_back(f);
     }
     return out;
 }
 
-/// The motion of the correspondences: RANSAC over P3P, then Levenberg-Marquardt on the inliers.
+cv::Matx33d intrinsics(const StereoCamera& camera) {
+    return {camera.fx_px, 0.0, camera.cx_px, 0.0, camera.fy_px, camera.cy_px, 0.0, 0.0, 1.0};
+}
+
+/// A motion and the correspondences it agrees with.
+struct MotionFit {
+    MotionEstimate estimate;
+    Correspondences inliers;
+};
+
+/// The motion with the points lifted at offset_px: RANSAC over P3P, then Levenberg-Marquardt on
+/// the inliers.
 void solve_motion(const Correspondences& c, const StereoCamera& camera,
-                  const OdometryOptions& options, MotionEstimate& out) {
-    const std::vector<cv::Point3f>& object = c.object;
-    const std::vector<cv::Point2f>& image = c.image;
-    const cv::Matx33d K(camera.fx_px, 0.0, camera.cx_px, 0.0, camera.fy_px, camera.cy_px, 0.0, 0.0,
-                        1.0);
+                  const OdometryOptions& options, double offset_px, MotionFit& out) {
+    const std::vector<cv::Point3f> object = object_points(c, camera, offset_px);
+    const cv::Matx33d K = intrinsics(camera);
     cv::Mat rvec, tvec;
     std::vector<int> inliers;
     const bool found = cv::solvePnPRansac(
-        object, image, K, cv::noArray(), rvec, tvec, false, options.ransac_iterations,
+        object, c.image, K, cv::noArray(), rvec, tvec, false, options.ransac_iterations,
         static_cast<float>(options.ransac_threshold_px), 0.999, inliers, cv::SOLVEPNP_P3P);
-    out.inliers = static_cast<int>(inliers.size());
-    if (!found || out.inliers < options.min_inliers) return;
+    out.estimate.inliers = static_cast<int>(inliers.size());
+    if (!found || out.estimate.inliers < options.min_inliers) return;
     std::vector<cv::Point3f> in_object;
-    std::vector<cv::Point2f> in_image;
     for (int k : inliers) {
-        in_object.push_back(object[static_cast<std::size_t>(k)]);
-        in_image.push_back(image[static_cast<std::size_t>(k)]);
+        const auto i = static_cast<std::size_t>(k);
+        in_object.push_back(object[i]);
+        out.inliers.corner.push_back(c.corner[i]);
+        out.inliers.disparity_px.push_back(c.disparity_px[i]);
+        out.inliers.image.push_back(c.image[i]);
     }
-    cv::solvePnPRefineLM(in_object, in_image, K, cv::noArray(), rvec, tvec);
-    out.T_curr_prev = pose_of(rvec, tvec);
-    out.valid = out.T_curr_prev.allFinite();
+    cv::solvePnPRefineLM(in_object, out.inliers.image, K, cv::noArray(), rvec, tvec);
+    out.estimate.T_curr_prev = pose_of(rvec, tvec);
+    out.estimate.valid = out.estimate.T_curr_prev.allFinite();
+    out.estimate.disparity_offset_px = offset_px;
+}
+
+/// T_curr_prev refined by Levenberg-Marquardt on the correspondences lifted at offset_px.
+Pose refined(const Correspondences& c, const StereoCamera& camera, double offset_px,
+             const Pose& T_curr_prev) {
+    cv::Mat R, rvec, tvec;
+    cv::eigen2cv(Eigen::Matrix3d(T_curr_prev.topLeftCorner<3, 3>()), R);
+    cv::Rodrigues(R, rvec);
+    cv::eigen2cv(Eigen::Vector3d(T_curr_prev.topRightCorner<3, 1>()), tvec);
+    cv::solvePnPRefineLM(object_points(c, camera, offset_px), c.image, intrinsics(camera),
+                         cv::noArray(), rvec, tvec);
+    const Pose T = pose_of(rvec, tvec);
+    return T.allFinite() ? T : T_curr_prev;
+}
+
+/// The disparity offset one frame pair measures, with its variance.
+struct OffsetMeasurement {
+    double offset_px = 0.0;
+    double variance_px2 = 0.0;
+};
+
+/// The reprojection residuals of the correspondences under the motion (axis-angle, translation)
+/// and disparity offset packed in x; false where a point would lie behind a camera.
+bool reprojection_residuals(const Correspondences& c, const StereoCamera& camera,
+                            const Eigen::Matrix<double, 7, 1>& x, Eigen::VectorXd& r) {
+    const Eigen::Vector3d w = x.head<3>();
+    const Eigen::Matrix3d R = w.norm() > 0.0
+                                  ? Eigen::AngleAxisd(w.norm(), w.normalized()).toRotationMatrix()
+                                  : Eigen::Matrix3d::Identity();
+    for (std::size_t k = 0; k < c.corner.size(); ++k) {
+        const Eigen::Vector3d p = lifted(c.corner[k], c.disparity_px[k], camera, x[6]);
+        if (!(p.z() > 0.0)) return false;
+        const Eigen::Vector3d q = R * p + x.segment<3>(3);
+        if (!(q.z() > 0.0)) return false;
+        const auto i = static_cast<Eigen::Index>(2 * k);
+        r[i] = camera.fx_px * q.x() / q.z() + camera.cx_px - double{c.image[k].x};
+        r[i + 1] = camera.fy_px * q.y() / q.z() + camera.cy_px - double{c.image[k].y};
+    }
+    return true;
+}
+
+/// The disparity offset that makes the pair's motion parallax consistent: Gauss-Newton over
+/// the motion and the offset together, from the motion fitted at offset_px. Moving forward by
+/// s, a point's image motion grows as s (d + offset) / (f B): its slope over the points'
+/// disparities gives s, its intercept the offset. The variance is the fit's (residual variance
+/// times the offset's entry of the inverse normal matrix); without translation it is large and
+/// the pair says little. Empty when the fit fails.
+std::optional<OffsetMeasurement> offset_from_parallax(const Correspondences& c,
+                                                      const StereoCamera& camera,
+                                                      const Pose& T_curr_prev, double offset_px) {
+    using Vector7 = Eigen::Matrix<double, 7, 1>;
+    const auto m = static_cast<Eigen::Index>(2 * c.corner.size());
+    if (m <= 7) return std::nullopt;
+    Vector7 x;
+    const Eigen::AngleAxisd a(Eigen::Matrix3d(T_curr_prev.topLeftCorner<3, 3>()));
+    x << a.angle() * a.axis(), T_curr_prev.topRightCorner<3, 1>(), offset_px;
+    // Central differences: 1e-6 rad, 1e-6 m, 1e-4 px.
+    const Vector7 step = (Vector7() << 1e-6, 1e-6, 1e-6, 1e-6, 1e-6, 1e-6, 1e-4).finished();
+    Eigen::VectorXd r(m), plus(m), minus(m);
+    Eigen::MatrixXd J(m, 7);
+    for (int iteration = 0; iteration < 10; ++iteration) {
+        if (!reprojection_residuals(c, camera, x, r)) return std::nullopt;
+        for (int j = 0; j < 7; ++j) {
+            Vector7 xp = x, xm = x;
+            xp[j] += step[j];
+            xm[j] -= step[j];
+            if (!reprojection_residuals(c, camera, xp, plus) ||
+                !reprojection_residuals(c, camera, xm, minus)) {
+                return std::nullopt;
+            }
+            J.col(j) = (plus - minus) / (2.0 * step[j]);
+        }
+        const Eigen::Matrix<double, 7, 7> normal = J.transpose() * J;
+        const Vector7 dx = normal.ldlt().solve(-J.transpose() * r);
+        if (!dx.allFinite()) return std::nullopt;
+        x += dx;
+        if (std::abs(dx[6]) < 1e-4 && dx.head<6>().norm() < 1e-8) break;
+    }
+    if (!reprojection_residuals(c, camera, x, r)) return std::nullopt;
+    const Eigen::Matrix<double, 7, 7> normal = J.transpose() * J;
+    const double sigma2 = r.squaredNorm() / static_cast<double>(m - 7);
+    const double variance = sigma2 * normal.inverse()(6, 6);
+    if (!std::isfinite(x[6]) || !(variance > 0.0) || !std::isfinite(variance)) return std::nullopt;
+    return OffsetMeasurement{x[6], variance};
 }
 
 /// estimate_motion with the two left images' pyramids built.
-MotionEstimate motion(const OdometryFrame& prev, const VisualOdometry::Pyramid& prev_pyramid,
-                      const ImageU8& curr_left, const VisualOdometry::Pyramid& curr_pyramid,
-                      const StereoCamera& camera, const OdometryOptions& options) {
+MotionFit motion(const OdometryFrame& prev, const VisualOdometry::Pyramid& prev_pyramid,
+                 const ImageU8& curr_left, const VisualOdometry::Pyramid& curr_pyramid,
+                 const StereoCamera& camera, const OdometryOptions& options, double offset_px) {
     const int w = prev.left.width_px, h = prev.left.height_px;
     if (curr_left.width_px != w || curr_left.height_px != h || prev.disparity.width_px != w ||
         prev.disparity.height_px != h) {
@@ -233,23 +353,26 @@ MotionEstimate motion(const OdometryFrame& prev, const VisualOdometry::Pyramid& 
     const cv::Mat prev_grey = grey_of(prev.left);
     const std::vector<cv::Point2f> corners =
         spread_corners(prev_grey, voting_mask(prev, min_disparity), options);
-    MotionEstimate out;
+    MotionFit out;
+    out.estimate.disparity_offset_px = offset_px;
     if (corners.size() < static_cast<std::size_t>(options.min_inliers)) return out;
-    const Correspondences c = track_corners(prev, prev_grey, prev_pyramid, curr_pyramid, corners,
-                                            camera, options, min_disparity);
-    out.tracked = static_cast<int>(c.object.size());
-    if (out.tracked < options.min_inliers) return out;
-    solve_motion(c, camera, options, out);
+    const Correspondences c =
+        track_corners(prev, prev_grey, prev_pyramid, curr_pyramid, corners, options, min_disparity);
+    out.estimate.tracked = static_cast<int>(c.corner.size());
+    if (out.estimate.tracked < options.min_inliers) return out;
+    solve_motion(c, camera, options, offset_px, out);
     return out;
 }
 
 }  // namespace
 
 MotionEstimate estimate_motion(const OdometryFrame& prev, const ImageU8& curr_left,
-                               const StereoCamera& camera, const OdometryOptions& options) {
+                               const StereoCamera& camera, const OdometryOptions& options,
+                               double disparity_offset_px) {
     options.validate();
     return motion(prev, pyramid_of(grey_of(prev.left), options), curr_left,
-                  pyramid_of(grey_of(curr_left), options), camera, options);
+                  pyramid_of(grey_of(curr_left), options), camera, options, disparity_offset_px)
+        .estimate;
 }
 
 std::vector<std::uint8_t> static_mask(const std::vector<std::uint16_t>& class_index,
@@ -265,6 +388,8 @@ std::vector<std::uint8_t> static_mask(const std::vector<std::uint16_t>& class_in
 VisualOdometry::VisualOdometry(const StereoCamera& camera, const OdometryOptions& options)
     : camera_(camera), options_(options) {
     options_.validate();
+    offset_.information =
+        1.0 / (options_.disparity_offset_prior_px * options_.disparity_offset_prior_px);
 }
 
 VisualOdometry::~VisualOdometry() = default;
@@ -281,7 +406,23 @@ Pose VisualOdometry::add(OdometryFrame frame) {
     to_grey(frame.right);
     auto pyramid = std::make_unique<Pyramid>(pyramid_of(grey_of(frame.left), options_));
     if (prev_) {
-        last_ = motion(*prev_, *prev_pyramid_, frame.left, *pyramid, camera_, options_);
+        MotionFit fit = motion(*prev_, *prev_pyramid_, frame.left, *pyramid, camera_, options_,
+                               offset_.mean_px);
+        if (fit.estimate.valid && options_.estimate_disparity_offset) {
+            if (const auto m = offset_from_parallax(fit.inliers, camera_, fit.estimate.T_curr_prev,
+                                                    offset_.mean_px)) {
+                // One Gaussian update of a constant: the pair's measurement by its information.
+                const double information = 1.0 / m->variance_px2;
+                offset_.mean_px =
+                    (offset_.information * offset_.mean_px + information * m->offset_px) /
+                    (offset_.information + information);
+                offset_.information += information;
+                fit.estimate.T_curr_prev =
+                    refined(fit.inliers, camera_, offset_.mean_px, fit.estimate.T_curr_prev);
+                fit.estimate.disparity_offset_px = offset_.mean_px;
+            }
+        }
+        last_ = fit.estimate;
         if (last_.valid) velocity_ = last_.T_curr_prev;
         T_world_prev_ = T_world_prev_ * velocity_.inverse();
     }

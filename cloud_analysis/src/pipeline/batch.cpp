@@ -389,6 +389,9 @@ void end_batch(const BatchOptions& options, std::optional<tracking::SequenceTrac
     if (odo) {
         stereoscene::support::write_file_atomic(options.out_dir / "poses.txt",
                                                 odometry::format_kitti_poses(odo->poses));
+        if (odo->chain && options.odometry_options.estimate_disparity_offset) {
+            report.disparity_offset_px = odo->chain->disparity_offset_px();
+        }
     }
     summarize(report, start, cpu_start);
 }

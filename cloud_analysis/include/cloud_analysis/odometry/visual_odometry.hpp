@@ -35,7 +35,7 @@ struct OdometryOptions {
     double corner_cell_px = 32.0;    ///< corners are kept strongest first per square cell of this
                                      ///< side, the same number in each: spread over the image, px,
                                      ///< >= 4
-    int track_window_px = 7;        ///< Lucas-Kanade window side, px, odd, >= 5
+    int track_window_px = 7;         ///< Lucas-Kanade window side, px, odd, >= 5
     int track_levels = 3;            ///< image pyramid levels above the image, [0, 8]
     double max_round_trip_px = 1.0;  ///< forward-backward track error kept, px, > 0
     double max_stereo_gap_px = 1.0;  ///< a corner's match across the pair: off its row, or
@@ -50,6 +50,12 @@ struct OdometryOptions {
     int ransac_iterations = 300;       ///< RANSAC hypotheses, >= 10
     int min_inliers = 12;              ///< fewer: the motion is not trusted (previous motion
                                        ///< kept), >= 6
+    /// The rig's disparity offset (added to every measured disparity: a rectification error
+    /// between the two principal points, which makes far points too far) is estimated from
+    /// the motion: each frame pair's parallax gives it with a variance, and the drive's
+    /// estimate is their information-weighted mean. Its prior: mean 0, this deviation, px, > 0.
+    double disparity_offset_prior_px = 1.0;
+    bool estimate_disparity_offset = true;  ///< false: the disparities are taken as they are
     /// Throws std::invalid_argument naming the bad field.
     void validate() const;
 };
@@ -70,12 +76,14 @@ struct MotionEstimate {
     int tracked = 0;                      ///< corners tracked both ways with a depth
     int inliers = 0;                      ///< of them, agreeing with the motion
     bool valid = false;                   ///< at least min_inliers inliers
+    double disparity_offset_px = 0.0;     ///< the offset the points were lifted with
 };
 
 /// The motion of the left camera from `prev` to `curr` (images of one size, `camera` their
 /// rectified rig).
 MotionEstimate estimate_motion(const OdometryFrame& prev, const ImageU8& curr_left,
-                               const StereoCamera& camera, const OdometryOptions& options);
+                               const StereoCamera& camera, const OdometryOptions& options,
+                               double disparity_offset_px = 0.0);
 
 /// The per-pixel vote mask of a class image: 0 on the palette's thing classes, 1 elsewhere.
 std::vector<std::uint8_t> static_mask(const std::vector<std::uint16_t>& class_index,
@@ -94,6 +102,8 @@ class VisualOdometry {
     Pose add(OdometryFrame frame);
     /// The last motion's estimate (invalid for the first frame).
     const MotionEstimate& last_motion() const { return last_; }
+    /// The drive's disparity offset estimate so far, px (0 before any motion).
+    double disparity_offset_px() const { return offset_.mean_px; }
 
     struct Pyramid;  ///< the previous left image's image pyramid (behind the .cpp: OpenCV)
 
@@ -105,6 +115,11 @@ class VisualOdometry {
     Pose velocity_ = Pose::Identity();  ///< the last trusted T_curr_prev
     MotionEstimate last_;
     std::unique_ptr<Pyramid> prev_pyramid_;
+    /// The disparity offset as a Gaussian in information form (a constant of the rig).
+    struct Offset {
+        double mean_px = 0.0;
+        double information = 0.0;  ///< 1 / variance, px^-2
+    } offset_;
 };
 
 /// KITTI odometry poses text: per frame one line of the 3x4 matrix [R | t] of T_world_camera,

@@ -74,6 +74,9 @@ struct BatchReport {
     DisparityTally evaluation;
     /// With BatchOptions::track: frames tracked, tracks, restarts, tracker time.
     std::optional<tracking::SequenceTrackReport> tracking;
+    /// With BatchOptions::odometry: the rig's disparity offset the odometry estimated from the
+    /// drive's motion, px (docs/odometry.md).
+    std::optional<double> disparity_offset_px;
 };
 
 /// Called on the calling thread as the batch goes: failed(frame, reason) for each frame that
