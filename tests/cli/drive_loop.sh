@@ -25,7 +25,9 @@ grep -q "^car      all" "$d/eval.txt"
 
 # The same drive as a KITTI raw folder (image_02/data, image_03/data, timestamps.txt, the
 # calibration in the date folder above) tracked inside batch: the same track ids as
-# batch + track.
+# batch + track writing each frame at once (--lag 0: batch --track is live, so it neither turns
+# nor reports a track in frames already written).
+"$analyse" track "$d/analysed" --out-dir "$d/tracked-live" --fps 10 --lag 0 --quiet
 raw=$d/raw/2011_09_26/drive_sync
 mkdir -p "$raw/image_02/data" "$raw/image_03/data"
 cp "$d/drive/image_2/"*.png "$raw/image_02/data/"
@@ -35,7 +37,7 @@ for i in $(seq 0 $((frames - 1))); do printf '2011-09-26 13:02:25.%d00000000\n' 
     > "$raw/image_02/timestamps.txt"
 "$analyse" batch --drive "$raw" --semantic-dir "$d/drive/semantic_rgb" --track \
     --out-dir "$d/raw-tracked" --quiet
-python3 - "$d/tracked" "$d/raw-tracked" <<'PY'
+python3 - "$d/tracked-live" "$d/raw-tracked" <<'PY'
 import json, os, sys
 a, b = sys.argv[1:3]
 index = json.load(open(os.path.join(b, "sequence.json")))
@@ -54,7 +56,7 @@ PY
 test "$(grep -c '"file"' "$d/pairs-tracked/sequence.json")" = "$frames"
 # The tracker's settings reach the tracker inside batch as they do `track`.
 "$analyse" track "$d/analysed" --out-dir "$d/tracked-open" --fps 10 --gate-chi2 0 \
-    --coast-min-hits 0 --coast 4 --quiet
+    --coast-min-hits 0 --coast 4 --lag 0 --quiet
 "$analyse" batch --kitti-root "$d/drive" --list "$d/frames.txt" --track --fps 10 --gate-chi2 0 \
     --coast-min-hits 0 --coast 4 --out-dir "$d/batch-tracked-open" --quiet
 for f in "$d/tracked-open/"0*.json; do

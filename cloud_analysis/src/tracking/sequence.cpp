@@ -17,6 +17,30 @@ namespace {
 using stereoscene::support::kPi;
 using stereoscene::support::wrap_angle;
 
+/// Frames tracked but not yet written, oldest first, with their file names.
+using HeldFrames = std::deque<std::pair<scene_schema::EntityDocument, std::string>>;
+
+/// A track confirmed in the newest held frame is reported in the held frames before it, on the
+/// entities it was made of there: its id, velocity, heading and held size (each keeps its own
+/// measured centre). An entity another track already reports is left alone.
+void report_earlier(HeldFrames& held, const std::vector<ConfirmedTrack>& confirmed) {
+    for (const ConfirmedTrack& c : confirmed) {
+        const std::size_t n = c.earlier_entity_ids.size();
+        for (std::size_t k = 1; k <= n && k < held.size(); ++k) {
+            const std::string& id = c.earlier_entity_ids[n - k];
+            for (scene_schema::Entity& e : held[held.size() - 1 - k].first.entities) {
+                if (e.id != id || e.track_id) continue;
+                e.track_id = c.id;
+                e.velocity = c.reported.velocity;
+                e.theta = c.reported.theta;
+                e.W = c.reported.W;
+                e.H = c.reported.H;
+                e.L = c.reported.L;
+            }
+        }
+    }
+}
+
 }  // namespace
 
 void SequenceTrackOptions::validate() const {
@@ -74,6 +98,7 @@ scene_schema::EntityDocument SequenceTracker::track(const scene_schema::EntityDo
         std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - start).count();
     if (stats.restarted) ++report_.restarts;
     turned_ = std::move(stats.turned);
+    confirmed_ = std::move(stats.confirmed);
     for (const auto& e : tracked.entities) {
         if (e.track_id) ids_.insert(*e.track_id);
     }
@@ -110,8 +135,7 @@ SequenceTrackReport track_files(const scene_schema::SequenceIndex& index,
                                 const std::function<void(const std::string&)>& warn) {
     options.validate();
     SequenceTracker sequence(index.id, index.fps.value_or(options.fps), options, warn);
-    // Frames tracked but not yet written, oldest first, with their file names.
-    std::deque<std::pair<scene_schema::EntityDocument, std::string>> held;
+    HeldFrames held;
     const auto write_oldest = [&] {
         scene_schema::write_file(held.front().first, out_dir / held.front().second);
         held.pop_front();
@@ -127,6 +151,7 @@ SequenceTrackReport track_files(const scene_schema::SequenceIndex& index,
             continue;
         }
         held.emplace_back(sequence.track(doc, f.index, f.file, f.timestamp_s), f.file);
+        report_earlier(held, sequence.confirmed());
         // A track the motion turned round faced backwards in the frames still held as well.
         for (const std::int64_t id : sequence.turned()) {
             for (std::size_t k = 0; k + 1 < held.size(); ++k) {

@@ -322,6 +322,7 @@ void Tracker::take_detections(const scene_schema::EntityDocument& frame, std::ve
             ++s.born;
         }
         Track& t = tracks_[track_of[i]];
+        const bool was_confirmed = t.confirmed;
         if (!t.confirmed &&
             (t.hits >= options_.min_hits ||
              (options_.confirm_first_frames && frames_since_start_ <= options_.min_hits))) {
@@ -333,6 +334,13 @@ void Tracker::take_detections(const scene_schema::EntityDocument& frame, std::ve
         if (t.confirmed) {
             report(t, options_, out.entities[i]);
             ++s.reported;
+            if (!was_confirmed && !t.tentative_entity_ids.empty()) {
+                s.confirmed.push_back(
+                    ConfirmedTrack{t.id, std::move(t.tentative_entity_ids), out.entities[i]});
+                t.tentative_entity_ids.clear();
+            }
+        } else {
+            t.tentative_entity_ids.push_back(e.id);
         }
     }
 }

@@ -574,6 +574,75 @@ TEST_CASE("track_files with a lag turns a backwards-born track round in the fram
     }
 }
 
+TEST_CASE("a track confirmed after min_hits says which entities it was made of", "[tracking]") {
+    TrackerOptions options;
+    options.min_hits = 3;
+    Tracker tracker(options);
+    for (int i = 0; i < 5; ++i) tracker.update(frame_of({car(0.0, 10.0, 0.0)}), 0.1 * i);
+    std::vector<std::string> ids;
+    for (int i = 5; i < 8; ++i) {
+        TrackerFrameStats stats;
+        auto doc = frame_of({car(0.0, 10.0, 0.0), car(5.0, 30.0, kPi / 2)});
+        doc.entities[1].id = "car-in-" + std::to_string(i);
+        const auto out = tracker.update(doc, 0.1 * i, &stats);
+        if (i < 7) {
+            CHECK(stats.confirmed.empty());
+            continue;
+        }
+        REQUIRE(stats.confirmed.size() == 1);
+        CHECK(stats.confirmed[0].id == *out.entities[1].track_id);
+        ids = stats.confirmed[0].earlier_entity_ids;
+        CHECK(stats.confirmed[0].reported.L == Approx(out.entities[1].L));
+    }
+    CHECK(ids == std::vector<std::string>{"car-in-5", "car-in-6"});
+}
+
+TEST_CASE("track_files with a lag reports a track from its first detection", "[tracking]") {
+    const auto in = fresh_dir("first_in");
+    scene_schema::SequenceIndex index;
+    index.id = "first";
+    const int frames = 12;
+    for (int i = 0; i < frames; ++i) {
+        // A parked car from the first frame (confirmed at once), another from frame 6.
+        std::vector<Entity> seen{car(0.0, 10.0, 0.0)};
+        if (i >= 6) seen.push_back(car(5.0, 30.0, kPi / 2, 3.9 + 0.1 * (i % 3)));
+        auto doc = frame_of(seen);
+        doc.frame.id = std::to_string(i);
+        const std::string file = "f" + std::to_string(i) + ".json";
+        scene_schema::write_file(doc, in / file);
+        index.frames.push_back({i, file, 0.1 * i, {}});
+    }
+    scene_schema::write_sequence_file(index, in / "sequence.json");
+    const auto quiet = [](const std::string&) {};
+    // The ids of the later car's entities, frame by frame (none where it is not reported).
+    const auto later_ids = [&](const std::filesystem::path& dir) {
+        std::vector<std::optional<std::int64_t>> ids;
+        std::set<double> lengths;
+        for (int i = 6; i < frames; ++i) {
+            const auto doc = scene_schema::read_file(dir / ("f" + std::to_string(i) + ".json"));
+            ids.push_back(doc.entities.at(1).track_id);
+            if (doc.entities[1].track_id) lengths.insert(doc.entities[1].L);
+        }
+        return std::make_pair(ids, lengths);
+    };
+    SequenceTrackOptions options;
+    options.tracker.min_hits = 3;
+    options.lag_frames = 0;
+    const auto at_once = fresh_dir("first_0");
+    track_files(index, in / "sequence.json", at_once, options, quiet);
+    const auto [live, live_lengths] = later_ids(at_once);
+    CHECK_FALSE(live[0]);
+    CHECK_FALSE(live[1]);
+    REQUIRE(live[2]);
+
+    options.lag_frames = 5;
+    const auto lagged = fresh_dir("first_5");
+    track_files(index, in / "sequence.json", lagged, options, quiet);
+    const auto [held, held_lengths] = later_ids(lagged);
+    for (const auto& id : held) CHECK(id == live[2]);
+    CHECK(held_lengths.size() == 1);  // one held size, the earlier frames' too
+}
+
 TEST_CASE("sequence track options refuse a negative lag", "[tracking]") {
     SequenceTrackOptions options;
     options.lag_frames = -1;

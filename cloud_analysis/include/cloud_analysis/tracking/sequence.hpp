@@ -22,7 +22,9 @@ struct SequenceTrackOptions {
     TrackerOptions tracker;  ///< association, birth, death, smoothing
     /// track_files holds this many frames before writing them: a track whose motion shows,
     /// within that many frames, that its box was reported facing backwards is turned round in
-    /// the held frames too (no heading flip in the output). 0 writes each frame at once.
+    /// the held frames too (no heading flip in the output), and a track confirmed after
+    /// min_hits detections is reported in the held frames of its earlier ones as well (an
+    /// object is followed from its first detection). 0 writes each frame at once.
     int lag_frames = 15;
     /// Throws std::invalid_argument naming the bad field.
     void validate() const;
@@ -70,6 +72,8 @@ class SequenceTracker {
     }
     /// Tracks the last track() turned round by pi (see TrackerFrameStats::turned).
     const std::vector<std::int64_t>& turned() const { return turned_; }
+    /// Tracks the last track() confirmed after earlier hits (see TrackerFrameStats::confirmed).
+    const std::vector<ConfirmedTrack>& confirmed() const { return confirmed_; }
 
     /// Counts a frame that could not be read or analysed (the tracker sees a gap).
     void skip() { ++report_.skipped; }
@@ -85,6 +89,7 @@ class SequenceTracker {
     std::deque<scene_schema::SequenceFrame> pending_;  ///< tracked, not yet committed
     std::optional<double> last_time_;  ///< of the last frame tracked with a usable timestamp
     std::vector<std::int64_t> turned_;
+    std::vector<ConfirmedTrack> confirmed_;
     std::set<std::int64_t> ids_;
     SequenceTrackReport report_;
 };

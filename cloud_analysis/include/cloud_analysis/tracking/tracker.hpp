@@ -78,6 +78,15 @@ struct TrackerOptions {
 };
 
 /// What one frame gave the tracker.
+/// A track confirmed in a frame, and what it was before (TrackerFrameStats::confirmed).
+struct ConfirmedTrack {
+    std::int64_t id = 0;
+    /// Its detections' entity ids in the frames before this one, oldest first, one a frame, the
+    /// last in the frame just before.
+    std::vector<std::string> earlier_entity_ids;
+    scene_schema::Entity reported;  ///< its entity in this frame
+};
+
 struct TrackerFrameStats {
     int detections = 0;      ///< entities of tracked classes
     int matched = 0;         ///< of those, associated with an existing track
@@ -90,6 +99,10 @@ struct TrackerFrameStats {
     /// reported facing backwards before its velocity was known); a fixed-lag writer turns
     /// their entities in the frames it still holds.
     std::vector<std::int64_t> turned;
+    /// Tracks confirmed in this frame after earlier hits (not born confirmed): each with the ids
+    /// of the entities it was made of in the frames before, oldest first, and its box as
+    /// reported now; a fixed-lag writer reports it in the frames it still holds too.
+    std::vector<ConfirmedTrack> confirmed;
 };
 
 /// One followed object.
@@ -110,6 +123,8 @@ struct Track {
     int misses = 0;                                ///< consecutive frames without one
     int seen_in_part = 0;    ///< frames missed but seen in part since its last hit
     bool confirmed = false;  ///< reached min_hits (or was born in the first frames)
+    /// Before confirmation: the entity ids of its hits, oldest first, one a frame.
+    std::vector<std::string> tentative_entity_ids{};
 };
 
 /// The tracker's state across frames. Feed frames in capture order.
