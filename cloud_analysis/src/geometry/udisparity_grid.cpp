@@ -35,53 +35,34 @@ void unite(std::vector<int>& parent, int a, int b) {
 bool is_green(int r, int g, int b) { return g >= r + 6 && g * 10 >= r * 11 && g * 10 >= b * 11; }
 
 /// Per pixel: whether the mean colour of its (2 radius + 1)^2 window is green (foliage's own
-/// shadows between sunlit leaves are green only on average); all 0 without a colour image.
+/// shadows between sunlit leaves are green only on average); all 0 without a colour image. At
+/// the image's border the window holds only the pixels inside.
 std::vector<char> green_mask(const ImageU8& left, int w, int h, int radius) {
     std::vector<char> mask(static_cast<std::size_t>(w) * h, 0);
     if (left.channels != 3 || left.empty() || left.width_px != w || left.height_px != h) {
         return mask;
     }
-    // Box sums, separable: per row over the window's columns (at most 129 * 255 per channel),
-    // then per column over the window's rows, slid down the image.
-    const std::size_t row_len = static_cast<std::size_t>(w) * 3;
-    std::vector<std::int32_t> across(row_len * h);
-    for (int v = 0; v < h; ++v) {
-        const std::uint8_t* p = left.at(0, v);
-        std::int32_t* out = across.data() + v * row_len;
-        std::array<std::int32_t, 3> sum{0, 0, 0};
-        for (int u = 0; u < std::min(w, radius); ++u) {
-            for (int c = 0; c < 3; ++c) sum[c] += p[u * 3 + c];
-        }
-        for (int u = 0; u < w; ++u) {
-            for (int c = 0; c < 3; ++c) {
-                if (u + radius < w) sum[c] += p[(u + radius) * 3 + c];
-                if (u - radius - 1 >= 0) sum[c] -= p[(u - radius - 1) * 3 + c];
-                out[u * 3 + c] = sum[c];
-            }
-        }
-    }
-    std::vector<std::int32_t> down(row_len, 0);
-    for (int v = 0; v < std::min(h, radius); ++v) {
-        for (std::size_t k = 0; k < row_len; ++k) down[k] += across[v * row_len + k];
+    // The window's colour sums (zeros outside the image), then its mean floored without a
+    // division per pixel: (s + 0.5) / n lies at least 0.5 / n from an integer, far beyond the
+    // rounding of (s + 0.5) times the window's reciprocal (a few ulp of at most 255.5), so
+    // truncating that product floors s / n exactly.
+    cv::Mat sums;
+    const int side = 2 * radius + 1;
+    cv::boxFilter(mat_view(left), sums, CV_32S, cv::Size(side, side), cv::Point(-1, -1), false,
+                  cv::BORDER_CONSTANT);
+    std::vector<double> per_column(static_cast<std::size_t>(w));
+    for (int u = 0; u < w; ++u) {
+        per_column[static_cast<std::size_t>(u)] =
+            1.0 / (std::min(w, u + radius + 1) - std::max(0, u - radius));
     }
     for (int v = 0; v < h; ++v) {
-        if (v + radius < h) {
-            const std::int32_t* add = across.data() + (v + radius) * row_len;
-            for (std::size_t k = 0; k < row_len; ++k) down[k] += add[k];
-        }
-        if (v - radius - 1 >= 0) {
-            const std::int32_t* sub = across.data() + (v - radius - 1) * row_len;
-            for (std::size_t k = 0; k < row_len; ++k) down[k] -= sub[k];
-        }
-        const int rows = std::min(h, v + radius + 1) - std::max(0, v - radius);
+        const double per_row = 1.0 / (std::min(h, v + radius + 1) - std::max(0, v - radius));
+        const std::int32_t* s = sums.ptr<std::int32_t>(v);
         char* m = mask.data() + static_cast<std::size_t>(v) * w;
-        for (int u = 0; u < w; ++u) {
-            // The mean colour, floored; a double quotient of these integers floors exactly and
-            // costs less than an integer division.
-            const double n = rows * (std::min(w, u + radius + 1) - std::max(0, u - radius));
-            const std::int32_t* s = down.data() + u * 3;
-            m[u] = is_green(static_cast<int>(s[0] / n), static_cast<int>(s[1] / n),
-                            static_cast<int>(s[2] / n));
+        for (int u = 0; u < w; ++u, s += 3) {
+            const double inverse = per_row * per_column[static_cast<std::size_t>(u)];
+            const auto mean = [&](int c) { return static_cast<int>((s[c] + 0.5) * inverse); };
+            m[u] = is_green(mean(0), mean(1), mean(2));
         }
     }
     return mask;
@@ -361,6 +342,10 @@ void raise_top(float hf, float& top, float& second) {
 /// only in cells that have no other.
 void find_tops(const DisparityMap& disparity, const Rig& rig, const GeometryOptions& o, Grid& g) {
     const int w = disparity.width_px, h = disparity.height_px;
+    std::vector<double> cell_mean_d(g.cells.size(), 0.0);
+    for (std::size_t k = 0; k < g.cells.size(); ++k) {
+        if (g.cells[k].count > 0) cell_mean_d[k] = g.cells[k].d_sum / g.cells[k].count;
+    }
     for (int v = 0; v < h; ++v) {
         const std::size_t row = static_cast<std::size_t>(v) * w;
         for (int u = 0; u < w; ++u) {
@@ -368,7 +353,7 @@ void find_tops(const DisparityMap& disparity, const Rig& rig, const GeometryOpti
             if (cell < 0 || g.pixel_low[row + u]) continue;
             Cell& c = g.cells[static_cast<std::size_t>(cell)];
             const double d = double{disparity.disparity_px[row + u]} - rig.offset;
-            const double mean_d = c.d_sum / c.count;
+            const double mean_d = cell_mean_d[static_cast<std::size_t>(cell)];
             if (d < mean_d - o.top_behind_px) continue;
             const float hf = g.pixel_height[row + u];
             if (hf > c.top2 || hf > c.blend2) {  // else neither pair changes

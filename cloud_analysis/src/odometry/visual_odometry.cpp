@@ -149,53 +149,47 @@ std::vector<cv::Point3f> object_points(const Correspondences& c, const StereoCam
     return out;
 }
 
-/// The corners tracked into the current left image and back (round trip within
-/// max_round_trip_px), each matched across the previous pair (its own sub-pixel disparity, near
-/// the dense one), lifted to 3D with the calibration.
-Correspondences track_corners(const OdometryFrame& prev, const cv::Mat& prev_grey,
-                              const VisualOdometry::Pyramid& prev_pyramid,
-                              const VisualOdometry::Pyramid& curr_pyramid,
-                              const std::vector<cv::Point2f>& corners,
-                              const OdometryOptions& options, double min_disparity) {
-    const int w = prev.left.width_px, h = prev.left.height_px;
-    std::vector<cv::Point2f> forward, back;
-    std::vector<std::uint8_t> ok_forward, ok_back;
-    std::vector<float> error;
-    const cv::Size window(options.track_window_px, options.track_window_px);
-    cv::calcOpticalFlowPyrLK(prev_pyramid.levels, curr_pyramid.levels, corners, forward, ok_forward,
-                             error, window, options.track_levels);
-    cv::calcOpticalFlowPyrLK(curr_pyramid.levels, prev_pyramid.levels, forward, back, ok_back,
-                             error, window, options.track_levels);
-    // Each corner's own match in the previous right image, from the dense disparity.
-    const bool stereo = !prev.right.empty();
+/// Corners of a frame's left image with their own disparity: the points a motion is fitted to.
+struct Landmarks {
+    std::vector<cv::Point2f> corner;
+    std::vector<double> disparity_px;  ///< as measured, before the rig's offset
+};
+
+/// The lowest disparity a point votes with (OdometryOptions::max_relative_depth_error).
+double min_voting_disparity(const StereoCamera& camera, const OdometryOptions& options) {
+    return options.disparity_noise_px / options.max_relative_depth_error +
+           match_border(camera).offset_px;
+}
+
+/// The corners of `frame` where a point can vote (a disparity known well enough, a static class),
+/// each matched across the pair: its own sub-pixel disparity by Lucas-Kanade along the row from
+/// the dense one, kept within max_stereo_gap_px of its row and of the dense disparity.
+Landmarks landmarks_of(const OdometryFrame& frame, const cv::Mat& grey, const StereoCamera& camera,
+                       const OdometryOptions& options) {
+    const int w = frame.left.width_px;
+    const double min_disparity = min_voting_disparity(camera, options);
+    const std::vector<cv::Point2f> corners =
+        spread_corners(grey, voting_mask(frame, min_disparity), options);
+    const auto dense = [&](const cv::Point2f& c) {
+        return frame.disparity
+            .disparity_px[static_cast<std::size_t>(std::lround(c.y)) * static_cast<std::size_t>(w) +
+                          static_cast<std::size_t>(std::lround(c.x))];
+    };
+    const bool stereo = !frame.right.empty();
     std::vector<cv::Point2f> across;
     std::vector<std::uint8_t> ok_across;
-    if (stereo) {
-        for (const cv::Point2f& c : corners) {
-            const float d = prev.disparity.disparity_px[static_cast<std::size_t>(std::lround(c.y)) *
-                                                            static_cast<std::size_t>(w) +
-                                                        static_cast<std::size_t>(std::lround(c.x))];
-            across.emplace_back(c.x - d, c.y);
-        }
+    std::vector<float> error;
+    if (stereo && !corners.empty()) {
+        for (const cv::Point2f& c : corners) across.emplace_back(c.x - dense(c), c.y);
+        const cv::Size window(options.track_window_px, options.track_window_px);
         cv::calcOpticalFlowPyrLK(
-            prev_grey, grey_of(prev.right), corners, across, ok_across, error, window, 1,
+            grey, grey_of(frame.right), corners, across, ok_across, error, window, 1,
             cv::TermCriteria(cv::TermCriteria::COUNT | cv::TermCriteria::EPS, 30, 0.01),
             cv::OPTFLOW_USE_INITIAL_FLOW);
     }
-    Correspondences out;
+    Landmarks out;
     for (std::size_t k = 0; k < corners.size(); ++k) {
-        if (!ok_forward[k] || !ok_back[k]) continue;
-        if (cv::norm(back[k] - corners[k]) > options.max_round_trip_px) continue;
-        const cv::Point2f& f = forward[k];
-        if (f.x < 0.0f || f.y < 0.0f || f.x > static_cast<float>(w - 1) ||
-            f.y > static_cast<float>(h - 1)) {
-            continue;
-        }
-        const int u = static_cast<int>(std::lround(corners[k].x));
-        const int v = static_cast<int>(std::lround(corners[k].y));
-        float d =
-            prev.disparity.disparity_px[static_cast<std::size_t>(v) * static_cast<std::size_t>(w) +
-                                        static_cast<std::size_t>(u)];
+        float d = dense(corners[k]);
         if (stereo) {
             const float own = corners[k].x - across[k].x;
             if (!ok_across[k] ||
@@ -208,9 +202,33 @@ Correspondences track_corners(const OdometryFrame& prev, const cv::Mat& prev_gre
         if (!(double{d} > min_disparity)) continue;
         out.corner.push_back(corners[k]);
         out.disparity_px.push_back(double{d});
-        out.image.push_back(f);
     }
     return out;
+}
+
+/// `points` of pyramid `from` tracked into pyramid `to` by pyramidal Lucas-Kanade; `ok` says
+/// which came back within max_round_trip_px of where they started and stay inside the image.
+std::vector<cv::Point2f> tracked(const VisualOdometry::Pyramid& from,
+                                 const VisualOdometry::Pyramid& to,
+                                 const std::vector<cv::Point2f>& points, int w, int h,
+                                 const OdometryOptions& options, std::vector<char>& ok) {
+    ok.assign(points.size(), 0);
+    std::vector<cv::Point2f> forward, back;
+    if (points.empty()) return forward;
+    std::vector<std::uint8_t> ok_forward, ok_back;
+    std::vector<float> error;
+    const cv::Size window(options.track_window_px, options.track_window_px);
+    cv::calcOpticalFlowPyrLK(from.levels, to.levels, points, forward, ok_forward, error, window,
+                             options.track_levels);
+    cv::calcOpticalFlowPyrLK(to.levels, from.levels, forward, back, ok_back, error, window,
+                             options.track_levels);
+    for (std::size_t k = 0; k < points.size(); ++k) {
+        const cv::Point2f& f = forward[k];
+        ok[k] = ok_forward[k] && ok_back[k] &&
+                cv::norm(back[k] - points[k]) <= options.max_round_trip_px && f.x >= 0.0f &&
+                f.y >= 0.0f && f.x <= static_cast<float>(w - 1) && f.y <= static_cast<float>(h - 1);
+    }
+    return forward;
 }
 
 cv::Matx33d intrinsics(const StereoCamera& camera) {
@@ -334,10 +352,8 @@ std::optional<OffsetMeasurement> offset_from_parallax(const Correspondences& c,
     return OffsetMeasurement{x[6], variance};
 }
 
-/// estimate_motion with the two left images' pyramids built.
-MotionFit motion(const OdometryFrame& prev, const VisualOdometry::Pyramid& prev_pyramid,
-                 const ImageU8& curr_left, const VisualOdometry::Pyramid& curr_pyramid,
-                 const StereoCamera& camera, const OdometryOptions& options, double offset_px) {
+/// The images and disparity of a frame pair: one size, or std::invalid_argument.
+void check_sizes(const OdometryFrame& prev, const ImageU8& curr_left) {
     const int w = prev.left.width_px, h = prev.left.height_px;
     if (curr_left.width_px != w || curr_left.height_px != h || prev.disparity.width_px != w ||
         prev.disparity.height_px != h) {
@@ -347,21 +363,43 @@ MotionFit motion(const OdometryFrame& prev, const VisualOdometry::Pyramid& prev_
     if (!prev.static_mask.empty() && prev.static_mask.size() != n) {
         throw std::invalid_argument("estimate_motion: static mask differs in size");
     }
-    // Corners only where a point can vote: a disparity known well enough, a static class.
-    const double min_disparity = options.disparity_noise_px / options.max_relative_depth_error +
-                                 match_border(camera).offset_px;
-    const cv::Mat prev_grey = grey_of(prev.left);
-    const std::vector<cv::Point2f> corners =
-        spread_corners(prev_grey, voting_mask(prev, min_disparity), options);
+}
+
+/// The landmarks with their tracked pixels where `ok`.
+Correspondences correspondences(const Landmarks& l, const std::vector<cv::Point2f>& image,
+                                const std::vector<char>& ok) {
+    Correspondences c;
+    for (std::size_t k = 0; k < l.corner.size(); ++k) {
+        if (!ok[k]) continue;
+        c.corner.push_back(l.corner[k]);
+        c.disparity_px.push_back(l.disparity_px[k]);
+        c.image.push_back(image[k]);
+    }
+    return c;
+}
+
+/// The motion fitted to correspondences at offset_px, or an invalid estimate with too few.
+MotionFit fit_motion(const Correspondences& c, const StereoCamera& camera,
+                     const OdometryOptions& options, double offset_px) {
     MotionFit out;
     out.estimate.disparity_offset_px = offset_px;
-    if (corners.size() < static_cast<std::size_t>(options.min_inliers)) return out;
-    const Correspondences c =
-        track_corners(prev, prev_grey, prev_pyramid, curr_pyramid, corners, options, min_disparity);
     out.estimate.tracked = static_cast<int>(c.corner.size());
-    if (out.estimate.tracked < options.min_inliers) return out;
-    solve_motion(c, camera, options, offset_px, out);
+    if (out.estimate.tracked >= options.min_inliers) {
+        solve_motion(c, camera, options, offset_px, out);
+    }
     return out;
+}
+
+/// estimate_motion with the two left images' pyramids built.
+MotionFit motion(const OdometryFrame& prev, const VisualOdometry::Pyramid& prev_pyramid,
+                 const ImageU8& curr_left, const VisualOdometry::Pyramid& curr_pyramid,
+                 const StereoCamera& camera, const OdometryOptions& options, double offset_px) {
+    check_sizes(prev, curr_left);
+    const Landmarks l = landmarks_of(prev, grey_of(prev.left), camera, options);
+    std::vector<char> ok;
+    const std::vector<cv::Point2f> image = tracked(
+        prev_pyramid, curr_pyramid, l.corner, curr_left.width_px, curr_left.height_px, options, ok);
+    return fit_motion(correspondences(l, image, ok), camera, options, offset_px);
 }
 
 }  // namespace
