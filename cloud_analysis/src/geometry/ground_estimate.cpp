@@ -62,6 +62,7 @@ void GeometryOptions::validate() const {
     positive(low_max_height_m, "geometry.low_max_height_m");
     fail_if(!(min_cell_height_m >= 0.0), "geometry.min_cell_height_m: must be >= 0");
     positive(low_cut_m, "geometry.low_cut_m");
+    fail_if(threads < 1, "geometry.threads: must be >= 1");
     fail_if(segmentation != "columns" && segmentation != "clusters",
             "geometry.segmentation: must be columns or clusters");
     positive(cluster_distance_m, "geometry.cluster_distance_m");

@@ -12,6 +12,7 @@
 
 #include "cloud_analysis/entities/cluster.hpp"
 #include "cloud_analysis/io/mat_view.hpp"
+#include "cloud_analysis/support/task_queue.hpp"
 #include "derive_semantics_internal.hpp"
 
 namespace cloud_analysis::geometry {
@@ -36,35 +37,73 @@ bool is_green(int r, int g, int b) { return g >= r + 6 && g * 10 >= r * 11 && g 
 
 /// Per pixel: whether the mean colour of its (2 radius + 1)^2 window is green (foliage's own
 /// shadows between sunlit leaves are green only on average); all 0 without a colour image. At
-/// the image's border the window holds only the pixels inside.
-std::vector<char> green_mask(const ImageU8& left, int w, int h, int radius) {
+/// the image's border the window holds only the pixels inside. Rows in `threads` stripes.
+std::vector<char> green_mask(const ImageU8& left, int w, int h, int radius, int threads) {
     std::vector<char> mask(static_cast<std::size_t>(w) * h, 0);
     if (left.channels != 3 || left.empty() || left.width_px != w || left.height_px != h) {
         return mask;
     }
-    // The window's colour sums (zeros outside the image), then its mean floored without a
-    // division per pixel: (s + 0.5) / n lies at least 0.5 / n from an integer, far beyond the
-    // rounding of (s + 0.5) times the window's reciprocal (a few ulp of at most 255.5), so
-    // truncating that product floors s / n exactly.
-    cv::Mat sums;
-    const int side = 2 * radius + 1;
-    cv::boxFilter(mat_view(left), sums, CV_32S, cv::Size(side, side), cv::Point(-1, -1), false,
-                  cv::BORDER_CONSTANT);
+    // Box sums, separable: per row over the window's columns (at most 129 * 255 per channel),
+    // then per column over the window's rows, slid down each stripe of rows.
+    const std::size_t row_len = static_cast<std::size_t>(w) * 3;
+    std::vector<std::int32_t> across(row_len * h);
+    // The mean colour, floored, without a division per pixel: (s + 0.5) / n lies at least 0.5 / n
+    // from an integer, far beyond the rounding of (s + 0.5) times the window's reciprocal
+    // (a few ulp of at most 255.5), so truncating that product floors s / n exactly.
     std::vector<double> per_column(static_cast<std::size_t>(w));
     for (int u = 0; u < w; ++u) {
         per_column[static_cast<std::size_t>(u)] =
             1.0 / (std::min(w, u + radius + 1) - std::max(0, u - radius));
     }
-    for (int v = 0; v < h; ++v) {
-        const double per_row = 1.0 / (std::min(h, v + radius + 1) - std::max(0, v - radius));
-        const std::int32_t* s = sums.ptr<std::int32_t>(v);
-        char* m = mask.data() + static_cast<std::size_t>(v) * w;
-        for (int u = 0; u < w; ++u, s += 3) {
-            const double inverse = per_row * per_column[static_cast<std::size_t>(u)];
-            const auto mean = [&](int c) { return static_cast<int>((s[c] + 0.5) * inverse); };
-            m[u] = is_green(mean(0), mean(1), mean(2));
-        }
-    }
+    const auto stripes = static_cast<std::size_t>(std::max(1, threads));
+    for_each_chunk(static_cast<std::size_t>(h), stripes,
+                   [&](std::size_t, std::size_t v0, std::size_t v1) {
+                       for (auto v = static_cast<int>(v0); v < static_cast<int>(v1); ++v) {
+                           const std::uint8_t* p = left.at(0, v);
+                           std::int32_t* out = across.data() + v * row_len;
+                           std::array<std::int32_t, 3> sum{0, 0, 0};
+                           for (int u = 0; u < std::min(w, radius); ++u) {
+                               for (int c = 0; c < 3; ++c) sum[c] += p[u * 3 + c];
+                           }
+                           for (int u = 0; u < w; ++u) {
+                               for (int c = 0; c < 3; ++c) {
+                                   if (u + radius < w) sum[c] += p[(u + radius) * 3 + c];
+                                   if (u - radius - 1 >= 0) sum[c] -= p[(u - radius - 1) * 3 + c];
+                                   out[u * 3 + c] = sum[c];
+                               }
+                           }
+                       }
+                   });
+    for_each_chunk(
+        static_cast<std::size_t>(h), stripes, [&](std::size_t, std::size_t v0, std::size_t v1) {
+            const auto first = static_cast<int>(v0);
+            // The window's rows above the stripe's first row, less the one that enters at it.
+            std::vector<std::int32_t> down(row_len, 0);
+            for (int v = std::max(0, first - radius); v < std::min(h, first + radius); ++v) {
+                for (std::size_t k = 0; k < row_len; ++k) down[k] += across[v * row_len + k];
+            }
+            for (int v = first; v < static_cast<int>(v1); ++v) {
+                if (v + radius < h) {
+                    const std::int32_t* add = across.data() + (v + radius) * row_len;
+                    for (std::size_t k = 0; k < row_len; ++k) down[k] += add[k];
+                }
+                if (v - radius - 1 >= 0 && v - radius - 1 >= first - radius) {
+                    const std::int32_t* sub = across.data() + (v - radius - 1) * row_len;
+                    for (std::size_t k = 0; k < row_len; ++k) down[k] -= sub[k];
+                }
+                const double per_row =
+                    1.0 / (std::min(h, v + radius + 1) - std::max(0, v - radius));
+                char* m = mask.data() + static_cast<std::size_t>(v) * w;
+                const std::int32_t* s = down.data();
+                for (int u = 0; u < w; ++u, s += 3) {
+                    const double inverse = per_row * per_column[static_cast<std::size_t>(u)];
+                    const auto mean = [&](int c) {
+                        return static_cast<int>((s[c] + 0.5) * inverse);
+                    };
+                    m[u] = is_green(mean(0), mean(1), mean(2));
+                }
+            }
+        });
     return mask;
 }
 
@@ -230,13 +269,37 @@ Grid make_grid(const DisparityMap& disparity, const Rig& rig, const GeometryOpti
     return g;
 }
 
-/// Road pixels labelled, every other pixel above the road counted in its cell; returns the
-/// lower-layer pixels near the layers' border, counted once their cells' mean disparity is
-/// known (count_lower_at_cut).
+/// Columns [u_begin, u_end) of the image: the cells of their column bands are theirs alone.
+struct Columns {
+    int u_begin = 0, u_end = 0;
+};
+
+/// The image's columns in `parts` runs of whole column bands, for threads that each fill the
+/// cells of their own bands (each cell's pixels still taken in row order).
+std::vector<Columns> column_parts(int w, int column_bin_px, int parts) {
+    const int bands = (w + column_bin_px - 1) / column_bin_px;
+    parts = std::clamp(parts, 1, std::max(1, bands));
+    std::vector<Columns> out;
+    for (int k = 0; k < parts; ++k) {
+        out.push_back({std::min(w, bands * k / parts * column_bin_px),
+                       std::min(w, bands * (k + 1) / parts * column_bin_px)});
+    }
+    return out;
+}
+
+/// What the pixel passes read of the left image: green pixels and the grid of their edges.
+struct ImageCues {
+    std::vector<char> green;
+    EdgeGrid edges;
+};
+
+/// Road pixels labelled, every other pixel above the road counted in its cell, in `columns`;
+/// returns the lower-layer pixels near the layers' border, counted once their cells' mean
+/// disparity is known (count_lower_at_cut).
 std::vector<std::size_t> count_pixels(const DisparityMap& disparity, const Rig& rig,
-                                      const ImageU8& left, const GroundEstimate& ground,
-                                      const GeometryOptions& o, std::uint16_t road, Grid& g,
-                                      ClassImage& out) {
+                                      const ImageCues& cues, const GroundEstimate& ground,
+                                      const GeometryOptions& o, std::uint16_t road, Columns columns,
+                                      Grid& g, ClassImage& out) {
     const int w = disparity.width_px, h = disparity.height_px;
     const Eigen::Vector3d n = ground.plane.normal;
     const double plane_d = ground.plane.d;
@@ -245,13 +308,13 @@ std::vector<std::size_t> count_pixels(const DisparityMap& disparity, const Rig& 
     const double slope = o.disparity_noise_px * plane_d / rig.fb;
     const auto tall_m = static_cast<float>(o.layer_height_m);
     const auto band_m = static_cast<float>(o.continuity_band_m);
-    const std::vector<char> green_px = green_mask(left, w, h, o.green_window_px);
-    const EdgeGrid edges = edge_grid(left, w, h, o.edge_step_px);
+    const std::vector<char>& green_px = cues.green;
+    const EdgeGrid& edges = cues.edges;
     std::vector<std::size_t> lower_at_cut;  // lower-layer pixels near the layers' border
     for (int v = 0; v < h; ++v) {
         const std::size_t row = static_cast<std::size_t>(v) * w;
         const double row_term = n.y() * (v - rig.cy) / rig.fy + n.z();
-        for (int u = 0; u < w; ++u) {
+        for (int u = columns.u_begin; u < columns.u_end; ++u) {
             const double raw = double{disparity.disparity_px[row + u]};
             const double d = raw - rig.offset;
             if (!(raw > 0.0) || !(d > min_d)) continue;
@@ -340,15 +403,12 @@ void raise_top(float hf, float& top, float& second) {
 /// a tree's crown a metre in front of a car's end, which runs on up into the upper layer. Pixels on
 /// a blend (on_blend) or at the foot of a surface above, ahead of the cell's mean, count
 /// only in cells that have no other.
-void find_tops(const DisparityMap& disparity, const Rig& rig, const GeometryOptions& o, Grid& g) {
+void find_tops(const DisparityMap& disparity, const Rig& rig, const GeometryOptions& o,
+               const std::vector<double>& cell_mean_d, Columns columns, Grid& g) {
     const int w = disparity.width_px, h = disparity.height_px;
-    std::vector<double> cell_mean_d(g.cells.size(), 0.0);
-    for (std::size_t k = 0; k < g.cells.size(); ++k) {
-        if (g.cells[k].count > 0) cell_mean_d[k] = g.cells[k].d_sum / g.cells[k].count;
-    }
     for (int v = 0; v < h; ++v) {
         const std::size_t row = static_cast<std::size_t>(v) * w;
-        for (int u = 0; u < w; ++u) {
+        for (int u = columns.u_begin; u < columns.u_end; ++u) {
             const std::int32_t cell = g.pixel_cell[row + u];
             if (cell < 0 || g.pixel_low[row + u]) continue;
             Cell& c = g.cells[static_cast<std::size_t>(cell)];
@@ -371,12 +431,6 @@ void find_tops(const DisparityMap& disparity, const Rig& rig, const GeometryOpti
                 c.top_v = v;
                 c.top_u = u;
             }
-        }
-    }
-    for (Cell& c : g.cells) {
-        if (c.top1 < -1e8f) {
-            c.top1 = c.blend1;
-            c.top2 = c.blend2;
         }
     }
 }
@@ -418,12 +472,32 @@ std::vector<int> dense_cells(Grid& g, const DisparityMap& disparity, const Rig& 
 Grid fill_grid(const DisparityMap& disparity, const Rig& rig, const ImageU8& left,
                const GroundEstimate& ground, const GeometryOptions& o, std::uint16_t road,
                ClassImage& out) {
+    const int w = disparity.width_px, h = disparity.height_px;
     Grid g = make_grid(disparity, rig, o);
-    const std::vector<std::size_t> lower_at_cut =
-        count_pixels(disparity, rig, left, ground, o, road, g, out);
-    count_lower_at_cut(lower_at_cut, disparity, rig, o, g);
+    const ImageCues cues{green_mask(left, w, h, o.green_window_px, o.threads),
+                         edge_grid(left, w, h, o.edge_step_px)};
+    // Each thread fills the cells of its own column bands, their pixels in row order as one
+    // thread would: the sums come out the same.
+    const std::vector<Columns> parts = column_parts(w, o.column_bin_px, o.threads);
+    std::vector<std::vector<std::size_t>> lower_at_cut(parts.size());
+    for_each_chunk(parts.size(), parts.size(), [&](std::size_t k, std::size_t, std::size_t) {
+        lower_at_cut[k] = count_pixels(disparity, rig, cues, ground, o, road, parts[k], g, out);
+    });
+    for (const auto& part : lower_at_cut) count_lower_at_cut(part, disparity, rig, o, g);
     mark_kinds(g, rig, o);
-    find_tops(disparity, rig, o, g);
+    std::vector<double> cell_mean_d(g.cells.size(), 0.0);
+    for (std::size_t k = 0; k < g.cells.size(); ++k) {
+        if (g.cells[k].count > 0) cell_mean_d[k] = g.cells[k].d_sum / g.cells[k].count;
+    }
+    for_each_chunk(parts.size(), parts.size(), [&](std::size_t k, std::size_t, std::size_t) {
+        find_tops(disparity, rig, o, cell_mean_d, parts[k], g);
+    });
+    for (Cell& c : g.cells) {
+        if (c.top1 < -1e8f) {
+            c.top1 = c.blend1;
+            c.top2 = c.blend2;
+        }
+    }
     return g;
 }
 

@@ -644,6 +644,55 @@ TEST_CASE("semantic scores count equal pixels and per-class IoU", "[geometry]") 
     CHECK(rgb.data[5] == 142);  // car 0, 0, 142
 }
 
+TEST_CASE("the per-pixel passes give the same classes and segments on any number of threads",
+          "[geometry]") {
+    const StereoCamera cam = kitti_rig();
+    const auto palette = cloud_analysis::load_palette("cityscapes");
+    const std::vector<Box> boxes = with_car_from_behind({{3.5, 12.0, 15.0, 8.0},
+                                                         {-4.0, -3.8, 8.0, 4.0},
+                                                         {-12.0, -6.0, 14.0, 1.2},
+                                                         {-3.0, -1.6, 22.0, 1.4}},
+                                                        10.0);
+    const DisparityMap d = render(cam, 1.65, boxes);
+    // A colour image: random colours over the left half (their window means lie near the
+    // green test's bounds), stripes on the car.
+    ImageU8 left;
+    left.width_px = cam.width_px;
+    left.height_px = cam.height_px;
+    left.channels = 3;
+    left.data.resize(static_cast<std::size_t>(cam.width_px) * cam.height_px * 3);
+    for (int v = 0; v < cam.height_px; ++v) {
+        for (int u = 0; u < cam.width_px; ++u) {
+            auto* p = left.data.data() + (static_cast<std::size_t>(v) * cam.width_px + u) * 3;
+            if (u < cam.width_px / 2) {
+                p[0] = static_cast<std::uint8_t>(speckle(u, v));
+                p[1] = static_cast<std::uint8_t>(std::min(255, speckle(u + 1, v) + 20));
+                p[2] = static_cast<std::uint8_t>(speckle(u, v + 1));
+            } else {
+                p[0] = p[1] = p[2] = static_cast<std::uint8_t>(horizontal_stripes(u, v));
+            }
+        }
+    }
+    GeometryOptions one;
+    one.threads = 1;
+    const SceneGeometry a = derive_semantics(d, cam, left, palette, one);
+    REQUIRE(a.ground.found);
+    REQUIRE(a.segments.size() >= 4);
+    for (const int threads : {2, 3, 7}) {
+        GeometryOptions o;
+        o.threads = threads;
+        const SceneGeometry b = derive_semantics(d, cam, left, palette, o);
+        CHECK(b.classes.class_index == a.classes.class_index);
+        REQUIRE(b.segments.size() == a.segments.size());
+        for (std::size_t k = 0; k < a.segments.size(); ++k) {
+            CHECK(b.segments[k].class_index == a.segments[k].class_index);
+            CHECK(b.segments[k].top_m == a.segments[k].top_m);
+            CHECK(b.segments[k].horizontal_edges == a.segments[k].horizontal_edges);
+            CHECK(b.segments[k].green == a.segments[k].green);
+        }
+    }
+}
+
 TEST_CASE("geometry options name the bad field", "[geometry]") {
     // Each bad value, set on the defaults, and the field the error names.
     const std::vector<std::pair<std::function<void(GeometryOptions&)>, std::string>> bad = {
@@ -656,6 +705,7 @@ TEST_CASE("geometry options name the bad field", "[geometry]") {
         {[](GeometryOptions& o) { o.edge_window_m = 0.0; }, "edge_window_m"},
         {[](GeometryOptions& o) { o.edge_step_px = 0; }, "edge_step_px"},
         {[](GeometryOptions& o) { o.segmentation = "stixels"; }, "segmentation"},
+        {[](GeometryOptions& o) { o.threads = 0; }, "threads"},
     };
     for (const auto& [set, field] : bad) {
         GeometryOptions o;

@@ -127,6 +127,7 @@ struct GeometryOptions {
     double min_face_share = 0.15;          ///< a thing entity seen over less than this share of
                                            ///< its smallest prior face (W x H) is a fragment or
                                            ///< clutter and is dropped, [0, 1), 0 = off
+    int threads = 2;                       ///< threads of the per-pixel passes, >= 1
     /// Throws std::invalid_argument naming the bad field.
     void validate() const;
 };
