@@ -4,6 +4,7 @@
 #include <array>
 #include <cmath>
 #include <filesystem>
+#include <functional>
 #include <map>
 #include <numeric>
 #include <random>
@@ -532,22 +533,33 @@ int heading_flips(const std::filesystem::path& dir, int frames) {
     return flips;
 }
 
+/// A drive of `frames` entity files f<i>.json in `dir`, 0.1 s apart, frame i holding
+/// entities_of(i), and its sequence index (written as dir/sequence.json).
+scene_schema::SequenceIndex write_drive(
+    const std::filesystem::path& dir, const std::string& id, int frames,
+    const std::function<std::vector<Entity>(int)>& entities_of) {
+    scene_schema::SequenceIndex index;
+    index.id = id;
+    for (int i = 0; i < frames; ++i) {
+        auto doc = frame_of(entities_of(i));
+        doc.frame.id = std::to_string(i);
+        const std::string file = "f" + std::to_string(i) + ".json";
+        scene_schema::write_file(doc, dir / file);
+        index.frames.push_back({i, file, 0.1 * i, {}});
+    }
+    scene_schema::write_sequence_file(index, dir / "sequence.json");
+    return index;
+}
+
 }  // namespace
 
 TEST_CASE("track_files with a lag turns a backwards-born track round in the frames it holds",
           "[tracking]") {
     const auto in = fresh_dir("lag_in");
-    scene_schema::SequenceIndex index;
-    index.id = "lag";
     const int frames = 12;
-    for (int i = 0; i < frames; ++i) {
-        auto doc = frame_of({car(-10.0 + 0.6 * i, 15.0, kPi), car(4.0, 20.0, kPi / 2)});
-        doc.frame.id = std::to_string(i);
-        const std::string file = "f" + std::to_string(i) + ".json";
-        scene_schema::write_file(doc, in / file);
-        index.frames.push_back({i, file, 0.1 * i, {}});
-    }
-    scene_schema::write_sequence_file(index, in / "sequence.json");
+    const auto index = write_drive(in, "lag", frames, [](int i) {
+        return std::vector<Entity>{car(-10.0 + 0.6 * i, 15.0, kPi), car(4.0, 20.0, kPi / 2)};
+    });
     const auto quiet = [](const std::string&) {};
 
     SequenceTrackOptions options;
@@ -599,20 +611,13 @@ TEST_CASE("a track confirmed after min_hits says which entities it was made of",
 
 TEST_CASE("track_files with a lag reports a track from its first detection", "[tracking]") {
     const auto in = fresh_dir("first_in");
-    scene_schema::SequenceIndex index;
-    index.id = "first";
     const int frames = 12;
-    for (int i = 0; i < frames; ++i) {
-        // A parked car from the first frame (confirmed at once), another from frame 6.
+    // A parked car from the first frame (confirmed at once), another from frame 6.
+    const auto index = write_drive(in, "first", frames, [](int i) {
         std::vector<Entity> seen{car(0.0, 10.0, 0.0)};
         if (i >= 6) seen.push_back(car(5.0, 30.0, kPi / 2, 3.9 + 0.1 * (i % 3)));
-        auto doc = frame_of(seen);
-        doc.frame.id = std::to_string(i);
-        const std::string file = "f" + std::to_string(i) + ".json";
-        scene_schema::write_file(doc, in / file);
-        index.frames.push_back({i, file, 0.1 * i, {}});
-    }
-    scene_schema::write_sequence_file(index, in / "sequence.json");
+        return seen;
+    });
     const auto quiet = [](const std::string&) {};
     // The ids of the later car's entities, frame by frame (none where it is not reported).
     const auto later_ids = [&](const std::filesystem::path& dir) {
