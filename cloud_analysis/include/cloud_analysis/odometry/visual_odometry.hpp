@@ -9,7 +9,9 @@
 /// 3D, and the motion is the robust 3D-2D fit of those points to
 /// their tracked pixels (RANSAC over P3P, then Levenberg-Marquardt on the inliers), as in
 /// libviso2 (Geiger, Ziegler, Stiller, "StereoScan", IV 2011) without its own matcher. Pixels of
-/// thing classes (cars, people: what may move) do not vote. See docs/odometry.md.
+/// thing classes (cars, people: what may move) do not vote. A drive also estimates the rig's
+/// disparity offset from the motion's parallax (self-calibration of the principal points'
+/// difference, as in Dang, Hoffmann, Stiller, IEEE TIP 2009). See docs/odometry.md.
 
 #include <array>
 #include <cstdint>
@@ -80,7 +82,8 @@ struct MotionEstimate {
 };
 
 /// The motion of the left camera from `prev` to `curr` (images of one size, `camera` their
-/// rectified rig).
+/// rectified rig), the disparities corrected by the rig's disparity_offset_px (see
+/// OdometryOptions::disparity_offset_prior_px; VisualOdometry estimates it).
 MotionEstimate estimate_motion(const OdometryFrame& prev, const ImageU8& curr_left,
                                const StereoCamera& camera, const OdometryOptions& options,
                                double disparity_offset_px = 0.0);
