@@ -171,6 +171,21 @@ TEST_CASE("a rig's disparity offset is found from the motion's parallax and corr
     CHECK(z_fixed > driven_m * 1.02);
 }
 
+TEST_CASE("a camera standing still says nothing of the disparity offset", "[odometry]") {
+    const StereoCamera c = rig();
+    const TwoWallView view = view_of_two_walls(texture(), 0.0, c);
+    odometry::VisualOdometry vo(c, odometry::OdometryOptions{});
+    odometry::OdometryFrame frame;
+    frame.left = view.image;
+    frame.disparity = view.disparity;
+    Pose last = Pose::Identity();
+    for (int i = 0; i < 4; ++i) last = vo.add(frame);
+    CHECK(vo.last_motion().valid);
+    CHECK(last.topRightCorner<3, 1>().norm() < 0.01);
+    // Without parallax the offset keeps its prior's mean.
+    CHECK(std::abs(vo.disparity_offset_px()) < 0.05);
+}
+
 TEST_CASE("points on things that may move do not vote", "[odometry]") {
     const StereoCamera c = rig();
     const cv::Mat tex = texture();
