@@ -35,6 +35,65 @@ void unite(std::vector<int>& parent, int a, int b) {
 
 bool is_green(int r, int g, int b) { return g >= r + 6 && g * 10 >= r * 11 && g * 10 >= b * 11; }
 
+/// Row v's sums of each pixel's colour over the columns of its window (at most 129 * 255 per
+/// channel), 3 channels a pixel.
+void sums_across(const ImageU8& left, int v, int radius, std::int32_t* out) {
+    const int w = left.width_px;
+    const std::uint8_t* p = left.at(0, v);
+    std::array<std::int32_t, 3> sum{0, 0, 0};
+    for (int u = 0; u < std::min(w, radius); ++u) {
+        for (int c = 0; c < 3; ++c) sum[c] += p[u * 3 + c];
+    }
+    for (int u = 0; u < w; ++u) {
+        for (int c = 0; c < 3; ++c) {
+            if (u + radius < w) sum[c] += p[(u + radius) * 3 + c];
+            if (u - radius - 1 >= 0) sum[c] -= p[(u - radius - 1) * 3 + c];
+            out[u * 3 + c] = sum[c];
+        }
+    }
+}
+
+/// green_mask over rows [v0, v1): the window sums slid down the rows, each row's sums across
+/// computed once and kept only while in the window (a ring of 2 radius + 1 rows). The mean
+/// colour is floored without a division per pixel: (s + 0.5) / n lies at least 0.5 / n from an
+/// integer, far beyond the rounding of (s + 0.5) times the window's reciprocal (a few ulp of at
+/// most 255.5), so truncating that product floors s / n exactly.
+void green_rows(const ImageU8& left, int radius, const std::vector<double>& per_column, int v0,
+                int v1, char* mask) {
+    const int w = left.width_px, h = left.height_px, span = 2 * radius + 1;
+    const std::size_t row_len = static_cast<std::size_t>(w) * 3;
+    std::vector<std::int32_t> ring(row_len * static_cast<std::size_t>(span));
+    const auto slot = [&](int v) {
+        return ring.data() + static_cast<std::size_t>(v % span) * row_len;
+    };
+    std::vector<std::int32_t> down(row_len, 0);
+    const auto add = [&](int v, int sign) {
+        const std::int32_t* r = slot(v);
+        for (std::size_t k = 0; k < row_len; ++k) down[k] += sign * r[k];
+    };
+    // The window's rows above v0, less the one that enters at v0.
+    for (int v = std::max(0, v0 - radius); v < std::min(h, v0 + radius); ++v) {
+        sums_across(left, v, radius, slot(v));
+        add(v, 1);
+    }
+    for (int v = v0; v < v1; ++v) {
+        // The row leaving shares its slot with the one entering: out first.
+        if (v - radius - 1 >= std::max(0, v0 - radius)) add(v - radius - 1, -1);
+        if (v + radius < h) {
+            sums_across(left, v + radius, radius, slot(v + radius));
+            add(v + radius, 1);
+        }
+        const double per_row = 1.0 / (std::min(h, v + radius + 1) - std::max(0, v - radius));
+        char* m = mask + static_cast<std::size_t>(v) * w;
+        const std::int32_t* s = down.data();
+        for (int u = 0; u < w; ++u, s += 3) {
+            const double inverse = per_row * per_column[static_cast<std::size_t>(u)];
+            const auto mean = [&](int c) { return static_cast<int>((s[c] + 0.5) * inverse); };
+            m[u] = is_green(mean(0), mean(1), mean(2));
+        }
+    }
+}
+
 /// Per pixel: whether the mean colour of its (2 radius + 1)^2 window is green (foliage's own
 /// shadows between sunlit leaves are green only on average); all 0 without a colour image. At
 /// the image's border the window holds only the pixels inside. Rows in `threads` stripes.
@@ -43,67 +102,16 @@ std::vector<char> green_mask(const ImageU8& left, int w, int h, int radius, int 
     if (left.channels != 3 || left.empty() || left.width_px != w || left.height_px != h) {
         return mask;
     }
-    // Box sums, separable: per row over the window's columns (at most 129 * 255 per channel),
-    // then per column over the window's rows, slid down each stripe of rows.
-    const std::size_t row_len = static_cast<std::size_t>(w) * 3;
-    std::vector<std::int32_t> across(row_len * h);
-    // The mean colour, floored, without a division per pixel: (s + 0.5) / n lies at least 0.5 / n
-    // from an integer, far beyond the rounding of (s + 0.5) times the window's reciprocal
-    // (a few ulp of at most 255.5), so truncating that product floors s / n exactly.
     std::vector<double> per_column(static_cast<std::size_t>(w));
     for (int u = 0; u < w; ++u) {
         per_column[static_cast<std::size_t>(u)] =
             1.0 / (std::min(w, u + radius + 1) - std::max(0, u - radius));
     }
-    const auto stripes = static_cast<std::size_t>(std::max(1, threads));
-    for_each_chunk(static_cast<std::size_t>(h), stripes,
+    for_each_chunk(static_cast<std::size_t>(h), static_cast<std::size_t>(std::max(1, threads)),
                    [&](std::size_t, std::size_t v0, std::size_t v1) {
-                       for (auto v = static_cast<int>(v0); v < static_cast<int>(v1); ++v) {
-                           const std::uint8_t* p = left.at(0, v);
-                           std::int32_t* out = across.data() + v * row_len;
-                           std::array<std::int32_t, 3> sum{0, 0, 0};
-                           for (int u = 0; u < std::min(w, radius); ++u) {
-                               for (int c = 0; c < 3; ++c) sum[c] += p[u * 3 + c];
-                           }
-                           for (int u = 0; u < w; ++u) {
-                               for (int c = 0; c < 3; ++c) {
-                                   if (u + radius < w) sum[c] += p[(u + radius) * 3 + c];
-                                   if (u - radius - 1 >= 0) sum[c] -= p[(u - radius - 1) * 3 + c];
-                                   out[u * 3 + c] = sum[c];
-                               }
-                           }
-                       }
+                       green_rows(left, radius, per_column, static_cast<int>(v0),
+                                  static_cast<int>(v1), mask.data());
                    });
-    for_each_chunk(
-        static_cast<std::size_t>(h), stripes, [&](std::size_t, std::size_t v0, std::size_t v1) {
-            const auto first = static_cast<int>(v0);
-            // The window's rows above the stripe's first row, less the one that enters at it.
-            std::vector<std::int32_t> down(row_len, 0);
-            for (int v = std::max(0, first - radius); v < std::min(h, first + radius); ++v) {
-                for (std::size_t k = 0; k < row_len; ++k) down[k] += across[v * row_len + k];
-            }
-            for (int v = first; v < static_cast<int>(v1); ++v) {
-                if (v + radius < h) {
-                    const std::int32_t* add = across.data() + (v + radius) * row_len;
-                    for (std::size_t k = 0; k < row_len; ++k) down[k] += add[k];
-                }
-                if (v - radius - 1 >= 0 && v - radius - 1 >= first - radius) {
-                    const std::int32_t* sub = across.data() + (v - radius - 1) * row_len;
-                    for (std::size_t k = 0; k < row_len; ++k) down[k] -= sub[k];
-                }
-                const double per_row =
-                    1.0 / (std::min(h, v + radius + 1) - std::max(0, v - radius));
-                char* m = mask.data() + static_cast<std::size_t>(v) * w;
-                const std::int32_t* s = down.data();
-                for (int u = 0; u < w; ++u, s += 3) {
-                    const double inverse = per_row * per_column[static_cast<std::size_t>(u)];
-                    const auto mean = [&](int c) {
-                        return static_cast<int>((s[c] + 0.5) * inverse);
-                    };
-                    m[u] = is_green(mean(0), mean(1), mean(2));
-                }
-            }
-        });
     return mask;
 }
 
