@@ -77,7 +77,6 @@ struct TrackerOptions {
     void validate() const;
 };
 
-/// What one frame gave the tracker.
 /// A track confirmed in a frame, and what it was before (TrackerFrameStats::confirmed).
 struct ConfirmedTrack {
     std::int64_t id = 0;
@@ -87,6 +86,7 @@ struct ConfirmedTrack {
     scene_schema::Entity reported;  ///< its entity in this frame
 };
 
+/// What one frame gave the tracker.
 struct TrackerFrameStats {
     int detections = 0;      ///< entities of tracked classes
     int matched = 0;         ///< of those, associated with an existing track
