@@ -20,9 +20,23 @@ test "$(wc -l < "$d/drive/truth/poses.txt")" = "$frames"
 grep -q '"pose"' "$d/drive/truth/0000000001.json"
 ls "$d/drive/image_2" | sed 's/\.png$//' > "$d/frames.txt"
 "$analyse" batch --kitti-root "$d/drive" --list "$d/frames.txt" --out-dir "$d/analysed" \
-    --odometry --quiet
+    --odometry --quiet --report "$d/report.json"
 "$analyse" evaluate-odometry --poses "$d/analysed/poses.txt" --truth "$d/drive/truth/poses.txt" \
     "$@"
+# The rig's disparity offset is estimated and reported; --no-disparity-offset leaves it out,
+# and without --odometry it is refused (exit 2, nothing written).
+grep -q '"disparity_offset_px"' "$d/report.json"
+head -3 "$d/frames.txt" > "$d/three.txt"
+"$analyse" batch --kitti-root "$d/drive" --list "$d/three.txt" --out-dir "$d/fixed" \
+    --odometry --no-disparity-offset --quiet --report "$d/fixed.json"
+test "$(wc -l < "$d/fixed/poses.txt")" = 3
+if grep -q '"disparity_offset_px"' "$d/fixed.json"; then exit 1; fi
+set +e
+"$analyse" batch --kitti-root "$d/drive" --list "$d/three.txt" --out-dir "$d/refused" \
+    --no-disparity-offset 2> "$d/err"
+code=$?
+set -e
+test "$code" = 2 && grep -q -- "--no-disparity-offset" "$d/err" && test ! -e "$d/refused"
 
 # A moving camera needs a drive, and a sane speed.
 set +e
