@@ -54,6 +54,10 @@ PY
 "$analyse" batch --pairs "$d/drive/pairs.txt" --calib "$d/drive/calib/calib_cam_to_cam.txt" \
     --track --out-dir "$d/pairs-tracked" --quiet
 test "$(grep -c '"file"' "$d/pairs-tracked/sequence.json")" = "$frames"
+# The list named by a bare file name, from its own folder: the drive takes the folder's name.
+(cd "$d/drive" && "$analyse" batch --pairs pairs.txt --calib calib/calib_cam_to_cam.txt \
+    --track --out-dir "$d/pairs-bare" --quiet)
+grep -q '"id": "drive"' "$d/pairs-bare/sequence.json"
 # The tracker's settings reach the tracker inside batch as they do `track`.
 "$analyse" track "$d/analysed" --out-dir "$d/tracked-open" --fps 10 --gate-chi2 0 \
     --coast-min-hits 0 --coast 4 --lag 0 --quiet

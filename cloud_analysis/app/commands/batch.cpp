@@ -114,11 +114,13 @@ cloud_analysis::BatchOptions batch_options(const BatchArgs& a, std::vector<std::
     }
     if (a.track) {
         options.track = a.track_options;
-        const std::filesystem::path source = !a.drive_dir.empty() ? a.drive_dir
-                                             : !a.pairs.empty()   ? a.pairs.parent_path()
-                                                                  : a.kitti_root;
-        options.sequence_id =
-            std::filesystem::absolute(source).lexically_normal().filename().string();
+        // The drive's folder, or the folder of the list of pairs (absolute first: a bare file
+        // name has no parent of its own).
+        const std::filesystem::path source =
+            !a.drive_dir.empty() ? std::filesystem::absolute(a.drive_dir)
+            : !a.pairs.empty()   ? std::filesystem::absolute(a.pairs).parent_path()
+                                 : std::filesystem::absolute(a.kitti_root);
+        options.sequence_id = source.lexically_normal().filename().string();
         if (options.sequence_id.empty()) options.sequence_id = "drive";
     }
     options.out_dir = a.out_dir;
