@@ -16,9 +16,7 @@ namespace {
 /// Zisserman / OpenCV stereoRectify).
 Eigen::Vector3f reproject_pixel(const StereoCamera& cam, int u, int v, double d) {
     const double doffs = cam.cx_right_px != 0.0 ? cam.cx_px - cam.cx_right_px : 0.0;
-    const double z = cam.fx_px * cam.baseline_m / (d - doffs);
-    return {static_cast<float>((u - cam.cx_px) * z / cam.fx_px),
-            static_cast<float>((v - cam.cy_px) * z / cam.fy_px), static_cast<float>(z)};
+    return camera_point(cam, u, v, cam.fx_px * cam.baseline_m / (d - doffs)).cast<float>();
 }
 
 void check_camera(const StereoCamera& cam) {

@@ -109,9 +109,7 @@ GroundEstimate estimate_ground(const DisparityMap& disparity, const StereoCamera
             if (!(row[u] > 0.0f) || !(d > 0.0)) continue;
             const double z = fb / d;
             in_range += z < options.ground_max_range_m ? 1 : 0;
-            points.emplace_back(static_cast<float>((u - camera.cx_px) * z / camera.fx_px),
-                                static_cast<float>((v - camera.cy_px) * z / camera.fy_px),
-                                static_cast<float>(z));
+            points.push_back(camera_point(camera, u, v, z).cast<float>());
         }
     }
     GroundOptions ransac;

@@ -132,9 +132,8 @@ struct Correspondences {
 /// The corner of disparity d lifted to 3D with the calibration, d corrected by offset_px.
 Eigen::Vector3d lifted(const cv::Point2f& corner, double disparity_px, const StereoCamera& camera,
                        double offset_px) {
-    const double z = match_border(camera).depth_m(disparity_px + offset_px);
-    return {(double{corner.x} - camera.cx_px) * z / camera.fx_px,
-            (double{corner.y} - camera.cy_px) * z / camera.fy_px, z};
+    return camera_point(camera, double{corner.x}, double{corner.y},
+                        match_border(camera).depth_m(disparity_px + offset_px));
 }
 
 std::vector<cv::Point3f> object_points(const Correspondences& c, const StereoCamera& camera,

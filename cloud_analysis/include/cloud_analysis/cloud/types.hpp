@@ -66,6 +66,12 @@ inline MatchBorder match_border(const StereoCamera& c) {
     return {c.fx_px * c.baseline_m, c.cx_px - c.cx_right_px};
 }
 
+/// The point of pixel (u, v) at depth z_m in the rectified left camera's frame (x right, y
+/// down, z forward, metres).
+inline Eigen::Vector3d camera_point(const StereoCamera& c, double u_px, double v_px, double z_m) {
+    return {(u_px - c.cx_px) * z_m / c.fx_px, (v_px - c.cy_px) * z_m / c.fy_px, z_m};
+}
+
 /// A metric point cloud in the rectified left camera frame (x right, y down, z forward,
 /// metres), one entry per valid pixel, structure of arrays.
 struct LabeledCloud {
