@@ -375,11 +375,13 @@ std::vector<std::size_t> count_pixels(const DisparityMap& disparity, const Rig& 
 /// roof at 30 m) shares its cell, pixel-locked a few tenths of a pixel farther. A surface
 /// along the ray spreads over the whole bin, so only pixels farther than both limits drop.
 void count_lower_at_cut(const std::vector<std::size_t>& lower_at_cut, const DisparityMap& disparity,
-                        const Rig& rig, const GeometryOptions& o, Grid& g) {
+                        const Rig& rig, const GeometryOptions& o,
+                        const std::vector<double>& cell_mean_d, Grid& g) {
     for (const std::size_t p : lower_at_cut) {
-        Cell& c = g.cells[static_cast<std::size_t>(g.pixel_cell[p])];
+        const auto cell = static_cast<std::size_t>(g.pixel_cell[p]);
+        Cell& c = g.cells[cell];
         const double d = double{disparity.disparity_px[p]} - rig.offset;
-        const double mean_d = c.d_sum / c.count;
+        const double mean_d = cell_mean_d[cell];
         if (d >= mean_d - o.continuity_behind_px ||
             rig.fb / d <= rig.fb / mean_d + o.continuity_behind_m) {
             ++c.at_cut;
@@ -491,12 +493,15 @@ Grid fill_grid(const DisparityMap& disparity, const Rig& rig, const ImageU8& lef
     for_each_chunk(parts.size(), parts.size(), [&](std::size_t k, std::size_t, std::size_t) {
         lower_at_cut[k] = count_pixels(disparity, rig, cues, ground, o, road, parts[k], g, out);
     });
-    for (const auto& part : lower_at_cut) count_lower_at_cut(part, disparity, rig, o, g);
-    mark_kinds(g, rig, o);
+    // Each cell's mean disparity, once its pixels are counted (the passes below read it).
     std::vector<double> cell_mean_d(g.cells.size(), 0.0);
     for (std::size_t k = 0; k < g.cells.size(); ++k) {
         if (g.cells[k].count > 0) cell_mean_d[k] = g.cells[k].d_sum / g.cells[k].count;
     }
+    for (const auto& part : lower_at_cut) {
+        count_lower_at_cut(part, disparity, rig, o, cell_mean_d, g);
+    }
+    mark_kinds(g, rig, o);
     for_each_chunk(parts.size(), parts.size(), [&](std::size_t k, std::size_t, std::size_t) {
         find_tops(disparity, rig, o, cell_mean_d, parts[k], g);
     });
