@@ -264,7 +264,6 @@ void solve_motion(const Correspondences& c, const StereoCamera& camera,
     cv::solvePnPRefineLM(in_object, out.inliers.image, K, cv::noArray(), rvec, tvec);
     out.estimate.T_curr_prev = pose_of(rvec, tvec);
     out.estimate.valid = out.estimate.T_curr_prev.allFinite();
-    out.estimate.disparity_offset_px = offset_px;
 }
 
 /// T_curr_prev refined by Levenberg-Marquardt on the correspondences lifted at offset_px.
