@@ -58,14 +58,8 @@ ca="$build_dir/cloud_analysis/cloud-analysis"
 [ -n "$out_dir" ] || out_dir="$build_dir/evaluation"
 mkdir -p "$out_dir"
 
-# The rendered scenes: the goal's bars on cars within 30 m at least a quarter visible
-# (docs/evaluation.md "Hard parking streets").
-goal=(--bar-class car --bar-range 30 --require-recall 1.0 --max-spurious 0
-      --max-median-centre-error 0.4 --max-median-heading-error 8 --min-good-iou-fraction 0.8)
-# The stereo-only path's bars (docs/stereo-only.md): every such car found, median centre error
-# <= 0.5 m, median heading error <= 10 degrees.
-stereo_only_goal=(--bar-class car --bar-range 30 --require-recall 1.0
-                  --max-median-centre-error 0.5 --max-median-heading-error 10)
+# The rendered scenes: the goal's bars, and the stereo-only bars (goal, stereo_only_goal).
+source "$STEREOSCENE_ROOT/scripts/street-bars.sh"
 stereo_only_evals=()
 rendered=()
 for dir in "$STEREOSCENE_ROOT"/samples/rendered/*/; do
