@@ -9,6 +9,7 @@
 # used to choose a parameter. Prints one Markdown table. Skipped (exit 0) without the models.
 # usage: scripts/evaluate-vehicle-models.sh [--no-build] [--build-dir DIR] [--out DIR]
 #            [--models DIR] [--dev-seeds "2 ..."] [--held-out-seeds "13 ..."]
+#            [--analysis "FLAGS"]   (more cloud-analysis flags, e.g. "--row-split partition")
 set -euo pipefail
 source "$(dirname "${BASH_SOURCE[0]}")/common.sh"
 
@@ -19,6 +20,7 @@ models="$STEREOSCENE_ROOT/../shared/gltf-thirdparty"
 # pedestrian_seeds (every kind of street has them), held_out_seeds
 source "$STEREOSCENE_ROOT/scripts/street-seeds.sh"
 dev_seeds=$pedestrian_seeds
+analysis_args=()
 # goal, stereo_only_goal
 source "$STEREOSCENE_ROOT/scripts/street-bars.sh"
 while [ $# -gt 0 ]; do
@@ -29,7 +31,8 @@ while [ $# -gt 0 ]; do
         --models) models=$2; shift ;;
         --dev-seeds) dev_seeds=$2; shift ;;
         --held-out-seeds) held_out_seeds=$2; shift ;;
-        -h|--help) sed -n '2,11p' "$0"; exit 0 ;;
+        --analysis) read -r -a analysis_args <<<"$2"; shift ;;
+        -h|--help) sed -n '2,12p' "$0"; exit 0 ;;
         *) echo "evaluate-vehicle-models.sh: error: unknown argument: $1 (see --help)" >&2; exit 2 ;;
     esac
     shift
@@ -79,7 +82,8 @@ score() {  # set models name dir scene
             flags=(--semantics geometry)
             bars=("${stereo_only_goal[@]}")
         fi
-        "$ca" --kitti-root "$dir" --frame 000000 "${flags[@]}" -o "$base.json" 2>"$base.log"
+        "$ca" --kitti-root "$dir" --frame 000000 "${flags[@]}" "${analysis_args[@]}" \
+            -o "$base.json" 2>"$base.log"
         local code=0
         "$ca" evaluate --entities "$base.json" --reference "$scene" "${bars[@]}" \
             --min-visible-fraction 0.25 --kitti-root "$dir" --frame 000000 \
