@@ -235,13 +235,6 @@ void add_cloud_flags(CLI::App& cmd, AnalyseArgs& a) {
         ->check(CLI::IsMember({"instances", "centroid", "average", "variance"}))
         ->capture_default_str()
         ->group(cl);
-    cmd.add_option("--row-split", a.row_split,
-                   "things parked end to end parted by rules (gaps, valleys between roofs, a "
-                   "walk of car lengths) or as one partition (dynamic programming over the cuts "
-                   "with a vehicle-length distribution; docs/entities.md)")
-        ->check(CLI::IsMember({"rules", "partition"}))
-        ->capture_default_str()
-        ->group(cl);
     cmd.add_option("--class-config", a.class_config, "per-class settings JSON")->group(cl);
     cmd.add_flag("--fsync-clouds", a.fsync_clouds,
                  "also fsync the cloud files before renaming them (durable across a power loss; "
@@ -393,7 +386,6 @@ stereoscene::support::FileSync cloud_sync(const AnalyseArgs& a) {
 cloud_analysis::ExtractOptions extract_options(const AnalyseArgs& a) {
     cloud_analysis::ExtractOptions extract;
     extract.method = a.method;
-    extract.row_split = a.row_split;
     extract.classes = cloud_analysis::load_class_config(
         a.class_config.empty() ? cloud_analysis::default_class_config_path() : a.class_config);
     extract.validate();

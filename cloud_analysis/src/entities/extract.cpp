@@ -304,10 +304,6 @@ void ExtractOptions::validate() const {
         throw std::invalid_argument(
             "method: must be instances, centroid, average or variance (got '" + method + "')");
     }
-    if (row_split != "rules" && row_split != "partition") {
-        throw std::invalid_argument("row_split: must be rules or partition (got '" + row_split +
-                                    "')");
-    }
     classes.validate();
     ground.validate();
     fail_if(!(max_range_m > 0.0), "max_range_m: must be > 0");

@@ -427,19 +427,43 @@ bool parts_van_or_roofs(const std::vector<Eigen::Vector3f>& pts, const Split& cu
     return tall_pieces == 1 || (tall_pieces == 0 && roofed_pieces == 2);
 }
 
-/// The rules' cuts of things parked end to end along the box's heading (split_oversized's
-/// "rules"); nothing when they find none.
-std::optional<Split> split_in_line_by_rules(const std::vector<Eigen::Vector3f>& pts,
-                                            const Indices& idx, const OrientedBox& box,
-                                            const ClassSettings& s,
-                                            const std::optional<GroundPlane>& ground,
-                                            const ExtractOptions& options) {
+}  // namespace
+
+/// Vertical extent of points (2 % to 98 % height quantiles above the ground, or along -y
+/// without a ground plane), metres.
+double height_spread(const std::vector<Eigen::Vector3f>& pts, const Indices& idx,
+                     const std::optional<GroundPlane>& ground) {
+    std::vector<double> h;
+    h.reserve(idx.size());
+    for (std::size_t i : idx) {
+        h.push_back(ground ? ground->height(pts[i].cast<double>()) : -double{pts[i].y()});
+    }
+    const auto [lo, hi] = quantiles(h, 0.02, 0.98);
+    return hi - lo;
+}
+
+/// Pieces of a thing whose box is much longer or wider than its prior (a parked row, or
+/// cars side by side merged by the semantic image); {idx} when it fits the prior.
+Split split_oversized(const std::vector<Eigen::Vector3f>& pts, const Indices& idx,
+                      const OrientedBox& box, const ClassSettings& s,
+                      const std::optional<GroundPlane>& ground, const ExtractOptions& options,
+                      bool truncated) {
+    if (!s.has_prior()) return {{idx}, false, std::nullopt};
     const double c = std::cos(box.theta), sn = std::sin(box.theta);
+    if (std::optional<Split> widest = split_side_by_side(pts, idx, box, s)) return *widest;
+    if (ground && options.row_low_fraction > 0.0 &&
+        front_on_row(pts, idx, box, s, *ground, options)) {
+        // Side by side: cut along the box's length at the row's pitch; each piece heads across.
+        Split split = split_along(pts, idx, c, -sn, box.L_m, s.prior_W_m + options.row_gap_m, true);
+        split.yaw_rad = wrap_angle(box.theta + kHalfPi);
+        split.at_gaps = true;  // a row of distinct things, whatever the density at the cuts
+        return split;
+    }
     if (ground && options.row_valley_depth_m > 0.0 &&
         box.L_m > options.row_valley_min_length_fraction * s.prior_L_m) {
         // Parked end to end: cut where the evidence says, at the valleys between the roofs.
         std::vector<Indices> parts = split_at_valleys(pts, idx, c, -sn, s, *ground, options);
-        if (parts.size() > 1) return Split{std::move(parts), false, std::nullopt};
+        if (parts.size() > 1) return {std::move(parts), false, std::nullopt};
     }
     const double van_pitch = options.van_prior_L_m + options.row_gap_m;
     if (ground && s.name == options.family_class && box.L_m > van_pitch &&
@@ -468,53 +492,7 @@ std::optional<Split> split_in_line_by_rules(const std::vector<Eigen::Vector3f>& 
         if (walk.at_gaps && walk.parts.size() > 1) return walk;
         return split_along(pts, idx, c, -sn, box.L_m, s.prior_L_m);
     }
-    return std::nullopt;
-}
-
-}  // namespace
-
-/// Vertical extent of points (2 % to 98 % height quantiles above the ground, or along -y
-/// without a ground plane), metres.
-double height_spread(const std::vector<Eigen::Vector3f>& pts, const Indices& idx,
-                     const std::optional<GroundPlane>& ground) {
-    std::vector<double> h;
-    h.reserve(idx.size());
-    for (std::size_t i : idx) {
-        h.push_back(ground ? ground->height(pts[i].cast<double>()) : -double{pts[i].y()});
-    }
-    const auto [lo, hi] = quantiles(h, 0.02, 0.98);
-    return hi - lo;
-}
-
-/// Pieces of a thing whose box is much longer or wider than its prior (a parked row, or
-/// cars side by side merged by the semantic image); {idx} when it fits the prior.
-Split split_oversized(const std::vector<Eigen::Vector3f>& pts, const Indices& idx,
-                      const OrientedBox& box, const ClassSettings& s,
-                      const std::optional<GroundPlane>& ground, const ExtractOptions& options,
-                      const std::optional<Eigen::Vector2d>& truncation_xz, double fb_px_m) {
-    if (!s.has_prior()) return {{idx}, false, std::nullopt};
-    const double c = std::cos(box.theta), sn = std::sin(box.theta);
-    if (std::optional<Split> widest = split_side_by_side(pts, idx, box, s)) return *widest;
-    if (ground && options.row_low_fraction > 0.0 &&
-        front_on_row(pts, idx, box, s, *ground, options)) {
-        // Side by side: cut along the box's length at the row's pitch; each piece heads across.
-        Split split = split_along(pts, idx, c, -sn, box.L_m, s.prior_W_m + options.row_gap_m, true);
-        split.yaw_rad = wrap_angle(box.theta + kHalfPi);
-        split.at_gaps = true;  // a row of distinct things, whatever the density at the cuts
-        return split;
-    }
-    if (options.row_split == "partition") {
-        if (ground && box.L_m > options.row_valley_min_length_fraction * s.prior_L_m) {
-            // Parked end to end: the partition the evidence and the class's lengths say.
-            Split row =
-                partition_row(pts, idx, c, -sn, s, *ground, options, truncation_xz, fb_px_m);
-            if (row.parts.size() > 1) return row;
-        }
-    } else if (std::optional<Split> row =
-                   split_in_line_by_rules(pts, idx, box, s, ground, options)) {
-        return std::move(*row);
-    }
-    if (truncation_xz && box.L_m > options.row_valley_min_length_fraction * s.prior_L_m) {
+    if (truncated && box.L_m > options.row_valley_min_length_fraction * s.prior_L_m) {
         // The image's edge cuts the thing: what shows of it is at most its own length, so a
         // longer blob holds a second thing beyond it, parted by a clear gap along the row
         // (the two in line, their sides seen edge-on as thin as they are) that leaves the cut

@@ -3,7 +3,6 @@
 // What row_split.cpp (the cuts of a blob) and row_profiles.cpp (the height profiles that say
 // where a row's things meet) share.
 
-#include <optional>
 #include <vector>
 
 #include <Eigen/Core>
@@ -41,17 +40,5 @@ bool front_on_row(const std::vector<Eigen::Vector3f>& pts, const Indices& idx,
 std::vector<Indices> split_at_valleys(const std::vector<Eigen::Vector3f>& pts, const Indices& idx,
                                       double dir_x, double dir_z, const ClassSettings& s,
                                       const GroundPlane& ground, const ExtractOptions& options);
-
-/// A row of things end to end along the unit direction (dir_x, dir_z) parted as one
-/// optimisation: the partition of its points, over cut positions in 0.1 m bins, that minimises
-/// the pieces' length costs (the class's length distribution, blurred by the range spread at
-/// the piece's range; the far end's piece only as long as it is at least) plus a cost for each
-/// cut that no clear gap or valley between roofs supports. The piece at the end the image's
-/// edge cuts (truncation_xz) counts only as long as it is at least, too. {idx} when no cut
-/// pays. truncation_xz and fb_px_m as split_oversized's.
-Split partition_row(const std::vector<Eigen::Vector3f>& pts, const Indices& idx, double dir_x,
-                    double dir_z, const ClassSettings& s, const GroundPlane& ground,
-                    const ExtractOptions& options,
-                    const std::optional<Eigen::Vector2d>& truncation_xz, double fb_px_m);
 
 }  // namespace cloud_analysis::instances

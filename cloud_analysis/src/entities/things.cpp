@@ -195,8 +195,8 @@ struct ClusterPieces {
             fit.truncation_xz = truncation_point(pts, pixels, grid, part);
             const OrientedBox box = fit_upright_box(gather(pts, part), ground, fit);
             if (depth < 3 && !yaw &&
-                queue_pieces(split_oversized(pts, part, box, s, ground, options, fit.truncation_xz,
-                                             fit.disparity_fb_px_m),
+                queue_pieces(split_oversized(pts, part, box, s, ground, options,
+                                             fit.truncation_xz.has_value()),
                              depth, group)) {
                 continue;
             }
@@ -212,7 +212,7 @@ struct ClusterPieces {
             // trimmed along the ray, its extents over seen surface): still more than one.
             if (depth < 4 && !yaw && s.has_prior() && c.box.L_m > s.split_factor * s.prior_L_m &&
                 queue_pieces(split_oversized(pts, c.members, c.box, s, ground, options,
-                                             fit.truncation_xz, fit.disparity_fb_px_m),
+                                             fit.truncation_xz.has_value()),
                              depth, group)) {
                 continue;
             }

@@ -415,14 +415,12 @@ void project_pixels(LabeledCloud& cloud) {
 instances::Split split_with_car_prior(const std::vector<Eigen::Vector3f>& pts,
                                       const instances::Indices& idx, const OrientedBox& box,
                                       const std::optional<GroundPlane>& ground = std::nullopt,
-                                      const std::optional<Eigen::Vector2d>& truncation_xz = {},
-                                      const std::string& row_split = "rules") {
+                                      bool truncated = false) {
     const auto config = load_class_config(std::string(STEREOSCENE_SOURCE_DIR) +
                                           "/assets/classes/entity_config.json");
-    ExtractOptions options;
-    options.row_split = row_split;
+    const ExtractOptions options;
     return instances::split_oversized(pts, idx, box, config.find("car"), ground, options,
-                                      truncation_xz);
+                                      truncated);
 }
 
 /// The 1.8 m wide box of a row at x = -1.1 along +z, centred at (y, z).
@@ -961,9 +959,7 @@ TEST_CASE(
     add_side(pts, 7.2f, 11.0f, 1.45f);
     add_side(pts, 11.8f, 12.1f, 1.4f);
     const OrientedBox box = row_box_along_z(0.65, 8.85, 6.5, 1.45);
-    // The image's edge cuts the row at its near end.
-    const auto split =
-        split_with_car_prior(pts, all_of(pts), box, std::nullopt, Eigen::Vector2d(-1.1, 5.6));
+    const auto split = split_with_car_prior(pts, all_of(pts), box, std::nullopt, true);
     REQUIRE(split.parts.size() == 2);
     CHECK(parted_at(pts, split, 6.8f, 7.2f));
     // Not cut by the edge: no reason to part it.

@@ -66,15 +66,11 @@ struct ExtractOptions {
                                        ///< 0 = off (or without fx_px, fy_px)
     double fx_px = 0.0;                ///< the camera's focal lengths for min_face_share, px
     double fy_px = 0.0;
-    double row_low_fraction = 0.7;  ///< a thing blob at least two prior widths long whose top
-                                    ///< stays below this * its highest top for row_low_extent_m
-                                    ///< across it from the camera's side (bonnets) is a row side
-                                    ///< by side seen front-on, [0, 1), 0 = off
-    double row_low_extent_m = 0.6;  ///< that low extent, metres, > 0
-    /// Things parked end to end are parted by "rules" (valleys between roofs, a van beside a
-    /// car, a walk of car lengths over the gaps) or as one "partition" (partition_row: dynamic
-    /// programming over the cuts with a vehicle-length distribution).
-    std::string row_split = "rules";
+    double row_low_fraction = 0.7;    ///< a thing blob at least two prior widths long whose top
+                                      ///< stays below this * its highest top for row_low_extent_m
+                                      ///< across it from the camera's side (bonnets) is a row side
+                                      ///< by side seen front-on, [0, 1), 0 = off
+    double row_low_extent_m = 0.6;    ///< that low extent, metres, > 0
     double row_gap_m = 0.6;           ///< gap between things in a row: pitch = prior W + this
                                       ///< side by side, prior L + this end to end, metres, >= 0
     double row_valley_depth_m = 0.4;  ///< a thing blob longer than

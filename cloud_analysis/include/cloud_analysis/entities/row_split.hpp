@@ -23,14 +23,10 @@ struct Split {
 
 /// Pieces of a thing whose box is much longer or wider than its prior (a parked row, or
 /// cars side by side merged by the semantic image); {idx} when it fits the prior.
-/// truncation_xz: where the image's edge cuts the blob (camera-frame x, z; see
-/// BoxFitOptions::truncation_xz). fb_px_m: the rig's focal length times baseline (0 unknown),
-/// which says how far one surface's points spread along the viewing ray at each range.
 Split split_oversized(const std::vector<Eigen::Vector3f>& pts, const Indices& idx,
                       const OrientedBox& box, const ClassSettings& s,
                       const std::optional<GroundPlane>& ground, const ExtractOptions& options,
-                      const std::optional<Eigen::Vector2d>& truncation_xz = std::nullopt,
-                      double fb_px_m = 0.0);
+                      bool truncated = false);
 
 /// Pairs of pieces of one cluster each too faint to be a thing (seen over less than
 /// min_seen_area_m2) that lie end to end along the first one's heading (at most
