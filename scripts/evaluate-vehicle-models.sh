@@ -74,8 +74,8 @@ EOF
 done
 
 rows=()
-score() {  # set models name dir scene
-    local set=$1 models=$2 name=$3 dir=$4 scene=$5
+score() {  # set drawn-with name dir scene
+    local set=$1 drawn=$2 name=$3 dir=$4 scene=$5
     for path in labels stereo-only; do
         local base="$dir-$path" flags=() bars=("${goal[@]}")
         if [ "$path" = stereo-only ]; then
@@ -89,7 +89,7 @@ score() {  # set models name dir scene
             --min-visible-fraction 0.25 --kitti-root "$dir" --frame 000000 \
             --json "$base-eval.json" >"$base-eval.txt" 2>&1 || code=$?
         [ "$code" = 0 ] || [ "$code" = 3 ] || { cat "$base-eval.txt" >&2; exit 1; }
-        rows+=("$set=$models=$path=$name=$base-eval.json")
+        rows+=("$set=$drawn=$path=$name=$base-eval.json")
     done
 }
 streets() {  # set "seeds" bodies...: every street of the seeds, the bodies in turn
@@ -106,12 +106,13 @@ streets() {  # set "seeds" bodies...: every street of the seeds, the bodies in t
                 "${flags[@]}" -o "$scene"
             local body=${street_bodies[$((n % ${#street_bodies[@]}))]}
             n=$((n + 1))
-            for models in own "$body"; do
+            local drawn
+            for drawn in own "$body"; do
                 local classes=()
-                [ "$models" = own ] || classes=(--classes "$out_dir/classes-$body.json")
-                "$sr" sensors "$scene" --out "$out_dir/$models/$name" --frame 000000 \
+                [ "$drawn" = own ] || classes=(--classes "$out_dir/classes-$body.json")
+                "$sr" sensors "$scene" --out "$out_dir/$drawn/$name" --frame 000000 \
                     --seed "$seed" --label-bleed 3 "${classes[@]}" >/dev/null
-                score "$set" "$models" "$name" "$out_dir/$models/$name" "$scene"
+                score "$set" "$drawn" "$name" "$out_dir/$drawn/$name" "$scene"
             done
         done
     done
