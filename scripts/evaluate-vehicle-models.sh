@@ -139,7 +139,7 @@ for arg in sys.argv[1:]:
     r["spur"] += sum(b.get("spurious", 0) for b in near)
     r["centre"] += [m["centre_error_m"] for m in e["matches"]
                     if m["class"] == "car" and m["range_m"] < 30.0]
-print("| streets | classes from | vehicle models | streets | cars found | recall | spurious cars "
+print("| set | classes from | vehicle models | streets | cars found | recall | spurious cars "
       "| precision | median centre error, m | streets meeting the bars |")
 print("|---|---|---|---|---|---|---|---|---|---|")
 for (street_set, path, models), r in rows.items():
