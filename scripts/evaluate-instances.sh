@@ -13,7 +13,7 @@ build=1
 build_dir="$STEREOSCENE_ROOT/build"
 out_dir=""
 kitti_root="$STEREOSCENE_ROOT/../shared/data/kitti15"
-# pedestrian_seeds, held_out_seeds (parking_seeds and kerbside_seeds are wider)
+# pedestrian_seeds, held_out_seeds (parking_seeds and kerbside_seeds are wider), set_street_flags
 source "$STEREOSCENE_ROOT/scripts/street-seeds.sh"
 seeds=$pedestrian_seeds
 while [ $# -gt 0 ]; do
@@ -38,12 +38,11 @@ mkdir -p "$out_dir"
 
 evals=()
 score_street() {  # set kind seed
-    local set=$1 kind=$2 seed=$3 flags=()
-    [ "$kind" = kerbside ] && flags=(--kerbside)
-    [ "$kind" = pedestrians ] && flags=(--kerbside --pedestrians)
+    local set=$1 kind=$2 seed=$3
+    set_street_flags "$kind"
     local name="$kind-$seed" scene="$out_dir/$kind-$seed.json" dir="$out_dir/$kind-$seed"
-    python3 "$STEREOSCENE_ROOT/scripts/make-parking-scene.py" --seed "$seed" "${flags[@]}" \
-        -o "$scene"
+    python3 "$STEREOSCENE_ROOT/scripts/make-parking-scene.py" --seed "$seed" \
+        "${street_flags[@]}" -o "$scene"
     "$build_dir/scene_viewer/scene-render" sensors "$scene" --out "$dir" --frame 000000 \
         --seed "$seed" --label-bleed 3 >/dev/null
     for path in labels instances; do

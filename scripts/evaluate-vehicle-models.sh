@@ -17,7 +17,7 @@ build=1
 build_dir="$STEREOSCENE_ROOT/build"
 out_dir=""
 models="$STEREOSCENE_ROOT/../shared/gltf-thirdparty"
-# pedestrian_seeds (every kind of street has them), held_out_seeds
+# pedestrian_seeds (every kind of street has them), held_out_seeds, set_street_flags
 source "$STEREOSCENE_ROOT/scripts/street-seeds.sh"
 dev_seeds=$pedestrian_seeds
 analysis_args=()
@@ -33,7 +33,10 @@ while [ $# -gt 0 ]; do
         --held-out-seeds) held_out_seeds=$2; shift ;;
         --analysis) read -r -a analysis_args <<<"$2"; shift ;;
         -h|--help) sed -n '2,12p' "$0"; exit 0 ;;
-        *) echo "evaluate-vehicle-models.sh: error: unknown argument: $1 (see --help)" >&2; exit 2 ;;
+        *)
+            echo "evaluate-vehicle-models.sh: error: unknown argument: $1 (see --help)" >&2
+            exit 2
+            ;;
     esac
     shift
 done
@@ -98,12 +101,10 @@ streets() {  # set "seeds" bodies...: every street of the seeds, the bodies in t
     local street_bodies=("$@") n=0
     for seed in $seeds; do
         for kind in parking kerbside pedestrians; do
-            local flags=() name="$kind-$seed"
-            [ "$kind" = kerbside ] && flags=(--kerbside)
-            [ "$kind" = pedestrians ] && flags=(--kerbside --pedestrians)
-            local scene="$out_dir/$name.json"
+            local name="$kind-$seed" scene="$out_dir/$kind-$seed.json"
+            set_street_flags "$kind"
             python3 "$STEREOSCENE_ROOT/scripts/make-parking-scene.py" --seed "$seed" \
-                "${flags[@]}" -o "$scene"
+                "${street_flags[@]}" -o "$scene"
             local body=${street_bodies[$((n % ${#street_bodies[@]}))]}
             n=$((n + 1))
             local drawn
