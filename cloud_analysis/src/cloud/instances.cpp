@@ -225,18 +225,22 @@ void mark_object_outlines(std::vector<std::uint8_t>& depth_edge, const InstanceM
         std::nth_element(d.begin(), mid, d.end());
         if (const double z = border.depth_m(double{*mid}); z > 0.0) depth_m[id] = z;
     }
-    if (depth_m.size() < 2) return;
+    if (depth_m.empty()) return;
     if (depth_edge.size() != n) depth_edge.assign(n, 0);
     for (int v = 0; v < h; ++v) {
         const std::uint32_t* row = instances.id.data() + static_cast<std::size_t>(v) * w;
         std::uint8_t* edge = depth_edge.data() + static_cast<std::size_t>(v) * w;
+        const float* disp = disparity.disparity_px.data() + static_cast<std::size_t>(v) * w;
         for (int u = 0; u < w; ++u) {
             const auto own = depth_m.find(row[u]);
             if (own == depth_m.end() || edge[u] != 0) continue;
             for (int k = std::max(0, u - columns); k <= std::min(w - 1, u + columns); ++k) {
-                if (row[k] == row[u] || row[k] == 0) continue;
+                if (row[k] == row[u]) continue;
                 const auto other = depth_m.find(row[k]);
-                if (other != depth_m.end() && other->second <= own->second - step_m) {
+                const double z = row[k] == 0              ? border.depth_m(double{disp[k]})
+                                 : other != depth_m.end() ? other->second
+                                                          : 0.0;
+                if (z > 0.0 && z <= own->second - step_m) {
                     edge[u] = 1;
                     break;
                 }

@@ -158,3 +158,36 @@ TEST_CASE("an object's pixels beside a nearer object's outline are marked as a d
     mark_object_outlines(none, m, d, border, 0.8, 4);
     CHECK(std::count(none.begin(), none.end(), 1) == 0);
 }
+
+TEST_CASE("an object's pixels beside a nearer surface of no object are marked as a depth edge",
+          "[instances]") {
+    // One row: object 1 at 40 m (disparity 10) over columns 0-19 but for a trunk of no object
+    // at 10 m (disparity 40) over columns 8-9, then background at 80 m.
+    InstanceMap m;
+    m.width_px = 24;
+    m.height_px = 1;
+    m.id.assign(24, 0);
+    DisparityMap d;
+    d.width_px = 24;
+    d.height_px = 1;
+    d.disparity_px.assign(24, 5.0f);
+    for (int u = 0; u < 20; ++u) {
+        const bool trunk = u == 8 || u == 9;
+        m.id[static_cast<std::size_t>(u)] = trunk ? 0 : 1;
+        d.disparity_px[static_cast<std::size_t>(u)] = trunk ? 40.0f : 10.0f;
+    }
+    MatchBorder border{400.0, 0.0};
+    std::vector<std::uint8_t> edge;
+    mark_object_outlines(edge, m, d, border, 0.8, 4);
+    REQUIRE(edge.size() == 24);
+    for (int u = 0; u < 24; ++u) {
+        INFO("column " << u);
+        // Four columns of the object on each side of the trunk; never the trunk or background.
+        CHECK(edge[static_cast<std::size_t>(u)] == ((u >= 4 && u < 8) || (u >= 10 && u < 14)));
+    }
+    // A surface of no object behind the object (farther by more than the step) marks nothing.
+    d.disparity_px[8] = d.disparity_px[9] = 8.0f;
+    std::vector<std::uint8_t> none;
+    mark_object_outlines(none, m, d, border, 0.8, 4);
+    CHECK(std::count(none.begin(), none.end(), 1) == 0);
+}

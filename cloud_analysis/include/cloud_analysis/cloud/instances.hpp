@@ -60,12 +60,13 @@ InstanceMap decode_instances(const IdImage& image, InstanceEncoding encoding,
 
 /// Marks in `depth_edge` (per pixel, 1 on the far side of a depth step; see depth_edge_band
 /// in reproject.hpp, sized like the map or empty, then filled with 0 first) the pixels of an
-/// object within `columns` columns of a pixel of another object nearer by at least `step_m`
-/// (the objects' median depths, fb / (d - offset) of `border`): there the matcher's window
-/// straddles the nearer object's outline and the disparity is that object's (foreground
-/// fattening). Across rows depth_edge_band marks such pixels for every surface; across columns
-/// only the instance image tells an outline from a surface seen along the viewing ray. Does
-/// nothing when the sizes differ, step_m <= 0 or columns <= 0.
+/// object within `columns` columns of a pixel nearer than the object by at least `step_m`: a
+/// pixel of another object (its median depth) or of no object (its own depth: a trunk, a pole
+/// or a sign in front of a car), depths fb / (d - offset) of `border` and the object's median.
+/// There the matcher's window straddles the nearer surface's outline and the disparity is that
+/// surface's (foreground fattening). Across rows depth_edge_band marks such pixels for every
+/// surface; across columns only the instance image tells an outline from a surface seen along the
+/// viewing ray. Does nothing when the sizes differ, step_m <= 0 or columns <= 0.
 void mark_object_outlines(std::vector<std::uint8_t>& depth_edge, const InstanceMap& instances,
                           const DisparityMap& disparity, const MatchBorder& border, double step_m,
                           int columns);
