@@ -417,15 +417,35 @@ def part_odometry(a, tool, result):
     score = run([tool, "evaluate-odometry", "--poses", out / "poses.txt", "--truth",
                  drive / "poses.txt", "--json", "-"])
     errors = json.loads(score.stdout)
+    # The odometry alone, in the process that ran the matcher (bench --next-left): every
+    # fifth frame pair of the drive, a median of --runs each.
+    lefts = sorted((drive / "image_2").glob("*.png"))
+    alone = []
+    for left, next_left in list(zip(lefts, lefts[1:]))[::5]:
+        r = run([tool, "bench", "--left", left, "--right", drive / "image_3" / left.name,
+                 "--calib", drive / "calib.txt", "--next-left", next_left, "--work-dir", out,
+                 "--runs", str(a.runs), "--json", "-"])
+        if r.returncode != 0:
+            sys.exit(f"bench failed: {r.stderr}")
+        b = json.loads(r.stdout)
+        alone.append((left.stem, b["odometry_cpu_ms"], b["odometry_ms"], b["matcher_cpu_ms"]))
     result["odometry"] = {"cpu_ms_per_frame": {k: v[0] for k, v in rows.items()},
-                          "fps": {k: v[1] for k, v in rows.items()}, "errors": errors}
+                          "fps": {k: v[1] for k, v in rows.items()}, "errors": errors,
+                          "alone": [dict(zip(("frame", "cpu_ms", "wall_ms", "matcher_cpu_ms"), x))
+                                    for x in alone]}
     print(f"\n### Odometry on the real drive ({drive.name}, 20 frames, medians of {a.runs} runs)\n")
     print("| batch | CPU ms per frame | fps |")
     print("|---|---|---|")
     for name, (c, f) in rows.items():
         print(f"| {name} | {c:.1f} | {f:.1f} |")
+    print("\n| frame pair from | odometry CPU ms | odometry wall ms | matcher CPU ms |")
+    print("|---|---|---|---|")
+    for frame, cpu, wall, matcher in alone:
+        print(f"| {frame} | {cpu:.1f} | {wall:.1f} | {matcher:.1f} |")
     extra = rows["with --odometry"][0] - rows["without"][0]
-    print(f"\nThe odometry's own cost: {extra:.1f} ms of CPU a frame. Drift: translation "
+    print(f"\nThe odometry's own cost: {extra:.1f} ms of CPU a frame in the batch, "
+          f"{statistics.median(x[1] for x in alone):.1f} ms alone (bench --next-left, median of "
+          f"the pairs). Drift: translation "
           f"{errors['translation_pct']:.2f} % and rotation {errors['rotation_deg_per_m']:.4f} deg/m "
           f"over the segments, end point {errors['end_point_m']:.2f} m = "
           f"{errors['end_point_pct']:.2f} % of {errors['path_m']:.1f} m.")

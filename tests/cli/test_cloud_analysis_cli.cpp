@@ -513,6 +513,29 @@ TEST_CASE("bench reports frames from memory and from files beside the matcher al
     CHECK(fs::exists(dir / "bench.ply"));
 }
 
+TEST_CASE("bench times the odometry's cost per frame when given the next frame's left image",
+          "[cli][bench][odometry]") {
+    const auto dir = scratch("bench_odometry");
+    const std::string bench = tool() + " bench" + sample_inputs() +
+                              " --runs 1 --warmup 0 --work-dir " + quote(dir.string());
+    const Run r = run(bench + " --next-left " + quote((kSample / "right.png").string()), dir);
+    REQUIRE(r.code == 0);
+    const auto j = nlohmann::json::parse(r.out);
+    CHECK(j["odometry_ms"].get<double>() > 0.0);
+    CHECK(j["odometry_cpu_ms"].get<double>() >= 0.0);
+    // Without it, no odometry entry.
+    const Run plain = run(bench, dir);
+    REQUIRE(plain.code == 0);
+    CHECK(nlohmann::json::parse(plain.out).count("odometry_ms") == 0);
+    // A next frame of another size is an error naming the flag.
+    const fs::path other =
+        fs::path(STEREOSCENE_SAMPLES_DIR) / "rendered/kerbside-1/image_2/000000.png";
+    const Run bad = run(bench + " --next-left " + quote(other.string()), dir);
+    CHECK(bad.code == 1);
+    CHECK(bad.err.find("--next-left") != std::string::npos);
+    CHECK(std::count(bad.err.begin(), bad.err.end(), '\n') == 1);
+}
+
 TEST_CASE("the palette flag takes a palette file path as well as a bundled name",
           "[cli][semantic]") {
     const auto dir = scratch("palette_path");

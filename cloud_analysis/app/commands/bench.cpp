@@ -11,6 +11,8 @@
 #include <nlohmann/json.hpp>
 
 #include "analyse.hpp"
+#include "cloud_analysis/io/io.hpp"
+#include "cloud_analysis/odometry/visual_odometry.hpp"
 #include "cloud_analysis/pipeline/batch.hpp"
 #include "cloud_analysis/stereo/disparity.hpp"
 #include "cloud_analysis/support/select.hpp"
@@ -119,6 +121,50 @@ struct MatcherTimes {
     }
 };
 
+/// The odometry's cost per frame in a drive: the thing mask of the frame and
+/// VisualOdometry::add from it to the next frame (its motion, the next frame's pyramid), as a
+/// batch with --odometry runs it; wall and process CPU time (all threads), ms per run.
+class OdometryTimes {
+  public:
+    /// `r`: the frame analysed; `next_left`: the next frame's left image (same size).
+    OdometryTimes(const LoadedInputs& in, AnalyseResult r, ImageU8 next_left)
+        : in_(in), r_(std::move(r)), next_left_(std::move(next_left)) {
+        if (next_left_.width_px != in.left.width_px || next_left_.height_px != in.left.height_px) {
+            throw std::runtime_error(
+                "the next frame's left image differs in size from --left "
+                "(--next-left)");
+        }
+        for (const auto& c : in.palette.classes) is_thing_.push_back(c.thing ? 1 : 0);
+    }
+
+    void time(bool timed) {
+        odometry::VisualOdometry vo(r_.camera, odometry::OdometryOptions{});
+        vo.add(frame(in_.left));
+        const std::clock_t c0 = std::clock();
+        const auto t0 = Clock::now();
+        vo.add(frame(next_left_));
+        const double ms = ms_between(t0, Clock::now());
+        const double cpu = 1000.0 * static_cast<double>(std::clock() - c0) / CLOCKS_PER_SEC;
+        if (!timed) return;
+        wall_ms.push_back(ms);
+        cpu_ms.push_back(cpu);
+    }
+
+    std::vector<double> wall_ms, cpu_ms;
+
+  private:
+    /// A frame as the batch gives it: `left`, the bench frame's right image and disparity.
+    odometry::OdometryFrame frame(const ImageU8& left) const {
+        return {left, in_.right, r_.disparity,
+                odometry::static_mask(r_.classes.class_index, is_thing_)};
+    }
+
+    const LoadedInputs& in_;
+    AnalyseResult r_;
+    ImageU8 next_left_;
+    std::vector<char> is_thing_;
+};
+
 }  // namespace
 
 CLI::App* add_bench_command(CLI::App& app, BenchArgs& a) {
@@ -138,6 +184,9 @@ CLI::App* add_bench_command(CLI::App& app, BenchArgs& a) {
         ->check(CLI::Range(0, 100));
     cmd->add_option("--work-dir", a.work_dir, "folder for the timed outputs")->required();
     cmd->add_option("--json", a.json, "result file ('-' = stdout)")->capture_default_str();
+    cmd->add_option("--next-left", a.next_left,
+                    "the next frame's left image of a drive: also time the odometry's cost per "
+                    "frame (batch --odometry) in the same process");
     return cmd;
 }
 
@@ -164,15 +213,22 @@ int run_bench(const BenchArgs& a) {
     std::optional<DisparityMatcher> reference;
     if (own_matcher) reference.emplace(reference_options);
     MatcherTimes matcher_times, reference_times;
+    std::optional<OdometryTimes> odometry_times;
+    if (!a.next_left.empty()) {
+        const LoadedRun& run = *rows.front().loaded;
+        odometry_times.emplace(in, analyse(in, run.fit.run_options(in.palette, false), matcher),
+                               read_image(a.next_left));
+    }
     for (int i = 0; i < a.warmup + a.runs; ++i) {
         const bool timed = i >= a.warmup;
         matcher_times.time(matcher, in, timed);
         if (reference) reference_times.time(*reference, in, timed);
+        if (odometry_times) odometry_times->time(timed);
         run_rows(rows, timed, i == 0, matcher);
     }
     const double floor_ms = median(matcher_times.wall_ms);
     const MatcherTimes& ref = own_matcher ? reference_times : matcher_times;
-    const nlohmann::json result = {
+    nlohmann::json result = {
         {"frame", in.paths.frame_id},
         {"width", in.left.width_px},
         {"height", in.left.height_px},
@@ -193,6 +249,10 @@ int run_bench(const BenchArgs& a) {
         {"reference_matcher_cpu_ms", median(ref.cpu_ms)},
         {"rows", rows_json(rows, floor_ms)},
         {"peak_rss_mb", cloud_analysis::peak_rss_mb()}};
+    if (odometry_times) {
+        result["odometry_ms"] = median(odometry_times->wall_ms);
+        result["odometry_cpu_ms"] = median(odometry_times->cpu_ms);
+    }
     write_output({a.json, result.dump(1) + "\n", "--json"});
     return 0;
 }

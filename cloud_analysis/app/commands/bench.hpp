@@ -20,6 +20,8 @@ struct BenchArgs {
     int warmup = 1;                  ///< --warmup: untimed runs first
     std::filesystem::path work_dir;  ///< --work-dir: where the timed outputs are written
     std::string json = "-";          ///< --json: result file ("-" = stdout)
+    /// --next-left: the next frame's left image; also times the odometry's cost per frame.
+    std::filesystem::path next_left;
 };
 
 /// Registers `bench` on app and binds its flags to args (which must outlive parsing).

@@ -36,10 +36,11 @@ Pose pose_of(const cv::Mat& rvec, const cv::Mat& tvec) {
     return T;
 }
 
-/// FAST corners (Rosten & Drummond 2006) of `grey` where `mask` is set, the strongest of each
+/// FAST corners (Rosten & Drummond 2006) of `grey` where `votes(u, v)`, the strongest of each
 /// square cell of corner_cell_px, about max_corners in all: spread over the image, so that the
 /// motion is not fitted to one textured patch.
-std::vector<cv::Point2f> spread_corners(const cv::Mat& grey, const cv::Mat& mask,
+template <typename Votes>
+std::vector<cv::Point2f> spread_corners(const cv::Mat& grey, const Votes& votes,
                                         const OdometryOptions& options) {
     std::vector<cv::KeyPoint> found;
     cv::FAST(grey, found, 20, true);
@@ -51,7 +52,7 @@ std::vector<cv::Point2f> spread_corners(const cv::Mat& grey, const cv::Mat& mask
     std::vector<std::vector<cv::KeyPoint>> cells(static_cast<std::size_t>(columns * rows));
     for (const cv::KeyPoint& k : found) {
         const int u = static_cast<int>(k.pt.x), v = static_cast<int>(k.pt.y);
-        if (mask.at<std::uint8_t>(v, u) == 0) continue;
+        if (!votes(u, v)) continue;
         const int c = static_cast<int>(v / cell) * columns + static_cast<int>(u / cell);
         cells[static_cast<std::size_t>(c)].push_back(k);
     }
@@ -108,17 +109,14 @@ VisualOdometry::Pyramid pyramid_of(const cv::Mat& grey, const OdometryOptions& o
     return p;
 }
 
-/// The pixels whose corners may vote: a disparity known well enough, a static class.
-cv::Mat voting_mask(const OdometryFrame& prev, double min_disparity) {
-    const int w = prev.left.width_px, h = prev.left.height_px;
-    const auto n = static_cast<std::size_t>(w) * static_cast<std::size_t>(h);
-    cv::Mat mask(h, w, CV_8U);
-    for (std::size_t p = 0; p < n; ++p) {
-        const bool near = double{prev.disparity.disparity_px[p]} > min_disparity;
-        const bool still = prev.static_mask.empty() || prev.static_mask[p] != 0;
-        mask.data[p] = near && still ? 255 : 0;
-    }
-    return mask;
+/// Whether a corner at pixel (u, v) of `frame` may vote: a disparity known well enough, a
+/// static class.
+bool votes(const OdometryFrame& frame, int u, int v, double min_disparity) {
+    const std::size_t p =
+        static_cast<std::size_t>(v) * static_cast<std::size_t>(frame.left.width_px) +
+        static_cast<std::size_t>(u);
+    return double{frame.disparity.disparity_px[p]} > min_disparity &&
+           (frame.static_mask.empty() || frame.static_mask[p] != 0);
 }
 
 /// Corners of the previous left image with their disparity, and their pixels in the current
@@ -162,13 +160,15 @@ double min_voting_disparity(const StereoCamera& camera, const OdometryOptions& o
 
 /// The corners of `frame` where a point can vote (a disparity known well enough, a static class),
 /// each matched across the pair: its own sub-pixel disparity by Lucas-Kanade along the row from
-/// the dense one, kept within max_stereo_gap_px of its row and of the dense disparity.
-Landmarks landmarks_of(const OdometryFrame& frame, const cv::Mat& grey, const StereoCamera& camera,
-                       const OdometryOptions& options) {
+/// the dense one, kept within max_stereo_gap_px of its row and of the dense disparity. `pyramid`:
+/// the frame's left image's (its derivatives are reused).
+Landmarks landmarks_of(const OdometryFrame& frame, const VisualOdometry::Pyramid& pyramid,
+                       const StereoCamera& camera, const OdometryOptions& options) {
     const int w = frame.left.width_px;
     const double min_disparity = min_voting_disparity(camera, options);
-    const std::vector<cv::Point2f> corners =
-        spread_corners(grey, voting_mask(frame, min_disparity), options);
+    const std::vector<cv::Point2f> corners = spread_corners(
+        pyramid.levels.front(), [&](int u, int v) { return votes(frame, u, v, min_disparity); },
+        options);
     const auto dense = [&](const cv::Point2f& c) {
         return frame.disparity
             .disparity_px[static_cast<std::size_t>(std::lround(c.y)) * static_cast<std::size_t>(w) +
@@ -182,7 +182,8 @@ Landmarks landmarks_of(const OdometryFrame& frame, const cv::Mat& grey, const St
         for (const cv::Point2f& c : corners) across.emplace_back(c.x - dense(c), c.y);
         const cv::Size window(options.track_window_px, options.track_window_px);
         cv::calcOpticalFlowPyrLK(
-            grey, grey_of(frame.right), corners, across, ok_across, error, window, 1,
+            pyramid.levels, grey_of(frame.right), corners, across, ok_across, error, window,
+            std::min(1, options.track_levels),
             cv::TermCriteria(cv::TermCriteria::COUNT | cv::TermCriteria::EPS, 30, 0.01),
             cv::OPTFLOW_USE_INITIAL_FLOW);
     }
@@ -393,7 +394,7 @@ MotionFit motion(const OdometryFrame& prev, const VisualOdometry::Pyramid& prev_
                  const ImageU8& curr_left, const VisualOdometry::Pyramid& curr_pyramid,
                  const StereoCamera& camera, const OdometryOptions& options, double offset_px) {
     check_sizes(prev, curr_left);
-    const Landmarks l = landmarks_of(prev, grey_of(prev.left), camera, options);
+    const Landmarks l = landmarks_of(prev, prev_pyramid, camera, options);
     std::vector<char> ok;
     const std::vector<cv::Point2f> image = tracked(
         prev_pyramid, curr_pyramid, l.corner, curr_left.width_px, curr_left.height_px, options, ok);
