@@ -155,7 +155,7 @@ class OdometryTimes {
   private:
     /// A frame as the batch gives it: `left`, the bench frame's right image and disparity.
     odometry::OdometryFrame frame(const ImageU8& left) const {
-        return {left, in_.right, r_.disparity,
+        return {odometry::grey_image(left), odometry::grey_image(in_.right), r_.disparity,
                 odometry::static_mask(r_.classes.class_index, is_thing_)};
     }
 

@@ -412,6 +412,16 @@ MotionEstimate estimate_motion(const OdometryFrame& prev, const ImageU8& curr_le
         .estimate;
 }
 
+ImageU8 grey_image(const ImageU8& image) {
+    if (image.channels == 1 || image.empty()) return image;
+    ImageU8 out{image.width_px, image.height_px, 1,
+                std::vector<std::uint8_t>(static_cast<std::size_t>(image.width_px) *
+                                          static_cast<std::size_t>(image.height_px))};
+    cv::Mat grey(out.height_px, out.width_px, CV_8UC1, out.data.data());
+    cv::cvtColor(mat_view(image), grey, cv::COLOR_RGB2GRAY);
+    return out;
+}
+
 std::vector<std::uint8_t> static_mask(const std::vector<std::uint16_t>& class_index,
                                       const std::vector<char>& is_thing) {
     std::vector<std::uint8_t> out(class_index.size(), 1);
@@ -433,14 +443,8 @@ VisualOdometry::~VisualOdometry() = default;
 
 Pose VisualOdometry::add(OdometryFrame frame) {
     // Grey once: the left image is tracked from twice (into this frame and the next).
-    const auto to_grey = [](ImageU8& image) {
-        if (image.channels == 1 || image.empty()) return;
-        const cv::Mat grey = grey_of(image);
-        image = ImageU8{image.width_px, image.height_px, 1,
-                        std::vector<std::uint8_t>(grey.data, grey.data + grey.total())};
-    };
-    to_grey(frame.left);
-    to_grey(frame.right);
+    if (frame.left.channels != 1) frame.left = grey_image(frame.left);
+    if (frame.right.channels != 1) frame.right = grey_image(frame.right);
     auto pyramid = std::make_unique<Pyramid>(pyramid_of(grey_of(frame.left), options_));
     if (prev_) {
         MotionFit fit = motion(*prev_, *prev_pyramid_, frame.left, *pyramid, camera_, options_,

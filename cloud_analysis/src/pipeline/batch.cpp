@@ -114,7 +114,8 @@ odometry::Pose pose_of(const FinishJob& job, const BatchOptions& options, Odomet
     if (!odo.chain) odo.chain.emplace(job.result.camera, options.odometry_options);
     std::vector<char> is_thing;
     for (const auto& c : job.in.palette.classes) is_thing.push_back(c.thing ? 1 : 0);
-    odometry::OdometryFrame frame{job.in.left, job.in.right, job.result.disparity,
+    odometry::OdometryFrame frame{odometry::grey_image(job.in.left),
+                                  odometry::grey_image(job.in.right), job.result.disparity,
                                   odometry::static_mask(job.result.classes.class_index, is_thing)};
     return odo.chain->add(std::move(frame));
 }

@@ -88,6 +88,10 @@ MotionEstimate estimate_motion(const OdometryFrame& prev, const ImageU8& curr_le
                                const StereoCamera& camera, const OdometryOptions& options,
                                double disparity_offset_px = 0.0);
 
+/// `image` in grey (OpenCV's RGB to grey, as the odometry reads it), converted straight into
+/// the result; a copy when it is grey already. A frame given in grey is not converted again.
+ImageU8 grey_image(const ImageU8& image);
+
 /// The per-pixel vote mask of a class image: 0 on the palette's thing classes, 1 elsewhere.
 std::vector<std::uint8_t> static_mask(const std::vector<std::uint16_t>& class_index,
                                       const std::vector<char>& is_thing);
