@@ -2,6 +2,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <map>
 #include <numeric>
 #include <stdexcept>
 #include <tuple>
@@ -269,6 +270,86 @@ Segment classify(SegmentStats& st, const Classes& cls, bool has_image, double fx
     return seg;
 }
 
+/// Each car candidate's lean (Segment::lean): per column band (one stretch of surface), the
+/// slope of depth over height of its lower body's pixels within two disparity noises (at least
+/// 0.5 m) of the band's median depth (a kerb or a bollard in front of the body is another
+/// surface, not a lean); the segment's lean is the median over its bands, its error the bands'
+/// spread (1.4826 median absolute deviations) over the square root of their number.
+void measure_leans(const Grid& grid, const DisparityMap& disparity, const Rig& rig,
+                   const GroundEstimate& ground, const GeometryOptions& o, std::uint16_t car,
+                   std::vector<Segment>& segments) {
+    constexpr double kLow = 0.25, kHigh = 0.65;  // metres above the road
+    constexpr std::size_t kMinPixels = 6;        // a band's, for a slope
+    constexpr double kMinHeightSpread = 0.1;     // metres: a band's, for a slope
+    const int w = disparity.width_px;
+    // Per segment, per column band: (height, depth) of its lower body's pixels.
+    std::vector<std::map<int, std::vector<std::pair<double, double>>>> bands(segments.size());
+    const Eigen::Vector3d n = ground.plane.normal;
+    for (std::size_t p = 0; p < grid.pixel_cell.size(); ++p) {
+        const std::int32_t cell = grid.pixel_cell[p];
+        if (cell < 0) continue;
+        const int s = grid.cells[static_cast<std::size_t>(cell)].segment;
+        if (s < 0 || segments[static_cast<std::size_t>(s)].class_index != car) continue;
+        const double d = double{disparity.disparity_px[p]} - rig.offset;
+        if (!(d > 0.0)) continue;
+        const int u = static_cast<int>(p % static_cast<std::size_t>(w));
+        const int v = static_cast<int>(p / static_cast<std::size_t>(w));
+        const double z = rig.fb / d;
+        const double height =
+            (n.x() * (u - rig.cx) / rig.fx + n.y() * (v - rig.cy) / rig.fy + n.z()) * z +
+            ground.plane.d;
+        if (height < kLow || height > kHigh) continue;
+        bands[static_cast<std::size_t>(s)][u / o.column_bin_px].emplace_back(height, z);
+    }
+    std::vector<double> depths, slopes, deviations;
+    for (std::size_t s = 0; s < segments.size(); ++s) {
+        slopes.clear();
+        for (auto& [band, px] : bands[s]) {
+            if (px.size() < kMinPixels) continue;
+            depths.clear();
+            for (const auto& hz : px) depths.push_back(hz.second);
+            const double mid = quantile(depths, 0.5);
+            const double reach = std::max(0.5, 2.0 * o.disparity_noise_px * mid * mid / rig.fb);
+            double count = 0, h = 0, z = 0, hh = 0, hz = 0;
+            for (const auto& [ph, pz] : px) {
+                if (std::abs(pz - mid) > reach) continue;
+                count += 1;
+                h += ph;
+                z += pz;
+                hh += ph * ph;
+                hz += ph * pz;
+            }
+            const double shh = hh - h * h / std::max(count, 1.0);
+            if (count < kMinPixels || !(shh > count * kMinHeightSpread * kMinHeightSpread / 12.0)) {
+                continue;
+            }
+            slopes.push_back((hz - h * z / count) / shh);
+        }
+        if (slopes.size() < 3) continue;
+        const double lean = quantile(slopes, 0.5);
+        deviations.clear();
+        for (double b : slopes) deviations.push_back(std::abs(b - lean));
+        segments[s].lean = lean;
+        segments[s].lean_error =
+            1.4826 * quantile(deviations, 0.5) / std::sqrt(static_cast<double>(slopes.size()));
+    }
+}
+
+/// Car candidates leaning beyond car_max_lean by twice their error (a bank's foot) are static.
+void drop_leaning_cars(const Classes& cls, const GeometryOptions& o, std::vector<Segment>& segments,
+                       std::vector<std::uint16_t>& segment_class) {
+    if (!(o.car_max_lean > 0.0)) return;
+    for (std::size_t s = 0; s < segments.size(); ++s) {
+        Segment& seg = segments[s];
+        if (seg.class_index == cls.car && std::isfinite(seg.lean) &&
+            seg.lean - 2.0 * seg.lean_error > o.car_max_lean) {
+            seg.class_index = cls.other;
+            seg.label = "static";
+            segment_class[s] = cls.other;
+        }
+    }
+}
+
 /// Sky above the horizon wherever no segment holds the pixel.
 void label_sky(const Grid* g, int w, double horizon_v, std::uint16_t sky, ClassImage& out) {
     if (sky == kVoidClass) return;
@@ -388,6 +469,8 @@ SceneGeometry derive_semantics(const DisparityMap& disparity, const StereoCamera
         out.segments.push_back(classify(stats[s], cls, has_image, rig.fx, o));
         segment_class[s] = out.segments.back().class_index;
     }
+    measure_leans(grid, disparity, rig, out.ground, o, cls.car, out.segments);
+    drop_leaning_cars(cls, o, out.segments, segment_class);
     label_segment_pixels(grid, cls, segment_class, stats, w, o.column_bin_px, out);
     label_sky(&grid, w, out.ground.horizon_v_px, cls.sky, out.classes);
     sort_segments(out);

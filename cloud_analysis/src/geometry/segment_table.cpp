@@ -1,4 +1,5 @@
 #include <algorithm>
+#include <cmath>
 #include <limits>
 
 #include <nlohmann/json.hpp>
@@ -11,23 +12,27 @@ std::string segments_json(const SceneGeometry& g, const std::string& frame_id) {
     nlohmann::json segments = nlohmann::json::array();
     for (std::size_t k = 0; k < g.segments.size(); ++k) {
         const Segment& s = g.segments[k];
-        segments.push_back({{"index", k},
-                            {"class", s.label},
-                            {"pixels", s.pixels},
-                            {"cells", s.cells},
-                            {"box_px", {s.u0, s.v0, s.u1, s.v1}},
-                            {"top_m", s.top_m},
-                            {"top_q25_m", s.top_q25_m},
-                            {"low_m", s.low_m},
-                            {"width_m", s.width_m},
-                            {"thickness_m", s.thickness_m},
-                            {"depth_m", s.depth_m},
-                            {"near_m", s.near_m},
-                            {"far_m", s.far_m},
-                            {"green", s.green},
-                            {"occluded", s.occluded},
-                            {"horizontal_edges", s.horizontal_edges},
-                            {"tall", s.tall}});
+        segments.push_back(
+            {{"index", k},
+             {"class", s.label},
+             {"pixels", s.pixels},
+             {"cells", s.cells},
+             {"box_px", {s.u0, s.v0, s.u1, s.v1}},
+             {"top_m", s.top_m},
+             {"top_q25_m", s.top_q25_m},
+             {"low_m", s.low_m},
+             {"width_m", s.width_m},
+             {"thickness_m", s.thickness_m},
+             {"depth_m", s.depth_m},
+             {"near_m", s.near_m},
+             {"far_m", s.far_m},
+             {"green", s.green},
+             {"occluded", s.occluded},
+             {"horizontal_edges", s.horizontal_edges},
+             {"tall", s.tall},
+             {"lean", std::isfinite(s.lean) ? nlohmann::json(s.lean) : nlohmann::json()},
+             {"lean_error",
+              std::isfinite(s.lean_error) ? nlohmann::json(s.lean_error) : nlohmann::json()}});
     }
     const nlohmann::json doc = {{"frame", frame_id},
                                 {"ground",

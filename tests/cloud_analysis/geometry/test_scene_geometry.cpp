@@ -580,6 +580,38 @@ TEST_CASE("edges are read at the rig's scale: pixel speckle averages out over wi
     CHECK(class_at(derive_semantics(d, cam, left, palette, o), palette, cu, cv) == "car");
 }
 
+TEST_CASE("a surface whose depth grows with height below a car's waist is no car; a car's back is",
+          "[geometry]") {
+    const StereoCamera cam = kitti_rig();
+    const auto palette = cloud_analysis::load_palette("cityscapes");
+    // Beside a car's back at 12 m, a bank 3 m wide (x 2-5 m) rising 1 in 4 from 15 m to 21 m,
+    // 1.5 m high (a staircase of 75 steps, every other one 1 cm higher: not level as a wall). A
+    // vehicle's lower body stands upright.
+    std::vector<Box> bank;
+    for (int k = 0; k < 75; ++k) {
+        bank.push_back({2.0, 5.0, 15.0 + 0.08 * k, 0.02 * (k + 1) + (k % 2) * 0.01});
+    }
+    const DisparityMap d = render(cam, 1.65, with_car_from_behind(bank, 12.0));
+    const auto bank_px = pixel_of(cam, 3.5, 1.0, 18.9);
+    const auto car_px = pixel_of(cam, 0.0, 0.5, 12.0);
+    GeometryOptions off;
+    off.car_max_lean = 0.0;
+    const SceneGeometry without = derive_semantics(d, cam, ImageU8{}, palette, off);
+    REQUIRE(class_at(without, palette, bank_px.first, bank_px.second) == "car");
+    const SceneGeometry g = derive_semantics(d, cam, ImageU8{}, palette, {});
+    CHECK(class_at(g, palette, bank_px.first, bank_px.second) == "static");
+    CHECK(class_at(g, palette, car_px.first, car_px.second) == "car");
+    // The segments say how far each car candidate leans.
+    const auto lean_at = [&](std::pair<int, int> px) {
+        const auto s = g.segment_of_pixel[static_cast<std::size_t>(px.second) * cam.width_px +
+                                          static_cast<std::size_t>(px.first)];
+        REQUIRE(s >= 0);
+        return g.segments[static_cast<std::size_t>(s)].lean;
+    };
+    CHECK(lean_at(bank_px) > 3.0);
+    CHECK(std::abs(lean_at(car_px)) < 0.3);
+}
+
 TEST_CASE("a car merged with upright clutter beside it keeps its own bands as car", "[geometry]") {
     const StereoCamera cam = kitti_rig();
     const auto palette = cloud_analysis::load_palette("cityscapes");
@@ -702,6 +734,7 @@ TEST_CASE("geometry options name the bad field", "[geometry]") {
         {[](GeometryOptions& o) { o.min_face_share = 1.0; }, "min_face_share"},
         {[](GeometryOptions& o) { o.green_window_px = -1; }, "green_window_px"},
         {[](GeometryOptions& o) { o.car_min_edge_share = 1.0; }, "car_min_edge_share"},
+        {[](GeometryOptions& o) { o.car_max_lean = -1.0; }, "car_max_lean"},
         {[](GeometryOptions& o) { o.edge_window_m = 0.0; }, "edge_window_m"},
         {[](GeometryOptions& o) { o.edge_step_px = 0; }, "edge_step_px"},
         {[](GeometryOptions& o) { o.segmentation = "stixels"; }, "segmentation"},

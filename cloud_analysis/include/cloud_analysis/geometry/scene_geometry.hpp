@@ -9,6 +9,7 @@
 /// it unchanged. See docs/stereo-only.md.
 
 #include <cstdint>
+#include <limits>
 #include <string>
 #include <vector>
 
@@ -93,6 +94,11 @@ struct GeometryOptions {
     double car_max_height_m = 2.2;         ///< ... and this above the road (below layer_height_m:
                                            ///< a segment reaching it meets a surface above), m
     double car_min_width_m = 1.2;          ///< narrower objects are persons or poles, metres
+    /// A vehicle's body below its waist stands upright; a surface whose depth grows with its
+    /// height by more than this (metres per metre; 2.5: a slope of 1 in 2.5, 22 degrees) beyond
+    /// twice its standard error (Segment::lean) is a bank, a verge or a hedge's sloping foot,
+    /// not a car. 0 = off.
+    double car_max_lean = 3.0;
     double car_min_edge_share = 0.28;      ///< a car's back and sides are bands of horizontal
                                            ///< edges (bumper, sills, window line, roof): at
                                            ///< least this share of its pixels' grey-level
@@ -165,7 +171,12 @@ struct Segment {
                                              ///< without a left image
     bool tall = false;                       ///< most pixels in cells of a surface reaching
                                              ///< above layer_height_m
-    int u0 = 0, v0 = 0, u1 = -1, v1 = -1;    ///< image box of its pixels (inclusive), px
+    /// Car candidates: how far the surface of its lower body (0.25-0.9 m above the road) leans
+    /// away from the camera, metres of depth per metre of height (0: vertical), and the standard
+    /// error of that; NaN when not measured.
+    double lean = std::numeric_limits<double>::quiet_NaN();
+    double lean_error = std::numeric_limits<double>::quiet_NaN();
+    int u0 = 0, v0 = 0, u1 = -1, v1 = -1;  ///< image box of its pixels (inclusive), px
 };
 
 /// What the geometry decided.
