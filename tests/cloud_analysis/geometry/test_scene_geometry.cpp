@@ -580,7 +580,7 @@ TEST_CASE("edges are read at the rig's scale: pixel speckle averages out over wi
     CHECK(class_at(derive_semantics(d, cam, left, palette, o), palette, cu, cv) == "car");
 }
 
-TEST_CASE("a surface whose depth grows with height below a car's waist is no car; a car's back is",
+TEST_CASE("a surface whose depth grows with height below a car's waist is no car, a car's back is",
           "[geometry]") {
     const StereoCamera cam = kitti_rig();
     const auto palette = cloud_analysis::load_palette("cityscapes");
