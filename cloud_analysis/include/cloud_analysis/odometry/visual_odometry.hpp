@@ -43,10 +43,11 @@ struct OdometryOptions {
     double max_stereo_gap_px = 1.0;  ///< a corner's match across the pair: off its row, or
                                      ///< off the dense disparity, by at most this, px, > 0
     /// A point votes when its depth is known to this share at least: its disparity at least
-    /// disparity_noise_px / max_relative_depth_error (12.5 px, 31 m on KITTI's rig). Depth error
-    /// grows as z^2 and the matcher's bias does not shrink with the disparity: far points
-    /// would scale the motion, (0, 1).
-    double max_relative_depth_error = 0.04;
+    /// disparity_noise_px / max_relative_depth_error (5 px, 78 m on KITTI's rig). Far points pin
+    /// the rotation (their image motion is mostly the turn); their depth error, growing as z^2,
+    /// weighs little in the reprojection fit, and the rig's disparity offset is estimated
+    /// (disparity_offset_prior_px), (0, 1).
+    double max_relative_depth_error = 0.1;
     double disparity_noise_px = 0.5;   ///< the disparity's error at a corner, px, > 0
     double ransac_threshold_px = 1.0;  ///< reprojection error of an inlier, px, > 0
     int ransac_iterations = 300;       ///< RANSAC hypotheses, >= 10
