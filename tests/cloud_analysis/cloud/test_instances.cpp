@@ -1,5 +1,8 @@
 #include <algorithm>
 #include <cstdint>
+#include <functional>
+#include <tuple>
+#include <utility>
 #include <vector>
 
 #include <catch2/catch.hpp>
@@ -127,25 +130,42 @@ TEST_CASE("instance encodings are named", "[instances]") {
     CHECK_THROWS_WITH(parse_instance_encoding("rgb"), Catch::Contains("auto, kitti"));
 }
 
+namespace {
+
+/// One image row of 24 columns: columns 0-19 take their object id (0: none) and disparity (px)
+/// from `column`, columns 20-23 are background without an object at disparity 5 (80 m).
+struct Row {
+    InstanceMap instances;
+    DisparityMap disparity;
+};
+Row one_row(const std::function<std::pair<std::uint32_t, float>(int)>& column) {
+    Row r;
+    r.instances.width_px = r.disparity.width_px = 24;
+    r.instances.height_px = r.disparity.height_px = 1;
+    r.instances.id.assign(24, 0);
+    r.disparity.disparity_px.assign(24, 5.0f);
+    for (int u = 0; u < 20; ++u) {
+        std::tie(r.instances.id[static_cast<std::size_t>(u)],
+                 r.disparity.disparity_px[static_cast<std::size_t>(u)]) = column(u);
+    }
+    return r;
+}
+
+/// mark_object_outlines of the row at 400 px m (disparity 40: 10 m, 10: 40 m), step 0.8 m,
+/// 4 columns.
+std::vector<std::uint8_t> outlines(const Row& r) {
+    std::vector<std::uint8_t> edge;
+    mark_object_outlines(edge, r.instances, r.disparity, MatchBorder{400.0, 0.0}, 0.8, 4);
+    return edge;
+}
+
+}  // namespace
+
 TEST_CASE("an object's pixels beside a nearer object's outline are marked as a depth edge",
           "[instances]") {
-    // One row: object 1 (near, disparity 40) over columns 0-9, object 2 (far, 10) over 10-19,
-    // then background without an object.
-    InstanceMap m;
-    m.width_px = 24;
-    m.height_px = 1;
-    m.id.assign(24, 0);
-    DisparityMap d;
-    d.width_px = 24;
-    d.height_px = 1;
-    d.disparity_px.assign(24, 5.0f);
-    for (int u = 0; u < 20; ++u) {
-        m.id[static_cast<std::size_t>(u)] = u < 10 ? 1 : 2;
-        d.disparity_px[static_cast<std::size_t>(u)] = u < 10 ? 40.0f : 10.0f;
-    }
-    MatchBorder border{400.0, 0.0};  // depths 10 m and 40 m
-    std::vector<std::uint8_t> edge;
-    mark_object_outlines(edge, m, d, border, 0.8, 4);
+    // Object 1 (near, 10 m) over columns 0-9, object 2 (far, 40 m) over 10-19.
+    Row r = one_row([](int u) { return u < 10 ? std::pair{1u, 40.0f} : std::pair{2u, 10.0f}; });
+    const std::vector<std::uint8_t> edge = outlines(r);
     REQUIRE(edge.size() == 24);
     for (int u = 0; u < 24; ++u) {
         INFO("column " << u);
@@ -153,32 +173,18 @@ TEST_CASE("an object's pixels beside a nearer object's outline are marked as a d
         CHECK(edge[static_cast<std::size_t>(u)] == (u >= 10 && u < 14 ? 1 : 0));
     }
     // Objects at one depth (within the step) mark nothing.
-    std::fill(d.disparity_px.begin(), d.disparity_px.begin() + 20, 40.0f);
-    std::vector<std::uint8_t> none;
-    mark_object_outlines(none, m, d, border, 0.8, 4);
+    std::fill(r.disparity.disparity_px.begin(), r.disparity.disparity_px.begin() + 20, 40.0f);
+    const std::vector<std::uint8_t> none = outlines(r);
     CHECK(std::count(none.begin(), none.end(), 1) == 0);
 }
 
 TEST_CASE("an object's pixels beside a nearer surface of no object are marked as a depth edge",
           "[instances]") {
-    // One row: object 1 at 40 m (disparity 10) over columns 0-19 but for a trunk of no object
-    // at 10 m (disparity 40) over columns 8-9, then background at 80 m.
-    InstanceMap m;
-    m.width_px = 24;
-    m.height_px = 1;
-    m.id.assign(24, 0);
-    DisparityMap d;
-    d.width_px = 24;
-    d.height_px = 1;
-    d.disparity_px.assign(24, 5.0f);
-    for (int u = 0; u < 20; ++u) {
-        const bool trunk = u == 8 || u == 9;
-        m.id[static_cast<std::size_t>(u)] = trunk ? 0 : 1;
-        d.disparity_px[static_cast<std::size_t>(u)] = trunk ? 40.0f : 10.0f;
-    }
-    MatchBorder border{400.0, 0.0};
-    std::vector<std::uint8_t> edge;
-    mark_object_outlines(edge, m, d, border, 0.8, 4);
+    // Object 1 at 40 m over columns 0-19 but for a trunk of no object at 10 m over columns 8-9.
+    Row r = one_row([](int u) {
+        return u == 8 || u == 9 ? std::pair{0u, 40.0f} : std::pair{1u, 10.0f};
+    });
+    const std::vector<std::uint8_t> edge = outlines(r);
     REQUIRE(edge.size() == 24);
     for (int u = 0; u < 24; ++u) {
         INFO("column " << u);
@@ -186,8 +192,7 @@ TEST_CASE("an object's pixels beside a nearer surface of no object are marked as
         CHECK(edge[static_cast<std::size_t>(u)] == ((u >= 4 && u < 8) || (u >= 10 && u < 14)));
     }
     // A surface of no object behind the object (farther by more than the step) marks nothing.
-    d.disparity_px[8] = d.disparity_px[9] = 8.0f;
-    std::vector<std::uint8_t> none;
-    mark_object_outlines(none, m, d, border, 0.8, 4);
+    r.disparity.disparity_px[8] = r.disparity.disparity_px[9] = 8.0f;
+    const std::vector<std::uint8_t> none = outlines(r);
     CHECK(std::count(none.begin(), none.end(), 1) == 0);
 }
