@@ -319,10 +319,10 @@ void measure_leans(const Grid& grid, const DisparityMap& disparity, const Rig& r
                 hh += ph * ph;
                 hz += ph * pz;
             }
-            const double shh = hh - h * h / std::max(count, 1.0);
-            if (count < kMinPixels || !(shh > count * kMinHeightSpread * kMinHeightSpread / 12.0)) {
-                continue;
-            }
+            if (count < kMinPixels) continue;
+            // A band of pixels spread evenly over kMinHeightSpread has this variance at least.
+            const double shh = hh - h * h / count;
+            if (!(shh > count * kMinHeightSpread * kMinHeightSpread / 12.0)) continue;
             slopes.push_back((hz - h * z / count) / shh);
         }
         if (slopes.size() < 3) continue;

@@ -95,9 +95,9 @@ struct GeometryOptions {
                                            ///< a segment reaching it meets a surface above), m
     double car_min_width_m = 1.2;          ///< narrower objects are persons or poles, metres
     /// A vehicle's body below its waist stands upright; a surface whose depth grows with its
-    /// height by more than this (metres per metre; 2.5: a slope of 1 in 2.5, 22 degrees) beyond
-    /// twice its standard error (Segment::lean) is a bank, a verge or a hedge's sloping foot,
-    /// not a car. 0 = off.
+    /// height by more than this (metres per metre; 3: a slope of 1 in 3, 18 degrees, the
+    /// flattest usual embankment) beyond twice its standard error (Segment::lean) is a bank, a
+    /// verge or a hedge's sloping foot, not a car. 0 = off.
     double car_max_lean = 3.0;
     double car_min_edge_share = 0.28;      ///< a car's back and sides are bands of horizontal
                                            ///< edges (bumper, sills, window line, roof): at
@@ -171,7 +171,7 @@ struct Segment {
                                              ///< without a left image
     bool tall = false;                       ///< most pixels in cells of a surface reaching
                                              ///< above layer_height_m
-    /// Car candidates: how far the surface of its lower body (0.25-0.9 m above the road) leans
+    /// Car candidates: how far the surface of its lower body (0.25-0.65 m above the road) leans
     /// away from the camera, metres of depth per metre of height (0: vertical), and the standard
     /// error of that; NaN when not measured.
     double lean = std::numeric_limits<double>::quiet_NaN();
