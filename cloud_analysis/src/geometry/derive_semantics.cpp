@@ -276,15 +276,13 @@ Segment classify(SegmentStats& st, const Classes& cls, bool has_image, double fx
 /// surface, not a lean); the segment's lean is the median over its bands, its error the bands'
 /// spread (1.4826 median absolute deviations) over the square root of their number.
 void measure_leans(const Grid& grid, const DisparityMap& disparity, const Rig& rig,
-                   const GroundEstimate& ground, const GeometryOptions& o, std::uint16_t car,
-                   std::vector<Segment>& segments) {
+                   const GeometryOptions& o, std::uint16_t car, std::vector<Segment>& segments) {
     constexpr double kLow = 0.25, kHigh = 0.65;  // metres above the road
     constexpr std::size_t kMinPixels = 6;        // a band's, for a slope
     constexpr double kMinHeightSpread = 0.1;     // metres: a band's, for a slope
     const int w = disparity.width_px;
     // Per segment, per column band: (height, depth) of its lower body's pixels.
     std::vector<std::map<int, std::vector<std::pair<double, double>>>> bands(segments.size());
-    const Eigen::Vector3d n = ground.plane.normal;
     for (std::size_t p = 0; p < grid.pixel_cell.size(); ++p) {
         const std::int32_t cell = grid.pixel_cell[p];
         if (cell < 0) continue;
@@ -293,11 +291,8 @@ void measure_leans(const Grid& grid, const DisparityMap& disparity, const Rig& r
         const double d = double{disparity.disparity_px[p]} - rig.offset;
         if (!(d > 0.0)) continue;
         const int u = static_cast<int>(p % static_cast<std::size_t>(w));
-        const int v = static_cast<int>(p / static_cast<std::size_t>(w));
         const double z = rig.fb / d;
-        const double height =
-            (n.x() * (u - rig.cx) / rig.fx + n.y() * (v - rig.cy) / rig.fy + n.z()) * z +
-            ground.plane.d;
+        const double height = double{grid.pixel_height[p]};
         if (height < kLow || height > kHigh) continue;
         bands[static_cast<std::size_t>(s)][u / o.column_bin_px].emplace_back(height, z);
     }
@@ -469,7 +464,7 @@ SceneGeometry derive_semantics(const DisparityMap& disparity, const StereoCamera
         out.segments.push_back(classify(stats[s], cls, has_image, rig.fx, o));
         segment_class[s] = out.segments.back().class_index;
     }
-    measure_leans(grid, disparity, rig, out.ground, o, cls.car, out.segments);
+    measure_leans(grid, disparity, rig, o, cls.car, out.segments);
     drop_leaning_cars(cls, o, out.segments, segment_class);
     label_segment_pixels(grid, cls, segment_class, stats, w, o.column_bin_px, out);
     label_sky(&grid, w, out.ground.horizon_v_px, cls.sky, out.classes);

@@ -63,7 +63,8 @@ struct Grid {
     std::vector<std::int32_t> pixel_cell;  ///< per pixel: its cell, -1 when none
     std::vector<char> pixel_low;           ///< per pixel: below low_cut_m
     std::vector<char> pixel_green;         ///< per pixel: green (green_mask)
-    std::vector<float> pixel_height;       ///< per pixel in a cell: height above the road, m
+    std::vector<float> pixel_height;       ///< per pixel in a cell (low ones too): height
+                                           ///< above the road, m
 };
 
 inline int find_root(std::vector<int>& parent, int i) {

@@ -341,6 +341,7 @@ std::vector<std::size_t> count_pixels(const DisparityMap& disparity, const Rig& 
                                  kLayers +
                              upper;
             g.pixel_cell[row + u] = cell;
+            g.pixel_height[row + u] = hf;
             const bool green = green_px[row + u] != 0;
             g.pixel_green[row + u] = green ? 1 : 0;
             if (!green && !edges.grey.empty()) {
@@ -353,7 +354,6 @@ std::vector<std::size_t> count_pixels(const DisparityMap& disparity, const Rig& 
             Cell& c = g.cells[static_cast<std::size_t>(cell)];
             ++c.count;
             c.d_sum += d;
-            g.pixel_height[row + u] = hf;
             c.height_sum += hf;
             if (std::abs(hf - tall_m) <= band_m) {
                 if (upper || !(o.continuity_behind_m > 0.0)) {
