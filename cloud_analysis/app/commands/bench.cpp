@@ -12,7 +12,6 @@
 
 #include "analyse.hpp"
 #include "cloud_analysis/io/io.hpp"
-#include "cloud_analysis/odometry/visual_odometry.hpp"
 #include "cloud_analysis/pipeline/batch.hpp"
 #include "cloud_analysis/stereo/disparity.hpp"
 #include "cloud_analysis/support/select.hpp"
@@ -121,9 +120,9 @@ struct MatcherTimes {
     }
 };
 
-/// The odometry's cost per frame in a drive: the thing mask of the frame and
-/// VisualOdometry::add from it to the next frame (its motion, the next frame's pyramid), as a
-/// batch with --odometry runs it; wall and process CPU time (all threads), ms per run.
+/// The odometry's cost per frame in a drive: the frame as batch --odometry hands it over
+/// (odometry_frame) and VisualOdometry::add from it to the next frame (its motion, the next
+/// frame's pyramid); wall and process CPU time (all threads), ms per run.
 class OdometryTimes {
   public:
     /// `r`: the frame analysed; `next_left`: the next frame's left image (same size).
@@ -134,15 +133,14 @@ class OdometryTimes {
                 "the next frame's left image differs in size from --left "
                 "(--next-left)");
         }
-        for (const auto& c : in.palette.classes) is_thing_.push_back(c.thing ? 1 : 0);
     }
 
     void time(bool timed) {
         odometry::VisualOdometry vo(r_.camera, odometry::OdometryOptions{});
-        vo.add(frame(in_.left));
+        vo.add(odometry_frame(in_.left, in_, r_));
         const std::clock_t c0 = std::clock();
         const auto t0 = Clock::now();
-        vo.add(frame(next_left_));
+        vo.add(odometry_frame(next_left_, in_, r_));
         const double ms = ms_between(t0, Clock::now());
         const double cpu = 1000.0 * static_cast<double>(std::clock() - c0) / CLOCKS_PER_SEC;
         if (!timed) return;
@@ -153,16 +151,9 @@ class OdometryTimes {
     std::vector<double> wall_ms, cpu_ms;
 
   private:
-    /// A frame as the batch gives it: `left`, the bench frame's right image and disparity.
-    odometry::OdometryFrame frame(const ImageU8& left) const {
-        return {odometry::grey_image(left), odometry::grey_image(in_.right), r_.disparity,
-                odometry::static_mask(r_.classes.class_index, is_thing_)};
-    }
-
     const LoadedInputs& in_;
     AnalyseResult r_;
     ImageU8 next_left_;
-    std::vector<char> is_thing_;
 };
 
 }  // namespace

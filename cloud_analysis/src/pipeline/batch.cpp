@@ -112,12 +112,7 @@ struct Odometry {
 /// The pose of the frame of `job`, its motion chained onto the frames before it.
 odometry::Pose pose_of(const FinishJob& job, const BatchOptions& options, Odometry& odo) {
     if (!odo.chain) odo.chain.emplace(job.result.camera, options.odometry_options);
-    std::vector<char> is_thing;
-    for (const auto& c : job.in.palette.classes) is_thing.push_back(c.thing ? 1 : 0);
-    odometry::OdometryFrame frame{odometry::grey_image(job.in.left),
-                                  odometry::grey_image(job.in.right), job.result.disparity,
-                                  odometry::static_mask(job.result.classes.class_index, is_thing)};
-    return odo.chain->add(std::move(frame));
+    return odo.chain->add(odometry_frame(job.in.left, job.in, job.result));
 }
 
 /// The frame's entity file: its entities with the drive's capture time and the camera's pose
@@ -331,6 +326,14 @@ void summarize(BatchReport& report, Clock::time_point start, double cpu_start) {
 }
 
 }  // namespace
+
+odometry::OdometryFrame odometry_frame(const ImageU8& left, const LoadedInputs& in,
+                                       const AnalyseResult& r) {
+    std::vector<char> is_thing;
+    for (const auto& c : in.palette.classes) is_thing.push_back(c.thing ? 1 : 0);
+    return {odometry::grey_image(left), odometry::grey_image(in.right), r.disparity,
+            odometry::static_mask(r.classes.class_index, is_thing)};
+}
 
 double peak_rss_mb() {
     rusage usage{};

@@ -19,6 +19,7 @@
 #include "cloud_analysis/pipeline/batch_report.hpp"
 #include "cloud_analysis/pipeline/drive.hpp"
 #include "cloud_analysis/pipeline/entity_document.hpp"
+#include "cloud_analysis/pipeline/pipeline.hpp"
 #include "cloud_analysis/tracking/sequence.hpp"
 
 namespace cloud_analysis {
@@ -99,6 +100,12 @@ struct BatchObserver {
 /// first frame when a folder is missing or the palette cannot be read; a frame that fails later is
 /// reported to the observer and skipped.
 BatchReport run_batch(const BatchOptions& options, const BatchObserver& observer);
+
+/// What batch --odometry hands the odometry for an analysed frame: `left` (the frame's left
+/// image, or another of its size), the frame's right image, both in grey, its disparity, and
+/// its thing classes masked from voting (odometry::static_mask).
+odometry::OdometryFrame odometry_frame(const ImageU8& left, const LoadedInputs& in,
+                                       const AnalyseResult& r);
 
 /// Peak resident set of this process so far, MB.
 double peak_rss_mb();
