@@ -199,6 +199,37 @@ TEST_CASE("a semantic image of another size and a zero baseline fail before any 
     CHECK_FALSE(fs::exists(json));
 }
 
+TEST_CASE("a disparity offset brings every car nearer and is recorded, a wild one is refused",
+          "[cli]") {
+    const auto dir = scratch("disparity_offset");
+    const fs::path plain = dir / "plain.json", shifted = dir / "shifted.json";
+    REQUIRE(run(tool() + sample_inputs() + " -o " + quote(plain.string()), dir).code == 0);
+    REQUIRE(
+        run(tool() + sample_inputs() + " --disparity-offset 0.5 -o " + quote(shifted.string()), dir)
+            .code == 0);
+    const auto nearest_car_z = [](const nlohmann::json& doc) {
+        double z = 1e9;
+        for (const auto& e : doc["entities"]) {
+            if (e["class"] == "car") z = std::min(z, e["z"].get<double>());
+        }
+        return z;
+    };
+    const auto a = nlohmann::json::parse(slurp(plain));
+    const auto b = nlohmann::json::parse(slurp(shifted));
+    CHECK(a["source"]["calibration"]["disparity_offset_px"] == 0.0);
+    CHECK(b["source"]["calibration"]["disparity_offset_px"] == 0.5);
+    REQUIRE(nearest_car_z(a) < 1e9);
+    CHECK(nearest_car_z(b) < nearest_car_z(a) - 0.05);
+
+    const fs::path wild = dir / "wild.json";
+    const Run r =
+        run(tool() + sample_inputs() + " --disparity-offset 9 -o " + quote(wild.string()), dir);
+    CHECK(r.code == 2);
+    CHECK(r.err.find("--disparity-offset") != std::string::npos);
+    CHECK(count_lines(r.err) == 1);
+    CHECK_FALSE(fs::exists(wild));
+}
+
 TEST_CASE("make-sample reproduces the bundled synthetic sample byte for byte", "[cli][synthetic]") {
     const auto dir = scratch("make_sample");
     const Run r = run(tool() + " make-sample --out " + quote(dir.string()), dir);

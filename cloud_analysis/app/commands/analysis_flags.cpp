@@ -8,6 +8,7 @@
 #include "cloud_analysis/cloud/semantic.hpp"
 #include "cloud_analysis/entities/class_config.hpp"
 #include "cloud_analysis/io/io.hpp"
+#include "cloud_analysis/stereo/calibration.hpp"
 #include "cloud_analysis/stereo/disparity.hpp"
 
 namespace cloud_analysis::app {
@@ -50,6 +51,12 @@ void add_input_settings_flags(CLI::App& cmd, AnalyseArgs& a) {
         ->group(in);
     cmd.add_option("--right-camera", a.options.calibration.right_camera,
                    "KITTI camera index of the right image")
+        ->capture_default_str()
+        ->group(in);
+    cmd.add_option("--disparity-offset", a.options.calibration.disparity_offset_px,
+                   "the rig's disparity offset, px: added to every matched disparity before "
+                   "depth (batch --odometry estimates it from a drive; docs/clouds.md)")
+        ->check(CLI::Range(-kMaxDisparityOffsetPx, kMaxDisparityOffsetPx))
         ->capture_default_str()
         ->group(in);
     cmd.add_option("--semantics", a.options.semantics,

@@ -107,11 +107,15 @@ struct FrameOutput {
 struct Odometry {
     std::optional<odometry::VisualOdometry> chain;  ///< made with the first frame's camera
     std::vector<odometry::Pose> poses;              ///< of the frames written
+    double resolution_scale = 1.0;                  ///< of the first frame's analysis
 };
 
 /// The pose of the frame of `job`, its motion chained onto the frames before it.
 odometry::Pose pose_of(const FinishJob& job, const BatchOptions& options, Odometry& odo) {
-    if (!odo.chain) odo.chain.emplace(job.result.camera, options.odometry_options);
+    if (!odo.chain) {
+        odo.chain.emplace(job.result.camera, options.odometry_options);
+        odo.resolution_scale = job.in.resolution_scale;
+    }
     return odo.chain->add(odometry_frame(job.in.left, job.in, job.result));
 }
 
@@ -394,7 +398,10 @@ void end_batch(const BatchOptions& options, std::optional<tracking::SequenceTrac
         stereoscene::support::write_file_atomic(options.out_dir / "poses.txt",
                                                 odometry::format_kitti_poses(odo->poses));
         if (odo->chain && options.odometry_options.estimate_disparity_offset) {
-            report.disparity_offset_px = odo->chain->disparity_offset_px();
+            // The rig's offset in full-resolution pixels: the one the analysis was given plus
+            // what the motion still measures at the analysed resolution.
+            report.disparity_offset_px = options.run.analyse.calibration.disparity_offset_px +
+                                         odo->chain->disparity_offset_px() / odo->resolution_scale;
         }
     }
     summarize(report, start, cpu_start);

@@ -302,6 +302,9 @@ void CalibrationOptions::validate() const {
     if (right_camera < 0 || right_camera > 9 || right_camera == left_camera) {
         throw std::invalid_argument("right_camera: must be 0..9 and differ from left_camera");
     }
+    if (!(std::abs(disparity_offset_px) <= kMaxDisparityOffsetPx)) {
+        throw std::invalid_argument("disparity_offset_px: must be within +-8 px");
+    }
 }
 
 Calibration parse_calibration(std::string_view text, const std::string& origin,
@@ -325,6 +328,9 @@ Calibration parse_calibration(std::string_view text, const std::string& origin,
              "not a KITTI raw (P_rect_0x), KITTI object (P2:) or fx/fy/cx/cy/baseline_m file");
     }
     calib.source = origin;
+    // A disparity d reads d + offset: the depth fx B / (d - (cx - cx_right)) takes it as a right
+    // principal point offset further right (the raw cameras keep the file's values).
+    calib.camera.cx_right_px += options.disparity_offset_px;
     return calib;
 }
 

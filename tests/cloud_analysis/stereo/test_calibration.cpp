@@ -1,5 +1,6 @@
 #include <catch2/catch.hpp>
 
+#include <cmath>
 #include <filesystem>
 
 #include "cloud_analysis/cloud/reproject.hpp"
@@ -103,4 +104,35 @@ TEST_CASE("Q reprojects a disparity plane to Z = f*B/d", "[calibration][reprojec
     ReprojectOptions near;
     near.max_range_m = 10.0;  // every point is ~20 m away: none survives, none at z = 10000
     CHECK(reproject(map, cam, grey, ClassImage{}, near).size() == 0);
+}
+
+TEST_CASE("a disparity offset is added to every disparity before depth, raw cameras unchanged",
+          "[calibration][reproject]") {
+    const char* text =
+        "fx: 700\nfy: 700\ncx: 320\ncy: 240\nbaseline_m: 0.5\ncx_right: 322\n"
+        "distortion: [0.1, -0.01, 0, 0, 0]\n";
+    CalibrationOptions options;
+    options.disparity_offset_px = 0.5;
+    const Calibration plain = parse_calibration(text, "rig.yaml");
+    const Calibration shifted = parse_calibration(text, "rig.yaml", options);
+    CHECK(shifted.camera.cx_right_px == Approx(322.5));
+    // 10 px measured: 10 - (320 - 322) = 12 px as filed, 12.5 px with the offset.
+    CHECK(match_border(plain.camera).depth_m(10.0) == Approx(350.0 / 12.0));
+    CHECK(match_border(shifted.camera).depth_m(10.0) == Approx(350.0 / 12.5));
+    REQUIRE(shifted.raw_right.has_value());
+    CHECK(shifted.raw_right->K(0, 2) == Approx(322.0));
+
+    const StereoCamera cam = shifted.camera;
+    DisparityMap map{4, 2, std::vector<float>(8, 10.0f)};
+    ImageU8 grey{4, 2, 1, std::vector<std::uint8_t>(8, 128)};
+    const LabeledCloud cloud = reproject(map, cam, grey, ClassImage{}, ReprojectOptions{});
+    REQUIRE(cloud.size() == 8);
+    CHECK(cloud.xyz_m[0].z() == Approx(350.0 / 12.5).epsilon(1e-5));
+
+    options.disparity_offset_px = 8.5;
+    REQUIRE_THROWS_WITH(parse_calibration(text, "rig.yaml", options),
+                        Catch::Contains("disparity_offset_px"));
+    options.disparity_offset_px = std::nan("");
+    REQUIRE_THROWS_WITH(parse_calibration(text, "rig.yaml", options),
+                        Catch::Contains("disparity_offset_px"));
 }

@@ -75,8 +75,9 @@ struct BatchReport {
     DisparityTally evaluation;
     /// With BatchOptions::track: frames tracked, tracks, restarts, tracker time.
     std::optional<tracking::SequenceTrackReport> tracking;
-    /// With BatchOptions::odometry: the rig's disparity offset the odometry estimated from the
-    /// drive's motion, px (docs/odometry.md).
+    /// With BatchOptions::odometry: the rig's disparity offset, px at full resolution: the
+    /// analysis' own (CalibrationOptions::disparity_offset_px) plus what the odometry still
+    /// measures from the drive's motion (docs/odometry.md); --disparity-offset takes it.
     std::optional<double> disparity_offset_px;
 };
 

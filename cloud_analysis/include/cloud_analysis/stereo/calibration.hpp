@@ -20,12 +20,19 @@
 
 namespace cloud_analysis {
 
-/// Which cameras of a KITTI calibration form the pair.
+/// Which cameras of a KITTI calibration form the pair, and the rig's disparity offset.
 struct CalibrationOptions {
     int left_camera = 2;   ///< KITTI camera index of the left image (2 = left colour)
     int right_camera = 3;  ///< KITTI camera index of the right image (3 = right colour)
+    /// Added to every matched disparity before it becomes depth, px: the rig's residual
+    /// principal-point difference after rectification (docs/clouds.md "Disparity offset"),
+    /// applied as a shift of the right principal point. |offset| <= kMaxDisparityOffsetPx.
+    double disparity_offset_px = 0.0;
     void validate() const;
 };
+
+/// The largest disparity offset a calibration takes, px.
+inline constexpr double kMaxDisparityOffsetPx = 8.0;
 
 /// One unrectified camera and the map from it to the rectified image (KITTI raw layout).
 struct RawCamera {
