@@ -121,8 +121,8 @@ def part_table(a, tool, render, result):
           "files = frames from PNG files (including decode). Same process, same matcher floor.\n")
     print("| input | frames from | output | load | matcher alone | disparity stage | "
           "classes (semantic or geometry) + reproject | entities | entity write | clouds (format+write) | total ms | "
-          "fps | pipeline / matcher | peak RSS MB |")
-    print("|---|---|---|---|---|---|---|---|---|---|---|---|---|---|")
+          "CPU ms | fps | pipeline / matcher | peak RSS MB |")
+    print("|---|---|---|---|---|---|---|---|---|---|---|---|---|---|---|")
     for b in table:
         for row in b["rows"]:
             clouds = sum(s["ms"] for s in row["stages"]
@@ -132,7 +132,7 @@ def part_table(a, tool, render, result):
                   f"{b['matcher_ms']:.1f} | {stage(row, 'disparity'):.1f} | "
                   f"{stage(row, 'semantic') + stage(row, 'geometry') + stage(row, 'reproject'):.1f} | "
                   f"{stage(row, 'entities'):.1f} | {stage(row, 'write --entities'):.1f} | "
-                  f"{clouds:.1f} | {row['total_ms']:.1f} | "
+                  f"{clouds:.1f} | {row['total_ms']:.1f} | {row['cpu_ms']:.1f} | "
                   f"{row['fps']:.1f} | {row['ratio_to_matcher']:.2f} | {b['peak_rss_mb']:.0f} |")
     if render:
         rows = render_bench(render, 50, a.render_frames)

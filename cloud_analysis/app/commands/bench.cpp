@@ -35,6 +35,7 @@ struct Row {
     std::map<std::string, std::vector<double>> stages;
     std::vector<std::string> order;
     std::vector<double> totals;
+    std::vector<double> cpu;     // process CPU (all threads), ms per run
     std::vector<double> writes;  // atomic writes (the entity file fsync'ed): disk latency
     std::size_t points = 0;
 };
@@ -67,14 +68,17 @@ void run_rows(std::vector<Row>& rows, bool timed, bool first, DisparityMatcher& 
     for (Row& row : rows) {
         // Every row reads the same frame: its warnings are said once, on the first run.
         row.args.warnings = first && &row == &rows.front();
+        const std::clock_t c0 = std::clock();
         const auto t0 = Clock::now();
         const RunReport report = row.loaded
                                      ? analyse_loaded_and_write(*row.loaded, row.args, matcher)
                                      : analyse_and_write(row.args, matcher);
         const double total = ms_between(t0, Clock::now());
+        const double cpu = 1000.0 * static_cast<double>(std::clock() - c0) / CLOCKS_PER_SEC;
         row.points = report.points;
         if (!timed) continue;
         row.totals.push_back(total);
+        row.cpu.push_back(cpu);
         double writes = 0.0;
         for (const auto& st : report.timings) {
             if (st.stage.rfind("write ", 0) == 0) writes += st.ms;
@@ -98,6 +102,7 @@ nlohmann::json rows_json(std::vector<Row>& rows, double floor_ms) {
                        {"row", row.name},
                        {"stages", stage_json},
                        {"total_ms", total_ms},
+                       {"cpu_ms", median(row.cpu)},
                        {"fps", 1000.0 / total_ms},
                        {"ratio_to_matcher", total_ms / floor_ms},
                        {"writes_ms", median(row.writes)},
