@@ -424,11 +424,14 @@ ImageU8 grey_image(const ImageU8& image) {
 
 std::vector<std::uint8_t> static_mask(const std::vector<std::uint16_t>& class_index,
                                       const std::vector<char>& is_thing) {
-    std::vector<std::uint8_t> out(class_index.size(), 1);
-    for (std::size_t p = 0; p < class_index.size(); ++p) {
-        const std::uint16_t k = class_index[p];
-        if (k < is_thing.size() && is_thing[k]) out[p] = 0;
+    // Every 16-bit index looked up in one table: no branch per pixel.
+    std::vector<std::uint8_t> votes(std::size_t{1} << 16, 1);
+    for (std::size_t k = 0; k < std::min(is_thing.size(), votes.size()); ++k) {
+        if (is_thing[k]) votes[k] = 0;
     }
+    std::vector<std::uint8_t> out(class_index.size());
+    std::transform(class_index.begin(), class_index.end(), out.begin(),
+                   [&](std::uint16_t k) { return votes[k]; });
     return out;
 }
 
