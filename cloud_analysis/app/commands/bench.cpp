@@ -26,6 +26,11 @@ double ms_between(Clock::time_point a, Clock::time_point b) {
     return std::chrono::duration<double, std::milli>(b - a).count();
 }
 
+/// Process CPU time (all threads) since `start`, ms.
+double cpu_ms_since(std::clock_t start) {
+    return 1000.0 * static_cast<double>(std::clock() - start) / CLOCKS_PER_SEC;
+}
+
 /// One timed configuration: frames from memory or from files, with or without clouds.
 struct Row {
     std::string input;  // "memory" or "files"
@@ -74,7 +79,7 @@ void run_rows(std::vector<Row>& rows, bool timed, bool first, DisparityMatcher& 
                                      ? analyse_loaded_and_write(*row.loaded, row.args, matcher)
                                      : analyse_and_write(row.args, matcher);
         const double total = ms_between(t0, Clock::now());
-        const double cpu = 1000.0 * static_cast<double>(std::clock() - c0) / CLOCKS_PER_SEC;
+        const double cpu = cpu_ms_since(c0);
         row.points = report.points;
         if (!timed) continue;
         row.totals.push_back(total);
@@ -118,7 +123,7 @@ struct MatcherTimes {
     void time(DisparityMatcher& m, const LoadedInputs& in, bool timed) {
         const std::clock_t c0 = std::clock();
         const double ms = m.time_matcher_only_ms(in.left, in.right);
-        const double cpu = 1000.0 * static_cast<double>(std::clock() - c0) / CLOCKS_PER_SEC;
+        const double cpu = cpu_ms_since(c0);
         if (!timed) return;
         wall_ms.push_back(ms);
         cpu_ms.push_back(cpu);
@@ -147,7 +152,7 @@ class OdometryTimes {
         const auto t0 = Clock::now();
         vo.add(odometry_frame(next_left_, in_, r_));
         const double ms = ms_between(t0, Clock::now());
-        const double cpu = 1000.0 * static_cast<double>(std::clock() - c0) / CLOCKS_PER_SEC;
+        const double cpu = cpu_ms_since(c0);
         if (!timed) return;
         wall_ms.push_back(ms);
         cpu_ms.push_back(cpu);

@@ -4,6 +4,7 @@
 #include <map>
 #include <sstream>
 #include <stdexcept>
+#include <string>
 
 #include <nlohmann/json.hpp>
 #include <opencv2/calib3d.hpp>
@@ -303,7 +304,9 @@ void CalibrationOptions::validate() const {
         throw std::invalid_argument("right_camera: must be 0..9 and differ from left_camera");
     }
     if (!(std::abs(disparity_offset_px) <= kMaxDisparityOffsetPx)) {
-        throw std::invalid_argument("disparity_offset_px: must be within +-8 px");
+        throw std::invalid_argument("disparity_offset_px: must be within +-" +
+                                    std::to_string(static_cast<int>(kMaxDisparityOffsetPx)) +
+                                    " px");
     }
 }
 
