@@ -114,6 +114,8 @@ cloud_analysis::BatchOptions batch_options(const BatchArgs& a, std::vector<std::
     }
     if (a.track) {
         options.track = a.track_options;
+        // Each frame is written once tracked: no frames are held to smooth.
+        options.track->smooth = false;
         // The drive's folder, or the folder of the list of pairs (absolute first: a bare file
         // name has no parent of its own).
         const std::filesystem::path source =

@@ -48,6 +48,9 @@ CLI::App* add_track_command(CLI::App& app, TrackArgs& a) {
                     "frames held before writing, so a track whose motion shows it was reported "
                     "facing backwards is turned round in them too")
         ->capture_default_str();
+    cmd->add_flag("!--no-smooth", o.smooth,
+                  "write each frame with the filter's state then, not smoothed over the frames "
+                  "held after it (--lag)");
     cmd->add_option("--max-gap", o.tracker.max_gap_s,
                     "a longer gap between frames restarts the tracker, s")
         ->capture_default_str();

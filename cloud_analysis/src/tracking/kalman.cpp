@@ -30,6 +30,9 @@ GroundKalman::GroundKalman(double x_m, double z_m, const KalmanOptions& options)
     const double v2 = options.initial_speed_sigma_mps * options.initial_speed_sigma_mps;
     covariance_ = Eigen::Vector4d(0.0, 0.0, v2, v2).asDiagonal();
     covariance_.topLeftCorner<2, 2>() = measurement_covariance(x_m, z_m);
+    step_.first = true;
+    step_.predicted = state_;
+    step_.predicted_covariance = covariance_;
 }
 
 void GroundKalman::predict(double dt_s) {
@@ -48,6 +51,9 @@ void GroundKalman::predict(double dt_s) {
     }
     state_ = F * state_;
     covariance_ = F * covariance_ * F.transpose() + Q;
+    step_.transition = F * step_.transition;
+    step_.predicted = state_;
+    step_.predicted_covariance = covariance_;
 }
 
 namespace {
@@ -82,6 +88,39 @@ void GroundKalman::change_frame(const Eigen::Matrix2d& R, const Eigen::Vector2d&
     state_ = M * state_;
     state_.head<2>() += t;
     covariance_ = M * covariance_ * M.transpose();
+    step_.transition = M * step_.transition;
+    step_.predicted = state_;
+    step_.predicted_covariance = covariance_;
+}
+
+KalmanStep GroundKalman::close_step() {
+    KalmanStep done = step_;
+    done.filtered = state_;
+    done.filtered_covariance = covariance_;
+    step_ = KalmanStep{};
+    step_.predicted = state_;
+    step_.predicted_covariance = covariance_;
+    return done;
+}
+
+std::vector<Eigen::Vector4d> smooth_states(const std::deque<KalmanStep>& steps) {
+    std::vector<Eigen::Vector4d> out(steps.size());
+    if (steps.empty()) return out;
+    out.back() = steps.back().filtered;
+    for (std::size_t k = steps.size() - 1; k-- > 0;) {
+        const KalmanStep& now = steps[k];
+        const KalmanStep& next = steps[k + 1];
+        if (next.first) {
+            // A chain starts after this step: nothing later speaks for it.
+            out[k] = now.filtered;
+            continue;
+        }
+        // Gain G = P_k|k A^T P_k+1|k^-1; the camera's translation cancels in the difference.
+        const Eigen::Matrix4d G = now.filtered_covariance * next.transition.transpose() *
+                                  next.predicted_covariance.inverse();
+        out[k] = now.filtered + G * (out[k + 1] - next.predicted);
+    }
+    return out;
 }
 
 void GroundKalman::update(double x_m, double z_m) {

@@ -17,8 +17,33 @@ namespace {
 using stereoscene::support::kPi;
 using stereoscene::support::wrap_angle;
 
-/// Frames tracked but not yet written, oldest first, with their file names.
-using HeldFrames = std::deque<std::pair<scene_schema::EntityDocument, std::string>>;
+/// A frame tracked but not yet written.
+struct HeldFrame {
+    scene_schema::EntityDocument doc;
+    std::string file;
+    std::int64_t number = 0;  ///< the tracker's frame number
+};
+/// Frames tracked but not yet written, oldest first.
+using HeldFrames = std::deque<HeldFrame>;
+
+/// Moves the tracked entities of `frame` to their tracks' smoothed positions and velocities.
+void smooth_frame(HeldFrame& frame, const SequenceTracker& sequence) {
+    for (scene_schema::Entity& e : frame.doc.entities) {
+        if (!e.track_id) continue;
+        const auto s = sequence.smoothed(*e.track_id, frame.number);
+        if (!s) continue;
+        e.x = (*s)(0);
+        e.z = (*s)(1);
+        if (e.velocity) e.velocity = scene_schema::Velocity{(*s)(2), (*s)(3)};
+    }
+}
+
+/// The tracker's settings, keeping the filter steps the held frames' smoothing needs.
+TrackerOptions with_history(const SequenceTrackOptions& options) {
+    TrackerOptions o = options.tracker;
+    o.history_frames = options.smooth ? options.lag_frames + 1 : 0;
+    return o;
+}
 
 /// A track confirmed in the newest held frame is reported in the held frames before it, on the
 /// entities it was made of there: its id, velocity, heading and held size (each keeps its own
@@ -28,7 +53,7 @@ void report_earlier(HeldFrames& held, const std::vector<ConfirmedTrack>& confirm
         const std::size_t n = c.earlier_entity_ids.size();
         for (std::size_t k = 1; k <= n && k < held.size(); ++k) {
             const std::string& id = c.earlier_entity_ids[n - k];
-            for (scene_schema::Entity& e : held[held.size() - 1 - k].first.entities) {
+            for (scene_schema::Entity& e : held[held.size() - 1 - k].doc.entities) {
                 if (e.id != id || e.track_id) continue;
                 e.track_id = c.id;
                 e.velocity = c.reported.velocity;
@@ -76,7 +101,7 @@ scene_schema::SequenceIndex read_frames(const fs::path& input) {
 
 SequenceTracker::SequenceTracker(std::string id, double fps, const SequenceTrackOptions& options,
                                  std::function<void(const std::string&)> warn)
-    : tracker_(options.tracker), warn_(std::move(warn)), fps_(fps) {
+    : tracker_(with_history(options)), warn_(std::move(warn)), fps_(fps) {
     options.validate();
     if (!(fps > 0.0 && fps <= 1000.0)) throw std::invalid_argument("fps must be in (0, 1000]");
     written_.id = std::move(id);
@@ -137,7 +162,8 @@ SequenceTrackReport track_files(const scene_schema::SequenceIndex& index,
     SequenceTracker sequence(index.id, index.fps.value_or(options.fps), options, warn);
     HeldFrames held;
     const auto write_oldest = [&] {
-        scene_schema::write_file(held.front().first, out_dir / held.front().second);
+        if (options.smooth) smooth_frame(held.front(), sequence);
+        scene_schema::write_file(held.front().doc, out_dir / held.front().file);
         held.pop_front();
         sequence.commit(out_dir / "sequence.json");
     };
@@ -150,12 +176,13 @@ SequenceTrackReport track_files(const scene_schema::SequenceIndex& index,
             sequence.skip();
             continue;
         }
-        held.emplace_back(sequence.track(doc, f.index, f.file, f.timestamp_s), f.file);
+        held.push_back(HeldFrame{sequence.track(doc, f.index, f.file, f.timestamp_s), f.file,
+                                 sequence.frame_number()});
         report_earlier(held, sequence.confirmed());
         // A track the motion turned round faced backwards in the frames still held as well.
         for (const std::int64_t id : sequence.turned()) {
             for (std::size_t k = 0; k + 1 < held.size(); ++k) {
-                for (auto& e : held[k].first.entities) {
+                for (auto& e : held[k].doc.entities) {
                     if (e.track_id == id) e.theta = wrap_angle(e.theta + kPi);
                 }
             }

@@ -3,6 +3,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <iterator>
 #include <stdexcept>
 
 #include <Eigen/LU>
@@ -60,6 +61,7 @@ void TrackerOptions::validate() const {
     require(size_settle_hits >= 0, "size_settle_hits", "must be >= 0");
     require(std::isfinite(max_velocity_sigma_mps) && max_velocity_sigma_mps > 0.0,
             "max_velocity_sigma_mps", "must be > 0");
+    require(history_frames >= 0 && history_frames <= 1001, "history_frames", "must be in 0..1001");
     kalman.validate();
 }
 
@@ -393,9 +395,37 @@ scene_schema::EntityDocument Tracker::update(const scene_schema::EntityDocument&
     scene_schema::EntityDocument out = frame;
     out.frame.timestamp_s = timestamp_s;
     take_detections(frame, track_of, hit, out, s);
+    ++frame_number_;
+    record_steps();
     age_tracks(frame, track_of, hit, out, s);
     if (stats) *stats = s;
     return out;
+}
+
+void Tracker::record_steps() {
+    for (Track& t : tracks_) {
+        const KalmanStep step = t.motion.close_step();
+        if (options_.history_frames <= 0) continue;
+        History& h = histories_[t.id];
+        h.steps.push_back(step);
+        h.last_frame = frame_number_;
+        while (h.steps.size() > static_cast<std::size_t>(options_.history_frames)) {
+            h.steps.pop_front();
+        }
+    }
+    for (auto it = histories_.begin(); it != histories_.end();) {
+        it = it->second.last_frame + options_.history_frames <= frame_number_ ? histories_.erase(it)
+                                                                              : std::next(it);
+    }
+}
+
+std::optional<Eigen::Vector4d> Tracker::smoothed(std::int64_t id, std::int64_t frame) const {
+    const auto it = histories_.find(id);
+    if (it == histories_.end()) return std::nullopt;
+    const History& h = it->second;
+    const auto first = h.last_frame - static_cast<std::int64_t>(h.steps.size()) + 1;
+    if (frame < first || frame > h.last_frame) return std::nullopt;
+    return smooth_states(h.steps)[static_cast<std::size_t>(frame - first)];
 }
 
 std::vector<scene_schema::EntityDocument> track_sequence(

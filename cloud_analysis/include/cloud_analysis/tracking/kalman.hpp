@@ -5,6 +5,9 @@
 /// (Bar-Shalom, Li & Kirubarajan 2001, "discrete white noise acceleration" model), as in
 /// AB3DMOT (Weng et al. 2020) restricted to the ground plane.
 
+#include <deque>
+#include <vector>
+
 #include <Eigen/Core>
 
 namespace cloud_analysis::tracking {
@@ -25,6 +28,24 @@ struct KalmanOptions {
     /// Throws std::invalid_argument naming the bad field.
     void validate() const;
 };
+
+/// One frame of a filter, as a smoother needs it: the prediction into this frame from the
+/// step before and the state after this frame's measurement (the prediction when it had none).
+struct KalmanStep {
+    /// The linear part of the map from the step before's state (in its frame) to this
+    /// prediction (in this frame): the camera's motion, then the motion model.
+    Eigen::Matrix4d transition = Eigen::Matrix4d::Identity();
+    Eigen::Vector4d predicted = Eigen::Vector4d::Zero();
+    Eigen::Matrix4d predicted_covariance = Eigen::Matrix4d::Identity();
+    Eigen::Vector4d filtered = Eigen::Vector4d::Zero();
+    Eigen::Matrix4d filtered_covariance = Eigen::Matrix4d::Identity();
+    bool first = false;  ///< the filter was born in this frame: no step before it
+};
+
+/// Rauch-Tung-Striebel smoothing (Rauch, Tung & Striebel 1965; Bar-Shalom et al. 2001, 8.6):
+/// each step's state given every measurement up to the last step, oldest first. A step marked
+/// `first` starts the chain; the steps before it are returned as filtered.
+std::vector<Eigen::Vector4d> smooth_states(const std::deque<KalmanStep>& steps);
 
 /// One object's state and covariance.
 class GroundKalman {
@@ -47,6 +68,10 @@ class GroundKalman {
     /// the viewing ray, across_sigma_m across it.
     Eigen::Matrix2d measurement_covariance(double x_m, double z_m) const;
 
+    /// This frame's step (what predict, change_frame and update did since the last call),
+    /// and starts the next one.
+    KalmanStep close_step();
+
     double x_m() const { return state_(0); }
     double z_m() const { return state_(1); }
     double vx_mps() const { return state_(2); }
@@ -57,6 +82,7 @@ class GroundKalman {
     Eigen::Vector4d state_;
     Eigen::Matrix4d covariance_;
     KalmanOptions options_;
+    KalmanStep step_;  ///< the step being built: its transition and prediction so far
 };
 
 }  // namespace cloud_analysis::tracking

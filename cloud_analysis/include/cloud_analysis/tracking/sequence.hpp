@@ -26,6 +26,11 @@ struct SequenceTrackOptions {
     /// min_hits detections is reported in the held frames of its earlier ones as well (an
     /// object is followed from its first detection). 0 writes each frame at once.
     int lag_frames = 15;
+    /// Whether each held frame is written with its tracks' smoothed positions and velocities:
+    /// the filter's states given the frames after it, up to the newest held (fixed-lag
+    /// Rauch-Tung-Striebel smoothing; a car first seen far is placed by what its nearer
+    /// views showed). Off, each frame keeps the filter's state as it was then.
+    bool smooth = true;
     /// Throws std::invalid_argument naming the bad field.
     void validate() const;
 };
@@ -69,6 +74,12 @@ class SequenceTracker {
     /// written).
     void discard() {
         if (!pending_.empty()) pending_.pop_front();
+    }
+    /// The tracker's number of the frame the last track() took (Tracker::frame_number).
+    std::int64_t frame_number() const { return tracker_.frame_number(); }
+    /// A track's smoothed state in a frame numbered by frame_number() (Tracker::smoothed).
+    std::optional<Eigen::Vector4d> smoothed(std::int64_t id, std::int64_t frame) const {
+        return tracker_.smoothed(id, frame);
     }
     /// Tracks the last track() turned round by pi (see TrackerFrameStats::turned).
     const std::vector<std::int64_t>& turned() const { return turned_; }

@@ -7,6 +7,7 @@
 
 #include <array>
 #include <cstdint>
+#include <deque>
 #include <map>
 #include <optional>
 #include <string>
@@ -72,6 +73,9 @@ struct TrackerOptions {
     /// The velocity is written only once the filter knows it this well (std of vx and vz,
     /// m/s); before, the entity has no `velocity` (unknown, not 0).
     double max_velocity_sigma_mps = 1.0;
+    /// Frames of each track's filter steps kept for Tracker::smoothed (a fixed-lag writer's
+    /// lag plus one); 0 keeps none.
+    int history_frames = 0;
     KalmanOptions kalman;  ///< motion model noise
     /// Throws std::invalid_argument naming the bad field.
     void validate() const;
@@ -150,6 +154,14 @@ class Tracker {
     /// Live tracks (confirmed or not).
     const std::vector<Track>& tracks() const { return tracks_; }
 
+    /// The number of the last frame update() took (1 for the first; restarts keep counting).
+    std::int64_t frame_number() const { return frame_number_; }
+
+    /// Track `id`'s state (x, z, vx, vz) in frame `frame` (that frame's camera) given every
+    /// frame since, up to the last one (fixed-lag Rauch-Tung-Striebel smoothing over the
+    /// TrackerOptions::history_frames kept); none when the frame is not kept for it.
+    std::optional<Eigen::Vector4d> smoothed(std::int64_t id, std::int64_t frame) const;
+
   private:
     void predict(double dt_s);
     /// Carries every track from the previous frame's camera into this frame's.
@@ -170,8 +182,17 @@ class Tracker {
     std::vector<Track> tracks_;
     std::optional<double> last_time_s_;
     std::optional<std::array<double, 12>> last_pose_;  ///< the previous frame's, when it had one
+    /// Keeps this frame's filter step of every track (history_frames > 0).
+    void record_steps();
     std::int64_t next_id_ = 0;
     int frames_since_start_ = 0;
+    std::int64_t frame_number_ = 0;
+    /// A track's last filter steps, one a frame, the newest taken in frame last_frame.
+    struct History {
+        std::deque<KalmanStep> steps;
+        std::int64_t last_frame = 0;
+    };
+    std::map<std::int64_t, History> histories_;  ///< by track id, dead tracks' kept a while
 };
 
 /// Tracks a whole drive (frames in order, one timestamp each).
