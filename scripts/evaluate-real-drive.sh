@@ -3,7 +3,9 @@
 # against the project's hand-drawn 2D boxes (samples/labels-2d/kitti_odometry_02.json): the
 # stereo pair alone through `batch`, every entity's 3D box projected into the left image and
 # matched to the boxes (docs/evaluation.md "Real drive"). Prints the table of
-# `evaluate --labels-2d` and writes its JSON.
+# `evaluate --labels-2d` and writes its JSON; then the same frames tracked over the ground
+# (the batch's poses, `track` with its defaults) scored on their confirmed tracks alone
+# (`evaluate --tracked-only`).
 # usage: scripts/evaluate-real-drive.sh [--no-build] [--build-dir DIR] [--drive DIR] [--out DIR]
 #            [-- extra batch flags]
 set -euo pipefail
@@ -40,7 +42,14 @@ for left in "$drive"/image_2/*.png; do
     echo "$left $drive/image_3/$(basename "$left")"
 done > "$out_dir/pairs.txt"
 echo "=== real drive $(basename "$drive"), stereo pair only, against the hand-drawn 2D boxes ==="
+labels="$STEREOSCENE_ROOT/samples/labels-2d/kitti_odometry_02.json"
 "$ca" batch --pairs "$out_dir/pairs.txt" --calib "$drive/calib.txt" \
-    --out-dir "$out_dir/entities" -q "${extra[@]}"
-"$ca" evaluate --labels-2d "$STEREOSCENE_ROOT/samples/labels-2d/kitti_odometry_02.json" \
-    --entities "$out_dir/entities" --json "$out_dir/labels-2d-eval.json"
+    --out-dir "$out_dir/entities" -q --odometry "${extra[@]}"
+"$ca" evaluate --labels-2d "$labels" --entities "$out_dir/entities" \
+    --json "$out_dir/labels-2d-eval.json"
+echo "=== the same frames tracked over the ground, confirmed tracks only ==="
+rm -rf "$out_dir/tracked"
+mkdir -p "$out_dir/tracked"
+"$ca" track "$out_dir/entities" --out-dir "$out_dir/tracked" --quiet
+"$ca" evaluate --labels-2d "$labels" --entities "$out_dir/tracked" --tracked-only \
+    --json "$out_dir/labels-2d-tracked-eval.json"

@@ -256,6 +256,27 @@ closed_loop_cli_test("evaluate --labels-2d exits 3 naming the false-entity bar w
     CODE 3 STDERR "bar missed: vehicle false per frame 2.00 > 0.00 .--max-false-per-frame.")
 set_tests_properties("evaluate --labels-2d exits 3 naming the false-entity bar when boxes miss"
     PROPERTIES FIXTURES_REQUIRED closed_loop_export)
+# --tracked-only: the things a tracker confirmed. Two copies of the truth tracked (born in the
+# first frames, confirmed at once) keep every box; the truth untracked keeps none.
+add_test(NAME "evaluate --labels-2d --tracked-only scores the tracks track confirmed"
+    COMMAND bash -c "set -euo pipefail; d=\"$2/tracked-only\"; rm -rf \"$d\"; \
+mkdir -p \"$d/in\" \"$d/out\"; cp \"$1\" \"$d/in/a.json\"; cp \"$1\" \"$d/in/b.json\"; \
+\"$0\" track \"$d/in\" --out-dir \"$d/out\" --quiet; \
+\"$0\" evaluate --entities \"$d/out/b.json\" --labels-2d \"$3\" --tracked-only \
+--min-box-height 0 --require-recall 1.0 --max-false-per-frame 0"
+        $<TARGET_FILE:cloud-analysis> ${_syn}/truth.json ${_loop_out}
+        ${_loop_out}/truth_label_2.txt)
+set_tests_properties("evaluate --labels-2d --tracked-only scores the tracks track confirmed"
+    PROPERTIES FIXTURES_REQUIRED closed_loop_export)
+closed_loop_cli_test("evaluate --labels-2d --tracked-only leaves out things without a track"
+    ARGS evaluate --entities ${_syn}/truth.json --labels-2d ${_loop_out}/truth_label_2.txt
+        --tracked-only --min-box-height 0 --require-recall 1.0
+    CODE 3 STDERR "bar missed: vehicle recall 0.000 < 1.000")
+set_tests_properties("evaluate --labels-2d --tracked-only leaves out things without a track"
+    PROPERTIES FIXTURES_REQUIRED closed_loop_export)
+closed_loop_cli_test("evaluate --tracked-only without --labels-2d is a usage error"
+    ARGS evaluate --entities ${_syn}/truth.json --reference ${_syn}/truth.json --tracked-only
+    CODE 2 STDERR "--tracked-only: needs --labels-2d")
 closed_loop_cli_test("evaluate --labels-2d refuses a file that is not JSON naming it"
     ARGS evaluate --entities ${_syn}/truth.json --labels-2d ${_syn}/calib.yaml
     CODE 1 STDERR "calib.yaml: cannot read 2D labels: not JSON")

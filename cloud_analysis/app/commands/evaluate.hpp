@@ -40,6 +40,7 @@ struct EvaluateArgs {
     std::filesystem::path labels_2d;          ///< --labels-2d: 2D boxes (JSON or KITTI label_2)
     cloud_analysis::Match2dOptions match_2d;  ///< --min-iou-2d, --min-box-height, ...
     double max_false_per_frame = -1.0;        ///< --max-false-per-frame bar (2D labels)
+    bool tracked_only = false;                ///< --tracked-only: things with a track_id only
 };
 
 /// Exit code of `evaluate` when the scores miss a bar (--require-recall, ...).

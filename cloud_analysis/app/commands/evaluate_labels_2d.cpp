@@ -1,5 +1,6 @@
 #include "evaluate_labels_2d.hpp"
 
+#include <algorithm>
 #include <filesystem>
 #include <stdexcept>
 #include <utility>
@@ -85,6 +86,10 @@ void add_labels_2d_flags(CLI::App* sub, EvaluateArgs& args) {
         ->check(CLI::Range(0.0, 1.0))
         ->capture_default_str()
         ->group(g);
+    sub->add_flag("--tracked-only", args.tracked_only,
+                  "score only the things a tracker confirmed (entities with a track_id, as "
+                  "`track` writes them); other things are left out")
+        ->group(g);
     sub->add_option("--max-false-per-frame", args.max_false_per_frame,
                     "bar: most false entities of --bar-class's category a frame, on average")
         ->check(CLI::NonNegativeNumber)
@@ -96,6 +101,7 @@ void check_labels_2d_flags(const EvaluateArgs& args) {
         if (args.max_false_per_frame >= 0.0) {
             throw CLI::ValidationError("--max-false-per-frame", "needs --labels-2d");
         }
+        if (args.tracked_only) throw CLI::ValidationError("--tracked-only", "needs --labels-2d");
         return;
     }
     if (args.entities.empty())
@@ -131,6 +137,7 @@ void evaluate_labels_2d(const EvaluateArgs& args, EvaluationReport& report) {
     Labels2dComparison c;
     c.labels_file = args.labels_2d.string();
     c.entities_source = args.entities.string();
+    c.tracked_only = args.tracked_only;
     for (FrameToScore& f : frames_to_score(args, labels)) {
         const fs::path& file = f.file;
         scene_schema::EntityDocument& doc = f.estimate;
@@ -147,6 +154,16 @@ void evaluate_labels_2d(const EvaluateArgs& args, EvaluationReport& report) {
                 "cannot evaluate: the entities' image is " + std::to_string(cam.width_px) + "x" +
                 std::to_string(cam.height_px) + ", the labels' " + std::to_string(labels.width_px) +
                 "x" + std::to_string(labels.height_px) + " (" + file.string() + ")");
+        }
+        if (args.tracked_only) {
+            // A thing no track confirmed is a detection the tracker did not take up.
+            auto& e = doc.entities;
+            e.erase(std::remove_if(e.begin(), e.end(),
+                                   [](const scene_schema::Entity& x) {
+                                       return !x.track_id &&
+                                              category_of_class(x.class_name).has_value();
+                                   }),
+                    e.end());
         }
         c.scores.push_back(score_frame_2d(doc.entities, cam, *f.labels, args.match_2d));
         c.labels.push_back(*f.labels);

@@ -71,7 +71,8 @@ void report_labels_2d(const Labels2dComparison& c, const Match2dOptions& options
         for (int k = 0; k < kCategory2dCount; ++k) total[k] += s.counts[k];
 
     std::ostringstream table;
-    table << "2D labels " << c.labels_file << " against " << c.entities_source << ": " << frames
+    table << "2D labels " << c.labels_file << " against " << c.entities_source
+          << (c.tracked_only ? " (confirmed tracks only)" : "") << ": " << frames
           << (frames == 1 ? " frame" : " frames") << " (labels owed from "
           << fixed_text(options.min_height_px, 0) << " px tall, entities counted within "
           << fixed_text(options.max_range_m, 0) << " m)\n";
@@ -105,6 +106,7 @@ void report_labels_2d(const Labels2dComparison& c, const Match2dOptions& options
     report.table += table.str();
     report.json["labels_2d"] = {{"labels_file", c.labels_file},
                                 {"entities", c.entities_source},
+                                {"tracked_only", c.tracked_only},
                                 {"frames", frames},
                                 {"min_iou", options.min_iou},
                                 {"hidden_min_cover", options.hidden_min_cover},

@@ -65,8 +65,10 @@ void report_ground_plane(const scene_schema::EntityDocument& doc, EvaluationRepo
 
 /// Entity files scored against 2D labels, frame by frame (score_frame_2d).
 struct Labels2dComparison {
-    std::string labels_file;                                  ///< the labels read
-    std::string entities_source;                              ///< entity file or folder scored
+    std::string labels_file;      ///< the labels read
+    std::string entities_source;  ///< entity file or folder scored
+    /// Only the things a tracker confirmed (a track_id) were scored (evaluate --tracked-only).
+    bool tracked_only = false;
     std::vector<FrameLabels2d> labels;                        ///< per scored frame
     std::vector<std::vector<scene_schema::Entity>> estimate;  ///< per scored frame
     std::vector<FrameScore2d> scores;                         ///< per scored frame
