@@ -178,12 +178,12 @@ class Tracker {
     void age_tracks(const scene_schema::EntityDocument& frame, const std::vector<int>& track_of,
                     const std::vector<char>& hit, scene_schema::EntityDocument& out,
                     TrackerFrameStats& s);
+    /// Keeps this frame's filter step of every track (history_frames > 0).
+    void record_steps();
     TrackerOptions options_;
     std::vector<Track> tracks_;
     std::optional<double> last_time_s_;
     std::optional<std::array<double, 12>> last_pose_;  ///< the previous frame's, when it had one
-    /// Keeps this frame's filter step of every track (history_frames > 0).
-    void record_steps();
     std::int64_t next_id_ = 0;
     int frames_since_start_ = 0;
     std::int64_t frame_number_ = 0;
