@@ -251,6 +251,26 @@ scene_schema::Entity predicted(const Track& t, const TrackerOptions& o,
     return e;
 }
 
+/// Whether any corner of a track's footprint lies in front of `camera` and within its image's
+/// columns: a track predicted wholly outside the view cannot be seen there, and nothing in the
+/// frame speaks for it. Without a camera, in view.
+bool in_view(const Track& t, const std::optional<scene_schema::CameraIntrinsics>& camera) {
+    if (!camera || !(camera->fx_px > 0.0) || camera->width_px <= 0) return true;
+    constexpr double kNearestM = 0.5;  // in front of the camera, not at its centre
+    const BoxAxes axes(t.theta_rad);
+    for (const double a : {-0.5, 0.5}) {
+        for (const double b : {-0.5, 0.5}) {
+            // (along, across) -> (x, z): the inverse of BoxAxes' projection.
+            const double x = t.motion.x_m() + a * t.L * axes.c + b * t.W * axes.s;
+            const double z = t.motion.z_m() - a * t.L * axes.s + b * t.W * axes.c;
+            if (!(z > kNearestM)) continue;
+            const double u = camera->fx_px * x / z + camera->cx_px;
+            if (u >= 0.0 && u <= static_cast<double>(camera->width_px)) return true;
+        }
+    }
+    return false;
+}
+
 /// Whether a still track missed in `frame` is seen in part there (TrackerOptions::
 /// support_frames): an entity of a support class, not matched to a track of the track's class
 /// (a car passing over a parked car's place is no piece of it), has its centre on the track's
@@ -369,7 +389,7 @@ void Tracker::age_tracks(const scene_schema::EntityDocument& frame,
             continue;
         }
         if (!hit[k] && (in_part || t.misses <= options_.coast_frames) &&
-            t.hits >= options_.coast_min_hits) {
+            t.hits >= options_.coast_min_hits && in_view(t, frame.frame.camera)) {
             out.entities.push_back(predicted(t, options_, out));
             ++s.reported;
             ++s.coasted;

@@ -42,7 +42,9 @@ struct TrackerOptions {
     double max_gap_s = 1.0;  ///< a longer gap between frames restarts the tracker, s
     /// A confirmed track missed in a frame is still reported, at its prediction, for this many
     /// frames in a row (the detector losing a car for a frame or two, e.g. behind a passing
-    /// car); 0 reports only matched tracks.
+    /// car); 0 reports only matched tracks. A prediction wholly outside the frame's camera
+    /// view (frame.camera: no corner of its footprint in front of it and within its image's
+    /// columns) is not reported: the object left the image.
     int coast_frames = 2;
     /// Only a track hit at least this often coasts: one confirmed on a few stray boxes and
     /// lost at once is more likely a stray than a car the detector missed. 0 coasts every

@@ -184,3 +184,56 @@ TEST_CASE("tracker options refuse a history beyond the lag's bound", "[tracking]
     o.history_frames = 2000;
     CHECK_THROWS_WITH(o.validate(), Catch::Contains("history_frames"));
 }
+
+TEST_CASE("a missed track predicted outside the camera's view is not reported", "[tracking]") {
+    // A car 8 m ahead crossing to the left at 10 m/s, confirmed, then missed: reported at its
+    // prediction while a corner of it is still in the image, not once it has left it.
+    scene_schema::CameraIntrinsics camera;
+    camera.width_px = 1242;
+    camera.height_px = 375;
+    camera.fx_px = camera.fy_px = 721.5;
+    camera.cx_px = 609.6;
+    camera.cy_px = 172.9;
+    const auto frame = [&](std::vector<Entity> entities) {
+        EntityDocument doc;
+        doc.frame.id = "f";
+        doc.frame.camera = camera;
+        doc.entities = std::move(entities);
+        return doc;
+    };
+    for (const bool with_camera : {true, false}) {
+        TrackerOptions o;
+        o.coast_frames = 10;
+        o.coast_min_hits = 0;
+        Tracker tracker(o);
+        for (int i = 0; i < 8; ++i) {
+            Entity e;
+            e.id = "car-" + std::to_string(i);
+            e.class_name = "car";
+            e.x = -1.0 * i;
+            e.z = 8.0;
+            e.W = 1.8;
+            e.L = 4.2;
+            EntityDocument doc = frame({e});
+            if (!with_camera) doc.frame.camera.reset();
+            tracker.update(doc, 0.1 * i);
+        }
+        std::vector<double> coasted_x;
+        for (int i = 8; i < 16; ++i) {
+            EntityDocument empty = frame({});
+            if (!with_camera) empty.frame.camera.reset();
+            const auto out = tracker.update(empty, 0.1 * i);
+            if (!out.entities.empty()) coasted_x.push_back(out.entities.front().x);
+        }
+        CAPTURE(with_camera, coasted_x);
+        if (with_camera) {
+            // The box lies along x (heading 0): its far right corner (x + 2.1 m, z 8.9 m) leaves
+            // the image's left edge (x = -7.52 m at 8.9 m) once its centre passes -9.62 m.
+            REQUIRE(coasted_x.size() == 2);
+            CHECK(coasted_x.back() > -9.62);
+            CHECK(coasted_x.back() - 1.0 < -9.62);
+        } else {
+            CHECK(coasted_x.size() == 8);  // no camera, no view to leave
+        }
+    }
+}
