@@ -399,14 +399,11 @@ void BoxFitOptions::validate() const {
     }
 }
 
-OrientedBox fit_upright_box(const std::vector<Eigen::Vector3f>& points_m,
-                            const std::optional<GroundPlane>& ground,
-                            const BoxFitOptions& options) {
-    options.validate();
-    if (points_m.empty()) throw std::invalid_argument("fit_upright_box: no points");
-    const GroundFrame frame(ground);
-    std::vector<Eigen::Vector2d> ab;
-    std::vector<double> heights;
+namespace {
+
+/// The footprint (ab) and heights of points over the ground frame.
+void footprint_of(const std::vector<Eigen::Vector3f>& points_m, const GroundFrame& frame,
+                  std::vector<Eigen::Vector2d>& ab, std::vector<double>& heights) {
     ab.reserve(points_m.size());
     heights.reserve(points_m.size());
     for (const auto& p : points_m) {
@@ -414,20 +411,58 @@ OrientedBox fit_upright_box(const std::vector<Eigen::Vector3f>& points_m,
         ab.push_back(frame.footprint(q));
         heights.push_back(frame.height(q));
     }
-    double angle = footprint_angle(frame, ab, options);
+}
+
+OrientedBox box_on_axis(const GroundFrame& frame, bool has_ground, const BoxFitOptions& options,
+                        const std::vector<Eigen::Vector2d>& ab, std::vector<double>& heights,
+                        const FootprintAxis& axis) {
+    const Eigen::Vector2d e1(std::cos(axis.angle_rad), std::sin(axis.angle_rad));
+    const Eigen::Vector2d e2(-std::sin(axis.angle_rad), std::cos(axis.angle_rad));
+    return assemble_box(frame, has_ground, options, axis.face_is_length, e1, e2,
+                        fit_extents(ab, heights, e1, e2, options));
+}
+
+}  // namespace
+
+OrientedBox fit_upright_box(const std::vector<Eigen::Vector3f>& points_m,
+                            const std::optional<GroundPlane>& ground, const BoxFitOptions& options,
+                            FootprintAxis& axis) {
+    options.validate();
+    if (points_m.empty()) throw std::invalid_argument("fit_upright_box: no points");
+    const GroundFrame frame(ground);
+    std::vector<Eigen::Vector2d> ab;
+    std::vector<double> heights;
+    footprint_of(points_m, frame, ab, heights);
+    axis.angle_rad = footprint_angle(frame, ab, options);
+    axis.face_is_length = false;
     // A straight face across the viewing ray (more than 45 degrees from it) holding most of the
     // points and longer than a width is a long side: its extent comes from pixel columns, and
     // at range the closeness criterion follows the smear and stray points around it instead.
     // (Along the ray a face is no evidence: range smear itself lines points up along rays.)
-    bool face_is_length = false;
     if (const std::optional<double> face = long_face_angle(ab, options)) {
-        angle = *face;
-        face_is_length = true;
+        axis.angle_rad = *face;
+        axis.face_is_length = true;
     }
-    Eigen::Vector2d e1(std::cos(angle), std::sin(angle));
-    Eigen::Vector2d e2(-std::sin(angle), std::cos(angle));
-    return assemble_box(frame, ground.has_value(), options, face_is_length, e1, e2,
-                        fit_extents(ab, heights, e1, e2, options));
+    return box_on_axis(frame, ground.has_value(), options, ab, heights, axis);
+}
+
+OrientedBox fit_upright_box(const std::vector<Eigen::Vector3f>& points_m,
+                            const std::optional<GroundPlane>& ground,
+                            const BoxFitOptions& options) {
+    FootprintAxis axis;
+    return fit_upright_box(points_m, ground, options, axis);
+}
+
+OrientedBox fit_upright_box_on_axis(const std::vector<Eigen::Vector3f>& points_m,
+                                    const std::optional<GroundPlane>& ground,
+                                    const BoxFitOptions& options, const FootprintAxis& axis) {
+    options.validate();
+    if (points_m.empty()) throw std::invalid_argument("fit_upright_box: no points");
+    const GroundFrame frame(ground);
+    std::vector<Eigen::Vector2d> ab;
+    std::vector<double> heights;
+    footprint_of(points_m, frame, ab, heights);
+    return box_on_axis(frame, ground.has_value(), options, ab, heights, axis);
 }
 
 OrientedBox with_length(const OrientedBox& box, double length_m, bool keep_far_end) {

@@ -78,12 +78,13 @@ BoxFitOptions own_box_fit(const BoxFitOptions& fit, const ExtractOptions& option
     return final_fit;
 }
 
-/// The thing's own box (own_box_fit) of its points, `box` when that fit changes nothing.
+/// The thing's own box (own_box_fit) of its points, `box` when that fit changes nothing; on the
+/// footprint axis `box`'s fit chose (own_box_fit changes only how the extents are trimmed).
 OrientedBox own_box(const std::vector<Eigen::Vector3f>& member_pts, const OrientedBox& box,
-                    const BoxFitOptions& fit, const BoxFitOptions& final_fit,
-                    const std::optional<GroundPlane>& ground) {
+                    const FootprintAxis& axis, const BoxFitOptions& fit,
+                    const BoxFitOptions& final_fit, const std::optional<GroundPlane>& ground) {
     if (final_fit.near_trim_fraction > fit.near_trim_fraction || final_fit.area_weighted_extents) {
-        return fit_upright_box(member_pts, ground, final_fit);
+        return fit_upright_box_on_axis(member_pts, ground, final_fit, axis);
     }
     return box;
 }
@@ -193,7 +194,9 @@ struct ClusterPieces {
             if (part.size() < std::max<std::size_t>(min_points, 1)) continue;
             fit.yaw_rad = yaw;
             fit.truncation_xz = truncation_point(pts, pixels, grid, part);
-            const OrientedBox box = fit_upright_box(gather(pts, part), ground, fit);
+            std::vector<Eigen::Vector3f> member_pts = gather(pts, part);
+            FootprintAxis axis;
+            const OrientedBox box = fit_upright_box(member_pts, ground, fit, axis);
             if (depth < 3 && !yaw &&
                 queue_pieces(split_oversized(pts, part, box, s, ground, options,
                                              fit.truncation_xz.has_value()),
@@ -205,9 +208,8 @@ struct ClusterPieces {
             Candidate c;
             c.members = std::move(part);
             c.group = group;
-            const std::vector<Eigen::Vector3f> member_pts = gather(pts, c.members);
             const BoxFitOptions final_fit = own_box_fit(fit, options);
-            c.box = own_box(member_pts, box, fit, final_fit, ground);
+            c.box = own_box(member_pts, box, axis, fit, final_fit, ground);
             // The thing's own box can come out longer than the box the splits read (its near end
             // trimmed along the ray, its extents over seen surface): still more than one.
             if (depth < 4 && !yaw && s.has_prior() && c.box.L_m > s.split_factor * s.prior_L_m &&
@@ -339,7 +341,8 @@ std::vector<Candidate> candidates_of_instance(const std::vector<Eigen::Vector3f>
         }
     }
     const std::vector<Eigen::Vector3f> member_pts = gather(pts, members);
-    const OrientedBox box = fit_upright_box(member_pts, ground, fit);
+    FootprintAxis axis;
+    const OrientedBox box = fit_upright_box(member_pts, ground, fit, axis);
     // Points all near the ground are no object, whatever the image says.
     if (too_low(box, s, ground, options)) return {};
     Candidate c;
@@ -347,7 +350,7 @@ std::vector<Candidate> candidates_of_instance(const std::vector<Eigen::Vector3f>
     c.group = cluster;
     c.instance = instance;
     const BoxFitOptions final_fit = own_box_fit(fit, options);
-    c.box = own_box(member_pts, box, fit, final_fit, ground);
+    c.box = own_box(member_pts, box, axis, fit, final_fit, ground);
     complete_candidate(c, pts, member_pts, box.H_m, final_fit, s, ground, options,
                        std::array<bool, 2>{!cut[0], !cut[1]});
     // Longer than any thing of its class, the box holds range smear behind the face it shows

@@ -84,6 +84,26 @@ struct BoxFitOptions {
 OrientedBox fit_upright_box(const std::vector<Eigen::Vector3f>& points_m,
                             const std::optional<GroundPlane>& ground, const BoxFitOptions& options);
 
+/// The footprint axis a fit chose: its angle in the ground frame and whether a long straight
+/// face set it (then the face is the box's length). It depends on the points, the ground, the
+/// truncation, yaw, angle-step, face and prior settings, not on the extents' trimming.
+struct FootprintAxis {
+    double angle_rad = 0.0;
+    bool face_is_length = false;
+};
+
+/// fit_upright_box, also giving the footprint axis it chose.
+OrientedBox fit_upright_box(const std::vector<Eigen::Vector3f>& points_m,
+                            const std::optional<GroundPlane>& ground, const BoxFitOptions& options,
+                            FootprintAxis& axis);
+
+/// fit_upright_box on the footprint axis an earlier fit of the same points and ground chose
+/// with the same axis settings (a refit that changes only how the extents are trimmed or
+/// weighted: near_trim_fraction, area_weighted_extents), without searching it again.
+OrientedBox fit_upright_box_on_axis(const std::vector<Eigen::Vector3f>& points_m,
+                                    const std::optional<GroundPlane>& ground,
+                                    const BoxFitOptions& options, const FootprintAxis& axis);
+
 /// As fit_upright_box for weighted points, each standing for `weight` points at its place
 /// (voxel centroids weighted by their point counts, so that a stuff cluster costs its voxels,
 /// not its points): closeness terms and quantiles are weighted, and the L-shape angle is
