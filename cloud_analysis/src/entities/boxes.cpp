@@ -401,9 +401,15 @@ void BoxFitOptions::validate() const {
 
 namespace {
 
-/// The footprint (ab) and heights of points over the ground frame.
-void footprint_of(const std::vector<Eigen::Vector3f>& points_m, const GroundFrame& frame,
-                  std::vector<Eigen::Vector2d>& ab, std::vector<double>& heights) {
+/// fit_upright_box on `given`'s axis, or on the one it searches (written to `chosen`).
+OrientedBox fit_on_axis(const std::vector<Eigen::Vector3f>& points_m,
+                        const std::optional<GroundPlane>& ground, const BoxFitOptions& options,
+                        const FootprintAxis* given, FootprintAxis* chosen) {
+    options.validate();
+    if (points_m.empty()) throw std::invalid_argument("fit_upright_box: no points");
+    const GroundFrame frame(ground);
+    std::vector<Eigen::Vector2d> ab;
+    std::vector<double> heights;
     ab.reserve(points_m.size());
     heights.reserve(points_m.size());
     for (const auto& p : points_m) {
@@ -411,14 +417,21 @@ void footprint_of(const std::vector<Eigen::Vector3f>& points_m, const GroundFram
         ab.push_back(frame.footprint(q));
         heights.push_back(frame.height(q));
     }
-}
-
-OrientedBox box_on_axis(const GroundFrame& frame, bool has_ground, const BoxFitOptions& options,
-                        const std::vector<Eigen::Vector2d>& ab, std::vector<double>& heights,
-                        const FootprintAxis& axis) {
+    FootprintAxis axis = given ? *given : FootprintAxis{};
+    if (!given) {
+        axis.angle_rad = footprint_angle(frame, ab, options);
+        // A straight face across the viewing ray (over 45 degrees from it) holding most points,
+        // longer than a width, is a long side, its extent from pixel columns (along the ray a
+        // face is no evidence: range smear itself lines points up along rays).
+        if (const std::optional<double> face = long_face_angle(ab, options)) {
+            axis.angle_rad = *face;
+            axis.face_is_length = true;
+        }
+    }
+    if (chosen) *chosen = axis;
     const Eigen::Vector2d e1(std::cos(axis.angle_rad), std::sin(axis.angle_rad));
     const Eigen::Vector2d e2(-std::sin(axis.angle_rad), std::cos(axis.angle_rad));
-    return assemble_box(frame, has_ground, options, axis.face_is_length, e1, e2,
+    return assemble_box(frame, ground.has_value(), options, axis.face_is_length, e1, e2,
                         fit_extents(ab, heights, e1, e2, options));
 }
 
@@ -427,42 +440,19 @@ OrientedBox box_on_axis(const GroundFrame& frame, bool has_ground, const BoxFitO
 OrientedBox fit_upright_box(const std::vector<Eigen::Vector3f>& points_m,
                             const std::optional<GroundPlane>& ground, const BoxFitOptions& options,
                             FootprintAxis& axis) {
-    options.validate();
-    if (points_m.empty()) throw std::invalid_argument("fit_upright_box: no points");
-    const GroundFrame frame(ground);
-    std::vector<Eigen::Vector2d> ab;
-    std::vector<double> heights;
-    footprint_of(points_m, frame, ab, heights);
-    axis.angle_rad = footprint_angle(frame, ab, options);
-    axis.face_is_length = false;
-    // A straight face across the viewing ray (more than 45 degrees from it) holding most of the
-    // points and longer than a width is a long side: its extent comes from pixel columns, and
-    // at range the closeness criterion follows the smear and stray points around it instead.
-    // (Along the ray a face is no evidence: range smear itself lines points up along rays.)
-    if (const std::optional<double> face = long_face_angle(ab, options)) {
-        axis.angle_rad = *face;
-        axis.face_is_length = true;
-    }
-    return box_on_axis(frame, ground.has_value(), options, ab, heights, axis);
+    return fit_on_axis(points_m, ground, options, nullptr, &axis);
 }
 
 OrientedBox fit_upright_box(const std::vector<Eigen::Vector3f>& points_m,
                             const std::optional<GroundPlane>& ground,
                             const BoxFitOptions& options) {
-    FootprintAxis axis;
-    return fit_upright_box(points_m, ground, options, axis);
+    return fit_on_axis(points_m, ground, options, nullptr, nullptr);
 }
 
 OrientedBox fit_upright_box_on_axis(const std::vector<Eigen::Vector3f>& points_m,
                                     const std::optional<GroundPlane>& ground,
                                     const BoxFitOptions& options, const FootprintAxis& axis) {
-    options.validate();
-    if (points_m.empty()) throw std::invalid_argument("fit_upright_box: no points");
-    const GroundFrame frame(ground);
-    std::vector<Eigen::Vector2d> ab;
-    std::vector<double> heights;
-    footprint_of(points_m, frame, ab, heights);
-    return box_on_axis(frame, ground.has_value(), options, ab, heights, axis);
+    return fit_on_axis(points_m, ground, options, &axis, nullptr);
 }
 
 OrientedBox with_length(const OrientedBox& box, double length_m, bool keep_far_end) {
