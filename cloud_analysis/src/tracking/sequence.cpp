@@ -40,6 +40,7 @@ void smooth_frame(HeldFrame& frame, const SequenceTracker& sequence) {
 
 /// The tracker's settings, keeping the filter steps the held frames' smoothing needs.
 TrackerOptions with_history(const SequenceTrackOptions& options) {
+    options.validate();  // a bad lag is named as such, not as the history it sizes
     TrackerOptions o = options.tracker;
     o.history_frames = options.smooth ? options.lag_frames + 1 : 0;
     return o;
@@ -102,7 +103,6 @@ scene_schema::SequenceIndex read_frames(const fs::path& input) {
 SequenceTracker::SequenceTracker(std::string id, double fps, const SequenceTrackOptions& options,
                                  std::function<void(const std::string&)> warn)
     : tracker_(with_history(options)), warn_(std::move(warn)), fps_(fps) {
-    options.validate();
     if (!(fps > 0.0 && fps <= 1000.0)) throw std::invalid_argument("fps must be in (0, 1000]");
     written_.id = std::move(id);
     written_.fps = fps;

@@ -177,6 +177,13 @@ TEST_CASE("track_files writes smoothed positions unless told not to", "[tracking
     fs::remove_all(root);
 }
 
+TEST_CASE("a sequence tracker names a lag out of bounds, not the history it sizes", "[tracking]") {
+    SequenceTrackOptions o;
+    o.lag_frames = 5000;
+    CHECK_THROWS_WITH(SequenceTracker("drive", 10.0, o, [](const std::string&) {}),
+                      Catch::Contains("lag_frames"));
+}
+
 TEST_CASE("tracker options refuse a history beyond the lag's bound", "[tracking]") {
     TrackerOptions o;
     o.history_frames = -1;
