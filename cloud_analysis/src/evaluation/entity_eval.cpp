@@ -11,6 +11,7 @@
 #include <nlohmann/json.hpp>
 
 #include "cloud_analysis/io/io.hpp"
+#include "cloud_analysis/support/box_axes.hpp"
 #include "scene_schema/entities.hpp"
 #include "scene_schema/json_text.hpp"
 #include "stereoscene/support/angles.hpp"
@@ -54,12 +55,7 @@ std::string fmt(double v) {
 }  // namespace
 
 std::array<Eigen::Vector2d, 4> footprint_corners(const scene_schema::Entity& box) {
-    const Eigen::Vector2d c(box.x, box.z);
-    const Eigen::Vector2d h(std::cos(box.theta), -std::sin(box.theta));  // heading in (x, z)
-    const Eigen::Vector2d a(-h.y(), h.x());  // h turned +90 deg in (x, z): counter-clockwise
-    const Eigen::Vector2d hl = 0.5 * box.L * h;
-    const Eigen::Vector2d aw = 0.5 * box.W * a;
-    return {c - hl - aw, c + hl - aw, c + hl + aw, c - hl + aw};
+    return BoxAxes(box.theta).corners(box.x, box.z, box.L, box.W);
 }
 
 double convex_intersection_area(const Polygon& a, const Polygon& b) {

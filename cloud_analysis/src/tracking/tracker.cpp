@@ -257,18 +257,12 @@ scene_schema::Entity predicted(const Track& t, const TrackerOptions& o,
 bool in_view(const Track& t, const std::optional<scene_schema::CameraIntrinsics>& camera) {
     if (!camera || !(camera->fx_px > 0.0) || camera->width_px <= 0) return true;
     constexpr double kNearestM = 0.5;  // in front of the camera, not at its centre
-    const BoxAxes axes(t.theta_rad);
-    for (const double a : {-0.5, 0.5}) {
-        for (const double b : {-0.5, 0.5}) {
-            // (along, across) -> (x, z): the inverse of BoxAxes' projection.
-            const double x = t.motion.x_m() + a * t.L * axes.c + b * t.W * axes.s;
-            const double z = t.motion.z_m() - a * t.L * axes.s + b * t.W * axes.c;
-            if (!(z > kNearestM)) continue;
-            const double u = camera->fx_px * x / z + camera->cx_px;
-            if (u >= 0.0 && u <= static_cast<double>(camera->width_px)) return true;
-        }
-    }
-    return false;
+    const auto corners = BoxAxes(t.theta_rad).corners(t.motion.x_m(), t.motion.z_m(), t.L, t.W);
+    return std::any_of(corners.begin(), corners.end(), [&](const Eigen::Vector2d& p) {
+        if (!(p.y() > kNearestM)) return false;
+        const double u = camera->fx_px * p.x() / p.y() + camera->cx_px;
+        return u >= 0.0 && u <= static_cast<double>(camera->width_px);
+    });
 }
 
 /// Whether a still track missed in `frame` is seen in part there (TrackerOptions::
