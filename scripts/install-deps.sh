@@ -11,7 +11,7 @@ packages=(
     cmake ninja-build g++ make pkg-config clang-format
     # libraries
     libopencv-dev libopencv-contrib-dev libpcl-dev libeigen3-dev nlohmann-json3-dev
-    libglm-dev libtinygltf-dev libstb-dev catch2 libcli11-dev zlib1g-dev
+    libglm-dev libtinygltf-dev libstb-dev catch2 libcli11-dev zlib1g-dev libdeflate-dev
     # headless OpenGL: GLVND EGL/OpenGL + Mesa's EGL and llvmpipe drivers
     libegl-dev libopengl-dev libegl-mesa0 libgl1-mesa-dri
     # real clients used by the tests: JSON Schema validator, CloudCompare, PCL tools

@@ -16,6 +16,7 @@
 #include <opencv2/imgproc.hpp>
 
 #include "cloud_analysis/io/mat_view.hpp"
+#include "cloud_analysis/io/png_decode.hpp"
 #include "stereoscene/support/file_read.hpp"
 #include "stereoscene/support/limits.hpp"
 
@@ -129,6 +130,29 @@ std::optional<bool> png_is_grey8(const std::vector<unsigned char>& bytes) {
     return bytes[25] == 0 && bytes[24] <= 8;
 }
 
+/// A camera frame's PNG decoded by decode_png8 (8-bit grey or RGB, not interlaced) in `mode`;
+/// empty for other files, and for colour files read as grey (OpenCV's conversion decides those
+/// values).
+std::optional<ImageU8> fast_png(const std::vector<unsigned char>& bytes,
+                                const std::filesystem::path& path, ImageMode mode) {
+    std::optional<ImageU8> image;
+    try {
+        if (mode == ImageMode::kGrey) {
+            const std::optional<bool> grey = png_is_grey8(bytes);
+            if (grey && *grey) image = decode_png8(bytes, PngChannels::kAsStored);
+        } else {
+            image = decode_png8(
+                bytes, mode == ImageMode::kColour ? PngChannels::kColour : PngChannels::kAsStored);
+        }
+    } catch (const std::bad_alloc&) {
+        throw std::runtime_error("cannot decode image: out of memory (" + path.string() + ")");
+    } catch (const std::runtime_error& e) {
+        throw std::runtime_error("cannot decode image: " + std::string(e.what()) + " (" +
+                                 path.string() + ")");
+    }
+    return image;
+}
+
 /// The samples of a 16-bit single-channel image.
 ImageU16 u16_of(const cv::Mat& m) {
     ImageU16 out;
@@ -164,6 +188,7 @@ ImageU8 read_image(const std::filesystem::path& path, ImageMode mode) {
     // A PNG's header says whether it is grey: one decode instead of a colour decode followed by
     // an unchanged one (a KITTI colour frame decoded in 7 ms instead of 14).
     const std::vector<unsigned char> bytes = read_image_bytes(path);
+    if (const std::optional<ImageU8> fast = fast_png(bytes, path, mode)) return *fast;
     const std::optional<bool> png_grey = as_is ? png_is_grey8(bytes) : std::nullopt;
     // IMREAD_ANYDEPTH: a 16-bit file keeps its depth and is refused below, instead of OpenCV's
     // silent shift to the top 8 bits (a 12-bit camera's frames would come out nearly black).

@@ -1,0 +1,24 @@
+#pragma once
+
+/// PNG decoding for the frames a camera writes: 8-bit grey or RGB, not interlaced. The image
+/// data is inflated by libdeflate (Biggers; about twice zlib's speed) and unfiltered here (PNG
+/// specification, 2nd edition, section 9); every other kind of PNG is left to OpenCV.
+
+#include <optional>
+#include <vector>
+
+#include "cloud_analysis/io/io.hpp"
+
+namespace cloud_analysis {
+
+/// The channels decode_png8 returns: as stored (1 for grey, 3 for RGB), or always 3 (grey
+/// repeated, as cv::IMREAD_COLOR does).
+enum class PngChannels { kAsStored, kColour };
+
+/// The image of a PNG's bytes when it is 8-bit grey or RGB without interlacing (RGB order);
+/// empty for any other kind (palette, alpha, 16-bit, interlaced) or a file that is not a PNG.
+/// Throws std::runtime_error when such a file's image data does not inflate to its rows or a
+/// row names no PNG filter. The chunks' structure and CRCs are the caller's to check first.
+std::optional<ImageU8> decode_png8(const std::vector<unsigned char>& bytes, PngChannels channels);
+
+}  // namespace cloud_analysis

@@ -1,0 +1,131 @@
+#include "cloud_analysis/io/png_decode.hpp"
+
+#include <libdeflate.h>
+
+#include <cstdint>
+#include <cstdlib>
+#include <cstring>
+#include <memory>
+#include <stdexcept>
+
+namespace cloud_analysis {
+namespace {
+
+std::uint32_t be32(const unsigned char* p) {
+    return (std::uint32_t{p[0]} << 24) | (std::uint32_t{p[1]} << 16) | (std::uint32_t{p[2]} << 8) |
+           std::uint32_t{p[3]};
+}
+
+[[noreturn]] void corrupt(const char* why) {
+    throw std::runtime_error(std::string("corrupt PNG image data (") + why + ")");
+}
+
+/// The Paeth predictor (PNG specification, section 9.4).
+unsigned char paeth(int a, int b, int c) {
+    const int p = a + b - c;
+    const int pa = std::abs(p - a), pb = std::abs(p - b), pc = std::abs(p - c);
+    if (pa <= pb && pa <= pc) return static_cast<unsigned char>(a);
+    return static_cast<unsigned char>(pb <= pc ? b : c);
+}
+
+/// Reverses the filter of one row in place (section 9.2): `row` its bytes after the filter
+/// type, `prior` the row above unfiltered (zeros for the first), `bpp` bytes per pixel.
+void unfilter(unsigned char type, unsigned char* row, const unsigned char* prior, std::size_t n,
+              std::size_t bpp) {
+    switch (type) {
+        case 0:
+            return;
+        case 1:
+            for (std::size_t i = bpp; i < n; ++i)
+                row[i] = static_cast<unsigned char>(row[i] + row[i - bpp]);
+            return;
+        case 2:
+            for (std::size_t i = 0; i < n; ++i)
+                row[i] = static_cast<unsigned char>(row[i] + prior[i]);
+            return;
+        case 3:
+            for (std::size_t i = 0; i < n; ++i) {
+                const int left = i >= bpp ? row[i - bpp] : 0;
+                row[i] = static_cast<unsigned char>(row[i] + ((left + prior[i]) >> 1));
+            }
+            return;
+        case 4:
+            for (std::size_t i = 0; i < n; ++i) {
+                const int left = i >= bpp ? row[i - bpp] : 0;
+                const int upper_left = i >= bpp ? prior[i - bpp] : 0;
+                row[i] = static_cast<unsigned char>(row[i] + paeth(left, prior[i], upper_left));
+            }
+            return;
+        default:
+            corrupt("a row names no filter");
+    }
+}
+
+struct DecompressorFree {
+    void operator()(libdeflate_decompressor* d) const { libdeflate_free_decompressor(d); }
+};
+
+}  // namespace
+
+std::optional<ImageU8> decode_png8(const std::vector<unsigned char>& bytes, PngChannels channels) {
+    static constexpr char kSignature[] = "\x89PNG\r\n\x1a\n";
+    // Signature, then IHDR (section 11.2.2): width, height, bit depth, colour type,
+    // compression, filter method, interlace method.
+    if (bytes.size() < 33 || std::memcmp(bytes.data(), kSignature, 8) != 0 ||
+        std::memcmp(bytes.data() + 12, "IHDR", 4) != 0) {
+        return std::nullopt;
+    }
+    const std::uint32_t width = be32(bytes.data() + 16), height = be32(bytes.data() + 20);
+    const unsigned char depth = bytes[24], colour_type = bytes[25];
+    if (depth != 8 || (colour_type != 0 && colour_type != 2) || bytes[26] != 0 || bytes[27] != 0 ||
+        bytes[28] != 0 || width == 0 || height == 0 || width > (1u << 24) || height > (1u << 24)) {
+        return std::nullopt;
+    }
+    const std::size_t bpp = colour_type == 2 ? 3 : 1;
+    // The image data: the IDAT chunks' contents in order, one zlib stream (section 10).
+    std::vector<unsigned char> stream;
+    for (std::size_t at = 8; at + 12 <= bytes.size();) {
+        const std::uint32_t length = be32(bytes.data() + at);
+        if (length > bytes.size() - at - 12) corrupt("a chunk runs past the end");
+        const unsigned char* type = bytes.data() + at + 4;
+        if (std::memcmp(type, "IDAT", 4) == 0)
+            stream.insert(stream.end(), type + 4, type + 4 + length);
+        if (std::memcmp(type, "IEND", 4) == 0) break;
+        at += 12 + std::size_t{length};
+    }
+    const std::size_t stride = 1 + std::size_t{width} * bpp;
+    std::vector<unsigned char> raw(stride * height);
+    const std::unique_ptr<libdeflate_decompressor, DecompressorFree> inflater(
+        libdeflate_alloc_decompressor());
+    if (!inflater) throw std::bad_alloc();
+    std::size_t inflated = 0;
+    if (libdeflate_zlib_decompress(inflater.get(), stream.data(), stream.size(), raw.data(),
+                                   raw.size(), &inflated) != LIBDEFLATE_SUCCESS ||
+        inflated != raw.size()) {
+        corrupt("the image data does not inflate to its rows");
+    }
+    const std::vector<unsigned char> zeros(stride - 1, 0);
+    for (std::size_t v = 0; v < height; ++v) {
+        unsigned char* row = raw.data() + v * stride;
+        const unsigned char* prior = v == 0 ? zeros.data() : row - stride + 1;
+        unfilter(row[0], row + 1, prior, stride - 1, bpp);
+    }
+    ImageU8 out;
+    out.width_px = static_cast<int>(width);
+    out.height_px = static_cast<int>(height);
+    out.channels = channels == PngChannels::kColour ? 3 : static_cast<int>(bpp);
+    out.data.resize(std::size_t{width} * height * static_cast<std::size_t>(out.channels));
+    for (std::size_t v = 0; v < height; ++v) {
+        const unsigned char* row = raw.data() + v * stride + 1;
+        unsigned char* dst = out.data.data() + v * std::size_t{width} * out.channels;
+        if (static_cast<std::size_t>(out.channels) == bpp) {
+            std::memcpy(dst, row, stride - 1);
+        } else {
+            for (std::size_t u = 0; u < width; ++u)
+                dst[3 * u] = dst[3 * u + 1] = dst[3 * u + 2] = row[u];
+        }
+    }
+    return out;
+}
+
+}  // namespace cloud_analysis
