@@ -28,32 +28,49 @@ unsigned char paeth(int a, int b, int c) {
     return static_cast<unsigned char>(pb <= pc ? b : c);
 }
 
-/// Reverses the filter of one row in place (section 9.2): `row` its bytes after the filter
-/// type, `prior` the row above unfiltered (zeros for the first), `bpp` bytes per pixel.
-void unfilter(unsigned char type, unsigned char* row, const unsigned char* prior, std::size_t n,
-              std::size_t bpp) {
+/// Sub (type 1) reversed for bpp bytes a pixel, each channel's running sum kept in a register:
+/// the store of one byte is not waited for by the next pixel's load.
+template <std::size_t kBpp>
+void unfilter_sub(const unsigned char* src, unsigned char* dst, std::size_t n) {
+    unsigned char sum[kBpp] = {};
+    for (std::size_t i = 0; i + kBpp <= n; i += kBpp) {
+        for (std::size_t c = 0; c < kBpp; ++c) {
+            sum[c] = static_cast<unsigned char>(sum[c] + src[i + c]);
+            dst[i + c] = sum[c];
+        }
+    }
+}
+
+/// Reverses the filter `type` of one row (section 9.2): `src` its filtered bytes, `dst` the
+/// row out, `prior` the row above unfiltered (zeros for the first), `bpp` bytes per pixel.
+void unfilter(unsigned char type, const unsigned char* src, unsigned char* dst,
+              const unsigned char* prior, std::size_t n, std::size_t bpp) {
     switch (type) {
         case 0:
+            std::memcpy(dst, src, n);
             return;
         case 1:
-            for (std::size_t i = bpp; i < n; ++i)
-                row[i] = static_cast<unsigned char>(row[i] + row[i - bpp]);
+            if (bpp == 3) {
+                unfilter_sub<3>(src, dst, n);
+            } else {
+                unfilter_sub<1>(src, dst, n);
+            }
             return;
         case 2:
             for (std::size_t i = 0; i < n; ++i)
-                row[i] = static_cast<unsigned char>(row[i] + prior[i]);
+                dst[i] = static_cast<unsigned char>(src[i] + prior[i]);
             return;
         case 3:
             for (std::size_t i = 0; i < n; ++i) {
-                const int left = i >= bpp ? row[i - bpp] : 0;
-                row[i] = static_cast<unsigned char>(row[i] + ((left + prior[i]) >> 1));
+                const int left = i >= bpp ? dst[i - bpp] : 0;
+                dst[i] = static_cast<unsigned char>(src[i] + ((left + prior[i]) >> 1));
             }
             return;
         case 4:
             for (std::size_t i = 0; i < n; ++i) {
-                const int left = i >= bpp ? row[i - bpp] : 0;
+                const int left = i >= bpp ? dst[i - bpp] : 0;
                 const int upper_left = i >= bpp ? prior[i - bpp] : 0;
-                row[i] = static_cast<unsigned char>(row[i] + paeth(left, prior[i], upper_left));
+                dst[i] = static_cast<unsigned char>(src[i] + paeth(left, prior[i], upper_left));
             }
             return;
         default:
@@ -104,25 +121,26 @@ std::optional<ImageU8> decode_png8(const std::vector<unsigned char>& bytes, PngC
         inflated != raw.size()) {
         corrupt("the image data does not inflate to its rows");
     }
-    const std::vector<unsigned char> zeros(stride - 1, 0);
-    for (std::size_t v = 0; v < height; ++v) {
-        unsigned char* row = raw.data() + v * stride;
-        const unsigned char* prior = v == 0 ? zeros.data() : row - stride + 1;
-        unfilter(row[0], row + 1, prior, stride - 1, bpp);
-    }
     ImageU8 out;
     out.width_px = static_cast<int>(width);
     out.height_px = static_cast<int>(height);
     out.channels = channels == PngChannels::kColour ? 3 : static_cast<int>(bpp);
     out.data.resize(std::size_t{width} * height * static_cast<std::size_t>(out.channels));
+    // Rows are unfiltered straight into the image, or, when grey becomes colour, into two
+    // alternating rows that are then repeated into three channels.
+    const std::size_t n = stride - 1;
+    const bool expand = static_cast<std::size_t>(out.channels) != bpp;
+    std::vector<unsigned char> rows(expand ? 2 * n : 0), zeros(n, 0);
+    const unsigned char* prior = zeros.data();
     for (std::size_t v = 0; v < height; ++v) {
-        const unsigned char* row = raw.data() + v * stride + 1;
-        unsigned char* dst = out.data.data() + v * std::size_t{width} * out.channels;
-        if (static_cast<std::size_t>(out.channels) == bpp) {
-            std::memcpy(dst, row, stride - 1);
-        } else {
-            for (std::size_t u = 0; u < width; ++u)
-                dst[3 * u] = dst[3 * u + 1] = dst[3 * u + 2] = row[u];
+        const unsigned char* src = raw.data() + v * stride;
+        unsigned char* dst = expand ? rows.data() + (v % 2) * n : out.data.data() + v * n;
+        unfilter(src[0], src + 1, dst, prior, n, bpp);
+        prior = dst;
+        if (expand) {
+            unsigned char* rgb = out.data.data() + v * 3 * n;
+            for (std::size_t u = 0; u < n; ++u)
+                rgb[3 * u] = rgb[3 * u + 1] = rgb[3 * u + 2] = dst[u];
         }
     }
     return out;
