@@ -107,6 +107,8 @@ std::optional<ImageU8> decode_png8(const std::vector<unsigned char>& bytes, PngC
         const unsigned char* type = bytes.data() + at + 4;
         if (std::memcmp(type, "IDAT", 4) == 0)
             stream.insert(stream.end(), type + 4, type + 4 + length);
+        // A transparent colour makes OpenCV add an alpha channel when the file is read as is.
+        if (std::memcmp(type, "tRNS", 4) == 0) return std::nullopt;
         if (std::memcmp(type, "IEND", 4) == 0) break;
         at += 12 + std::size_t{length};
     }

@@ -131,6 +131,13 @@ TEST_CASE("PNGs other than 8-bit grey or RGB without interlacing are left to Ope
     CHECK_FALSE(decode_png8(make_png(pixels, 24, 4, 1, {0}, 1 << 20, 8, 3),
                             PngChannels::kAsStored));  // palette
     CHECK_FALSE(decode_png8({'J', 'P', 'E', 'G'}, PngChannels::kAsStored));
+    // A transparent colour (tRNS): read as is, OpenCV adds an alpha channel.
+    std::vector<unsigned char> keyed = make_png(pixels, 8, 4, 3, {0});
+    std::vector<unsigned char> trns;
+    chunk(trns, "tRNS", {0, 1, 0, 2, 0, 3});
+    keyed.insert(keyed.begin() + 33, trns.begin(), trns.end());
+    CHECK(cv::imdecode(keyed, cv::IMREAD_UNCHANGED).channels() == 4);
+    CHECK_FALSE(decode_png8(keyed, PngChannels::kAsStored));
 }
 
 TEST_CASE("corrupt image data in a well-formed PNG is an error, never an image", "[io][png]") {
