@@ -135,22 +135,17 @@ std::optional<bool> png_is_grey8(const std::vector<unsigned char>& bytes) {
 /// values).
 std::optional<ImageU8> fast_png(const std::vector<unsigned char>& bytes,
                                 const std::filesystem::path& path, ImageMode mode) {
-    std::optional<ImageU8> image;
     try {
-        if (mode == ImageMode::kGrey) {
-            const std::optional<bool> grey = png_is_grey8(bytes);
-            if (grey && *grey) image = decode_png8(bytes, PngChannels::kAsStored);
-        } else {
-            image = decode_png8(
+        if (mode != ImageMode::kGrey) {
+            return decode_png8(
                 bytes, mode == ImageMode::kColour ? PngChannels::kColour : PngChannels::kAsStored);
         }
+        const std::optional<bool> grey = png_is_grey8(bytes);
+        if (grey && *grey) return decode_png8(bytes, PngChannels::kAsStored);
     } catch (const std::bad_alloc&) {
         throw std::runtime_error("cannot decode image: out of memory (" + path.string() + ")");
-    } catch (const std::runtime_error& e) {
-        throw std::runtime_error("cannot decode image: " + std::string(e.what()) + " (" +
-                                 path.string() + ")");
     }
-    return image;
+    return std::nullopt;
 }
 
 /// The samples of a 16-bit single-channel image.

@@ -6,7 +6,7 @@
 #include <cstdlib>
 #include <cstring>
 #include <memory>
-#include <stdexcept>
+#include <new>
 
 namespace cloud_analysis {
 namespace {
@@ -14,10 +14,6 @@ namespace {
 std::uint32_t be32(const unsigned char* p) {
     return (std::uint32_t{p[0]} << 24) | (std::uint32_t{p[1]} << 16) | (std::uint32_t{p[2]} << 8) |
            std::uint32_t{p[3]};
-}
-
-[[noreturn]] void corrupt(const char* why) {
-    throw std::runtime_error(std::string("corrupt PNG image data (") + why + ")");
 }
 
 /// The Paeth predictor (PNG specification, section 9.4).
@@ -42,39 +38,40 @@ void unfilter_sub(const unsigned char* src, unsigned char* dst, std::size_t n) {
 }
 
 /// Reverses the filter `type` of one row (section 9.2): `src` its filtered bytes, `dst` the
-/// row out, `prior` the row above unfiltered (zeros for the first), `bpp` bytes per pixel.
-void unfilter(unsigned char type, const unsigned char* src, unsigned char* dst,
+/// row out, `prior` the row above unfiltered (zeros for the first), `bpp` bytes per pixel;
+/// false for a type PNG does not have.
+bool unfilter(unsigned char type, const unsigned char* src, unsigned char* dst,
               const unsigned char* prior, std::size_t n, std::size_t bpp) {
     switch (type) {
         case 0:
             std::memcpy(dst, src, n);
-            return;
+            return true;
         case 1:
             if (bpp == 3) {
                 unfilter_sub<3>(src, dst, n);
             } else {
                 unfilter_sub<1>(src, dst, n);
             }
-            return;
+            return true;
         case 2:
             for (std::size_t i = 0; i < n; ++i)
                 dst[i] = static_cast<unsigned char>(src[i] + prior[i]);
-            return;
+            return true;
         case 3:
             for (std::size_t i = 0; i < n; ++i) {
                 const int left = i >= bpp ? dst[i - bpp] : 0;
                 dst[i] = static_cast<unsigned char>(src[i] + ((left + prior[i]) >> 1));
             }
-            return;
+            return true;
         case 4:
             for (std::size_t i = 0; i < n; ++i) {
                 const int left = i >= bpp ? dst[i - bpp] : 0;
                 const int upper_left = i >= bpp ? prior[i - bpp] : 0;
                 dst[i] = static_cast<unsigned char>(src[i] + paeth(left, prior[i], upper_left));
             }
-            return;
+            return true;
         default:
-            corrupt("a row names no filter");
+            return false;
     }
 }
 
@@ -103,7 +100,7 @@ std::optional<ImageU8> decode_png8(const std::vector<unsigned char>& bytes, PngC
     std::vector<unsigned char> stream;
     for (std::size_t at = 8; at + 12 <= bytes.size();) {
         const std::uint32_t length = be32(bytes.data() + at);
-        if (length > bytes.size() - at - 12) corrupt("a chunk runs past the end");
+        if (length > bytes.size() - at - 12) return std::nullopt;
         const unsigned char* type = bytes.data() + at + 4;
         if (std::memcmp(type, "IDAT", 4) == 0)
             stream.insert(stream.end(), type + 4, type + 4 + length);
@@ -121,7 +118,7 @@ std::optional<ImageU8> decode_png8(const std::vector<unsigned char>& bytes, PngC
     if (libdeflate_zlib_decompress(inflater.get(), stream.data(), stream.size(), raw.data(),
                                    raw.size(), &inflated) != LIBDEFLATE_SUCCESS ||
         inflated != raw.size()) {
-        corrupt("the image data does not inflate to its rows");
+        return std::nullopt;
     }
     ImageU8 out;
     out.width_px = static_cast<int>(width);
@@ -137,7 +134,7 @@ std::optional<ImageU8> decode_png8(const std::vector<unsigned char>& bytes, PngC
     for (std::size_t v = 0; v < height; ++v) {
         const unsigned char* src = raw.data() + v * stride;
         unsigned char* dst = expand ? rows.data() + (v % 2) * n : out.data.data() + v * n;
-        unfilter(src[0], src + 1, dst, prior, n, bpp);
+        if (!unfilter(src[0], src + 1, dst, prior, n, bpp)) return std::nullopt;
         prior = dst;
         if (expand) {
             unsigned char* rgb = out.data.data() + v * 3 * n;

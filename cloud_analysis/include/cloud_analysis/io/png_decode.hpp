@@ -16,10 +16,11 @@ namespace cloud_analysis {
 enum class PngChannels { kAsStored, kColour };
 
 /// The image of a PNG's bytes when it is 8-bit grey or RGB without interlacing (RGB order);
-/// empty for any other kind (palette, alpha, a transparent colour, 16-bit, interlaced) or a file
-/// that is not a PNG. Throws std::runtime_error when such a file's image data does not inflate
-/// to its rows or a row names no PNG filter. The chunks' structure and CRCs, and the image's
-/// size against the pixel limit, are the caller's to check first (read_image does).
+/// empty for any other kind (palette, alpha, a transparent colour, 16-bit, interlaced), for a
+/// file that is not a PNG, and for image data it cannot read (not inflating to exactly its rows,
+/// a row naming no PNG filter): OpenCV then decodes or refuses the file as for any other. The
+/// chunks' CRCs, and the image's size against the pixel limit, are the caller's to check first
+/// (read_image does).
 std::optional<ImageU8> decode_png8(const std::vector<unsigned char>& bytes, PngChannels channels);
 
 }  // namespace cloud_analysis
