@@ -12,6 +12,8 @@
 #include "cloud_analysis/evaluation/kitti_labels.hpp"
 #include "stereoscene/support/angles.hpp"
 
+#include "../kitti_rig.hpp"
+
 namespace {
 
 using cloud_analysis::EntityEvalOptions;
@@ -220,12 +222,7 @@ TEST_CASE("a malformed label_2 line is refused naming the line", "[kitti_labels]
 }
 
 TEST_CASE("exported labels read back as a reference give IoU 1", "[kitti_labels]") {
-    scene_schema::CameraIntrinsics cam;
-    cam.width_px = 1242;
-    cam.height_px = 375;
-    cam.fx_px = cam.fy_px = 721.5377;
-    cam.cx_px = 609.5593;
-    cam.cy_px = 172.854;
+    const scene_schema::CameraIntrinsics cam = test_rigs::kitti_intrinsics();
     std::vector<Entity> ours = {box("car", -2.5, 12.25, -1.57, 1.8, 4.2, 1.5, 0.9),
                                 box("person", 3.0, 9.5, 0.0, 0.6, 0.5, 1.75, 0.775),
                                 box("road", 0.0, 20.0, -1.57, 8.0, 40.0, 0.2, 1.65)};

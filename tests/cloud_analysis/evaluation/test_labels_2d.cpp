@@ -2,21 +2,13 @@
 
 #include "cloud_analysis/evaluation/labels_2d.hpp"
 
+#include "../kitti_rig.hpp"
+
 using namespace cloud_analysis;
 
 namespace {
 
-/// KITTI-like camera: 1242x375, fx 721.
-scene_schema::CameraIntrinsics camera() {
-    scene_schema::CameraIntrinsics c;
-    c.width_px = 1242;
-    c.height_px = 375;
-    c.fx_px = c.fy_px = 721.5377;
-    c.cx_px = 609.5593;
-    c.cy_px = 172.854;
-    c.baseline_m = 0.54;
-    return c;
-}
+scene_schema::CameraIntrinsics camera() { return test_rigs::kitti_intrinsics(); }
 
 /// A car standing on the road 1.65 m below the camera, facing along the road.
 scene_schema::Entity car(std::string id, double x, double z, std::string cls = "car") {

@@ -10,6 +10,8 @@
 #include "cloud_analysis/tracking/sequence.hpp"
 #include "cloud_analysis/tracking/tracker.hpp"
 
+#include "../kitti_rig.hpp"
+
 using namespace cloud_analysis::tracking;
 using scene_schema::Entity;
 using scene_schema::EntityDocument;
@@ -195,12 +197,7 @@ TEST_CASE("tracker options refuse a history beyond the lag's bound", "[tracking]
 TEST_CASE("a missed track predicted outside the camera's view is not reported", "[tracking]") {
     // A car 8 m ahead crossing to the left at 10 m/s, confirmed, then missed: reported at its
     // prediction while a corner of it is still in the image, not once it has left it.
-    scene_schema::CameraIntrinsics camera;
-    camera.width_px = 1242;
-    camera.height_px = 375;
-    camera.fx_px = camera.fy_px = 721.5;
-    camera.cx_px = 609.6;
-    camera.cy_px = 172.9;
+    const scene_schema::CameraIntrinsics camera = test_rigs::kitti_intrinsics();
     const auto frame = [&](std::vector<Entity> entities) {
         EntityDocument doc;
         doc.frame.id = "f";
