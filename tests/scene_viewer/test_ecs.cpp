@@ -308,6 +308,42 @@ TEST_CASE("A textured model uploads its texture once and lit draws bind it", "[e
     CHECK(device.textures_created == 1);
 }
 
+TEST_CASE("A class's low model draws its boxes lower than they are long or wide",
+          "[ecs][systems][export]") {
+    NullDevice device;
+    SceneRenderer renderer(device);
+    const auto triangle = [](float top) {
+        Model m;
+        MeshPrimitive prim;
+        prim.positions = {{-1, 0, -1}, {1, top, 1}, {1, 0, 1}};
+        prim.normals = {{0, 1, 0}, {0, 1, 0}, {0, 1, 0}};
+        prim.indices = {0, 1, 2};
+        m.primitives.push_back(prim);
+        m.bounds_min = {-1, 0, -1};
+        m.bounds_max = {1, top, 1};
+        return m;
+    };
+    renderer.set_class_model("vegetation", triangle(4.0f));        // a tree
+    renderer.set_class_model("vegetation", triangle(0.5f), true);  // a hedge
+    scene_schema::EntityDocument doc;
+    doc.entities.push_back(entity("vegetation", 21, {5, -1, 20}, 0.0, {2.6, 5.6, 2.6}));
+    doc.entities.push_back(entity("vegetation", 21, {7, 1, 20}, -kPi / 2, {0.9, 1.2, 3.0}));
+    doc.entities.push_back(entity("vegetation", 21, {-7, 1, 20}, 0.0, {1.5, 1.2, 1.0}));
+    RenderOptions options;
+    options.ego = false;
+    renderer.load(doc, nullptr, options);
+    const std::vector<PlacedModel> placed = renderer.placed_models();
+    REQUIRE(placed.size() == 3);
+    CHECK(placed[0].model->bounds_max.y == 4.0f);
+    CHECK(placed[1].model->bounds_max.y == 0.5f);
+    CHECK(placed[2].model->bounds_max.y == 0.5f);  // wider than tall: a bush
+    // Without a low model every box gets the class's model.
+    SceneRenderer plain(device);
+    plain.set_class_model("vegetation", triangle(4.0f));
+    plain.load(doc, nullptr, options);
+    for (const PlacedModel& p : plain.placed_models()) CHECK(p.model->bounds_max.y == 4.0f);
+}
+
 TEST_CASE("The assembled scene places every entity with the matrix it is drawn with",
           "[ecs][export]") {
     NullDevice device;

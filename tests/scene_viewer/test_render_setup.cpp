@@ -94,7 +94,7 @@ TEST_CASE("classes without a model are named, block classes are boxes by design"
     RenderOptions options;
     renderer.load(doc, nullptr, options);
     ClassTable table;
-    table.classes.push_back(RenderClass{"building", 11, {70, 70, 70}, RenderKind::Block, {}});
+    table.classes.push_back(RenderClass{"building", 11, {70, 70, 70}, RenderKind::Block, {}, {}});
     CHECK(classes_missing_models(renderer, table) == std::vector<std::string>{"car", "train"});
 }
 

@@ -32,6 +32,25 @@ RenderKind parse_kind(const std::string& text, const std::string& pointer) {
                      "\"");
 }
 
+/// The model file named by `member` of a class row, resolved against the table's folder; empty
+/// when the row has no such member.
+fs::path model_path(const nlohmann::json& item, const char* member, const std::string& pointer,
+                    const fs::path& folder) {
+    const auto model = item.find(member);
+    if (model == item.end()) return {};
+    const std::string where = pointer + "/" + member;
+    if (!model->is_string() || model->get<std::string>().empty()) {
+        throw TableError(where + ": must be a non-empty path");
+    }
+    const fs::path given(model->get<std::string>());
+    fs::path path = (given.is_absolute() ? given : folder / given).lexically_normal();
+    std::error_code ec;
+    if (!fs::is_regular_file(path, ec)) {
+        throw TableError(where + ": model file not found: " + path.string());
+    }
+    return path;
+}
+
 RenderClass parse_class(const nlohmann::json& item, const std::string& pointer,
                         const fs::path& folder) {
     if (!item.is_object()) throw TableError(pointer + ": must be an object");
@@ -64,20 +83,14 @@ RenderClass parse_class(const nlohmann::json& item, const std::string& pointer,
         throw TableError(pointer + "/kind: must be \"object\", \"ground\" or \"block\"");
     }
     out.kind = parse_kind(kind->get<std::string>(), pointer + "/kind");
-    const auto model = item.find("model");
-    if (model != item.end()) {
-        if (!model->is_string() || model->get<std::string>().empty()) {
-            throw TableError(pointer + "/model: must be a non-empty path");
-        }
-        const fs::path given(model->get<std::string>());
-        out.model = (given.is_absolute() ? given : folder / given).lexically_normal();
-        std::error_code ec;
-        if (!fs::is_regular_file(out.model, ec)) {
-            throw TableError(pointer + "/model: model file not found: " + out.model.string());
-        }
+    out.model = model_path(item, "model", pointer, folder);
+    out.low_model = model_path(item, "low_model", pointer, folder);
+    if (!out.low_model.empty() && out.model.empty()) {
+        throw TableError(pointer + "/low_model: needs a model beside it");
     }
     for (auto it = item.begin(); it != item.end(); ++it) {
-        static const std::set<std::string> known = {"name", "class_id", "colour", "kind", "model"};
+        static const std::set<std::string> known = {"name", "class_id", "colour",
+                                                    "kind", "model",    "low_model"};
         if (known.count(it.key()) == 0) {
             throw TableError(pointer + "/" + it.key() + ": unknown member");
         }

@@ -17,9 +17,10 @@ SceneRenderer::SceneRenderer(Device& device) : device_(&device), models_(device)
     models_.put("box", unit_box_mesh());
 }
 
-void SceneRenderer::set_class_model(const std::string& class_name, const Model& model) {
-    models_.put("class:" + class_name, model);
-    class_models_[class_name] = model;
+void SceneRenderer::set_class_model(const std::string& class_name, const Model& model, bool low) {
+    const std::string key = class_model_key(class_name, low);
+    models_.put(key, model);
+    class_models_[key] = model;
 }
 
 void SceneRenderer::load(const scene_schema::EntityDocument& document, const PointCloud* cloud,
@@ -67,16 +68,17 @@ std::vector<PlacedModel> SceneRenderer::placed_models() {
         if (!mesh.fit_to_transform) return;
         const std::string& key = models_.at(mesh.model).key;
         const Model* model = nullptr;
-        if (key.rfind("class:", 0) == 0) {
-            model = &class_models_.at(key.substr(6));
+        if (const auto own = class_models_.find(key); own != class_models_.end()) {
+            model = &own->second;
         } else {
-            auto it = export_boxes_.find(source.class_name);
-            if (it == export_boxes_.end()) {
+            auto box = export_boxes_.find(source.class_name);
+            if (box == export_boxes_.end()) {
                 const Rgb8 colour = class_colour(source.class_id, source.class_name);
-                it = export_boxes_.emplace(source.class_name, make_box_model(linear_colour(colour)))
-                         .first;
+                box =
+                    export_boxes_.emplace(source.class_name, make_box_model(linear_colour(colour)))
+                        .first;
             }
-            model = &it->second;
+            model = &box->second;
         }
         placed.push_back(PlacedModel{model, world_matrix.value, source.id});
     };
@@ -96,6 +98,10 @@ std::size_t use_class_models(SceneRenderer& renderer, const ClassTable& table) {
         if (c.model.empty() || c.kind == RenderKind::Ground) continue;
         renderer.set_class_model(c.name, load_model(c.model));
         ++loaded;
+        if (!c.low_model.empty()) {
+            renderer.set_class_model(c.name, load_model(c.low_model), true);
+            ++loaded;
+        }
     }
     return loaded;
 }

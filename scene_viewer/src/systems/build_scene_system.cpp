@@ -3,6 +3,7 @@
 #include <algorithm>
 #include <cmath>
 #include <cstdint>
+#include <optional>
 
 #include "scene_viewer/assets/colours.hpp"
 #include "scene_viewer/assets/palette.hpp"
@@ -15,6 +16,10 @@
 using stereoscene::support::kPi;
 
 namespace scene_viewer {
+
+std::string class_model_key(const std::string& class_name, bool low) {
+    return "class:" + class_name + (low ? ":low" : "");
+}
 
 namespace {
 
@@ -120,7 +125,11 @@ float add_document_entities(World& world, const scene_schema::EntityDocument& do
         MeshRef mesh{box, glm::mat4(1.0f), true};
         bool own_colours = false;
         if (!ground) {
-            if (auto m = models.find("class:" + src.class_name)) {
+            std::optional<std::uint32_t> m;
+            if (src.H < std::max(src.W, src.L))
+                m = models.find(class_model_key(src.class_name, true));
+            if (!m) m = models.find(class_model_key(src.class_name));
+            if (m) {
                 const UploadedModel& model = models.at(*m);
                 mesh =
                     MeshRef{*m, fit_bounds_to_unit_cube(model.bounds_min, model.bounds_max), true};
@@ -156,7 +165,7 @@ void add_ego(World& world, const RenderOptions& options, ModelLibrary& models, f
         e, Transform{{0.0f, ground_top_y - 0.5f * car_h, -1.0f}, -kPi / 2, {1.8f, car_h, 4.4f}});
     MeshRef mesh{*models.find("box"), glm::mat4(1.0f), true};
     glm::vec4 lit_colour = to_colour(kLitEgoColour);
-    if (auto m = models.find("class:car")) {
+    if (auto m = models.find(class_model_key("car"))) {
         const UploadedModel& model = models.at(*m);
         mesh = MeshRef{*m, fit_bounds_to_unit_cube(model.bounds_min, model.bounds_max), true};
         lit_colour = glm::vec4(1.0f);

@@ -28,6 +28,9 @@ struct RenderClass {
     std::array<std::uint8_t, 3> colour_srgb{};  ///< palette colour, sRGB 0..255
     RenderKind kind = RenderKind::Object;
     std::filesystem::path model;  ///< glTF file (resolved against the table's folder), or empty
+    /// glTF file for the class's entities whose box is lower than it is long or wide (H below
+    /// max(W, L)): a hedge or a bush where `model` is a tree. Empty: `model` for every box.
+    std::filesystem::path low_model;
 };
 
 /// Every class of a table file, in file order.

@@ -29,8 +29,9 @@ class SceneRenderer {
     /// Uses `device` (which must outlive the renderer); uploads the box model.
     explicit SceneRenderer(Device& device);
 
-    /// Draws entities of `class_name` with `model` (fitted to each box) instead of a box.
-    void set_class_model(const std::string& class_name, const Model& model);
+    /// Draws entities of `class_name` with `model` (fitted to each box) instead of a box; with
+    /// `low`, only those whose box is lower than it is long or wide (RenderClass::low_model).
+    void set_class_model(const std::string& class_name, const Model& model, bool low = false);
 
     /// Builds the world for a document (and an optional cloud overlay): the build system.
     void load(const scene_schema::EntityDocument& document, const PointCloud* cloud,
@@ -64,7 +65,8 @@ class SceneRenderer {
     ModelLibrary models_;
     World world_;
     RenderOptions options_;
-    std::map<std::string, Model> class_models_;  ///< CPU copies of the class models, for export
+    /// CPU copies of the class models by library key (class_model_key()), for export.
+    std::map<std::string, Model> class_models_;
     std::map<std::string, Model> export_boxes_;  ///< box models by class name, for export
 };
 

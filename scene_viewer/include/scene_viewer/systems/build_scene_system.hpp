@@ -1,5 +1,7 @@
 #pragma once
 
+#include <string>
+
 #include "scene_schema/entities.hpp"
 #include "scene_viewer/assets/point_cloud.hpp"
 #include "scene_viewer/ecs/world.hpp"
@@ -8,6 +10,10 @@
 namespace scene_viewer {
 
 struct RenderOptions;
+
+/// The model library key of a class's model ("class:car"), or of its model for boxes lower than
+/// they are long or wide ("class:vegetation:low", RenderClass::low_model).
+std::string class_model_key(const std::string& class_name, bool low = false);
 
 /// Build system: clears `world` and creates one entity per document entity (Transform, MeshRef,
 /// Material, SourceEntity), ground classes as flat patches, the ego car, the BEV grid, the point
