@@ -254,7 +254,7 @@ def wheels(m, mat, xs, zs, radius, width, hub=None):
 
 def make_car():
     m = Mesh("car")
-    body = m.material("body", colour(*PALETTE["car"]), 0.4)
+    body = m.material("paint", colour(*PALETTE["car"]), 0.4)
     glass = m.material("glass", GLASS, 0.1)
     tyre = m.material("tyre", TYRE)
     hub = m.material("hub", METAL, 0.3)
@@ -273,7 +273,7 @@ def make_car():
 
 def make_truck():
     m = Mesh("truck")
-    body = m.material("body", colour(*PALETTE["truck"]), 0.5)
+    body = m.material("paint", colour(*PALETTE["truck"]), 0.5)
     cargo = m.material("cargo", colour(200, 200, 205), 0.7)
     glass = m.material("glass", GLASS, 0.1)
     tyre = m.material("tyre", TYRE)
@@ -291,7 +291,7 @@ def make_truck():
 
 def make_bus():
     m = Mesh("bus")
-    body = m.material("body", colour(*PALETTE["bus"]), 0.5)
+    body = m.material("paint", colour(*PALETTE["bus"]), 0.5)
     glass = m.material("glass", GLASS, 0.1)
     tyre = m.material("tyre", TYRE)
     hub = m.material("hub", METAL, 0.3)
@@ -392,7 +392,7 @@ def make_cyclist():
 
 def make_motorcycle():
     m = Mesh("motorcycle")
-    body = m.material("body", colour(*PALETTE["motorcycle"]), 0.4)
+    body = m.material("paint", colour(*PALETTE["motorcycle"]), 0.4)
     tyre = m.material("tyre", TYRE)
     metal = m.material("metal", METAL, 0.3)
     seat = m.material("seat", DARK, 0.9)

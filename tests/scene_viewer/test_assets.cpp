@@ -4,6 +4,7 @@
 #include <filesystem>
 #include <fstream>
 #include <map>
+#include <set>
 #include <string>
 
 #include <unistd.h>
@@ -14,6 +15,7 @@
 #include <scene_viewer/assets/gltf_loader.hpp>
 #include <scene_viewer/assets/image_io.hpp>
 #include <scene_viewer/assets/palette.hpp>
+#include <scene_viewer/assets/vehicle_paints.hpp>
 
 namespace fs = std::filesystem;
 using scene_viewer::load_model;
@@ -331,4 +333,31 @@ TEST_CASE("third-party Kenney models (CC0) load with their external textures", "
         ++loaded;
     }
     CHECK(loaded >= 5);
+}
+
+TEST_CASE("Vehicle paints are drawn in the shares of the world's cars, the same for an id and seed",
+          "[assets]") {
+    double total = 0.0;
+    std::map<std::string, int> drawn;
+    for (const scene_viewer::VehiclePaint& p : scene_viewer::vehicle_paints()) {
+        total += p.share;
+        drawn[p.name] = 0;
+    }
+    CHECK(total == Approx(1.0));
+    constexpr int kDraws = 20000;
+    for (int i = 0; i < kDraws; ++i) {
+        ++drawn[scene_viewer::vehicle_paint("car-" + std::to_string(i % 100), i / 100).name];
+    }
+    for (const scene_viewer::VehiclePaint& p : scene_viewer::vehicle_paints()) {
+        INFO(p.name);
+        // Binomial spread at 20,000 draws is at most 0.34 %; 1.5 % is over four of it.
+        CHECK(drawn[p.name] / static_cast<double>(kDraws) == Approx(p.share).margin(0.015));
+    }
+    CHECK(scene_viewer::vehicle_paint("car-1", 5).name ==
+          scene_viewer::vehicle_paint("car-1", 5).name);
+    std::set<std::string> seen;
+    for (std::uint64_t seed = 0; seed < 40; ++seed) {
+        seen.insert(scene_viewer::vehicle_paint("car-1", seed).name);
+    }
+    CHECK(seen.size() >= 4);  // one id, many seeds: not one paint
 }

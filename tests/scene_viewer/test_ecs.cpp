@@ -4,6 +4,7 @@
 #include <catch2/catch.hpp>
 #include <glm/glm.hpp>
 
+#include "scene_viewer/assets/vehicle_paints.hpp"
 #include "scene_viewer/ecs/coordinates.hpp"
 #include "scene_viewer/ecs/world.hpp"
 #include "scene_viewer/gfx/null_device.hpp"
@@ -342,6 +343,44 @@ TEST_CASE("A class's low model draws its boxes lower than they are long or wide"
     plain.set_class_model("vegetation", triangle(4.0f));
     plain.load(doc, nullptr, options);
     for (const PlacedModel& p : plain.placed_models()) CHECK(p.model->bounds_max.y == 4.0f);
+}
+
+TEST_CASE("World paints replace a vehicle model's paint parts and nothing else", "[ecs][systems]") {
+    NullDevice device;
+    SceneRenderer renderer(device);
+    Model car;
+    for (const char* name : {"paint", "glass"}) {
+        MeshPrimitive prim;
+        prim.positions = {{-1, 0, -2}, {1, 1.5f, 2}, {1, 0, 2}};
+        prim.normals = {{0, 1, 0}, {0, 1, 0}, {0, 1, 0}};
+        prim.indices = {0, 1, 2};
+        prim.material_name = name;
+        car.primitives.push_back(prim);
+    }
+    car.bounds_min = {-1, 0, -2};
+    car.bounds_max = {1, 1.5f, 2};
+    renderer.set_class_model("car", car);
+    renderer.set_class_model("vegetation", car);
+    auto doc = one_car(0.0);
+    doc.entities.push_back(entity("vegetation", 21, {5, -1, 20}, 0.0, {2.6, 5.6, 2.6}));
+    RenderOptions options;
+    options.ego = false;
+    renderer.render(doc, nullptr, options);
+    REQUIRE(device.draws.size() == 4);
+    const glm::vec4 own = device.draws[0].colour;
+    options.vehicle_paints = true;
+    options.paint_seed = 3;
+    renderer.render(doc, nullptr, options);
+    REQUIRE(device.draws.size() == 4);
+    const Rgb8 paint = vehicle_paint(doc.entities[0].id, 3).srgb;
+    CHECK(device.draws[0].colour ==
+          glm::vec4(paint[0] / 255.0f, paint[1] / 255.0f, paint[2] / 255.0f, 1.0f));
+    CHECK(device.draws[1].colour == own);  // the glass keeps its colour
+    CHECK(device.draws[2].colour == own);  // vegetation wears no paint
+    // Semantic shading draws the class colour whatever the paint.
+    options.shading = Shading::semantic;
+    renderer.render(doc, nullptr, options);
+    CHECK(device.draws[0].colour == glm::vec4(0, 0, 142 / 255.0f, 1));
 }
 
 TEST_CASE("The assembled scene places every entity with the matrix it is drawn with",

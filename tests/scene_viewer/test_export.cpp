@@ -78,7 +78,7 @@ TEST_CASE("an exported scene loads back with the same triangles and world bounds
     }
     CHECK(body_found);
     CHECK(back.primitives[0].material_name == car.primitives[0].material_name);
-    CHECK(car.primitives[0].material_name == "body");
+    CHECK(car.primitives[0].material_name == "paint");
     // No temporary file is left beside the output.
     CHECK(std::distance(fs::directory_iterator(dir), fs::directory_iterator()) == 1);
     fs::remove_all(dir);

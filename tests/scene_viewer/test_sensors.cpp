@@ -9,8 +9,10 @@
 #include <catch2/catch.hpp>
 
 #include "gl_test_context.hpp"
+#include "scene_viewer/assets/class_table.hpp"
 #include "scene_viewer/assets/image_io.hpp"
 #include "scene_viewer/assets/palette.hpp"
+#include "scene_viewer/assets/vehicle_paints.hpp"
 #include "scene_viewer/gfx/null_device.hpp"
 #include "scene_viewer/render/scene_renderer.hpp"
 #include "scene_viewer/sensors/stereo_sensors.hpp"
@@ -284,6 +286,29 @@ TEST_CASE("Sensor renders are deterministic: same seed same bytes, another seed 
     const double mean_abs = sum / static_cast<double>(a.left.pixels.size());
     CHECK(mean_abs > 1.0);
     CHECK(mean_abs < 6.0);
+}
+
+TEST_CASE("World paints recolour the shipped car in the colour images only", "[sensors][gl]") {
+    // The car's back faces the camera; its lower body (0.25-0.8 m of 1.4 m) is at v ~ 112.
+    const auto doc = scene({box("car-1", "car", 26, 0.0, 0.5, 10.0, 1.8, 1.5, 4.2)});
+    SensorOptions options = small_options();
+    options.sensor.noise_sigma = 0.0;
+    options.sensor.blur_sigma_px = 0.0;
+    // A seed that paints it red.
+    while (std::string(vehicle_paint("car-1", options.sensor.seed).name) != "red") {
+        ++options.sensor.seed;
+    }
+    SceneRenderer renderer(testing::gl_device());
+    use_class_models(renderer, load_class_table(default_class_table_path()));
+    const StereoFrame own = render_stereo_frame(renderer, doc, options);
+    options.vehicle_paints = true;
+    const StereoFrame painted = render_stereo_frame(renderer, doc, options);
+    const Rgb8 before = rgb(own.left, 160, 112), after = rgb(painted.left, 160, 112);
+    CHECK(before[2] > before[0] + 40);  // the class colour: dark blue
+    CHECK(after[0] > after[2] + 40);    // red
+    CHECK(painted.semantic.pixels == own.semantic.pixels);
+    CHECK(painted.instance.values == own.instance.values);
+    CHECK(painted.disparity.values == own.disparity.values);
 }
 
 TEST_CASE("The sensor model adds Gaussian noise of the given sigma and the right camera's gain",

@@ -58,6 +58,12 @@ CLI::App* add_sensors_command(CLI::App& app, SensorsArgs& a) {
                   "semantic image: thing borders grown or shrunk by up to N px (seeded by "
                   "--seed, like hand-drawn labels; the instance image stays exact)")
         ->capture_default_str();
+    s->add_option("--paints", a.paints,
+                  "vehicles' paint in the colour images: class (the class colour) or world "
+                  "(white, black, grey, silver... in the shares of the world's cars, each "
+                  "vehicle's drawn from its id and --seed; docs/models.md)")
+        ->check(CLI::IsMember({"class", "world"}))
+        ->capture_default_str();
     s->add_flag("--no-ground", a.no_ground, "no terrain underlay under the road level");
     s->add_flag("--boxes", a.boxes, "draw every entity as a box (no glTF models)");
     s->add_option("--frames", a.frames,
@@ -156,6 +162,7 @@ int run_sensors(SensorsArgs a) {
     const auto document = read_entities(a.input);
     a.options.rig = resolve_rig(a, document);
     a.options.ground_underlay = !a.no_ground;
+    a.options.vehicle_paints = a.paints == "world";
     try {
         a.options.validate();
     } catch (const std::invalid_argument& e) {

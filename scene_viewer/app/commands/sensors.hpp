@@ -21,6 +21,7 @@ struct SensorsArgs {
     std::optional<double> fx_px;          ///< focal length (fx = fy), px; none: the rig's
     std::optional<double> baseline_m;     ///< stereo baseline, metres; none: the rig's
     bool no_ground = false;               ///< no terrain underlay under the road level
+    std::string paints = "class";         ///< --paints: "class" or "world" (vehicle_paints)
     bool boxes = false;                   ///< boxes instead of glTF models
     std::string classes;                  ///< class table; empty: the bundled one
     scene_viewer::SensorOptions options;  ///< noise, blur, gain, vignetting, MSAA, seed

@@ -62,6 +62,7 @@ std::uint32_t ModelLibrary::put(const std::string& key, const Model& model) {
         p.mesh = device_->create_mesh(data);
         p.base_colour = display_colour(prim.base_colour);
         p.node_transform = prim.node_transform;
+        p.paint = prim.material_name == "paint";
         up.triangle_count +=
             (prim.indices.empty() ? prim.positions.size() : prim.indices.size()) / 3;
         up.primitives.push_back(p);

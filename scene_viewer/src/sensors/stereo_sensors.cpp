@@ -232,6 +232,8 @@ RenderOptions rig_render_options(const SensorOptions& options) {
     o.ego = false;
     o.keep_alpha = true;
     o.procedural_texture = true;
+    o.vehicle_paints = options.vehicle_paints;
+    o.paint_seed = options.sensor.seed;
     o.antialias = Antialias::msaa;
     o.msaa_samples = options.msaa_samples;
     return o;

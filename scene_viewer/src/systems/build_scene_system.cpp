@@ -7,6 +7,7 @@
 
 #include "scene_viewer/assets/colours.hpp"
 #include "scene_viewer/assets/palette.hpp"
+#include "scene_viewer/assets/vehicle_paints.hpp"
 #include "scene_viewer/ecs/coordinates.hpp"
 #include "scene_viewer/ecs/render_options.hpp"
 #include "scene_viewer/views/views.hpp"
@@ -144,6 +145,10 @@ float add_document_entities(World& world, const scene_schema::EntityDocument& do
                               : to_colour(class_colour(src.class_id, src.class_name));
         material.lit = lit;
         material.procedural = lit && options.procedural_texture;
+        if (lit && options.vehicle_paints && is_painted_class(src.class_name)) {
+            material.painted = true;
+            material.paint = to_colour(vehicle_paint(src.id, options.paint_seed).srgb);
+        }
         if (!instance_ids.empty()) {
             material.colour = {(instance_ids[i] >> 8) / 255.0f, (instance_ids[i] & 0xff) / 255.0f,
                                0.0f, 1.0f};

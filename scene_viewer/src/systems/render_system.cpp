@@ -20,7 +20,8 @@ void render_world(const World& world, const ModelLibrary& models, Device& device
             call.texture = material.lit ? p.texture : TextureHandle{};
             call.model = world_matrix.value * p.node_transform;
             call.view_projection = view_projection;
-            call.colour = material.lit ? material.colour * p.base_colour : material.colour;
+            const glm::vec4 base = p.paint && material.painted ? material.paint : p.base_colour;
+            call.colour = material.lit ? material.colour * base : material.colour;
             call.lit = material.lit;
             call.vertex_colour = material.vertex_colour;
             call.point_size_px = material.point_size_px;

@@ -38,6 +38,8 @@ struct Material {
     bool vertex_colour = false;  ///< use per-vertex colours (point clouds)
     float point_size_px = 2.0f;  ///< size of GL points
     bool procedural = false;     ///< modulate by world-space value noise (sensor renders)
+    bool painted = false;        ///< lit: the model's "paint" parts take `paint`
+    glm::vec4 paint{1.0f};       ///< display (sRGB-encoded) RGBA 0..1 of the paint
 };
 
 /// A camera: what view it takes and the matrices the camera system computed for it.

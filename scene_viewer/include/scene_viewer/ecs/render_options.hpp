@@ -3,6 +3,7 @@
 /// How a frame is rendered: size, view, shading and antialiasing. Read by the build system and
 /// the renderer; includes nothing of either.
 
+#include <cstdint>
 #include <string>
 
 #include <glm/glm.hpp>
@@ -49,7 +50,11 @@ struct RenderOptions {
     float point_size_px = 2.0f;             ///< point cloud overlay: point size, pixels
     bool keep_alpha = false;                ///< keep alpha 0 where nothing was drawn (compositing)
     bool procedural_texture = false;        ///< lit: world-space noise texture on every surface
-    glm::mat4 texture_frame{1.0f};          ///< GL world -> the noise's frame (FrameSetup)
+    /// lit: vehicles wear the world's car paints (vehicle_paint()) where their models have a
+    /// "paint" material, instead of the model's own colour (the class colour).
+    bool vehicle_paints = false;
+    std::uint64_t paint_seed = 0;   ///< vehicle_paints: the seed of the draws (vehicle_paint())
+    glm::mat4 texture_frame{1.0f};  ///< GL world -> the noise's frame (FrameSetup)
     /// Throws std::invalid_argument naming the bad field.
     void validate() const;
 };

@@ -23,6 +23,7 @@ struct UploadedPrimitive {
     TextureHandle texture;
     glm::vec4 base_colour{1.0f};  ///< display (sRGB-encoded) RGBA 0..1 of the glTF base colour
     glm::mat4 node_transform{1.0f};
+    bool paint = false;  ///< its glTF material is named "paint": a vehicle's paint may replace it
 };
 
 /// A model as uploaded, with the bounds used to fit it into an entity box.

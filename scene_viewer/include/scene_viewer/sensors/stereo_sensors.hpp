@@ -87,6 +87,8 @@ struct SensorOptions {
     float far_m = 1000.0f;         ///< far plane, metres
     int label_bleed_px = 0;        ///< semantic image: thing borders moved out or in by up to
                                    ///< this many pixels (seeded, apply_label_bleed), 0..16
+    bool vehicle_paints = false;   ///< colour images: vehicles in the world's car paints
+                                   ///< (RenderOptions::vehicle_paints), not the class colour
     /// Throws std::invalid_argument naming the bad field.
     void validate() const;
 };
