@@ -425,7 +425,10 @@ def make_tree():
 
 HEDGE_SIZE = (0.9, 1.2, 3.0)  # W (x), H (y), L (z), metres: the model's own box
 HEDGE_LEAVES = 1250
-HEDGE_GREENS = [(46, 74, 22), (64, 98, 30), (86, 122, 38), (107, 142, 35), (120, 150, 60)]
+# Leaf colours around the X-Rite ColorChecker's "foliage" patch (sRGB 87, 108, 67): real leaves
+# are an olive, not the saturated green of the palette's vegetation class; some darker, some
+# yellower, some dry.
+HEDGE_GREENS = [(87, 108, 67), (70, 88, 52), (104, 112, 66), (58, 72, 44), (118, 118, 78)]
 
 
 def hedge_surface_point(rng):
@@ -461,7 +464,7 @@ def make_hedge():
     m = Mesh("hedge")
     rng = np.random.default_rng(7)
     greens = [m.material(f"leaves {i}", colour(*c), 0.9) for i, c in enumerate(HEDGE_GREENS)]
-    core = m.material("core", colour(24, 36, 14), 1.0)
+    core = m.material("core", colour(30, 36, 22), 1.0)
     w, h, l = HEDGE_SIZE
     m.box(core, (0, (h - 0.25) / 2, 0), (w - 0.4, h - 0.25, l - 0.4))
     for _ in range(HEDGE_LEAVES):
