@@ -22,7 +22,7 @@ packages=(
     dpkg-dev
     # plots for docs/performance.md
     python3-matplotlib
-    # OpenCV's random trees and PNG reader for scripts/segment-classifier.py
+    # OpenCV's random trees and PNG reader for scripts/train-segment-classifier.py
     python3-opencv
     # the browser viewer: node runs npm and esbuild; the browser tests drive Debian's chromium
     nodejs chromium

@@ -1,6 +1,6 @@
 # Seeds of the streets scripts/make-parking-scene.py renders for evaluation, read by
 # scripts/evaluate.sh, evaluate-instances.sh and evaluate-vehicle-models.sh (sourced) and
-# scripts/segment-classifier.py (parsed: NAME="..." lines).
+# scripts/train-segment-classifier.py (parsed: NAME="..." lines).
 # Parking, kerbside and pedestrian streets are tuning data; the held-out seeds give a parking, a
 # kerbside and a pedestrian street each and are never used to choose a parameter.
 parking_seeds="2 4 5 6 7 8 9 10 11 12 23 24 25 26 27 28 29 30 31 32"

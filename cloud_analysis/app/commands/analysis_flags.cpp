@@ -7,6 +7,7 @@
 #include "cloud_analysis/cloud/cloud_io.hpp"
 #include "cloud_analysis/cloud/semantic.hpp"
 #include "cloud_analysis/entities/class_config.hpp"
+#include "cloud_analysis/geometry/segment_classifier.hpp"
 #include "cloud_analysis/io/io.hpp"
 #include "cloud_analysis/stereo/calibration.hpp"
 #include "cloud_analysis/stereo/disparity.hpp"
@@ -76,6 +77,12 @@ void add_input_settings_flags(CLI::App& cmd, AnalyseArgs& a) {
                    "--semantics geometry: obstacles split by columns (u-disparity, the default) "
                    "or clusters (3D Euclidean clustering; docs/entities.md compares them)")
         ->check(CLI::IsMember({"columns", "clusters"}))
+        ->capture_default_str()
+        ->group(in);
+    cmd.add_option("--vehicle-classifier", a.vehicle_classifier,
+                   "--semantics geometry: the random trees that decide which segments are "
+                   "vehicles (a cv::ml::RTrees file), default (the project's, trained on "
+                   "rendered streets; docs/stereo-only.md) or none (the rules decide)")
         ->capture_default_str()
         ->group(in);
     cmd.add_option("--palette", a.options.palette,
@@ -350,6 +357,17 @@ void resolve_settings(AnalyseArgs& a, const CLI::App& cmd) {
         a.options.validate();
     } catch (const std::invalid_argument& e) {
         throw flag_error(cmd, e.what());
+    }
+    if (a.options.semantics != "labels" && a.vehicle_classifier != "none") {
+        const std::filesystem::path file =
+            a.vehicle_classifier == "default"
+                ? cloud_analysis::geometry::default_segment_classifier_path()
+                : std::filesystem::path(a.vehicle_classifier);
+        try {
+            a.options.geometry.classifier = cloud_analysis::geometry::SegmentClassifier::load(file);
+        } catch (const std::runtime_error& e) {
+            throw CLI::ValidationError("--vehicle-classifier", e.what());
+        }
     }
     if (a.drop_sky) a.drop_classes.push_back("sky");
     if (!a.drop_classes.empty()) {

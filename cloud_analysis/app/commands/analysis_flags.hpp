@@ -37,6 +37,8 @@ struct AnalyseArgs {
         drop_classes;             ///< --drop-classes (+ sky with --drop-sky): not in clouds
     bool drop_sky = false;        ///< --drop-sky
     bool no_rig_scaling = false;  ///< --no-rig-scaling: pixel settings as written for KITTI
+    /// --vehicle-classifier: "default" (the project's model), "none" (the rules) or a file.
+    std::string vehicle_classifier = "default";
     bool timings = false;
     bool fsync_clouds = false;  ///< --fsync-clouds: the clouds are durable too
     bool warnings = true;       ///< print the inputs' warnings (bench: on its first run only)

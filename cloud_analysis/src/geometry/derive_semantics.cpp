@@ -11,6 +11,7 @@
 #include <vector>
 
 #include "cloud_analysis/geometry/scene_geometry.hpp"
+#include "cloud_analysis/geometry/segment_classifier.hpp"
 #include "cloud_analysis/support/select.hpp"
 #include "derive_semantics_internal.hpp"
 
@@ -345,6 +346,26 @@ void drop_leaning_cars(const Classes& cls, const GeometryOptions& o, std::vector
     }
 }
 
+/// The classifier's call on every segment (GeometryOptions::classifier): one more of its trees
+/// than its vote threshold call a vehicle is a car (the rules' car bands kept), a car of the rules
+/// that it does not call one is static; the rules' other classes stand.
+void classify_vehicles(const SegmentClassifier& classifier, const Classes& cls,
+                       std::vector<Segment>& segments, std::vector<std::uint16_t>& segment_class) {
+    for (std::size_t s = 0; s < segments.size(); ++s) {
+        Segment& seg = segments[s];
+        seg.vehicle_votes = classifier.vehicle_votes(seg.features);
+        const bool vehicle = seg.vehicle_votes > classifier.vote_threshold();
+        if (vehicle && seg.class_index != cls.car) {
+            seg.class_index = cls.car;
+            seg.label = "car";
+        } else if (!vehicle && seg.class_index == cls.car) {
+            seg.class_index = cls.other;
+            seg.label = "static";
+        }
+        segment_class[s] = seg.class_index;
+    }
+}
+
 /// Sky above the horizon wherever no segment holds the pixel.
 void label_sky(const Grid* g, int w, double horizon_v, std::uint16_t sky, ClassImage& out) {
     if (sky == kVoidClass) return;
@@ -466,6 +487,13 @@ SceneGeometry derive_semantics(const DisparityMap& disparity, const StereoCamera
     }
     measure_leans(grid, disparity, rig, o, cls.car, out.segments);
     drop_leaning_cars(cls, o, out.segments, segment_class);
+    measure_appearance(grid, disparity, left, out.segments);
+    for (Segment& seg : out.segments) {
+        seg.rules_label = seg.label;
+        seg.features = segment_features(seg, rig.fx, rig.fy);
+    }
+    if (o.classifier) classify_vehicles(*o.classifier, cls, out.segments, segment_class);
+
     label_segment_pixels(grid, cls, segment_class, stats, w, o.column_bin_px, out);
     label_sky(&grid, w, out.ground.horizon_v_px, cls.sky, out.classes);
     sort_segments(out);

@@ -92,4 +92,9 @@ std::vector<int> link_cells(Grid& g, const DisparityMap& disparity, const Rig& r
 std::vector<int> cluster_cells(Grid& g, const DisparityMap& disparity, const Rig& rig,
                                const GeometryOptions& o);
 
+/// Each segment's colour, texture and surface roughness (Segment::chroma_r .. disparity_spread)
+/// from its pixels in the left image (colour left neutral without one) and the disparity.
+void measure_appearance(const Grid& grid, const DisparityMap& disparity, const ImageU8& left,
+                        std::vector<Segment>& segments);
+
 }  // namespace cloud_analysis::geometry

@@ -32,7 +32,21 @@ std::string segments_json(const SceneGeometry& g, const std::string& frame_id) {
              {"tall", s.tall},
              {"lean", std::isfinite(s.lean) ? nlohmann::json(s.lean) : nlohmann::json()},
              {"lean_error",
-              std::isfinite(s.lean_error) ? nlohmann::json(s.lean_error) : nlohmann::json()}});
+              std::isfinite(s.lean_error) ? nlohmann::json(s.lean_error) : nlohmann::json()},
+             {"chroma_r", s.chroma_r},
+             {"chroma_g", s.chroma_g},
+             {"chroma_b", s.chroma_b},
+             {"fill", s.fill},
+             {"luma", s.luma},
+             {"luma_cv", s.luma_cv},
+             {"grad", s.grad},
+             {"rough_h", s.rough_h},
+             {"rough_v", s.rough_v},
+             {"disparity_spread", s.disparity_spread},
+             {"rules_class", s.rules_label},
+             {"features", s.features},
+             {"vehicle_votes", std::isfinite(s.vehicle_votes) ? nlohmann::json(s.vehicle_votes)
+                                                              : nlohmann::json()}});
     }
     const nlohmann::json doc = {{"frame", frame_id},
                                 {"ground",

@@ -10,6 +10,7 @@
 
 #include <cstdint>
 #include <limits>
+#include <memory>
 #include <string>
 #include <vector>
 
@@ -19,6 +20,8 @@
 #include "cloud_analysis/io/io.hpp"
 
 namespace cloud_analysis::geometry {
+
+class SegmentClassifier;
 
 /// Entities made from classes the geometry decided carry this share of the confidence the
 /// labelled path gives the same support (docs/entities.md, "Confidence").
@@ -134,6 +137,8 @@ struct GeometryOptions {
                                            ///< its smallest prior face (W x H) is a fragment or
                                            ///< clutter and is dropped, [0, 1), 0 = off
     int threads = 2;                       ///< threads of the per-pixel passes, >= 1
+    /// Decides which segments are vehicles (segment_classifier.hpp); null: the rules do.
+    std::shared_ptr<const SegmentClassifier> classifier;
     /// Throws std::invalid_argument naming the bad field.
     void validate() const;
 };
@@ -177,6 +182,24 @@ struct Segment {
     double lean = std::numeric_limits<double>::quiet_NaN();
     double lean_error = std::numeric_limits<double>::quiet_NaN();
     int u0 = 0, v0 = 0, u1 = -1, v1 = -1;  ///< image box of its pixels (inclusive), px
+    // What the classifier reads beside the rules' measurements (measure_appearance): colour
+    // from the left image (neutral without colour), surface from the disparity.
+    double chroma_r = 1.0 / 3, chroma_g = 1.0 / 3,
+           chroma_b = 1.0 / 3;      ///< mean of each
+                                    ///< pixel's r/(r+g+b) etc.: hue and saturation
+    double fill = 0.0;              ///< share of its image box its pixels fill, [0, 1]
+    double luma = 0.0;              ///< mean grey level, 0..255
+    double luma_cv = 0.0;           ///< grey level's standard deviation / (mean + 5)
+    double grad = 0.0;              ///< mean |grey step| between neighbours in a row /
+                                    ///< (mean + 5): texture
+    double rough_h = 0.0;           ///< share of its neighbours in a row, and ...
+    double rough_v = 0.0;           ///< ... in a column, whose disparities differ by more
+                                    ///< than 0.3 px: a porous or broken surface
+    double disparity_spread = 0.0;  ///< (90th - 10th percentile) / median of its disparity
+    std::string rules_label;        ///< the class the rules gave it (label: the final one)
+    std::vector<float> features;    ///< what the classifier reads (segment_features())
+    /// Share of the classifier's trees calling it a vehicle; NaN without a classifier.
+    double vehicle_votes = std::numeric_limits<double>::quiet_NaN();
 };
 
 /// What the geometry decided.

@@ -1,0 +1,58 @@
+#pragma once
+
+/// Whether an obstacle segment of the stereo-only path is a vehicle, learnt instead of ruled:
+/// OpenCV's random trees (Breiman, "Random Forests", Machine Learning 45, 2001) over what stereo
+/// and the left image measure of the segment (segment_features()). Trained on rendered streets
+/// only, never on a real image (scripts/train-segment-classifier.py; docs/stereo-only.md).
+
+#include <array>
+#include <filesystem>
+#include <memory>
+#include <vector>
+
+namespace cloud_analysis::geometry {
+
+struct Segment;
+
+/// The measurements the classifier reads, in this order (Segment's members; see there).
+inline constexpr std::array<const char*, 25> kSegmentFeatureNames = {
+    "top_m",           "top_q25_m",     "low_m",   "width_m",
+    "thickness_m",     "depth_m",       "near_m",  "far_m",
+    "green",           "occluded",      "tall",    "horizontal_edges",
+    "top_spread_m",    "depth_range_m", "area_m2", "chroma_r",
+    "chroma_g",        "chroma_b",      "fill",    "luma",
+    "luma_cv",         "grad",          "rough_h", "rough_v",
+    "disparity_spread"};
+
+/// A segment's measurements as the classifier reads them (kSegmentFeatureNames). The area seen
+/// is pixels z^2 / (fx fy): the same for any rig that sees the same surface.
+std::vector<float> segment_features(const Segment& segment, double fx_px, double fy_px);
+
+/// A trained vehicle-or-not classifier.
+class SegmentClassifier {
+  public:
+    /// Reads a classifier's manifest (JSON: "format" "stereoscene-vehicle-classifier",
+    /// "version" 1, "model" the trees' file beside it as cv::ml::RTrees::save wrote it, two
+    /// classes, 0 not a vehicle and 1 a vehicle; "features" kSegmentFeatureNames in order;
+    /// "vote_threshold" in (0, 1)) and its trees. Throws std::runtime_error "<file>: <reason>".
+    static std::shared_ptr<const SegmentClassifier> load(const std::filesystem::path& manifest);
+
+    /// Share of the trees that call these features a vehicle, [0, 1].
+    double vehicle_votes(const std::vector<float>& features) const;
+    /// A segment is a vehicle when more than this share of the trees call it one.
+    double vote_threshold() const;
+
+    ~SegmentClassifier();
+    SegmentClassifier(const SegmentClassifier&) = delete;
+    SegmentClassifier& operator=(const SegmentClassifier&) = delete;
+
+  private:
+    struct Impl;
+    explicit SegmentClassifier(std::unique_ptr<Impl> impl);
+    std::unique_ptr<Impl> impl_;
+};
+
+/// The project's model: classifiers/vehicle-segments.json in the asset folder.
+std::filesystem::path default_segment_classifier_path();
+
+}  // namespace cloud_analysis::geometry

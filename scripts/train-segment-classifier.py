@@ -1,0 +1,314 @@
+#!/usr/bin/python3
+"""Trains the stereo-only path's vehicle classifier on rendered streets, and scores it.
+
+The stereo-only path cuts the obstacles standing on the road into segments and measures each
+(`cloud-analysis --semantics geometry --segments-out`: its height, width, depth, colour,
+texture, how rough its surface is in disparity; docs/stereo-only.md). This script renders
+streets it may learn from, gives every segment nearer than --max-depth the truth's answer (a
+vehicle when most of its pixels are a car in the rendered instance image), and trains OpenCV's
+random trees (cv2.ml.RTrees, the depth chosen by 4-fold cross-validation over the training
+streets) to answer vehicle or not. It writes the model (--out) and prints, beside the rules'
+answers, its errors on data it never learnt from:
+
+- held-out streets: the held-out seeds of scripts/street-seeds.sh (parking, kerbside and
+  pedestrian streets as scripts/evaluate.sh renders them, cars in the class colour) and verge
+  streets of their own seeds (scripts/make-verge-street.py, cars in the world's paints);
+- real frames, when ../shared/data is there: the KITTI frames with instance images, and the real
+  drive against the project's hand-drawn boxes (samples/labels-2d; a segment is a vehicle when
+  its image box overlaps a labelled vehicle's by IoU > 0.3).
+
+Training data is rendered streets only, never a real image: the tuning seeds of
+scripts/street-seeds.sh and the extra tuning seeds 43-106 (parking and kerbside streets), each
+rendered twice, its cars in the world's paints (--paints world) and in the class colour, so that
+no colour tells a vehicle; and verge streets of seeds 1..--verge-streets in the world's paints.
+
+usage: scripts/train-segment-classifier.py [--out FILE] [--work DIR] [--no-write]
+           [--verge-streets N] [--max-depth M] [--build-dir DIR] [--parking-seeds "2 4 ..."]
+           [--kerbside-seeds ...] [--pedestrian-seeds ...] [--held-out-seeds ...]
+           [--extra-seeds "43 44 ..."] [--held-out-verge-seeds "101 102 ..."]
+"""
+import argparse
+import glob
+import json
+import os
+import re
+import subprocess
+import sys
+
+import cv2
+import numpy as np
+
+from stereoscene_assets import class_ids
+
+ROOT = os.path.dirname(os.path.dirname(os.path.abspath(__file__)))
+SHARED = os.path.join(ROOT, "..", "shared", "data")
+CAR_LABEL_ID = class_ids("cityscapes")["car"]
+HELD_OUT_VERGE_SEEDS = range(101, 116)
+# A segment is a vehicle when more than this share of the trees call it one: a majority, the
+# forest's own rule (Breiman 2001); no threshold is fitted.
+VOTE_THRESHOLD = 0.5
+# What the classifier reads, in order (cloud_analysis/geometry/segment_classifier.hpp, the
+# segments table's "features").
+FEATURES = ["top_m", "top_q25_m", "low_m", "width_m", "thickness_m", "depth_m", "near_m", "far_m",
+            "green", "occluded", "tall", "horizontal_edges", "top_spread_m", "depth_range_m",
+            "area_m2", "chroma_r", "chroma_g", "chroma_b", "fill", "luma", "luma_cv", "grad",
+            "rough_h", "rough_v", "disparity_spread"]
+
+
+def run(cmd):
+    r = subprocess.run(cmd, capture_output=True, text=True)
+    if r.returncode != 0:
+        sys.exit(f"train-segment-classifier: {' '.join(cmd[:2])}: {r.stderr.strip()}")
+
+
+def street_seeds():
+    seeds = {}
+    with open(os.path.join(ROOT, "scripts", "street-seeds.sh")) as f:
+        for line in f:
+            m = re.fullmatch(r'(\w+)="([\d ]*)"', line.strip())
+            if m:
+                seeds[m.group(1)] = m.group(2).split()
+    return seeds
+
+
+def render(a, name, make, seed, paints):
+    """Renders a street (make: the generator's arguments) once into the work folder."""
+    root = os.path.join(a.work, name)
+    if not os.path.isdir(root):
+        scene = root + ".json"
+        run(["python3", os.path.join(ROOT, "scripts", make[0])] + make[1:] +
+            ["--seed", str(seed), "-o", scene])
+        run([a.scene_render, "sensors", scene, "--out", root + ".tmp", "--frame", "000000",
+             "--seed", str(seed), "--paints", paints])
+        os.rename(root + ".tmp", root)
+    return root
+
+
+def segments(a, key, args):
+    """The segments of one frame (rules only) and the image of their indices, cached."""
+    out = os.path.join(a.work, "segments", key)
+    if not os.path.exists(out + ".json"):
+        os.makedirs(os.path.dirname(out), exist_ok=True)
+        run([a.cloud_analysis] + args + ["--semantics", "geometry", "--vehicle-classifier",
+                                          "none", "--segments-out", out + ".tmp.json",
+                                          "--segment-ids-out", out + ".png"])
+        os.rename(out + ".tmp.json", out + ".json")
+    ids = cv2.imread(out + ".png", cv2.IMREAD_UNCHANGED).astype(np.int64)
+    return json.load(open(out + ".json"))["segments"], ids
+
+
+def rows_with_instances(a, name, root, frame):
+    """(name, features, vehicle in the truth, vehicle by the rules) of each near segment."""
+    segs, ids = segments(a, name, ["--kitti-root", root, "--frame", frame])
+    truth = cv2.imread(os.path.join(root, "instance", frame + ".png"), cv2.IMREAD_UNCHANGED)
+    car = (truth.astype(np.int64) >> 8) == CAR_LABEL_ID
+    pixels = np.bincount(ids.ravel(), minlength=len(segs) + 1)
+    cars = np.bincount(ids.ravel(), weights=car.ravel(), minlength=len(segs) + 1)
+    return [(name, s["features"], int(cars[s["index"] + 1] > 0.5 * pixels[s["index"] + 1]),
+             int(s["rules_class"] == "car")) for s in segs if s["depth_m"] < a.max_depth]
+
+
+def iou(p, q):
+    w = min(p[2], q[2]) - max(p[0], q[0])
+    h = min(p[3], q[3]) - max(p[1], q[1])
+    if w <= 0 or h <= 0:
+        return 0.0
+    inter = w * h
+    return inter / ((p[2] - p[0]) * (p[3] - p[1]) + (q[2] - q[0]) * (q[3] - q[1]) - inter)
+
+
+def rows_of_real_drive(a, drive, labels_file):
+    labels = json.load(open(labels_file))
+    boxes = {f["frame"]: [o["box"] for o in f["objects"]] for f in labels["frames"]}
+    rows = []
+    for left in sorted(glob.glob(os.path.join(drive, "image_2", "*.png"))):
+        frame = os.path.basename(left)[:-4]
+        segs, _ = segments(a, "drive-" + frame,
+                           ["--left", left, "--right", os.path.join(drive, "image_3", frame + ".png"),
+                            "--calib", os.path.join(drive, "calib.txt")])
+        for s in segs:
+            if s["depth_m"] >= a.max_depth:
+                continue
+            u0, v0, u1, v1 = s["box_px"]
+            box = [u0, v0, u1 + 1, v1 + 1]
+            vehicle = any(iou(box, b) > 0.3 for b in boxes.get(frame, []))
+            rows.append(("drive-" + frame, s["features"], int(vehicle),
+                         int(s["rules_class"] == "car")))
+    return rows
+
+
+def train(rows, depth):
+    x = np.array([r[1] for r in rows], np.float32)
+    y = np.array([r[2] for r in rows], np.int32).reshape(-1, 1)
+    trees = cv2.ml.RTrees_create()
+    trees.setMaxDepth(depth)
+    trees.setMinSampleCount(5)
+    trees.setTermCriteria((cv2.TERM_CRITERIA_MAX_ITER, 100, 0))
+    cv2.setRNGSeed(1)
+    trees.train(cv2.ml.TrainData_create(x, cv2.ml.ROW_SAMPLE, y))
+    return trees
+
+
+def vehicle_votes(trees, rows):
+    """Share of the trees calling each row a vehicle."""
+    if not rows:
+        return np.zeros(0)
+    votes = trees.getVotes(np.array([r[1] for r in rows], np.float32), 0)
+    vehicle = votes[1:, list(votes[0]).index(1)] if 1 in votes[0] else np.zeros(len(rows))
+    return vehicle / votes[1:].sum(axis=1)
+
+
+def errors(rows, guess):
+    truth = np.array([r[2] for r in rows], int)
+    guess = np.asarray(guess, int)
+    return int(truth.sum()), int(((guess == 1) & (truth == 0)).sum()), \
+        int(((guess == 0) & (truth == 1)).sum())
+
+
+def street(name):
+    """The street a render shows: both renders of a street fall in one fold."""
+    return name[:-len("-world")] if name.endswith("-world") else name
+
+
+def cross_validate(rows):
+    """The trees' depth with the fewest errors (false vehicles plus missed ones) over 4 folds by
+    street, a vehicle being what a majority of the trees call one; and the guesses it makes."""
+    names = sorted({street(r[0]) for r in rows})
+    folds = [set(names[k::4]) for k in range(4)]
+    best = None
+    for depth in (5, 8, 12):
+        votes = np.zeros(len(rows))
+        for fold in folds:
+            fit = [r for r in rows if street(r[0]) not in fold]
+            test = [k for k, r in enumerate(rows) if street(r[0]) in fold]
+            votes[test] = vehicle_votes(train(fit, depth), [rows[k] for k in test])
+        n, fp, fn = errors(rows, votes > VOTE_THRESHOLD)
+        print(f"  depth {depth}: {fp} false vehicles, {fn} missed of {n} vehicle segments")
+        if best is None or fp + fn < best[1]:
+            best = (depth, fp + fn, votes > VOTE_THRESHOLD)
+    return best[0], best[2]
+
+
+def write_model(manifest, trees, threshold, depth, rows):
+    """The trees beside their manifest (what they read, where a vehicle begins), each file
+    written whole."""
+    folder = os.path.dirname(os.path.abspath(manifest))
+    os.makedirs(folder, exist_ok=True)
+    model = os.path.splitext(os.path.basename(manifest))[0] + ".yml.gz"
+    trees.save(os.path.join(folder, "." + model + ".tmp.yml.gz"))
+    os.replace(os.path.join(folder, "." + model + ".tmp.yml.gz"), os.path.join(folder, model))
+    names = sorted({street(r[0]) for r in rows})
+    doc = {"format": "stereoscene-vehicle-classifier", "version": 1, "model": model,
+           "features": FEATURES, "vote_threshold": threshold,
+           "trained_on": f"{len(names)} rendered streets ({len(rows)} segments): the tuning "
+                         f"and extra tuning parking and kerbside streets in the world's paints "
+                         f"and the class colour, verge streets in the world's paints; random "
+                         f"trees of depth {depth}, 100 trees",
+           "command": "scripts/train-segment-classifier.py"}
+    with open(manifest + ".tmp", "w") as f:
+        json.dump(doc, f, indent=1)
+        f.write("\n")
+    os.replace(manifest + ".tmp", manifest)
+    print(f"\nwrote {manifest} and {model}", file=sys.stderr)
+
+
+def main():
+    ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    ap.add_argument("--out", default=os.path.join(ROOT, "assets", "classifiers",
+                                                   "vehicle-segments.json"),
+                    help="the manifest to write; the trees go beside it (<name>.yml.gz)")
+    ap.add_argument("--no-write", action="store_true", help="score only; write no model")
+    ap.add_argument("--work", default=os.path.join(ROOT, "build", "segment-classifier"),
+                    help="renders and segment tables, kept for the next run")
+    ap.add_argument("--build-dir", default=os.path.join(ROOT, "build"))
+    ap.add_argument("--verge-streets", type=int, default=60,
+                    help="verge streets of seeds 1..N to learn from")
+    seeds = street_seeds()
+    for kind in ("parking_seeds", "kerbside_seeds", "pedestrian_seeds", "held_out_seeds"):
+        ap.add_argument("--" + kind.replace("_", "-"), default=" ".join(seeds[kind]),
+                        help="(default: scripts/street-seeds.sh's)")
+    ap.add_argument("--extra-seeds", default=" ".join(str(s) for s in range(43, 107)),
+                    help="more parking and kerbside streets to learn from (docs/evaluation.md's "
+                         "extra tuning streets)")
+    ap.add_argument("--held-out-verge-seeds",
+                    default=" ".join(str(s) for s in HELD_OUT_VERGE_SEEDS))
+    ap.add_argument("--max-depth", type=float, default=45.0,
+                    help="segments nearer than this (median depth) are learnt and scored, m")
+    a = ap.parse_args()
+    a.cloud_analysis = os.path.join(a.build_dir, "cloud_analysis", "cloud-analysis")
+    a.scene_render = os.path.join(a.build_dir, "scene_viewer", "scene-render")
+    os.makedirs(a.work, exist_ok=True)
+    seeds = {k: getattr(a, k).split() for k in ("parking_seeds", "kerbside_seeds",
+                                                 "pedestrian_seeds", "held_out_seeds")}
+    kinds = (("parking-street", ["make-parking-scene.py"]),
+             ("kerbside", ["make-parking-scene.py", "--kerbside"]),
+             ("pedestrians", ["make-parking-scene.py", "--kerbside", "--pedestrians"]))
+    seed_lists = {"parking-street": "parking_seeds", "kerbside": "kerbside_seeds",
+                  "pedestrians": "pedestrian_seeds"}
+    fit = []
+    extra = a.extra_seeds.split()
+    for kind, make in kinds:
+        street_seeds_of_kind = seeds[seed_lists[kind]] + (extra if kind != "pedestrians" else [])
+        for s in street_seeds_of_kind:
+            # Each street twice: its cars in the world's paints and in the class colour, so
+            # that no colour tells a vehicle.
+            for paints, name in (("world", f"{kind}-{s}-world"), ("class", f"{kind}-{s}")):
+                fit += rows_with_instances(a, name, render(a, name, make, s, paints), "000000")
+    for s in range(1, a.verge_streets + 1):
+        name = f"verge-street-{s}"
+        fit += rows_with_instances(
+            a, name, render(a, name, ["make-verge-street.py"], s, "world"), "000000")
+    if len({r[2] for r in fit}) < 2:
+        sys.exit("train-segment-classifier: the training streets need vehicle and other "
+                 "segments to learn from")
+    print(f"cross-validation over the {len({street(r[0]) for r in fit})} training streets "
+          f"({len({r[0] for r in fit})} renders; 4 folds by street):")
+    depth, cv_guess = cross_validate(fit)
+    threshold = VOTE_THRESHOLD
+    trees = train(fit, depth)
+
+    checks = [(f"training streets ({len({street(r[0]) for r in fit})}, cross-validated)", fit,
+               cv_guess)]
+    held = []
+    for kind, make in kinds:
+        for s in seeds["held_out_seeds"]:
+            name = f"{kind}-{s}"
+            held += rows_with_instances(a, name, render(a, name, make, s, "class"), "000000")
+    checks.append((f"held-out streets ({len(seeds['held_out_seeds']) * 3})", held, None))
+    verge = []
+    held_out_verge = [int(s) for s in a.held_out_verge_seeds.split()]
+    if set(held_out_verge) & set(range(1, a.verge_streets + 1)):
+        ap.error("--held-out-verge-seeds overlap the training verge streets 1..--verge-streets")
+    for s in held_out_verge:
+        name = f"verge-street-{s}"
+        verge += rows_with_instances(
+            a, name, render(a, name, ["make-verge-street.py"], s, "world"), "000000")
+    checks.append((f"held-out verge streets ({len(held_out_verge)})", verge, None))
+    kitti = os.path.join(SHARED, "kitti15")
+    frames = sorted(os.path.basename(p)[:-4] for p in glob.glob(os.path.join(kitti, "instance",
+                                                                             "*.png")))
+    if frames:
+        rows = sum((rows_with_instances(a, "kitti-" + f, kitti, f) for f in frames), [])
+        checks.append((f"KITTI frames ({len(frames)}, instance images)", rows, None))
+    drive = os.path.join(SHARED, "kitti_odometry_02")
+    if os.path.isdir(os.path.join(drive, "image_2")):
+        rows = rows_of_real_drive(a, drive, os.path.join(ROOT, "samples", "labels-2d",
+                                                         "kitti_odometry_02.json"))
+        checks.append(("real drive (20 frames, hand-drawn boxes)", rows, None))
+
+    print(f"\nsegments nearer than {a.max_depth:g} m, vehicle or not; trees of depth {depth}, a "
+          f"vehicle above {threshold:.2f} of their votes:\n")
+    print("| data | vehicle segments | rules: false vehicles | rules: missed | "
+          "trees: false vehicles | trees: missed |")
+    print("|---|---|---|---|---|---|")
+    for label, rows, guess in checks:
+        guess = vehicle_votes(trees, rows) > threshold if guess is None else guess
+        n, rfp, rfn = errors(rows, [r[3] for r in rows])
+        _, tfp, tfn = errors(rows, guess)
+        print(f"| {label} | {n} | {rfp} | {rfn} | {tfp} | {tfn} |")
+    if not a.no_write:
+        write_model(a.out, trees, threshold, depth, fit)
+
+
+if __name__ == "__main__":
+    main()
