@@ -4,9 +4,10 @@
 /// obstacles standing on it segmented in u-disparity space (Labayrade et al., "Real Time
 /// Obstacle Detection in Stereovision on Non Flat Road Geometry Through V-disparity
 /// Representation", IV 2002; Badino et al., "The Stixel World", DAGM 2009, for cutting each
-/// column into ground / object / sky) and classified by rules on their metric shape, written
-/// as a per-pixel class image in the palette's classes so that the labelled extractor runs on
-/// it unchanged. See docs/stereo-only.md.
+/// column into ground / object / sky), classified by rules on their metric shape, the vehicles
+/// among them decided by random trees trained on rendered streets (segment_classifier.hpp),
+/// written as a per-pixel class image in the palette's classes so that the labelled extractor
+/// runs on it unchanged. See docs/stereo-only.md.
 
 #include <cstdint>
 #include <limits>
