@@ -71,17 +71,39 @@ def street_seeds():
     return seeds
 
 
-def render(a, name, make, seed, paints):
-    """Renders a street (make: the generator's arguments) once into the work folder."""
+def render(a, name, make, seed, paints, classes=None):
+    """Renders a street (make: the generator's arguments) once into the work folder, with
+    another class table (classes) when given."""
     root = os.path.join(a.work, name)
     if not os.path.isdir(root):
         scene = root + ".json"
         run(["python3", os.path.join(ROOT, "scripts", make[0])] + make[1:] +
             ["--seed", str(seed), "-o", scene])
         run([a.scene_render, "sensors", scene, "--out", root + ".tmp", "--frame", "000000",
-             "--seed", str(seed), "--paints", paints])
+             "--seed", str(seed), "--paints", paints] + (["--classes", classes] if classes else []))
         os.rename(root + ".tmp", root)
     return root
+
+
+def body_table(a, body):
+    """A class table drawing cars with a third-party body (and trucks with the kit's truck), or
+    None when the kit is not there."""
+    kit = os.path.join(ROOT, "..", "shared", "gltf-thirdparty", "kenney-car-kit")
+    if not os.path.isfile(os.path.join(kit, body + ".glb")):
+        return None
+    source = os.path.join(ROOT, "assets", "classes", "render_classes.json")
+    table = json.load(open(source))
+    for c in table["classes"]:
+        for member in ("model", "low_model"):
+            if member in c:
+                c[member] = os.path.normpath(os.path.join(os.path.dirname(source), c[member]))
+        if c["name"] == "car":
+            c["model"] = os.path.join(kit, body + ".glb")
+        if c["name"] == "truck":
+            c["model"] = os.path.join(kit, "truck.glb")
+    path = os.path.join(a.work, f"classes-{body}.json")
+    json.dump(table, open(path, "w"), indent=1)
+    return path
 
 
 def segments(a, key, args):
@@ -166,8 +188,11 @@ def errors(rows, guess):
 
 
 def street(name):
-    """The street a render shows: both renders of a street fall in one fold."""
-    return name[:-len("-world")] if name.endswith("-world") else name
+    """The street a render shows: every render of a street falls in one fold."""
+    for suffix in ("-world", "-sedan"):
+        if name.endswith(suffix):
+            return name[:-len(suffix)]
+    return name
 
 
 def cross_validate(rows):
@@ -230,6 +255,9 @@ def main():
     ap.add_argument("--extra-seeds", default=" ".join(str(s) for s in range(43, 107)),
                     help="more parking and kerbside streets to learn from (docs/evaluation.md's "
                          "extra tuning streets)")
+    ap.add_argument("--no-development-body", dest="development_body", action="store_false",
+                    help="leave out the tuning streets drawn with the Kenney sedan (learnt from "
+                         "when ../shared/gltf-thirdparty is there)")
     ap.add_argument("--held-out-verge-seeds",
                     default=" ".join(str(s) for s in HELD_OUT_VERGE_SEEDS))
     ap.add_argument("--max-depth", type=float, default=45.0,
@@ -258,6 +286,15 @@ def main():
         name = f"verge-street-{s}"
         fit += rows_with_instances(
             a, name, render(a, name, ["make-verge-street.py"], s, "world"), "000000")
+    # The development body of scripts/evaluate-vehicle-models.sh (its test bodies, the SUV and
+    # the van, are never learnt from): the tuning streets once more with its cars.
+    table = body_table(a, "sedan") if a.development_body else None
+    if table:
+        for kind, make in kinds:
+            for s in seeds[seed_lists[kind]]:
+                name = f"{kind}-{s}-sedan"
+                fit += rows_with_instances(a, name, render(a, name, make, s, "class", table),
+                                           "000000")
     if len({r[2] for r in fit}) < 2:
         sys.exit("train-segment-classifier: the training streets need vehicle and other "
                  "segments to learn from")
