@@ -673,6 +673,41 @@ TEST_CASE("the stereo-only segments are written as a table and an id image, or n
     CHECK_FALSE(fs::exists(out));
 }
 
+TEST_CASE("the vehicle classifier's votes are in the segments table, a bad classifier is refused",
+          "[cli][geometry]") {
+    const auto dir = scratch("vehicle_classifier");
+    const fs::path table = dir / "segments.json", out = dir / "entities.json";
+    const Run r = run(tool() + street_pair() + " -o " + quote(out.string()) + " --segments-out " +
+                          quote(table.string()),
+                      dir);
+    REQUIRE(r.code == 0);
+    for (const auto& s : nlohmann::json::parse(slurp(table))["segments"]) {
+        REQUIRE(s["vehicle_votes"].is_number());
+        CHECK(s["features"].size() == 25);
+        // A car is what a majority of the trees call a vehicle, whatever the rules said.
+        CHECK((s["class"] == "car") == (s["vehicle_votes"].get<double>() > 0.5));
+    }
+    // The rules alone: no votes.
+    const Run rules =
+        run(tool() + street_pair() + " -o - --vehicle-classifier none --segments-out " +
+                quote(table.string()),
+            dir);
+    REQUIRE(rules.code == 0);
+    for (const auto& s : nlohmann::json::parse(slurp(table))["segments"]) {
+        CHECK(s["vehicle_votes"].is_null());
+        CHECK(s["class"] == s["rules_class"]);
+    }
+    // A classifier that is not there: a usage error naming the flag and the file, nothing written.
+    fs::remove(out);
+    const Run bad = run(tool() + street_pair() + " -o " + quote(out.string()) +
+                            " --vehicle-classifier " + quote((dir / "none.json").string()),
+                        dir);
+    CHECK(bad.code == 2);
+    CHECK(bad.err.find("--vehicle-classifier") != std::string::npos);
+    CHECK(bad.err.find("none.json") != std::string::npos);
+    CHECK_FALSE(fs::exists(out));
+}
+
 TEST_CASE("a calibration whose baseline puts the road 10 m down warns, writes, and finds no car",
           "[cli][geometry]") {
     const auto dir = scratch("stereo_only_bad");

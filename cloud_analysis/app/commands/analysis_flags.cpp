@@ -358,7 +358,11 @@ void resolve_settings(AnalyseArgs& a, const CLI::App& cmd) {
     } catch (const std::invalid_argument& e) {
         throw flag_error(cmd, e.what());
     }
-    if (a.options.semantics != "labels" && a.vehicle_classifier != "none") {
+    // The trees are read only when the stereo-only path may run: not for labels, nor for a
+    // single frame given its semantic image.
+    const bool geometry_may_run = a.options.semantics == "geometry" ||
+                                  (a.options.semantics == "auto" && a.paths.semantic.empty());
+    if (geometry_may_run && a.vehicle_classifier != "none") {
         const std::filesystem::path file =
             a.vehicle_classifier == "default"
                 ? cloud_analysis::geometry::default_segment_classifier_path()
