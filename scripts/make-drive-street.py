@@ -19,7 +19,7 @@ import argparse
 import math
 import random
 
-from stereoscene_assets import class_ids, write_entity_file
+from stereoscene_assets import class_ids, kitti_frame, write_entity_file
 
 ROAD_TOP_Y = 1.60  # the road's top surface in the camera frame (y down), metres
 KERB = 6.0  # the road's half width, metres
@@ -136,9 +136,7 @@ def build_scene(seed, speed, yaw_rate_dps, length):
             e["velocity"] = {"vx": 0.0, "vz": round(v, 3)}
     return {
         "schema_version": "1.1.0",
-        "frame": {"id": f"drive-street-{seed}", "convention": "kitti_camera",
-                  "camera": {"width": 1242, "height": 375, "fx": 721.5377, "fy": 721.5377,
-                             "cx": 609.5593, "cy": 172.854, "baseline_m": 0.54}},
+        "frame": kitti_frame(f"drive-street-{seed}"),
         "source": {"tool": "scripts/make-drive-street.py",
                    "description": f"A {length:g} m street for a drive at {speed:g} m/s turning "
                                   f"{yaw_rate_dps:g} deg/s, seed {seed}: parked cars both sides, "

@@ -27,7 +27,7 @@ import argparse
 import math
 import random
 
-from stereoscene_assets import class_ids, write_entity_file
+from stereoscene_assets import class_ids, kitti_frame, write_entity_file
 
 ROAD_TOP_Y = 1.60  # the road's top surface in the camera frame (y down), metres
 ROW_X = 4.9  # parked cars' centre line from the street's centre, metres
@@ -251,9 +251,7 @@ def build_scene(seed, with_kerbside=False, with_pedestrians=False):
         name = f"pedestrians-{seed}"
     return {
         "schema_version": "1.0.0",
-        "frame": {"id": name, "convention": "kitti_camera",
-                  "camera": {"width": 1242, "height": 375, "fx": 721.5377, "fy": 721.5377,
-                             "cx": 609.5593, "cy": 172.854, "baseline_m": 0.54}},
+        "frame": kitti_frame(name),
         "source": {"tool": "scripts/make-parking-scene.py",
                    "description": f"Parking street, seed {seed}: both sides parked bumper to "
                                   "bumper (gaps 0.3-1.0 m) 3-40 m ahead, small cars to vans, "

@@ -19,7 +19,7 @@ import argparse
 import math
 import random
 
-from stereoscene_assets import class_ids, write_entity_file
+from stereoscene_assets import class_ids, kitti_frame, write_entity_file
 
 ROAD_TOP_Y = 1.60  # the road's top surface in the camera frame (y down), metres
 VERGE_TOP_Y = ROAD_TOP_Y - 0.1  # the verge stands on a 0.1 m kerb
@@ -168,9 +168,7 @@ def build_scene(seed):
         e["id"] = f"{e['class'].replace(' ', '-')}-{counts[e['class']]}"
     return {
         "schema_version": "1.0.0",
-        "frame": {"id": f"verge-street-{seed}", "convention": "kitti_camera",
-                  "camera": {"width": 1242, "height": 375, "fx": 721.5377, "fy": 721.5377,
-                             "cx": 609.5593, "cy": 172.854, "baseline_m": 0.54}},
+        "frame": kitti_frame(f"verge-street-{seed}"),
         "source": {"tool": "scripts/make-verge-street.py",
                    "description": f"Verge street, seed {seed}: a two-lane road with grass "
                                   "verges, hedges, walls, fences and garages behind them, "

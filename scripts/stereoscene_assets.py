@@ -1,5 +1,6 @@
 """What the scene generators share: class ids by name from a palette (assets/palettes/<name>.json,
-the same files cloud-analysis and scene-render read) and writing an entity file."""
+the same files cloud-analysis and scene-render read), KITTI's camera as an entity file's frame,
+and writing an entity file."""
 import json
 import os
 import sys
@@ -11,6 +12,13 @@ def class_ids(palette="cityscapes"):
     """{class name: id} of a bundled palette."""
     with open(os.path.join(ASSETS, "palettes", f"{palette}.json")) as f:
         return {c["name"]: c["id"] for c in json.load(f)["classes"]}
+
+
+def kitti_frame(frame_id):
+    """An entity file's frame seen by KITTI's left colour camera (1242x375, baseline 0.54 m)."""
+    return {"id": frame_id, "convention": "kitti_camera",
+            "camera": {"width": 1242, "height": 375, "fx": 721.5377, "fy": 721.5377,
+                       "cx": 609.5593, "cy": 172.854, "baseline_m": 0.54}}
 
 
 def write_entity_file(doc, out):
