@@ -27,15 +27,16 @@ struct Sums {
     std::vector<float> disparities;
 };
 
-/// The left image as three channels per pixel (a grey image repeated), or empty.
-std::vector<std::uint8_t> rgb_of(const ImageU8& left, int w, int h) {
-    if (left.empty() || left.width_px != w || left.height_px != h) return {};
-    if (left.channels == 3) return left.data;
-    std::vector<std::uint8_t> rgb(left.data.size() * 3);
+/// The left image's pixels as three channels each: its own bytes when it is RGB, else a grey
+/// image repeated into `grey3`; null without an image of the disparity's size.
+const std::uint8_t* rgb_of(const ImageU8& left, int w, int h, std::vector<std::uint8_t>& grey3) {
+    if (left.empty() || left.width_px != w || left.height_px != h) return nullptr;
+    if (left.channels == 3) return left.data.data();
+    grey3.resize(left.data.size() * 3);
     for (std::size_t p = 0; p < left.data.size(); ++p) {
-        rgb[3 * p] = rgb[3 * p + 1] = rgb[3 * p + 2] = left.data[p];
+        grey3[3 * p] = grey3[3 * p + 1] = grey3[3 * p + 2] = left.data[p];
     }
-    return rgb;
+    return grey3.data();
 }
 
 double quantile_of(std::vector<float>& v, double q) {
@@ -79,8 +80,9 @@ void finish(Sums& s, Segment& seg) {
 void measure_appearance(const Grid& grid, const DisparityMap& disparity, const ImageU8& left,
                         std::vector<Segment>& segments) {
     const int w = disparity.width_px, h = disparity.height_px;
-    const std::vector<std::uint8_t> rgb = rgb_of(left, w, h);
-    const bool colour = !rgb.empty();
+    std::vector<std::uint8_t> grey3;
+    const std::uint8_t* rgb = rgb_of(left, w, h, grey3);
+    const bool colour = rgb != nullptr;
     const std::size_t n = static_cast<std::size_t>(w) * h;
     // Each pixel's segment (-1: none), and each segment's pixel count to size its list.
     std::vector<std::int32_t> seg(n, -1);
