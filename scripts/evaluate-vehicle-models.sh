@@ -60,20 +60,8 @@ mkdir -p "$out_dir"
 # One class table per body: the shipped table with the car and truck models swapped (absolute
 # paths, so the table may live in the output folder).
 for body in "${dev_bodies[@]}" "${test_bodies[@]}"; do
-    python3 - "$STEREOSCENE_ROOT/assets/classes/render_classes.json" "$kit" "$body" \
-        "$out_dir/classes-$body.json" <<'EOF'
-import json, os, sys
-table_path, kit, body, out = sys.argv[1:]
-table = json.load(open(table_path))
-for c in table["classes"]:
-    if "model" in c:
-        c["model"] = os.path.normpath(os.path.join(os.path.dirname(table_path), c["model"]))
-    if c["name"] == "car":
-        c["model"] = os.path.join(kit, body + ".glb")
-    if c["name"] == "truck":
-        c["model"] = os.path.join(kit, "truck.glb")
-json.dump(table, open(out, "w"), indent=1)
-EOF
+    python3 -c 'import sys; sys.path.insert(0, sys.argv[1]); import stereoscene_assets as a; a.write_body_table(*sys.argv[2:])' \
+        "$STEREOSCENE_ROOT/scripts" "$kit" "$body" "$out_dir/classes-$body.json"
 done
 
 rows=()

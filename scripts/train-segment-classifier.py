@@ -38,7 +38,7 @@ import sys
 import cv2
 import numpy as np
 
-from stereoscene_assets import class_ids
+from stereoscene_assets import class_ids, write_body_table
 
 ROOT = os.path.dirname(os.path.dirname(os.path.abspath(__file__)))
 SHARED = os.path.join(ROOT, "..", "shared", "data")
@@ -91,18 +91,8 @@ def body_table(a, body):
     kit = os.path.join(ROOT, "..", "shared", "gltf-thirdparty", "kenney-car-kit")
     if not os.path.isfile(os.path.join(kit, body + ".glb")):
         return None
-    source = os.path.join(ROOT, "assets", "classes", "render_classes.json")
-    table = json.load(open(source))
-    for c in table["classes"]:
-        for member in ("model", "low_model"):
-            if member in c:
-                c[member] = os.path.normpath(os.path.join(os.path.dirname(source), c[member]))
-        if c["name"] == "car":
-            c["model"] = os.path.join(kit, body + ".glb")
-        if c["name"] == "truck":
-            c["model"] = os.path.join(kit, "truck.glb")
     path = os.path.join(a.work, f"classes-{body}.json")
-    json.dump(table, open(path, "w"), indent=1)
+    write_body_table(kit, body, path)
     return path
 
 
