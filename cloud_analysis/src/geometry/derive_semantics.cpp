@@ -4,6 +4,7 @@
 #include <cmath>
 #include <map>
 #include <numeric>
+#include <optional>
 #include <stdexcept>
 #include <tuple>
 #include <unordered_map>
@@ -16,6 +17,31 @@
 #include "derive_semantics_internal.hpp"
 
 namespace cloud_analysis::geometry {
+
+std::optional<std::pair<Eigen::Vector2d, Eigen::Vector2d>> footprint_axis(
+    const std::vector<Eigen::Vector3d>& pts) {
+    double wsum = 0.0;
+    Eigen::Vector2d mean = Eigen::Vector2d::Zero();
+    for (const auto& p : pts) {
+        mean += p.z() * p.head<2>();
+        wsum += p.z();
+    }
+    if (wsum <= 0.0) return std::nullopt;
+    mean /= wsum;
+    Eigen::Matrix2d cov = Eigen::Matrix2d::Zero();
+    for (const auto& p : pts) {
+        const Eigen::Vector2d q = p.head<2>() - mean;
+        cov += p.z() * q * q.transpose();
+    }
+    const double tr = cov.trace(), det = cov(0, 0) * cov(1, 1) - cov(0, 1) * cov(1, 0);
+    const double l1 = tr / 2.0 + std::sqrt(std::max(0.0, tr * tr / 4.0 - det));
+    Eigen::Vector2d axis(cov(0, 1), l1 - cov(0, 0));
+    if (axis.norm() < 1e-12) {
+        axis = cov(0, 0) >= cov(1, 1) ? Eigen::Vector2d(1, 0) : Eigen::Vector2d(0, 1);
+    }
+    return std::pair{mean, axis.normalized()};
+}
+
 namespace {
 
 /// Palette indices of the classes the rules decide (kVoidClass when the palette lacks one).
@@ -40,26 +66,9 @@ struct Classes {
 /// Extents of a weighted footprint (x, z, weight) along its main axis and across it (2-98 %),
 /// metres.
 std::pair<double, double> footprint_extents(const std::vector<Eigen::Vector3d>& pts) {
-    double wsum = 0.0;
-    Eigen::Vector2d mean = Eigen::Vector2d::Zero();
-    for (const auto& p : pts) {
-        mean += p.z() * p.head<2>();
-        wsum += p.z();
-    }
-    if (wsum <= 0.0) return {0.0, 0.0};
-    mean /= wsum;
-    Eigen::Matrix2d cov = Eigen::Matrix2d::Zero();
-    for (const auto& p : pts) {
-        const Eigen::Vector2d q = p.head<2>() - mean;
-        cov += p.z() * q * q.transpose();
-    }
-    const double tr = cov.trace(), det = cov(0, 0) * cov(1, 1) - cov(0, 1) * cov(1, 0);
-    const double l1 = tr / 2.0 + std::sqrt(std::max(0.0, tr * tr / 4.0 - det));
-    Eigen::Vector2d axis(cov(0, 1), l1 - cov(0, 0));
-    if (axis.norm() < 1e-12) {
-        axis = cov(0, 0) >= cov(1, 1) ? Eigen::Vector2d(1, 0) : Eigen::Vector2d(0, 1);
-    }
-    axis.normalize();
+    const auto frame = footprint_axis(pts);
+    if (!frame) return {0.0, 0.0};
+    const auto& [mean, axis] = *frame;
     const Eigen::Vector2d normal(-axis.y(), axis.x());
     std::vector<double> along, across;
     along.reserve(pts.size());
@@ -478,21 +487,37 @@ SceneGeometry derive_semantics(const DisparityMap& disparity, const StereoCamera
     Grid grid = fill_grid(disparity, rig, left, out.ground, o, cls.road, out.classes);
     std::vector<int> parent = o.segmentation == "clusters" ? cluster_cells(grid, disparity, rig, o)
                                                            : link_cells(grid, disparity, rig, o);
-    std::vector<SegmentStats> stats = gather_segments(grid, parent, rig, w, o);
-    std::vector<std::uint16_t> segment_class(stats.size(), kVoidClass);
+    std::vector<SegmentStats> stats;
+    std::vector<std::uint16_t> segment_class;
     const bool has_image = !left.empty() && left.width_px == w && left.height_px == h;
-    for (std::size_t s = 0; s < stats.size(); ++s) {
-        out.segments.push_back(classify(stats[s], cls, has_image, rig.fx, o));
-        segment_class[s] = out.segments.back().class_index;
+    const auto judge_segments = [&] {
+        stats = gather_segments(grid, parent, rig, w, o);
+        segment_class.assign(stats.size(), kVoidClass);
+        out.segments.clear();
+        for (std::size_t s = 0; s < stats.size(); ++s) {
+            out.segments.push_back(classify(stats[s], cls, has_image, rig.fx, o));
+            segment_class[s] = out.segments.back().class_index;
+        }
+        measure_leans(grid, disparity, rig, o, cls.car, out.segments);
+        drop_leaning_cars(cls, o, out.segments, segment_class);
+        measure_appearance(grid, disparity, left, out.segments);
+        for (Segment& seg : out.segments) {
+            seg.rules_label = seg.label;
+            seg.features = segment_features(seg, rig.fx, rig.fy);
+        }
+        if (o.classifier) classify_vehicles(*o.classifier, cls, out.segments, segment_class);
+    };
+    judge_segments();
+    if (o.classifier) {
+        // A long car of the rules that the trees reject may be a row of vehicles.
+        std::vector<char> split(out.segments.size(), 0);
+        for (std::size_t s = 0; s < out.segments.size(); ++s) {
+            const Segment& seg = out.segments[s];
+            split[s] = seg.rules_label == "car" && seg.label != "car" &&
+                       seg.width_m >= 1.5 * o.vehicle_piece_m;
+        }
+        if (split_into_vehicle_pieces(grid, parent, rig, o, split)) judge_segments();
     }
-    measure_leans(grid, disparity, rig, o, cls.car, out.segments);
-    drop_leaning_cars(cls, o, out.segments, segment_class);
-    measure_appearance(grid, disparity, left, out.segments);
-    for (Segment& seg : out.segments) {
-        seg.rules_label = seg.label;
-        seg.features = segment_features(seg, rig.fx, rig.fy);
-    }
-    if (o.classifier) classify_vehicles(*o.classifier, cls, out.segments, segment_class);
 
     label_segment_pixels(grid, cls, segment_class, stats, w, o.column_bin_px, out);
     label_sky(&grid, w, out.ground.horizon_v_px, cls.sky, out.classes);

@@ -6,7 +6,11 @@
 
 #include <array>
 #include <cstdint>
+#include <optional>
+#include <utility>
 #include <vector>
+
+#include <Eigen/Core>
 
 #include "cloud_analysis/geometry/scene_geometry.hpp"
 
@@ -96,5 +100,18 @@ std::vector<int> cluster_cells(Grid& g, const DisparityMap& disparity, const Rig
 /// from its pixels in the left image (colour left neutral without one) and the disparity.
 void measure_appearance(const Grid& grid, const DisparityMap& disparity, const ImageU8& left,
                         std::vector<Segment>& segments);
+
+/// The weighted mean and the main axis (a unit vector: the covariance's first eigenvector) of a
+/// footprint's points (x, z, weight); nullopt when the weights sum to 0.
+std::optional<std::pair<Eigen::Vector2d, Eigen::Vector2d>> footprint_axis(
+    const std::vector<Eigen::Vector3d>& pts);
+
+/// Segments flagged in `split` (by Cell::segment) cut across their footprint's main axis into
+/// equal pieces about GeometryOptions::vehicle_piece_m long (none when it spans under one and a
+/// half of them): a row of parked vehicles that stereo sees as one surface, each vehicle then
+/// judged on its own. Rewrites `parent` (the pieces' cells get a root of their own); whether
+/// any segment was cut.
+bool split_into_vehicle_pieces(Grid& g, std::vector<int>& parent, const Rig& rig,
+                               const GeometryOptions& o, const std::vector<char>& split);
 
 }  // namespace cloud_analysis::geometry

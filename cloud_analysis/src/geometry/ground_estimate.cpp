@@ -52,6 +52,7 @@ void GeometryOptions::validate() const {
     fail_if(!(car_max_height_m > car_min_height_m),
             "geometry.car_max_height_m: must be > car_min_height_m");
     positive(car_min_width_m, "geometry.car_min_width_m");
+    positive(vehicle_piece_m, "geometry.vehicle_piece_m");
     fail_if(!(car_max_lean >= 0.0 && car_max_lean < 1e6), "geometry.car_max_lean: must be >= 0");
     positive(building_min_height_m, "geometry.building_min_height_m");
     positive(pole_max_width_m, "geometry.pole_max_width_m");

@@ -686,6 +686,7 @@ TEST_CASE("geometry options name the bad field", "[geometry]") {
         {[](GeometryOptions& o) { o.green_window_px = -1; }, "green_window_px"},
         {[](GeometryOptions& o) { o.car_min_edge_share = 1.0; }, "car_min_edge_share"},
         {[](GeometryOptions& o) { o.car_max_lean = -1.0; }, "car_max_lean"},
+        {[](GeometryOptions& o) { o.vehicle_piece_m = 0.0; }, "vehicle_piece_m"},
         {[](GeometryOptions& o) { o.edge_window_m = 0.0; }, "edge_window_m"},
         {[](GeometryOptions& o) { o.edge_step_px = 0; }, "edge_step_px"},
         {[](GeometryOptions& o) { o.segmentation = "stixels"; }, "segmentation"},

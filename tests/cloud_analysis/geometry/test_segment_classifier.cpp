@@ -57,26 +57,43 @@ fs::path write_manifest(const fs::path& model, nlohmann::json doc = nlohmann::js
     return manifest;
 }
 
-/// Random trees over the segment features that call a vehicle whatever has `fill` above
-/// `threshold`, trained on features spread over [-2, 3], written with their manifest to files
-/// of the test's own; returns the manifest.
-fs::path trees_calling_vehicle_above(double threshold, const std::string& name) {
-    const int n = 200, f = static_cast<int>(kSegmentFeatureNames.size());
+/// Random trees over the segment features that call a vehicle whatever has feature `name` above
+/// `threshold` (below it when `below`), trained on features spread over [-2, 3] (the feature
+/// over [0, 20] for widths), written with their manifest to files of the test's own; returns
+/// the manifest.
+fs::path trees_calling_vehicle(const std::string& name, double threshold, bool below,
+                               const std::string& file_name) {
+    const int n = 400, f = static_cast<int>(kSegmentFeatureNames.size());
     cv::Mat x(n, f, CV_32F), y(n, 1, CV_32S);
     cv::RNG rng(7);
     rng.fill(x, cv::RNG::UNIFORM, -2.0, 3.0);
-    const int fill = 18;
-    REQUIRE(std::string(kSegmentFeatureNames[fill]) == "fill");
-    for (int i = 0; i < n; ++i) y.at<int>(i) = x.at<float>(i, fill) > threshold ? 1 : 0;
+    int feature = 0;
+    while (feature < f && name != kSegmentFeatureNames[static_cast<std::size_t>(feature)]) {
+        ++feature;
+    }
+    REQUIRE(feature < f);
+    if (name == "width_m") rng.fill(x.col(feature), cv::RNG::UNIFORM, 0.0, 20.0);
+    for (int i = 0; i < n; ++i) {
+        y.at<int>(i) = (x.at<float>(i, feature) > threshold) != below ? 1 : 0;
+    }
     auto trees = cv::ml::RTrees::create();
     trees->setMaxDepth(3);
     trees->setMinSampleCount(2);
     trees->setTermCriteria({cv::TermCriteria::MAX_ITER, 15, 0});
     trees->train(cv::ml::TrainData::create(x, cv::ml::ROW_SAMPLE, y));
     const fs::path file =
-        fs::temp_directory_path() / ("stereoscene-" + std::to_string(::getpid()) + name);
+        fs::temp_directory_path() / ("stereoscene-" + std::to_string(::getpid()) + file_name);
     trees->save(file.string());
     return write_manifest(file);
+}
+
+fs::path trees_calling_vehicle_above(double threshold, const std::string& name) {
+    return trees_calling_vehicle("fill", threshold, false, name);
+}
+
+void remove_trees(const fs::path& manifest) {
+    fs::remove(manifest);
+    fs::remove(manifest.parent_path() / manifest.stem());
 }
 
 }  // namespace
@@ -159,10 +176,40 @@ TEST_CASE("the vehicle classifier decides which segments are cars, the rules' ca
     CHECK(class_at(g, palette, wall_px.first, wall_px.second) == "car");
     CHECK(segment_at(g, cam, wall_px).rules_label == "wall");
     CHECK(segment_at(g, cam, wall_px).vehicle_votes > 0.5);
-    for (const fs::path& m : {never, always}) {
-        fs::remove(m);
-        fs::remove(m.parent_path() / m.stem());
+    for (const fs::path& m : {never, always}) remove_trees(m);
+}
+
+TEST_CASE("a long car of the rules that the trees reject is judged again vehicle by vehicle",
+          "[geometry][classifier]") {
+    const StereoCamera cam = test_rigs::kitti_rig();
+    const auto palette = cloud_analysis::load_palette("cityscapes");
+    // A car, a van and a car parked side on, bumper to bumper, 12 m ahead: one surface 13.2 m
+    // long, each one's flank up to its waist and its cabin 0.1 m behind it up to its roof.
+    std::vector<Box> row;
+    for (const auto& [x0, roof] : {std::pair{-6.6, 1.45}, {-2.2, 1.95}, {2.2, 1.5}}) {
+        row.push_back({x0, x0 + 4.4, 12.0, 0.95});
+        row.push_back({x0 + 0.9, x0 + 3.5, 12.1, roof});
     }
+    const auto disparity = render(cam, 1.65, row);
+    GeometryOptions o;
+    // Trees that call a vehicle only what is at most 6 m long.
+    const fs::path short_things = trees_calling_vehicle("width_m", 6.0, true, "-short.yml.gz");
+    o.classifier = SegmentClassifier::load(short_things);
+    const SceneGeometry g = derive_semantics(disparity, cam, ImageU8{}, palette, o);
+    for (const double x : {-4.4, 0.0, 4.4}) {
+        const auto px = pixel_of(cam, x, 0.7, 12.0);
+        CHECK(class_at(g, palette, px.first, px.second) == "car");
+        const Segment& piece = segment_at(g, cam, px);
+        CHECK(piece.rules_label == "car");
+        CHECK(piece.width_m == Approx(4.4).margin(0.6));
+    }
+    // Cut into pieces of a bus's length, it stays one thing the trees reject.
+    o.vehicle_piece_m = 12.0;
+    const SceneGeometry whole = derive_semantics(disparity, cam, ImageU8{}, palette, o);
+    const auto centre = pixel_of(cam, 0.0, 0.7, 12.0);
+    CHECK(class_at(whole, palette, centre.first, centre.second) == "static");
+    CHECK(segment_at(whole, cam, centre).width_m > 12.0);
+    remove_trees(short_things);
 }
 
 TEST_CASE("a classifier that is missing, not a model or reads other features is refused",

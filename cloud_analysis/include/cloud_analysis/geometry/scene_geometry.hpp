@@ -98,6 +98,10 @@ struct GeometryOptions {
     double car_max_height_m = 2.2;         ///< ... and this above the road (below layer_height_m:
                                            ///< a segment reaching it meets a surface above), m
     double car_min_width_m = 1.2;          ///< narrower objects are persons or poles, metres
+    /// A car's length, metres: a segment of the rules' car class that the classifier rejects
+    /// and that spans one and a half of these or more is cut into pieces about this long, each
+    /// judged again (a row of parked vehicles that stereo sees as one surface).
+    double vehicle_piece_m = 4.5;
     /// A vehicle's body below its waist stands upright; a surface whose depth grows with its
     /// height by more than this (metres per metre; 3: a slope of 1 in 3, 18 degrees, the
     /// flattest usual embankment) beyond twice its standard error (Segment::lean) is a bank, a
