@@ -280,13 +280,15 @@ Segment classify(SegmentStats& st, const Classes& cls, bool has_image, double fx
     return seg;
 }
 
-/// Each car candidate's lean (Segment::lean): per column band (one stretch of surface), the
-/// slope of depth over height of its lower body's pixels within two disparity noises (at least
-/// 0.5 m) of the band's median depth (a kerb or a bollard in front of the body is another
-/// surface, not a lean); the segment's lean is the median over its bands, its error the bands'
-/// spread (1.4826 median absolute deviations) over the square root of their number.
+/// Each car candidate's lean (Segment::lean), among the segments flagged `fresh`: per column band
+/// (one stretch of surface), the slope of depth over height of its lower body's pixels within two
+/// disparity noises (at least 0.5 m) of the band's median depth (a kerb or a bollard in front of
+/// the body is another surface, not a lean); the segment's lean is the median over its bands, its
+/// error the bands' spread (1.4826 median absolute deviations) over the square root of their
+/// number.
 void measure_leans(const Grid& grid, const DisparityMap& disparity, const Rig& rig,
-                   const GeometryOptions& o, std::uint16_t car, std::vector<Segment>& segments) {
+                   const GeometryOptions& o, std::uint16_t car, const std::vector<char>& fresh,
+                   std::vector<Segment>& segments) {
     constexpr double kLow = 0.25, kHigh = 0.65;  // metres above the road
     constexpr std::size_t kMinPixels = 6;        // a band's, for a slope
     constexpr double kMinHeightSpread = 0.1;     // metres: a band's, for a slope
@@ -297,7 +299,10 @@ void measure_leans(const Grid& grid, const DisparityMap& disparity, const Rig& r
         const std::int32_t cell = grid.pixel_cell[p];
         if (cell < 0) continue;
         const int s = grid.cells[static_cast<std::size_t>(cell)].segment;
-        if (s < 0 || segments[static_cast<std::size_t>(s)].class_index != car) continue;
+        if (s < 0 || !fresh[static_cast<std::size_t>(s)] ||
+            segments[static_cast<std::size_t>(s)].class_index != car) {
+            continue;
+        }
         const double d = double{disparity.disparity_px[p]} - rig.offset;
         if (!(d > 0.0)) continue;
         const int u = static_cast<int>(p % static_cast<std::size_t>(w));
@@ -340,11 +345,13 @@ void measure_leans(const Grid& grid, const DisparityMap& disparity, const Rig& r
     }
 }
 
-/// Car candidates leaning beyond car_max_lean by twice their error (a bank's foot) are static.
-void drop_leaning_cars(const Classes& cls, const GeometryOptions& o, std::vector<Segment>& segments,
-                       std::vector<std::uint16_t>& segment_class) {
+/// Car candidates flagged `fresh` leaning beyond car_max_lean by twice their error (a bank's
+/// foot) are static.
+void drop_leaning_cars(const Classes& cls, const GeometryOptions& o, const std::vector<char>& fresh,
+                       std::vector<Segment>& segments, std::vector<std::uint16_t>& segment_class) {
     if (!(o.car_max_lean > 0.0)) return;
     for (std::size_t s = 0; s < segments.size(); ++s) {
+        if (!fresh[s]) continue;
         Segment& seg = segments[s];
         if (seg.class_index == cls.car && std::isfinite(seg.lean) &&
             seg.lean - 2.0 * seg.lean_error > o.car_max_lean) {
@@ -355,12 +362,14 @@ void drop_leaning_cars(const Classes& cls, const GeometryOptions& o, std::vector
     }
 }
 
-/// The classifier's call on every segment (GeometryOptions::classifier): one more of its trees
-/// than its vote threshold call a vehicle is a car (the rules' car bands kept), a car of the rules
-/// that it does not call one is static; the rules' other classes stand.
+/// The classifier's call on each segment flagged `fresh` (GeometryOptions::classifier): one more of
+/// its trees than its vote threshold call a vehicle is a car (the rules' car bands kept), a car of
+/// the rules that it does not call one is static; the rules' other classes stand.
 void classify_vehicles(const SegmentClassifier& classifier, const Classes& cls,
-                       std::vector<Segment>& segments, std::vector<std::uint16_t>& segment_class) {
+                       const std::vector<char>& fresh, std::vector<Segment>& segments,
+                       std::vector<std::uint16_t>& segment_class) {
     for (std::size_t s = 0; s < segments.size(); ++s) {
+        if (!fresh[s]) continue;
         Segment& seg = segments[s];
         seg.vehicle_votes = classifier.vehicle_votes(seg.features);
         const bool vehicle = seg.vehicle_votes > classifier.vote_threshold();
@@ -373,6 +382,44 @@ void classify_vehicles(const SegmentClassifier& classifier, const Classes& cls,
         }
         segment_class[s] = seg.class_index;
     }
+}
+
+/// A long car of the rules that the trees reject may be a row of vehicles that stereo sees as
+/// one surface: such segments (spanning 1.5 vehicle_piece_m or more) are cut into pieces
+/// (split_into_vehicle_pieces) and the pieces judged (`judge`, given which segments are new);
+/// the other segments keep their judgement. `stats` and `segments` become the new segments'.
+template <typename Judge>
+void split_rejected_rows(Grid& grid, std::vector<int>& parent, const Rig& rig, int width_px,
+                         const GeometryOptions& o, std::vector<SegmentStats>& stats,
+                         std::vector<Segment>& segments, const Judge& judge) {
+    std::vector<char> split(segments.size(), 0);
+    for (std::size_t s = 0; s < segments.size(); ++s) {
+        split[s] = segments[s].rules_label == "car" && segments[s].label != "car" &&
+                   segments[s].width_m >= 1.5 * o.vehicle_piece_m;
+    }
+    std::vector<int> before_of_cell(grid.cells.size());
+    for (std::size_t i = 0; i < grid.cells.size(); ++i) before_of_cell[i] = grid.cells[i].segment;
+    if (!split_into_vehicle_pieces(grid, parent, rig, o, split)) return;
+    std::vector<Segment> before = std::move(segments);
+    std::vector<SegmentStats> before_stats = std::move(stats);
+    stats = gather_segments(grid, parent, rig, width_px, o);
+    std::vector<int> kept(stats.size(), -1);  // per new segment: the old one it is, if unsplit
+    for (std::size_t i = 0; i < grid.cells.size(); ++i) {
+        const int now = grid.cells[i].segment, was = before_of_cell[i];
+        if (now >= 0 && was >= 0 && !split[static_cast<std::size_t>(was)]) {
+            kept[static_cast<std::size_t>(now)] = was;
+        }
+    }
+    segments.assign(stats.size(), Segment{});
+    std::vector<char> fresh(stats.size(), 1);
+    for (std::size_t s = 0; s < stats.size(); ++s) {
+        if (kept[s] < 0) continue;
+        segments[s] = std::move(before[static_cast<std::size_t>(kept[s])]);
+        // The rules' car bands (mark_car_bands) as they were judged.
+        stats[s].band_car = std::move(before_stats[static_cast<std::size_t>(kept[s])].band_car);
+        fresh[s] = 0;
+    }
+    judge(fresh);
 }
 
 /// Sky above the horizon wherever no segment holds the pixel.
@@ -487,37 +534,29 @@ SceneGeometry derive_semantics(const DisparityMap& disparity, const StereoCamera
     Grid grid = fill_grid(disparity, rig, left, out.ground, o, cls.road, out.classes);
     std::vector<int> parent = o.segmentation == "clusters" ? cluster_cells(grid, disparity, rig, o)
                                                            : link_cells(grid, disparity, rig, o);
-    std::vector<SegmentStats> stats;
+    std::vector<SegmentStats> stats = gather_segments(grid, parent, rig, w, o);
     std::vector<std::uint16_t> segment_class;
     const bool has_image = !left.empty() && left.width_px == w && left.height_px == h;
-    const auto judge_segments = [&] {
-        stats = gather_segments(grid, parent, rig, w, o);
-        segment_class.assign(stats.size(), kVoidClass);
-        out.segments.clear();
+    // The rules, then the classifier, on the segments flagged `fresh`; the others are as judged.
+    const auto judge = [&](const std::vector<char>& fresh) {
+        segment_class.resize(stats.size(), kVoidClass);
+        out.segments.resize(stats.size());
         for (std::size_t s = 0; s < stats.size(); ++s) {
-            out.segments.push_back(classify(stats[s], cls, has_image, rig.fx, o));
-            segment_class[s] = out.segments.back().class_index;
+            if (fresh[s]) out.segments[s] = classify(stats[s], cls, has_image, rig.fx, o);
+            segment_class[s] = out.segments[s].class_index;
         }
-        measure_leans(grid, disparity, rig, o, cls.car, out.segments);
-        drop_leaning_cars(cls, o, out.segments, segment_class);
-        measure_appearance(grid, disparity, left, out.segments);
-        for (Segment& seg : out.segments) {
-            seg.rules_label = seg.label;
-            seg.features = segment_features(seg, rig.fx, rig.fy);
+        measure_leans(grid, disparity, rig, o, cls.car, fresh, out.segments);
+        drop_leaning_cars(cls, o, fresh, out.segments, segment_class);
+        measure_appearance(grid, disparity, left, fresh, out.segments);
+        for (std::size_t s = 0; s < stats.size(); ++s) {
+            if (!fresh[s]) continue;
+            out.segments[s].rules_label = out.segments[s].label;
+            out.segments[s].features = segment_features(out.segments[s], rig.fx, rig.fy);
         }
-        if (o.classifier) classify_vehicles(*o.classifier, cls, out.segments, segment_class);
+        if (o.classifier) classify_vehicles(*o.classifier, cls, fresh, out.segments, segment_class);
     };
-    judge_segments();
-    if (o.classifier) {
-        // A long car of the rules that the trees reject may be a row of vehicles.
-        std::vector<char> split(out.segments.size(), 0);
-        for (std::size_t s = 0; s < out.segments.size(); ++s) {
-            const Segment& seg = out.segments[s];
-            split[s] = seg.rules_label == "car" && seg.label != "car" &&
-                       seg.width_m >= 1.5 * o.vehicle_piece_m;
-        }
-        if (split_into_vehicle_pieces(grid, parent, rig, o, split)) judge_segments();
-    }
+    judge(std::vector<char>(stats.size(), 1));
+    if (o.classifier) split_rejected_rows(grid, parent, rig, w, o, stats, out.segments, judge);
 
     label_segment_pixels(grid, cls, segment_class, stats, w, o.column_bin_px, out);
     label_sky(&grid, w, out.ground.horizon_v_px, cls.sky, out.classes);

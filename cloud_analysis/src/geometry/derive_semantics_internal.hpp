@@ -97,9 +97,10 @@ std::vector<int> cluster_cells(Grid& g, const DisparityMap& disparity, const Rig
                                const GeometryOptions& o);
 
 /// Each segment's colour, texture and surface roughness (Segment::chroma_r .. disparity_spread)
-/// from its pixels in the left image (colour left neutral without one) and the disparity.
+/// from its pixels in the left image (colour left neutral without one) and the disparity; only
+/// the segments flagged in `fresh` (by index) are measured.
 void measure_appearance(const Grid& grid, const DisparityMap& disparity, const ImageU8& left,
-                        std::vector<Segment>& segments);
+                        const std::vector<char>& fresh, std::vector<Segment>& segments);
 
 /// The weighted mean and the main axis (a unit vector: the covariance's first eigenvector) of a
 /// footprint's points (x, z, weight); nullopt when the weights sum to 0.

@@ -78,7 +78,7 @@ void finish(Sums& s, Segment& seg) {
 }  // namespace
 
 void measure_appearance(const Grid& grid, const DisparityMap& disparity, const ImageU8& left,
-                        std::vector<Segment>& segments) {
+                        const std::vector<char>& fresh, std::vector<Segment>& segments) {
     const int w = disparity.width_px, h = disparity.height_px;
     std::vector<std::uint8_t> grey3;
     const std::uint8_t* rgb = rgb_of(left, w, h, grey3);
@@ -90,8 +90,10 @@ void measure_appearance(const Grid& grid, const DisparityMap& disparity, const I
     for (std::size_t p = 0; p < n; ++p) {
         const std::int32_t cell = grid.pixel_cell[p];
         if (cell < 0) continue;
-        seg[p] = grid.cells[static_cast<std::size_t>(cell)].segment;
-        if (seg[p] >= 0) ++sums[static_cast<std::size_t>(seg[p])].n;
+        const std::int32_t s = grid.cells[static_cast<std::size_t>(cell)].segment;
+        if (s < 0 || !fresh[static_cast<std::size_t>(s)]) continue;
+        seg[p] = s;
+        ++sums[static_cast<std::size_t>(s)].n;
     }
     for (Sums& t : sums) t.disparities.reserve(t.n);
     const float* d = disparity.disparity_px.data();
