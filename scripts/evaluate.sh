@@ -8,7 +8,9 @@
 # scored with the stereo-only bars. Then the KITTI frames (checks, never tuned on): disparity of the tuned defaults
 # vs OpenCV's sample settings, car entities vs the instance ground truth (with reasons), the
 # ground plane, the thesis's one-per-class extractors, and the stereo-only path (--semantics
-# geometry: the semantic image ignored; docs/stereo-only.md) beside them.
+# geometry: the semantic image ignored; docs/stereo-only.md) beside them; last the KITTI
+# frames without an instance image, stereo only, against the hand-drawn 2D boxes of
+# samples/labels-2d/kitti15.json.
 # usage: scripts/evaluate.sh [--no-build] [--build-dir DIR] [--kitti-root DIR] [--out DIR]
 #            [--parking-seeds "2 4 5 ... 12 23 ... 32"] [--kerbside-seeds "2 ... 9 23 ... 32"]
 #            [--pedestrian-seeds "2 ... 9"] [--held-out-seeds "13 14 15 16 17 18 19 20 21 22"]
@@ -294,3 +296,21 @@ for f in frames:
               f"  owed {'yes' if o['owed'] else 'no '} -> {'yes' if c['owed'] else 'no'}"
               f"  match {o['entity'] or '-'} -> {c['entity'] or '-'} {c['rule']}")
 PY
+
+# The KITTI frames without an instance image, stereo only, against the project's hand-drawn 2D
+# boxes (samples/labels-2d/kitti15.json).
+labels_2d="$STEREOSCENE_ROOT/samples/labels-2d/kitti15.json"
+mkdir -p "$out_dir/labels-2d"
+labelled=0
+for f in $(/usr/bin/python3 -c 'import json, sys; print(" ".join(x["frame"] for x in json.load(open(sys.argv[1]))["frames"]))' "$labels_2d"); do
+    [ -f "$kitti_root/image_2/$f.png" ] || continue
+    "$ca" --kitti-root "$kitti_root" --frame "$f" --semantics geometry "${analysis_args[@]}" \
+        -o "$out_dir/labels-2d/$f.json" 2>"$out_dir/labels-2d/$f.log"
+    labelled=$((labelled + 1))
+done
+if [ "$labelled" -gt 0 ]; then
+    echo "=== KITTI frames without instance images, stereo only, against the hand-drawn 2D boxes ==="
+    "$ca" evaluate --entities "$out_dir/labels-2d" --labels-2d "$labels_2d" \
+        --json "$out_dir/labels-2d-eval.json"
+fi
+
