@@ -166,6 +166,18 @@ std::uint64_t get_count(const nlohmann::json& value, const std::string& pointer,
     return v;
 }
 
+std::optional<std::string> format_header_problem(const nlohmann::json& doc, std::string_view format,
+                                                 int version) {
+    if (!doc.is_object()) return "(document): must be an object";
+    const auto f = doc.find("format");
+    if (f == doc.end() || !f->is_string() || f->get<std::string>() != format) {
+        return "/format: must be \"" + std::string(format) + "\"";
+    }
+    const auto v = doc.find("version");
+    if (v == doc.end() || *v != version) return "/version: must be " + std::to_string(version);
+    return std::nullopt;
+}
+
 json parse_json(std::string_view text, std::size_t max_depth) {
     json root;
     PathTrackingSax sax(root, max_depth);

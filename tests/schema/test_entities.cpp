@@ -269,6 +269,19 @@ TEST_CASE("JSON nested past the depth limit is refused before any walk of it", "
     CHECK_THROWS_AS(scene_schema::parse(text), SchemaError);
 }
 
+TEST_CASE("a tool file's format and version header is checked in one line", "[schema]") {
+    using scene_schema::format_header_problem;
+    CHECK_FALSE(format_header_problem(json{{"format", "x-tool"}, {"version", 2}}, "x-tool", 2));
+    CHECK(format_header_problem(json::array(), "x-tool", 2) == "(document): must be an object");
+    CHECK(format_header_problem(json{{"version", 2}}, "x-tool", 2) ==
+          "/format: must be \"x-tool\"");
+    CHECK(format_header_problem(json{{"format", 7}, {"version", 2}}, "x-tool", 2) ==
+          "/format: must be \"x-tool\"");
+    CHECK(format_header_problem(json{{"format", "x-tool"}}, "x-tool", 2) == "/version: must be 2");
+    CHECK(format_header_problem(json{{"format", "x-tool"}, {"version", "2"}}, "x-tool", 2) ==
+          "/version: must be 2");
+}
+
 TEST_CASE("a leading UTF-8 byte order mark is skipped (RFC 8259 8.1)", "[schema]") {
     const std::string text = "\xEF\xBB\xBF" + scene_schema::dump(small_document());
     CHECK(scene_schema::parse(text).entities.size() == small_document().entities.size());

@@ -43,13 +43,10 @@ std::filesystem::path model_file(const nlohmann::json& doc, const std::filesyste
 
 void check_manifest(const nlohmann::json& doc,
                     const std::function<std::runtime_error(std::string)>& fail) {
-    if (!doc.is_object()) throw fail("(document): must be an object");
-    const auto format = doc.find("format");
-    if (format == doc.end() || *format != "stereoscene-vehicle-classifier") {
-        throw fail("/format: must be \"stereoscene-vehicle-classifier\"");
+    if (const auto problem =
+            scene_schema::format_header_problem(doc, "stereoscene-vehicle-classifier", 1)) {
+        throw fail(*problem);
     }
-    const auto version = doc.find("version");
-    if (version == doc.end() || *version != 1) throw fail("/version: must be 1");
     const auto features = doc.find("features");
     std::vector<std::string> expected(kSegmentFeatureNames.begin(), kSegmentFeatureNames.end());
     if (features == doc.end() || !features->is_array() || *features != nlohmann::json(expected)) {

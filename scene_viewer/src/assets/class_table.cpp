@@ -113,13 +113,10 @@ ClassTable parse_table(std::string_view text, const fs::path& path) {
     } catch (const scene_schema::SchemaError& e) {
         throw TableError((e.pointer().empty() ? "" : e.pointer() + ": ") + e.rule());
     }
-    if (!doc.is_object()) throw TableError("(document): must be an object");
-    const auto format = doc.find("format");
-    if (format == doc.end() || *format != "stereoscene-render-classes") {
-        throw TableError("/format: must be \"stereoscene-render-classes\"");
+    if (const auto problem =
+            scene_schema::format_header_problem(doc, "stereoscene-render-classes", 1)) {
+        throw TableError(*problem);
     }
-    const auto version = doc.find("version");
-    if (version == doc.end() || *version != 1) throw TableError("/version: must be 1");
     const auto classes = doc.find("classes");
     if (classes == doc.end() || !classes->is_array() || classes->empty()) {
         throw TableError("/classes: must be a non-empty array");

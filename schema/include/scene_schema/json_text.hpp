@@ -5,6 +5,7 @@
 
 #include <cstddef>
 #include <cstdint>
+#include <optional>
 #include <string>
 #include <string_view>
 
@@ -33,5 +34,12 @@ std::string json_error_text(const nlohmann::json::exception& e);
 /// without a check).
 std::uint64_t get_count(const nlohmann::json& value, const std::string& pointer,
                         std::uint64_t max = UINT64_MAX);
+
+/// What is wrong with the header of a tool's own JSON file (an object whose "format" member is
+/// `format` and whose "version" member is `version`), as the one line a reader reports:
+/// `(document): must be an object`, `/format: must be "<format>"` or `/version: must be <N>`;
+/// nullopt when the header is right.
+std::optional<std::string> format_header_problem(const nlohmann::json& doc, std::string_view format,
+                                                 int version);
 
 }  // namespace scene_schema
