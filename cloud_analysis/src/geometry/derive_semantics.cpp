@@ -397,6 +397,7 @@ void split_rejected_rows(Grid& grid, std::vector<int>& parent, const Rig& rig, i
         split[s] = segments[s].rules_label == "car" && segments[s].label != "car" &&
                    segments[s].width_m >= 1.5 * o.vehicle_piece_m;
     }
+    if (std::none_of(split.begin(), split.end(), [](char c) { return c != 0; })) return;
     std::vector<int> before_of_cell(grid.cells.size());
     for (std::size_t i = 0; i < grid.cells.size(); ++i) before_of_cell[i] = grid.cells[i].segment;
     if (!split_into_vehicle_pieces(grid, parent, rig, o, split)) return;
