@@ -21,8 +21,11 @@ Training data is rendered streets only, never a real image: the tuning seeds of
 scripts/street-seeds.sh and the extra tuning seeds 43-106 (parking and kerbside streets), each
 rendered twice, its cars in the world's paints (--paints world) and in the class colour, so that
 no colour tells a vehicle; and verge streets of seeds 1..--verge-streets in the world's paints.
+With --rigs, the tuning streets also through other rigs (scene-render sensors --preset), where
+the same street comes out in other segments, and the held-out streets through them are scored
+apart.
 
-usage: scripts/train-segment-classifier.py [--out FILE] [--work DIR] [--no-write]
+usage: scripts/train-segment-classifier.py [--out FILE] [--work DIR] [--no-write] [--rigs "..."]
            [--verge-streets N] [--max-depth M] [--build-dir DIR] [--parking-seeds "2 4 ..."]
            [--kerbside-seeds ...] [--pedestrian-seeds ...] [--held-out-seeds ...]
            [--extra-seeds "43 44 ..."] [--held-out-verge-seeds "101 102 ..."]
@@ -44,6 +47,9 @@ ROOT = os.path.dirname(os.path.dirname(os.path.abspath(__file__)))
 SHARED = os.path.join(ROOT, "..", "shared", "data")
 CAR_LABEL_ID = class_ids("cityscapes")["car"]
 HELD_OUT_VERGE_SEEDS = range(101, 116)
+# The rigs of scene-render sensors --preset besides KITTI's (docs/cli.md "Any stereo rig"): the
+# same street seen at other resolutions, focal lengths and baselines is cut into other segments.
+OTHER_RIGS = ("cityscapes", "argoverse", "zed", "realsense")
 # A segment is a vehicle when more than this share of the trees call it one: a majority, the
 # forest's own rule (Breiman 2001); no threshold is fitted.
 VOTE_THRESHOLD = 0.5
@@ -71,16 +77,17 @@ def street_seeds():
     return seeds
 
 
-def render(a, name, make, seed, paints, classes=None):
+def render(a, name, make, seed, paints, classes=None, preset=None):
     """Renders a street (make: the generator's arguments) once into the work folder, with
-    another class table (classes) when given."""
+    another class table (classes) or through another rig (preset) when given."""
     root = os.path.join(a.work, name)
     if not os.path.isdir(root):
         scene = root + ".json"
         run(["python3", os.path.join(ROOT, "scripts", make[0])] + make[1:] +
             ["--seed", str(seed), "-o", scene])
         run([a.scene_render, "sensors", scene, "--out", root + ".tmp", "--frame", "000000",
-             "--seed", str(seed), "--paints", paints] + (["--classes", classes] if classes else []))
+             "--seed", str(seed), "--paints", paints] + (["--classes", classes] if classes else []) +
+            (["--preset", preset] if preset else []))
         os.rename(root + ".tmp", root)
     return root
 
@@ -113,6 +120,11 @@ def rows_with_instances(a, name, root, frame):
     """(name, features, vehicle in the truth, vehicle by the rules) of each near segment."""
     segs, ids = segments(a, name, ["--kitti-root", root, "--frame", frame])
     truth = cv2.imread(os.path.join(root, "instance", frame + ".png"), cv2.IMREAD_UNCHANGED)
+    if truth.shape != ids.shape:
+        # Analysed at a reduced resolution (a 5 MP frame is halved): the pixel each analysed
+        # pixel starts at, as the analysis picks its labels.
+        step = truth.shape[1] // ids.shape[1]
+        truth = truth[::step, ::step][:ids.shape[0], :ids.shape[1]]
     car = (truth.astype(np.int64) >> 8) == CAR_LABEL_ID
     pixels = np.bincount(ids.ravel(), minlength=len(segs) + 1)
     cars = np.bincount(ids.ravel(), weights=car.ravel(), minlength=len(segs) + 1)
@@ -179,9 +191,9 @@ def errors(rows, guess):
 
 def street(name):
     """The street a render shows: every render of a street falls in one fold."""
-    for suffix in ("-world", "-sedan"):
+    for suffix in ("-world", "-sedan") + tuple("-" + rig for rig in OTHER_RIGS):
         if name.endswith(suffix):
-            return name[:-len(suffix)]
+            return street(name[:-len(suffix)])
     return name
 
 
@@ -204,7 +216,7 @@ def cross_validate(rows):
     return best[0], best[2]
 
 
-def write_model(manifest, trees, threshold, depth, rows):
+def write_model(manifest, trees, threshold, depth, rows, rigs):
     """The trees beside their manifest (what they read, where a vehicle begins), each file
     written whole."""
     folder = os.path.dirname(os.path.abspath(manifest))
@@ -217,8 +229,9 @@ def write_model(manifest, trees, threshold, depth, rows):
            "features": FEATURES, "vote_threshold": threshold,
            "trained_on": f"{len(names)} rendered streets ({len(rows)} segments): the tuning "
                          f"and extra tuning parking and kerbside streets in the world's paints "
-                         f"and the class colour, verge streets in the world's paints; random "
-                         f"trees of depth {depth}, 100 trees",
+                         f"and the class colour, verge streets in the world's paints"
+                         + (f"; the tuning streets through the {', '.join(rigs)} rigs"
+                            if rigs else "") + f"; random trees of depth {depth}, 100 trees",
            "command": "scripts/train-segment-classifier.py"}
     with open(manifest + ".tmp", "w") as f:
         json.dump(doc, f, indent=1)
@@ -250,6 +263,12 @@ def main():
                          "when ../shared/gltf-thirdparty is there)")
     ap.add_argument("--held-out-verge-seeds",
                     default=" ".join(str(s) for s in HELD_OUT_VERGE_SEEDS))
+    ap.add_argument("--rigs", default="",
+                    help="other rigs (scene-render sensors --preset: "
+                         f"{', '.join(OTHER_RIGS)}) the tuning streets are also rendered through "
+                         "and learnt from, in the world's paints; the held-out streets are scored "
+                         "through them apart (default: none, KITTI's rig only, as the shipped "
+                         "model was trained)")
     ap.add_argument("--max-depth", type=float, default=45.0,
                     help="segments nearer than this (median depth) are learnt and scored, m")
     a = ap.parse_args()
@@ -285,6 +304,15 @@ def main():
                 name = f"{kind}-{s}-sedan"
                 fit += rows_with_instances(a, name, render(a, name, make, s, "class", table),
                                            "000000")
+    rigs = a.rigs.split()
+    if set(rigs) - set(OTHER_RIGS):
+        ap.error(f"--rigs: unknown rig (one of {', '.join(OTHER_RIGS)})")
+    for rig in rigs:
+        for kind, make in kinds:
+            for s in seeds[seed_lists[kind]]:
+                name = f"{kind}-{s}-{rig}"
+                fit += rows_with_instances(a, name, render(a, name, make, s, "world", None, rig),
+                                           "000000")
     if len({r[2] for r in fit}) < 2:
         sys.exit("train-segment-classifier: the training streets need vehicle and other "
                  "segments to learn from")
@@ -302,6 +330,16 @@ def main():
             name = f"{kind}-{s}"
             held += rows_with_instances(a, name, render(a, name, make, s, "class"), "000000")
     checks.append((f"held-out streets ({len(seeds['held_out_seeds']) * 3})", held, None))
+    if rigs:
+        held = []
+        for rig in rigs:
+            for kind, make in kinds:
+                for s in seeds["held_out_seeds"]:
+                    name = f"{kind}-{s}-{rig}"
+                    held += rows_with_instances(
+                        a, name, render(a, name, make, s, "world", None, rig), "000000")
+        checks.append((f"held-out streets through {len(rigs)} other rigs "
+                       f"({len(seeds['held_out_seeds']) * 3 * len(rigs)} renders)", held, None))
     verge = []
     held_out_verge = [int(s) for s in a.held_out_verge_seeds.split()]
     if set(held_out_verge) & set(range(1, a.verge_streets + 1)):
@@ -334,7 +372,7 @@ def main():
         _, tfp, tfn = errors(rows, guess)
         print(f"| {label} | {n} | {rfp} | {rfn} | {tfp} | {tfn} |")
     if not a.no_write:
-        write_model(a.out, trees, threshold, depth, fit)
+        write_model(a.out, trees, threshold, depth, fit, rigs)
 
 
 if __name__ == "__main__":
