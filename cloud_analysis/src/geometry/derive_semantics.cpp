@@ -548,7 +548,7 @@ SceneGeometry derive_semantics(const DisparityMap& disparity, const StereoCamera
         }
         measure_leans(grid, disparity, rig, o, cls.car, fresh, out.segments);
         drop_leaning_cars(cls, o, fresh, out.segments, segment_class);
-        measure_appearance(grid, disparity, left, fresh, out.segments);
+        measure_appearance(grid, disparity, left, fresh, out.segments, o.threads);
         for (std::size_t s = 0; s < stats.size(); ++s) {
             if (!fresh[s]) continue;
             out.segments[s].rules_label = out.segments[s].label;

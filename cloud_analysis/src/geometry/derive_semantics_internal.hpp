@@ -98,9 +98,11 @@ std::vector<int> cluster_cells(Grid& g, const DisparityMap& disparity, const Rig
 
 /// Each segment's colour, texture and surface roughness (Segment::chroma_r .. disparity_spread)
 /// from its pixels in the left image (colour left neutral without one) and the disparity; only
-/// the segments flagged in `fresh` (by index) are measured.
+/// the segments flagged in `fresh` (by index) are measured, on `threads` threads by bands of
+/// rows (the same values as one pass).
 void measure_appearance(const Grid& grid, const DisparityMap& disparity, const ImageU8& left,
-                        const std::vector<char>& fresh, std::vector<Segment>& segments);
+                        const std::vector<char>& fresh, std::vector<Segment>& segments,
+                        int threads);
 
 /// The weighted mean and the main axis (a unit vector: the covariance's first eigenvector) of a
 /// footprint's points (x, z, weight); nullopt when the weights sum to 0.

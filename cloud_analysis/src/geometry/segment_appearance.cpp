@@ -5,6 +5,7 @@
 #include <cstdint>
 #include <vector>
 
+#include "cloud_analysis/support/task_queue.hpp"
 #include "derive_semantics_internal.hpp"
 
 namespace cloud_analysis::geometry {
@@ -32,10 +33,9 @@ struct Sums {
 const std::uint8_t* rgb_of(const ImageU8& left, int w, int h, std::vector<std::uint8_t>& grey3) {
     if (left.empty() || left.width_px != w || left.height_px != h) return nullptr;
     if (left.channels == 3) return left.data.data();
-    grey3.resize(left.data.size() * 3);
-    for (std::size_t p = 0; p < left.data.size(); ++p) {
-        grey3[3 * p] = grey3[3 * p + 1] = grey3[3 * p + 2] = left.data[p];
-    }
+    grey3.clear();
+    grey3.reserve(left.data.size() * 3);
+    for (const std::uint8_t g : left.data) grey3.insert(grey3.end(), 3, g);
     return grey3.data();
 }
 
@@ -75,19 +75,29 @@ void finish(Sums& s, Segment& seg) {
     }
 }
 
-}  // namespace
+/// Adds `band`'s sums of one segment to `into`: counts and integer sums add, the image box
+/// grows, the disparities follow (bands in row order keep the one-pass order).
+void merge(Sums& into, Sums& band) {
+    into.n += band.n;
+    into.coloured += band.coloured;
+    into.u0 = std::min(into.u0, band.u0), into.u1 = std::max(into.u1, band.u1);
+    into.v0 = std::min(into.v0, band.v0), into.v1 = std::max(into.v1, band.v1);
+    for (int c = 0; c < 3; ++c) into.channel[c] += band.channel[c];
+    into.level += band.level, into.level2 += band.level2, into.grad += band.grad;
+    into.grad_pairs += band.grad_pairs;
+    into.pairs_h += band.pairs_h, into.rough_h += band.rough_h;
+    into.pairs_v += band.pairs_v, into.rough_v += band.rough_v;
+    into.disparities.insert(into.disparities.end(), band.disparities.begin(),
+                            band.disparities.end());
+}
 
-void measure_appearance(const Grid& grid, const DisparityMap& disparity, const ImageU8& left,
-                        const std::vector<char>& fresh, std::vector<Segment>& segments) {
-    const int w = disparity.width_px, h = disparity.height_px;
-    std::vector<std::uint8_t> grey3;
-    const std::uint8_t* rgb = rgb_of(left, w, h, grey3);
-    const bool colour = rgb != nullptr;
-    const std::size_t n = static_cast<std::size_t>(w) * h;
-    // Each pixel's segment (-1: none), and each segment's pixel count to size its list.
-    std::vector<std::int32_t> seg(n, -1);
-    std::vector<Sums> sums(segments.size());
-    for (std::size_t p = 0; p < n; ++p) {
+/// One band of rows [v_begin, v_end): each pixel's segment (-1: none) into `seg`, and the
+/// segments' pixel counts into `sums`.
+void assign_rows(const Grid& grid, const std::vector<char>& fresh, int w, int v_begin, int v_end,
+                 std::vector<std::int32_t>& seg, std::vector<Sums>& sums) {
+    const auto first = static_cast<std::size_t>(v_begin) * static_cast<std::size_t>(w);
+    const auto last = static_cast<std::size_t>(v_end) * static_cast<std::size_t>(w);
+    for (std::size_t p = first; p < last; ++p) {
         const std::int32_t cell = grid.pixel_cell[p];
         if (cell < 0) continue;
         const std::int32_t s = grid.cells[static_cast<std::size_t>(cell)].segment;
@@ -95,15 +105,22 @@ void measure_appearance(const Grid& grid, const DisparityMap& disparity, const I
         seg[p] = s;
         ++sums[static_cast<std::size_t>(s)].n;
     }
+}
+
+/// One band of rows [v_begin, v_end) summed into `sums` (a pixel's pair below may lie in the
+/// next band: `seg` is whole when this runs).
+void sum_rows(const std::vector<std::int32_t>& seg, const float* d, const std::uint8_t* rgb, int w,
+              int h, int v_begin, int v_end, std::vector<Sums>& sums) {
     for (Sums& t : sums) t.disparities.reserve(t.n);
-    const float* d = disparity.disparity_px.data();
-    for (int v = 0; v < h; ++v) {
+    for (Sums& t : sums) t.n = 0;
+    for (int v = v_begin; v < v_end; ++v) {
         const std::size_t row = static_cast<std::size_t>(v) * w;
         for (int u = 0; u < w; ++u) {
             const std::size_t p = row + u;
             const std::int32_t s = seg[p];
             if (s < 0) continue;
             Sums& t = sums[static_cast<std::size_t>(s)];
+            ++t.n;
             t.u0 = std::min(t.u0, u), t.u1 = std::max(t.u1, u);
             t.v0 = std::min(t.v0, v), t.v1 = std::max(t.v1, v);
             t.disparities.push_back(d[p]);
@@ -116,7 +133,7 @@ void measure_appearance(const Grid& grid, const DisparityMap& disparity, const I
                 ++t.pairs_v;
                 t.rough_v += std::abs(d[p + w] - d[p]) > kRoughStepPx;
             }
-            if (!colour) continue;
+            if (rgb == nullptr) continue;
             const std::uint8_t* px = &rgb[3 * p];
             const int level = px[0] + px[1] + px[2];
             ++t.coloured;
@@ -129,7 +146,39 @@ void measure_appearance(const Grid& grid, const DisparityMap& disparity, const I
             }
         }
     }
-    for (std::size_t s = 0; s < segments.size(); ++s) finish(sums[s], segments[s]);
+}
+
+}  // namespace
+
+void measure_appearance(const Grid& grid, const DisparityMap& disparity, const ImageU8& left,
+                        const std::vector<char>& fresh, std::vector<Segment>& segments,
+                        int threads) {
+    const int w = disparity.width_px, h = disparity.height_px;
+    std::vector<std::uint8_t> grey3;
+    const std::uint8_t* rgb = rgb_of(left, w, h, grey3);
+    // Bands of rows on `threads` threads, each with sums of its own, merged in row order: the
+    // same values as one pass.
+    const auto bands = static_cast<std::size_t>(std::clamp(threads, 1, std::max(h, 1)));
+    std::vector<std::int32_t> seg(static_cast<std::size_t>(w) * h, -1);
+    std::vector<std::vector<Sums>> band_sums(bands, std::vector<Sums>(segments.size()));
+    const auto rows = [&](std::size_t first, std::size_t last) {
+        return std::pair<int, int>(static_cast<int>(first), static_cast<int>(last));
+    };
+    for_each_chunk(static_cast<std::size_t>(h), bands,
+                   [&](std::size_t k, std::size_t a, std::size_t b) {
+                       const auto [v0, v1] = rows(a, b);
+                       assign_rows(grid, fresh, w, v0, v1, seg, band_sums[k]);
+                   });
+    const float* d = disparity.disparity_px.data();
+    for_each_chunk(static_cast<std::size_t>(h), bands,
+                   [&](std::size_t k, std::size_t a, std::size_t b) {
+                       const auto [v0, v1] = rows(a, b);
+                       sum_rows(seg, d, rgb, w, h, v0, v1, band_sums[k]);
+                   });
+    for (std::size_t k = 1; k < bands; ++k) {
+        for (std::size_t s = 0; s < segments.size(); ++s) merge(band_sums[0][s], band_sums[k][s]);
+    }
+    for (std::size_t s = 0; s < segments.size(); ++s) finish(band_sums[0][s], segments[s]);
 }
 
 }  // namespace cloud_analysis::geometry
