@@ -2,7 +2,6 @@
 
 #include <algorithm>
 #include <cmath>
-#include <map>
 #include <numeric>
 #include <optional>
 #include <stdexcept>
@@ -278,71 +277,6 @@ Segment classify(SegmentStats& st, const Classes& cls, bool has_image, double fx
         set(cls.other, "static");
     }
     return seg;
-}
-
-/// Each car candidate's lean (Segment::lean), among the segments flagged `fresh`: per column band
-/// (one stretch of surface), the slope of depth over height of its lower body's pixels within two
-/// disparity noises (at least 0.5 m) of the band's median depth (a kerb or a bollard in front of
-/// the body is another surface, not a lean); the segment's lean is the median over its bands, its
-/// error the bands' spread (1.4826 median absolute deviations) over the square root of their
-/// number.
-void measure_leans(const Grid& grid, const DisparityMap& disparity, const Rig& rig,
-                   const GeometryOptions& o, std::uint16_t car, const std::vector<char>& fresh,
-                   std::vector<Segment>& segments) {
-    constexpr double kLow = 0.25, kHigh = 0.65;  // metres above the road
-    constexpr std::size_t kMinPixels = 6;        // a band's, for a slope
-    constexpr double kMinHeightSpread = 0.1;     // metres: a band's, for a slope
-    const int w = disparity.width_px;
-    // Per segment, per column band: (height, depth) of its lower body's pixels.
-    std::vector<std::map<int, std::vector<std::pair<double, double>>>> bands(segments.size());
-    for (std::size_t p = 0; p < grid.pixel_cell.size(); ++p) {
-        const std::int32_t cell = grid.pixel_cell[p];
-        if (cell < 0) continue;
-        const int s = grid.cells[static_cast<std::size_t>(cell)].segment;
-        if (s < 0 || !fresh[static_cast<std::size_t>(s)] ||
-            segments[static_cast<std::size_t>(s)].class_index != car) {
-            continue;
-        }
-        const double d = double{disparity.disparity_px[p]} - rig.offset;
-        if (!(d > 0.0)) continue;
-        const int u = static_cast<int>(p % static_cast<std::size_t>(w));
-        const double z = rig.fb / d;
-        const double height = double{grid.pixel_height[p]};
-        if (height < kLow || height > kHigh) continue;
-        bands[static_cast<std::size_t>(s)][u / o.column_bin_px].emplace_back(height, z);
-    }
-    std::vector<double> depths, slopes, deviations;
-    for (std::size_t s = 0; s < segments.size(); ++s) {
-        slopes.clear();
-        for (auto& [band, px] : bands[s]) {
-            if (px.size() < kMinPixels) continue;
-            depths.clear();
-            for (const auto& hz : px) depths.push_back(hz.second);
-            const double mid = quantile(depths, 0.5);
-            const double reach = std::max(0.5, 2.0 * o.disparity_noise_px * mid * mid / rig.fb);
-            double count = 0, h = 0, z = 0, hh = 0, hz = 0;
-            for (const auto& [ph, pz] : px) {
-                if (std::abs(pz - mid) > reach) continue;
-                count += 1;
-                h += ph;
-                z += pz;
-                hh += ph * ph;
-                hz += ph * pz;
-            }
-            if (count < kMinPixels) continue;
-            // A band of pixels spread evenly over kMinHeightSpread has this variance at least.
-            const double shh = hh - h * h / count;
-            if (!(shh > count * kMinHeightSpread * kMinHeightSpread / 12.0)) continue;
-            slopes.push_back((hz - h * z / count) / shh);
-        }
-        if (slopes.size() < 3) continue;
-        const double lean = quantile(slopes, 0.5);
-        deviations.clear();
-        for (double b : slopes) deviations.push_back(std::abs(b - lean));
-        segments[s].lean = lean;
-        segments[s].lean_error =
-            1.4826 * quantile(deviations, 0.5) / std::sqrt(static_cast<double>(slopes.size()));
-    }
 }
 
 /// Car candidates flagged `fresh` leaning beyond car_max_lean by twice their error (a bank's

@@ -96,6 +96,16 @@ std::vector<int> link_cells(Grid& g, const DisparityMap& disparity, const Rig& r
 std::vector<int> cluster_cells(Grid& g, const DisparityMap& disparity, const Rig& rig,
                                const GeometryOptions& o);
 
+/// Each car candidate's lean (Segment::lean), among the segments flagged `fresh`: per column band
+/// (one stretch of surface), the slope of depth over height of its lower body's pixels within two
+/// disparity noises (at least 0.5 m) of the band's median depth (a kerb or a bollard in front of
+/// the body is another surface, not a lean); the segment's lean is the median over its bands, its
+/// error the bands' spread (1.4826 median absolute deviations) over the square root of their
+/// number.
+void measure_leans(const Grid& grid, const DisparityMap& disparity, const Rig& rig,
+                   const GeometryOptions& o, std::uint16_t car, const std::vector<char>& fresh,
+                   std::vector<Segment>& segments);
+
 /// Each segment's colour, texture and surface roughness (Segment::chroma_r .. disparity_spread)
 /// from its pixels in the left image (colour left neutral without one) and the disparity; only
 /// the segments flagged in `fresh` (by index) are measured, on `threads` threads by bands of
