@@ -13,6 +13,7 @@
 #include "cloud_analysis/geometry/scene_geometry.hpp"
 #include "cloud_analysis/geometry/segment_classifier.hpp"
 #include "cloud_analysis/support/select.hpp"
+#include "cloud_analysis/support/task_queue.hpp"
 #include "derive_semantics_internal.hpp"
 
 namespace cloud_analysis::geometry {
@@ -379,44 +380,72 @@ void label_without_ground(const DisparityMap& disparity, std::uint16_t sky, Clas
     if (sky == kVoidClass) classes.class_index.assign(classes.class_index.size(), kVoidClass);
 }
 
+/// An image box being grown, inclusive; empty while u1 < 0.
+struct PixelBox {
+    int u0 = 0, v0 = 0, u1 = -1, v1 = -1;
+    void add(int u, int v) {
+        if (u1 < 0) {
+            u0 = u1 = u;
+            v0 = v1 = v;
+        }
+        u0 = std::min(u0, u), u1 = std::max(u1, u);
+        v0 = std::min(v0, v), v1 = std::max(v1, v);
+    }
+};
+
 /// Each pixel of a segment: its segment's index, class (segment_class) and image box; a pixel
-/// below low_cut_m in no segment: sidewalk or terrain.
+/// below low_cut_m in no segment: sidewalk or terrain. By bands of rows on `threads` threads
+/// (each pixel is written once; the boxes are merged).
 void label_segment_pixels(const Grid& grid, const Classes& cls,
                           const std::vector<std::uint16_t>& segment_class,
                           const std::vector<SegmentStats>& stats, int w, int column_bin_px,
-                          SceneGeometry& out) {
+                          int threads, SceneGeometry& out) {
     out.segment_of_pixel.assign(grid.pixel_cell.size(), -1);
-    for (std::size_t p = 0; p < grid.pixel_cell.size(); ++p) {
-        const std::int32_t cell = grid.pixel_cell[p];
-        if (cell < 0) continue;
-        const int s = grid.cells[static_cast<std::size_t>(cell)].segment;
-        if (s >= 0) {
-            out.segment_of_pixel[p] = s;
-            Segment& seg = out.segments[static_cast<std::size_t>(s)];
-            const int u = static_cast<int>(p % static_cast<std::size_t>(w));
-            const int v = static_cast<int>(p / static_cast<std::size_t>(w));
-            if (seg.u1 < 0) {
-                seg.u0 = seg.u1 = u;
-                seg.v0 = seg.v1 = v;
-            }
-            seg.u0 = std::min(seg.u0, u);
-            seg.u1 = std::max(seg.u1, u);
-            seg.v0 = std::min(seg.v0, v);
-            seg.v1 = std::max(seg.v1, v);
-            // A car segment's bands without a car's horizontal edges are clutter beside it;
-            // its green pixels are the hedge or bush it touches.
-            std::uint16_t c = segment_class[static_cast<std::size_t>(s)];
-            const std::vector<char>& bands = stats[static_cast<std::size_t>(s)].band_car;
-            if (c == cls.car && grid.pixel_green[p]) {
-                c = cls.vegetation;
-            } else if (c == cls.car && !bands.empty() &&
-                       !bands[static_cast<std::size_t>(u / column_bin_px)]) {
-                c = cls.other;
-            }
-            out.classes.class_index[p] = c;
-        } else if (grid.pixel_low[p]) {
-            out.classes.class_index[p] = grid.pixel_green[p] ? cls.terrain : cls.sidewalk;
+    const auto rows = static_cast<int>(grid.pixel_cell.size() / static_cast<std::size_t>(w));
+    const auto parts = static_cast<std::size_t>(std::clamp(threads, 1, std::max(rows, 1)));
+    std::vector<std::vector<PixelBox>> boxes(parts, std::vector<PixelBox>(out.segments.size()));
+    for_each_chunk(static_cast<std::size_t>(rows), parts,
+                   [&](std::size_t k, std::size_t first, std::size_t last) {
+                       for (auto v = first; v < last; ++v) {
+                           for (int u = 0; u < w; ++u) {
+                               const std::size_t p =
+                                   v * static_cast<std::size_t>(w) + static_cast<std::size_t>(u);
+                               const std::int32_t cell = grid.pixel_cell[p];
+                               if (cell < 0) continue;
+                               const int s = grid.cells[static_cast<std::size_t>(cell)].segment;
+                               if (s < 0) {
+                                   if (grid.pixel_low[p]) {
+                                       out.classes.class_index[p] =
+                                           grid.pixel_green[p] ? cls.terrain : cls.sidewalk;
+                                   }
+                                   continue;
+                               }
+                               out.segment_of_pixel[p] = s;
+                               boxes[k][static_cast<std::size_t>(s)].add(u, static_cast<int>(v));
+                               // A car segment's bands without a car's horizontal edges are clutter
+                               // beside it; its green pixels are the hedge or bush it touches.
+                               std::uint16_t c = segment_class[static_cast<std::size_t>(s)];
+                               const std::vector<char>& bands =
+                                   stats[static_cast<std::size_t>(s)].band_car;
+                               if (c == cls.car && grid.pixel_green[p]) {
+                                   c = cls.vegetation;
+                               } else if (c == cls.car && !bands.empty() &&
+                                          !bands[static_cast<std::size_t>(u / column_bin_px)]) {
+                                   c = cls.other;
+                               }
+                               out.classes.class_index[p] = c;
+                           }
+                       }
+                   });
+    for (std::size_t s = 0; s < out.segments.size(); ++s) {
+        Segment& seg = out.segments[s];
+        PixelBox box{seg.u0, seg.v0, seg.u1, seg.v1};
+        for (const auto& part : boxes) {
+            if (part[s].u1 < 0) continue;
+            box.add(part[s].u0, part[s].v0);
+            box.add(part[s].u1, part[s].v1);
         }
+        seg.u0 = box.u0, seg.v0 = box.v0, seg.u1 = box.u1, seg.v1 = box.v1;
     }
 }
 
@@ -493,7 +522,7 @@ SceneGeometry derive_semantics(const DisparityMap& disparity, const StereoCamera
     judge(std::vector<char>(stats.size(), 1));
     if (o.classifier) split_rejected_rows(grid, parent, rig, w, o, stats, out.segments, judge);
 
-    label_segment_pixels(grid, cls, segment_class, stats, w, o.column_bin_px, out);
+    label_segment_pixels(grid, cls, segment_class, stats, w, o.column_bin_px, o.threads, out);
     label_sky(&grid, w, out.ground.horizon_v_px, cls.sky, out.classes);
     sort_segments(out);
     return out;
