@@ -1,6 +1,7 @@
 // What the segment classifier reads beside the rules' measurements: each segment's colour,
 // texture and surface roughness, gathered in one pass over its pixels.
 #include <algorithm>
+#include <atomic>
 #include <cmath>
 #include <cstdint>
 #include <vector>
@@ -175,10 +176,15 @@ void measure_appearance(const Grid& grid, const DisparityMap& disparity, const I
                        const auto [v0, v1] = rows(a, b);
                        sum_rows(seg, d, rgb, w, h, v0, v1, band_sums[k]);
                    });
-    for (std::size_t k = 1; k < bands; ++k) {
-        for (std::size_t s = 0; s < segments.size(); ++s) merge(band_sums[0][s], band_sums[k][s]);
-    }
-    for (std::size_t s = 0; s < segments.size(); ++s) finish(band_sums[0][s], segments[s]);
+    // Each segment merged and finished on its own (its quantiles cost as much as the pass),
+    // taken in turn by the threads.
+    std::atomic<std::size_t> next{0};
+    for_each_chunk(bands, bands, [&](std::size_t, std::size_t, std::size_t) {
+        for (std::size_t s = next++; s < segments.size(); s = next++) {
+            for (std::size_t k = 1; k < bands; ++k) merge(band_sums[0][s], band_sums[k][s]);
+            finish(band_sums[0][s], segments[s]);
+        }
+    });
 }
 
 }  // namespace cloud_analysis::geometry
