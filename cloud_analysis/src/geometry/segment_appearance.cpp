@@ -78,7 +78,7 @@ void finish(Sums& s, Segment& seg) {
 
 /// Adds `band`'s sums of one segment to `into`: counts and integer sums add, the image box
 /// grows, the disparities follow (bands in row order keep the one-pass order).
-void merge(Sums& into, Sums& band) {
+void merge(Sums& into, const Sums& band) {
     into.n += band.n;
     into.coloured += band.coloured;
     into.u0 = std::min(into.u0, band.u0), into.u1 = std::max(into.u1, band.u1);
@@ -108,12 +108,11 @@ void assign_rows(const Grid& grid, const std::vector<char>& fresh, int w, int v_
     }
 }
 
-/// One band of rows [v_begin, v_end) summed into `sums` (a pixel's pair below may lie in the
-/// next band: `seg` is whole when this runs).
+/// One band of rows [v_begin, v_end) summed into `sums`, whose pixel counts assign_rows made (a
+/// pixel's pair below may lie in the next band: `seg` is whole when this runs).
 void sum_rows(const std::vector<std::int32_t>& seg, const float* d, const std::uint8_t* rgb, int w,
               int h, int v_begin, int v_end, std::vector<Sums>& sums) {
     for (Sums& t : sums) t.disparities.reserve(t.n);
-    for (Sums& t : sums) t.n = 0;
     for (int v = v_begin; v < v_end; ++v) {
         const std::size_t row = static_cast<std::size_t>(v) * w;
         for (int u = 0; u < w; ++u) {
@@ -121,7 +120,6 @@ void sum_rows(const std::vector<std::int32_t>& seg, const float* d, const std::u
             const std::int32_t s = seg[p];
             if (s < 0) continue;
             Sums& t = sums[static_cast<std::size_t>(s)];
-            ++t.n;
             t.u0 = std::min(t.u0, u), t.u1 = std::max(t.u1, u);
             t.v0 = std::min(t.v0, v), t.v1 = std::max(t.v1, v);
             t.disparities.push_back(d[p]);
@@ -162,19 +160,16 @@ void measure_appearance(const Grid& grid, const DisparityMap& disparity, const I
     const auto bands = static_cast<std::size_t>(std::clamp(threads, 1, std::max(h, 1)));
     std::vector<std::int32_t> seg(static_cast<std::size_t>(w) * h, -1);
     std::vector<std::vector<Sums>> band_sums(bands, std::vector<Sums>(segments.size()));
-    const auto rows = [&](std::size_t first, std::size_t last) {
-        return std::pair<int, int>(static_cast<int>(first), static_cast<int>(last));
-    };
     for_each_chunk(static_cast<std::size_t>(h), bands,
-                   [&](std::size_t k, std::size_t a, std::size_t b) {
-                       const auto [v0, v1] = rows(a, b);
-                       assign_rows(grid, fresh, w, v0, v1, seg, band_sums[k]);
+                   [&](std::size_t k, std::size_t first, std::size_t last) {
+                       assign_rows(grid, fresh, w, static_cast<int>(first), static_cast<int>(last),
+                                   seg, band_sums[k]);
                    });
     const float* d = disparity.disparity_px.data();
     for_each_chunk(static_cast<std::size_t>(h), bands,
-                   [&](std::size_t k, std::size_t a, std::size_t b) {
-                       const auto [v0, v1] = rows(a, b);
-                       sum_rows(seg, d, rgb, w, h, v0, v1, band_sums[k]);
+                   [&](std::size_t k, std::size_t first, std::size_t last) {
+                       sum_rows(seg, d, rgb, w, h, static_cast<int>(first), static_cast<int>(last),
+                                band_sums[k]);
                    });
     // Each segment merged and finished on its own (its quantiles cost as much as the pass),
     // taken in turn by the threads.

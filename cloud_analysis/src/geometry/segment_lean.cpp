@@ -69,7 +69,7 @@ void measure_leans(const Grid& grid, const DisparityMap& disparity, const Rig& r
                    std::vector<Segment>& segments) {
     constexpr std::size_t kMinPixels = 6;     // a band's, for a slope
     constexpr double kMinHeightSpread = 0.1;  // metres: a band's, for a slope
-    // Per measured segment (slot), per column band: (height, depth) of its lower body's pixels.
+    // Each measured segment's place among the lower-body lists (-1: not measured).
     std::vector<int> slot(segments.size(), -1);
     std::size_t slots = 0;
     for (std::size_t s = 0; s < segments.size(); ++s) {
