@@ -471,6 +471,21 @@ void sort_segments(SceneGeometry& out) {
 
 }  // namespace
 
+ColumnRange fresh_columns(const Grid& g, const std::vector<char>& fresh, int column_bin_px,
+                          int width_px) {
+    const int per_band = g.bins_d * kLayers;
+    int first = g.bins_u, last = -1;
+    for (std::size_t i = 0; i < g.cells.size(); ++i) {
+        const int s = g.cells[i].segment;
+        if (s < 0 || !fresh[static_cast<std::size_t>(s)]) continue;
+        const int band = static_cast<int>(i) / per_band;
+        first = std::min(first, band);
+        last = std::max(last, band);
+    }
+    if (last < 0) return {};
+    return {first * column_bin_px, std::min(width_px, (last + 1) * column_bin_px)};
+}
+
 SceneGeometry derive_semantics(const DisparityMap& disparity, const StereoCamera& camera,
                                const ImageU8& left, const Palette& palette,
                                const GeometryOptions& o) {
@@ -509,9 +524,10 @@ SceneGeometry derive_semantics(const DisparityMap& disparity, const StereoCamera
             if (fresh[s]) out.segments[s] = classify(stats[s], cls, has_image, rig.fx, o);
             segment_class[s] = out.segments[s].class_index;
         }
-        measure_leans(grid, disparity, rig, o, cls.car, fresh, out.segments);
+        const ColumnRange columns = fresh_columns(grid, fresh, o.column_bin_px, w);
+        measure_leans(grid, disparity, rig, o, cls.car, fresh, columns, out.segments);
         drop_leaning_cars(cls, o, fresh, out.segments, segment_class);
-        measure_appearance(grid, disparity, left, fresh, out.segments, o.threads);
+        measure_appearance(grid, disparity, left, fresh, columns, out.segments, o.threads);
         for (std::size_t s = 0; s < stats.size(); ++s) {
             if (!fresh[s]) continue;
             out.segments[s].rules_label = out.segments[s].label;

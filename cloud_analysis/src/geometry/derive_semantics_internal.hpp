@@ -96,23 +96,36 @@ std::vector<int> link_cells(Grid& g, const DisparityMap& disparity, const Rig& r
 std::vector<int> cluster_cells(Grid& g, const DisparityMap& disparity, const Rig& rig,
                                const GeometryOptions& o);
 
+/// Image columns [u_begin, u_end).
+struct ColumnRange {
+    int u_begin = 0, u_end = 0;
+};
+
+/// The whole column bands (column_bin_px wide, clipped to width_px) that hold every pixel of
+/// the segments flagged in `fresh` (by Cell::segment): a pass over those segments' pixels reads
+/// no other column. Empty when no cell is theirs.
+ColumnRange fresh_columns(const Grid& g, const std::vector<char>& fresh, int column_bin_px,
+                          int width_px);
+
 /// Each car candidate's lean (Segment::lean), among the segments flagged `fresh`: per column band
 /// (one stretch of surface), the slope of depth over height of its lower body's pixels within two
 /// disparity noises (at least 0.5 m) of the band's median depth (a kerb or a bollard in front of
 /// the body is another surface, not a lean); the segment's lean is the median over its bands, its
 /// error the bands' spread (1.4826 median absolute deviations) over the square root of their
 /// number.
+/// Only the image columns `columns` are read (fresh_columns: where every pixel of those
+/// segments lies).
 void measure_leans(const Grid& grid, const DisparityMap& disparity, const Rig& rig,
                    const GeometryOptions& o, std::uint16_t car, const std::vector<char>& fresh,
-                   std::vector<Segment>& segments);
+                   ColumnRange columns, std::vector<Segment>& segments);
 
 /// Each segment's colour, texture and surface roughness (Segment::chroma_r .. disparity_spread)
 /// from its pixels in the left image (colour left neutral without one) and the disparity; only
-/// the segments flagged in `fresh` (by index) are measured, on `threads` threads by bands of
-/// rows (the same values as one pass).
+/// the segments flagged in `fresh` (by index) are measured, reading the image columns `columns`
+/// (fresh_columns), on `threads` threads by bands of rows (the same values as one pass).
 void measure_appearance(const Grid& grid, const DisparityMap& disparity, const ImageU8& left,
-                        const std::vector<char>& fresh, std::vector<Segment>& segments,
-                        int threads);
+                        const std::vector<char>& fresh, ColumnRange columns,
+                        std::vector<Segment>& segments, int threads);
 
 /// The weighted mean and the main axis (a unit vector: the covariance's first eigenvector) of a
 /// footprint's points (x, z, weight); nullopt when the weights sum to 0.

@@ -94,28 +94,30 @@ void merge(Sums& into, const Sums& band) {
 
 /// One band of rows [v_begin, v_end): each pixel's segment (-1: none) into `seg`, and the
 /// segments' pixel counts into `sums`.
-void assign_rows(const Grid& grid, const std::vector<char>& fresh, int w, int v_begin, int v_end,
-                 std::vector<std::int32_t>& seg, std::vector<Sums>& sums) {
-    const auto first = static_cast<std::size_t>(v_begin) * static_cast<std::size_t>(w);
-    const auto last = static_cast<std::size_t>(v_end) * static_cast<std::size_t>(w);
-    for (std::size_t p = first; p < last; ++p) {
-        const std::int32_t cell = grid.pixel_cell[p];
-        if (cell < 0) continue;
-        const std::int32_t s = grid.cells[static_cast<std::size_t>(cell)].segment;
-        if (s < 0 || !fresh[static_cast<std::size_t>(s)]) continue;
-        seg[p] = s;
-        ++sums[static_cast<std::size_t>(s)].n;
+void assign_rows(const Grid& grid, const std::vector<char>& fresh, int w, ColumnRange columns,
+                 int v_begin, int v_end, std::vector<std::int32_t>& seg, std::vector<Sums>& sums) {
+    for (int v = v_begin; v < v_end; ++v) {
+        const std::size_t row = static_cast<std::size_t>(v) * static_cast<std::size_t>(w);
+        for (int u = columns.u_begin; u < columns.u_end; ++u) {
+            const std::size_t p = row + static_cast<std::size_t>(u);
+            const std::int32_t cell = grid.pixel_cell[p];
+            if (cell < 0) continue;
+            const std::int32_t s = grid.cells[static_cast<std::size_t>(cell)].segment;
+            if (s < 0 || !fresh[static_cast<std::size_t>(s)]) continue;
+            seg[p] = s;
+            ++sums[static_cast<std::size_t>(s)].n;
+        }
     }
 }
 
 /// One band of rows [v_begin, v_end) summed into `sums`, whose pixel counts assign_rows made (a
 /// pixel's pair below may lie in the next band: `seg` is whole when this runs).
 void sum_rows(const std::vector<std::int32_t>& seg, const float* d, const std::uint8_t* rgb, int w,
-              int h, int v_begin, int v_end, std::vector<Sums>& sums) {
+              int h, ColumnRange columns, int v_begin, int v_end, std::vector<Sums>& sums) {
     for (Sums& t : sums) t.disparities.reserve(t.n);
     for (int v = v_begin; v < v_end; ++v) {
         const std::size_t row = static_cast<std::size_t>(v) * w;
-        for (int u = 0; u < w; ++u) {
+        for (int u = columns.u_begin; u < columns.u_end; ++u) {
             const std::size_t p = row + u;
             const std::int32_t s = seg[p];
             if (s < 0) continue;
@@ -150,8 +152,8 @@ void sum_rows(const std::vector<std::int32_t>& seg, const float* d, const std::u
 }  // namespace
 
 void measure_appearance(const Grid& grid, const DisparityMap& disparity, const ImageU8& left,
-                        const std::vector<char>& fresh, std::vector<Segment>& segments,
-                        int threads) {
+                        const std::vector<char>& fresh, ColumnRange columns,
+                        std::vector<Segment>& segments, int threads) {
     const int w = disparity.width_px, h = disparity.height_px;
     std::vector<std::uint8_t> grey3;
     const std::uint8_t* rgb = rgb_of(left, w, h, grey3);
@@ -162,14 +164,14 @@ void measure_appearance(const Grid& grid, const DisparityMap& disparity, const I
     std::vector<std::vector<Sums>> band_sums(bands, std::vector<Sums>(segments.size()));
     for_each_chunk(static_cast<std::size_t>(h), bands,
                    [&](std::size_t k, std::size_t first, std::size_t last) {
-                       assign_rows(grid, fresh, w, static_cast<int>(first), static_cast<int>(last),
-                                   seg, band_sums[k]);
+                       assign_rows(grid, fresh, w, columns, static_cast<int>(first),
+                                   static_cast<int>(last), seg, band_sums[k]);
                    });
     const float* d = disparity.disparity_px.data();
     for_each_chunk(static_cast<std::size_t>(h), bands,
                    [&](std::size_t k, std::size_t first, std::size_t last) {
-                       sum_rows(seg, d, rgb, w, h, static_cast<int>(first), static_cast<int>(last),
-                                band_sums[k]);
+                       sum_rows(seg, d, rgb, w, h, columns, static_cast<int>(first),
+                                static_cast<int>(last), band_sums[k]);
                    });
     // Each segment merged and finished on its own (its quantiles cost as much as the pass),
     // taken in turn by the threads.

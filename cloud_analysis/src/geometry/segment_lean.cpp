@@ -20,8 +20,8 @@ using LowerBody = std::vector<std::vector<std::vector<std::pair<double, double>>
 /// `slots`), by column band, in row order: bands of rows on the path's threads, each band's
 /// pixels appended after the previous band's, as one pass would list them.
 LowerBody lower_body_pixels(const Grid& grid, const DisparityMap& disparity, const Rig& rig,
-                            const GeometryOptions& o, const std::vector<int>& slot,
-                            std::size_t slots) {
+                            const GeometryOptions& o, ColumnRange columns,
+                            const std::vector<int>& slot, std::size_t slots) {
     constexpr double kLow = 0.25, kHigh = 0.65;  // metres above the road
     const int w = disparity.width_px;
     const auto rows = static_cast<int>(grid.pixel_cell.size() / static_cast<std::size_t>(w));
@@ -33,7 +33,7 @@ LowerBody lower_body_pixels(const Grid& grid, const DisparityMap& disparity, con
                        LowerBody& bands = part_bands[k];
                        for (auto v = first; v < last; ++v) {
                            const std::size_t row = v * static_cast<std::size_t>(w);
-                           for (int u = 0; u < w; ++u) {
+                           for (int u = columns.u_begin; u < columns.u_end; ++u) {
                                const std::size_t p = row + static_cast<std::size_t>(u);
                                const std::int32_t cell = grid.pixel_cell[p];
                                if (cell < 0) continue;
@@ -66,7 +66,7 @@ LowerBody lower_body_pixels(const Grid& grid, const DisparityMap& disparity, con
 
 void measure_leans(const Grid& grid, const DisparityMap& disparity, const Rig& rig,
                    const GeometryOptions& o, std::uint16_t car, const std::vector<char>& fresh,
-                   std::vector<Segment>& segments) {
+                   ColumnRange columns, std::vector<Segment>& segments) {
     constexpr std::size_t kMinPixels = 6;     // a band's, for a slope
     constexpr double kMinHeightSpread = 0.1;  // metres: a band's, for a slope
     // Each measured segment's place among the lower-body lists (-1: not measured).
@@ -75,7 +75,7 @@ void measure_leans(const Grid& grid, const DisparityMap& disparity, const Rig& r
     for (std::size_t s = 0; s < segments.size(); ++s) {
         if (fresh[s] && segments[s].class_index == car) slot[s] = static_cast<int>(slots++);
     }
-    const LowerBody bands = lower_body_pixels(grid, disparity, rig, o, slot, slots);
+    const LowerBody bands = lower_body_pixels(grid, disparity, rig, o, columns, slot, slots);
     std::vector<double> depths, slopes, deviations;
     for (std::size_t s = 0; s < segments.size(); ++s) {
         if (slot[s] < 0) continue;
