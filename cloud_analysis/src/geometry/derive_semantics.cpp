@@ -393,12 +393,13 @@ struct PixelBox {
     }
 };
 
-/// Each pixel of a segment: its segment's index, class (segment_class) and image box; a pixel
-/// below low_cut_m in no segment: sidewalk or terrain. By bands of rows on `threads` threads
-/// (each pixel is written once; the boxes are merged).
+/// Each pixel of a segment: its segment's index once sorted (`rank`), class (segment_class)
+/// and image box; a pixel below low_cut_m in no segment: sidewalk or terrain. By bands of rows
+/// on `threads` threads (each pixel is written once; the boxes are merged).
 void label_segment_pixels(const Grid& grid, const Classes& cls,
                           const std::vector<std::uint16_t>& segment_class,
-                          const std::vector<SegmentStats>& stats, int w, int column_bin_px,
+                          const std::vector<SegmentStats>& stats,
+                          const std::vector<std::int32_t>& rank, int w, int column_bin_px,
                           int threads, SceneGeometry& out) {
     out.segment_of_pixel.assign(grid.pixel_cell.size(), -1);
     const auto rows = static_cast<int>(grid.pixel_cell.size() / static_cast<std::size_t>(w));
@@ -420,7 +421,7 @@ void label_segment_pixels(const Grid& grid, const Classes& cls,
                                    }
                                    continue;
                                }
-                               out.segment_of_pixel[p] = s;
+                               out.segment_of_pixel[p] = rank[static_cast<std::size_t>(s)];
                                boxes[k][static_cast<std::size_t>(s)].add(u, static_cast<int>(v));
                                // A car segment's bands without a car's horizontal edges are clutter
                                // beside it; its green pixels are the hedge or bush it touches.
@@ -449,24 +450,25 @@ void label_segment_pixels(const Grid& grid, const Classes& cls,
     }
 }
 
-/// Largest first; the pixels' indices follow.
-void sort_segments(SceneGeometry& out) {
-    std::vector<std::size_t> order(out.segments.size());
+/// Each segment's place once sorted by pixels, largest first (ties in their order).
+std::vector<std::int32_t> largest_first(const std::vector<Segment>& segments) {
+    std::vector<std::size_t> order(segments.size());
     std::iota(order.begin(), order.end(), std::size_t{0});
     std::stable_sort(order.begin(), order.end(), [&](std::size_t a, std::size_t b) {
-        return out.segments[a].pixels > out.segments[b].pixels;
+        return segments[a].pixels > segments[b].pixels;
     });
-    std::vector<Segment> sorted;
-    sorted.reserve(order.size());
     std::vector<std::int32_t> rank(order.size());
-    for (std::size_t k = 0; k < order.size(); ++k) {
-        rank[order[k]] = static_cast<std::int32_t>(k);
-        sorted.push_back(std::move(out.segments[order[k]]));
+    for (std::size_t k = 0; k < order.size(); ++k) rank[order[k]] = static_cast<std::int32_t>(k);
+    return rank;
+}
+
+/// The segments put at their places in `rank` (largest_first), as the pixels name them.
+void sort_segments(const std::vector<std::int32_t>& rank, SceneGeometry& out) {
+    std::vector<Segment> sorted(out.segments.size());
+    for (std::size_t s = 0; s < rank.size(); ++s) {
+        sorted[static_cast<std::size_t>(rank[s])] = std::move(out.segments[s]);
     }
     out.segments = std::move(sorted);
-    for (std::int32_t& s : out.segment_of_pixel) {
-        if (s >= 0) s = rank[static_cast<std::size_t>(s)];
-    }
 }
 
 }  // namespace
@@ -538,9 +540,11 @@ SceneGeometry derive_semantics(const DisparityMap& disparity, const StereoCamera
     judge(std::vector<char>(stats.size(), 1));
     if (o.classifier) split_rejected_rows(grid, parent, rig, w, o, stats, out.segments, judge);
 
-    label_segment_pixels(grid, cls, segment_class, stats, w, o.column_bin_px, o.threads, out);
+    // Largest segment first; the pixels name them by their places in that order.
+    const std::vector<std::int32_t> rank = largest_first(out.segments);
+    label_segment_pixels(grid, cls, segment_class, stats, rank, w, o.column_bin_px, o.threads, out);
     label_sky(&grid, w, out.ground.horizon_v_px, cls.sky, out.classes);
-    sort_segments(out);
+    sort_segments(rank, out);
     return out;
 }
 
