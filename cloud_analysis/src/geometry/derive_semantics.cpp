@@ -393,50 +393,61 @@ struct PixelBox {
     }
 };
 
-/// Each pixel of a segment: its segment's index once sorted (`rank`), class (segment_class)
-/// and image box; a pixel below low_cut_m in no segment: sidewalk or terrain. By bands of rows
-/// on `threads` threads (each pixel is written once; the boxes are merged).
-void label_segment_pixels(const Grid& grid, const Classes& cls,
-                          const std::vector<std::uint16_t>& segment_class,
-                          const std::vector<SegmentStats>& stats,
-                          const std::vector<std::int32_t>& rank, int w, int column_bin_px,
-                          int threads, SceneGeometry& out) {
-    out.segment_of_pixel.assign(grid.pixel_cell.size(), -1);
-    const auto rows = static_cast<int>(grid.pixel_cell.size() / static_cast<std::size_t>(w));
-    const auto parts = static_cast<std::size_t>(std::clamp(threads, 1, std::max(rows, 1)));
+/// What labelling the segments' pixels reads.
+struct SegmentLabels {
+    const Grid& grid;
+    const Classes& cls;
+    const std::vector<std::uint16_t>& segment_class;
+    const std::vector<SegmentStats>& stats;
+    const std::vector<std::int32_t>& rank;  ///< each segment's index once sorted
+    int column_bin_px;
+};
+
+/// label_segment_pixels over rows [v_begin, v_end): each segment's box grown in `boxes`.
+void label_rows(const SegmentLabels& in, int w, std::size_t v_begin, std::size_t v_end,
+                std::vector<PixelBox>& boxes, SceneGeometry& out) {
+    const Grid& grid = in.grid;
+    for (auto v = v_begin; v < v_end; ++v) {
+        for (int u = 0; u < w; ++u) {
+            const std::size_t p = v * static_cast<std::size_t>(w) + static_cast<std::size_t>(u);
+            const std::int32_t cell = grid.pixel_cell[p];
+            if (cell < 0) continue;
+            const int s = grid.cells[static_cast<std::size_t>(cell)].segment;
+            if (s < 0) {
+                if (grid.pixel_low[p]) {
+                    out.classes.class_index[p] =
+                        grid.pixel_green[p] ? in.cls.terrain : in.cls.sidewalk;
+                }
+                continue;
+            }
+            out.segment_of_pixel[p] = in.rank[static_cast<std::size_t>(s)];
+            boxes[static_cast<std::size_t>(s)].add(u, static_cast<int>(v));
+            // A car segment's bands without a car's horizontal edges are clutter beside it; its
+            // green pixels are the hedge or bush it touches.
+            std::uint16_t c = in.segment_class[static_cast<std::size_t>(s)];
+            const std::vector<char>& bands = in.stats[static_cast<std::size_t>(s)].band_car;
+            if (c == in.cls.car && grid.pixel_green[p]) {
+                c = in.cls.vegetation;
+            } else if (c == in.cls.car && !bands.empty() &&
+                       !bands[static_cast<std::size_t>(u / in.column_bin_px)]) {
+                c = in.cls.other;
+            }
+            out.classes.class_index[p] = c;
+        }
+    }
+}
+
+/// Each pixel of a segment: its segment's index once sorted (SegmentLabels::rank), class
+/// (segment_class) and image box; a pixel below low_cut_m in no segment: sidewalk or terrain. By
+/// bands of rows (row_bands) on `threads` threads: each pixel is written once, the boxes merged.
+void label_segment_pixels(const SegmentLabels& in, int w, int threads, SceneGeometry& out) {
+    out.segment_of_pixel.assign(in.grid.pixel_cell.size(), -1);
+    const auto rows = static_cast<int>(in.grid.pixel_cell.size() / static_cast<std::size_t>(w));
+    const std::size_t parts = row_bands(rows, threads);
     std::vector<std::vector<PixelBox>> boxes(parts, std::vector<PixelBox>(out.segments.size()));
     for_each_chunk(static_cast<std::size_t>(rows), parts,
                    [&](std::size_t k, std::size_t first, std::size_t last) {
-                       for (auto v = first; v < last; ++v) {
-                           for (int u = 0; u < w; ++u) {
-                               const std::size_t p =
-                                   v * static_cast<std::size_t>(w) + static_cast<std::size_t>(u);
-                               const std::int32_t cell = grid.pixel_cell[p];
-                               if (cell < 0) continue;
-                               const int s = grid.cells[static_cast<std::size_t>(cell)].segment;
-                               if (s < 0) {
-                                   if (grid.pixel_low[p]) {
-                                       out.classes.class_index[p] =
-                                           grid.pixel_green[p] ? cls.terrain : cls.sidewalk;
-                                   }
-                                   continue;
-                               }
-                               out.segment_of_pixel[p] = rank[static_cast<std::size_t>(s)];
-                               boxes[k][static_cast<std::size_t>(s)].add(u, static_cast<int>(v));
-                               // A car segment's bands without a car's horizontal edges are clutter
-                               // beside it; its green pixels are the hedge or bush it touches.
-                               std::uint16_t c = segment_class[static_cast<std::size_t>(s)];
-                               const std::vector<char>& bands =
-                                   stats[static_cast<std::size_t>(s)].band_car;
-                               if (c == cls.car && grid.pixel_green[p]) {
-                                   c = cls.vegetation;
-                               } else if (c == cls.car && !bands.empty() &&
-                                          !bands[static_cast<std::size_t>(u / column_bin_px)]) {
-                                   c = cls.other;
-                               }
-                               out.classes.class_index[p] = c;
-                           }
-                       }
+                       label_rows(in, w, first, last, boxes[k], out);
                    });
     for (std::size_t s = 0; s < out.segments.size(); ++s) {
         Segment& seg = out.segments[s];
@@ -542,7 +553,8 @@ SceneGeometry derive_semantics(const DisparityMap& disparity, const StereoCamera
 
     // Largest segment first; the pixels name them by their places in that order.
     const std::vector<std::int32_t> rank = largest_first(out.segments);
-    label_segment_pixels(grid, cls, segment_class, stats, rank, w, o.column_bin_px, o.threads, out);
+    label_segment_pixels({grid, cls, segment_class, stats, rank, o.column_bin_px}, w, o.threads,
+                         out);
     label_sky(&grid, w, out.ground.horizon_v_px, cls.sky, out.classes);
     sort_segments(rank, out);
     return out;

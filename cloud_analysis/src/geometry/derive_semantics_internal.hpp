@@ -4,7 +4,9 @@
 /// filled and segmented in udisparity_grid.cpp, measured and classified in
 /// derive_semantics.cpp. Private to the library.
 
+#include <algorithm>
 #include <array>
+#include <cstddef>
 #include <cstdint>
 #include <optional>
 #include <utility>
@@ -95,6 +97,13 @@ std::vector<int> link_cells(Grid& g, const DisparityMap& disparity, const Rig& r
 /// extractor's depth-grown distance, whatever their kind (docs/entities.md compares the two).
 std::vector<int> cluster_cells(Grid& g, const DisparityMap& disparity, const Rig& rig,
                                const GeometryOptions& o);
+
+/// The bands of rows a per-pixel pass over an image `rows` tall is split into on `threads`
+/// threads (one each, at least one band, at most one a row); each band keeps results of its own,
+/// merged in row order, so the values are one pass's.
+inline std::size_t row_bands(int rows, int threads) {
+    return static_cast<std::size_t>(std::clamp(threads, 1, std::max(rows, 1)));
+}
 
 /// Image columns [u_begin, u_end).
 struct ColumnRange {

@@ -159,7 +159,7 @@ void measure_appearance(const Grid& grid, const DisparityMap& disparity, const I
     const std::uint8_t* rgb = rgb_of(left, w, h, grey3);
     // Bands of rows on `threads` threads, each with sums of its own, merged in row order: the
     // same values as one pass.
-    const auto bands = static_cast<std::size_t>(std::clamp(threads, 1, std::max(h, 1)));
+    const std::size_t bands = row_bands(h, threads);
     std::vector<std::int32_t> seg(static_cast<std::size_t>(w) * h, -1);
     std::vector<std::vector<Sums>> band_sums(bands, std::vector<Sums>(segments.size()));
     for_each_chunk(static_cast<std::size_t>(h), bands,

@@ -16,38 +16,46 @@ namespace {
 /// Per measured segment (slot), per column band: (height, depth) of its lower body's pixels.
 using LowerBody = std::vector<std::vector<std::vector<std::pair<double, double>>>>;
 
-/// The pixels 0.25-0.65 m above the road of the segments with a slot (slot[segment] >= 0, of
-/// `slots`), by column band, in row order: bands of rows on the path's threads, each band's
-/// pixels appended after the previous band's, as one pass would list them.
+/// The pixels 0.25-0.65 m above the road of the segments with a slot (slot[segment] >= 0) in
+/// rows [v_begin, v_end) and `columns`, appended to their slot's column band in `bands`.
+void lower_body_rows(const Grid& grid, const DisparityMap& disparity, const Rig& rig,
+                     int column_bin_px, ColumnRange columns, const std::vector<int>& slot,
+                     std::size_t v_begin, std::size_t v_end, LowerBody& bands) {
+    constexpr double kLow = 0.25, kHigh = 0.65;  // metres above the road
+    const auto w = static_cast<std::size_t>(disparity.width_px);
+    for (auto v = v_begin; v < v_end; ++v) {
+        for (int u = columns.u_begin; u < columns.u_end; ++u) {
+            const std::size_t p = v * w + static_cast<std::size_t>(u);
+            const std::int32_t cell = grid.pixel_cell[p];
+            if (cell < 0) continue;
+            const int s = grid.cells[static_cast<std::size_t>(cell)].segment;
+            if (s < 0 || slot[static_cast<std::size_t>(s)] < 0) continue;
+            const double height = double{grid.pixel_height[p]};
+            if (height < kLow || height > kHigh) continue;
+            const double d = double{disparity.disparity_px[p]} - rig.offset;
+            if (!(d > 0.0)) continue;
+            bands[static_cast<std::size_t>(slot[static_cast<std::size_t>(s)])]
+                 [static_cast<std::size_t>(u / column_bin_px)]
+                     .emplace_back(height, rig.fb / d);
+        }
+    }
+}
+
+/// lower_body_rows over the whole image, by bands of rows (row_bands) on the path's threads,
+/// each band's pixels appended after the previous band's, as one pass would list them; `slots`
+/// segments have a slot.
 LowerBody lower_body_pixels(const Grid& grid, const DisparityMap& disparity, const Rig& rig,
                             const GeometryOptions& o, ColumnRange columns,
                             const std::vector<int>& slot, std::size_t slots) {
-    constexpr double kLow = 0.25, kHigh = 0.65;  // metres above the road
     const int w = disparity.width_px;
     const auto rows = static_cast<int>(grid.pixel_cell.size() / static_cast<std::size_t>(w));
     const auto band_count = static_cast<std::size_t>((w + o.column_bin_px - 1) / o.column_bin_px);
-    const auto parts = static_cast<std::size_t>(std::clamp(o.threads, 1, std::max(rows, 1)));
+    const std::size_t parts = row_bands(rows, o.threads);
     std::vector<LowerBody> part_bands(parts, LowerBody(slots, LowerBody::value_type(band_count)));
     for_each_chunk(static_cast<std::size_t>(rows), parts,
                    [&](std::size_t k, std::size_t first, std::size_t last) {
-                       LowerBody& bands = part_bands[k];
-                       for (auto v = first; v < last; ++v) {
-                           const std::size_t row = v * static_cast<std::size_t>(w);
-                           for (int u = columns.u_begin; u < columns.u_end; ++u) {
-                               const std::size_t p = row + static_cast<std::size_t>(u);
-                               const std::int32_t cell = grid.pixel_cell[p];
-                               if (cell < 0) continue;
-                               const int s = grid.cells[static_cast<std::size_t>(cell)].segment;
-                               if (s < 0 || slot[static_cast<std::size_t>(s)] < 0) continue;
-                               const double height = double{grid.pixel_height[p]};
-                               if (height < kLow || height > kHigh) continue;
-                               const double d = double{disparity.disparity_px[p]} - rig.offset;
-                               if (!(d > 0.0)) continue;
-                               bands[static_cast<std::size_t>(slot[static_cast<std::size_t>(s)])]
-                                    [static_cast<std::size_t>(u / o.column_bin_px)]
-                                        .emplace_back(height, rig.fb / d);
-                           }
-                       }
+                       lower_body_rows(grid, disparity, rig, o.column_bin_px, columns, slot, first,
+                                       last, part_bands[k]);
                    });
     LowerBody& bands = part_bands.front();
     for (std::size_t k = 1; k < parts; ++k) {
