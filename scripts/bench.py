@@ -418,13 +418,15 @@ def part_odometry(a, tool, result):
                  drive / "poses.txt", "--json", "-"])
     errors = json.loads(score.stdout)
     # The odometry alone, in the process that ran the matcher (bench --next-left): every
-    # fifth frame pair of the drive, a median of --runs each.
+    # fifth frame pair of the drive, a median of --runs each, the odometry moved from the frame
+    # before first (--prev-left), as in the batch after its first frame.
     lefts = sorted((drive / "image_2").glob("*.png"))
     alone = []
-    for left, next_left in list(zip(lefts, lefts[1:]))[::5]:
+    for prev, left, next_left in list(zip(lefts, lefts[1:], lefts[2:]))[::5]:
         r = run([tool, "bench", "--left", left, "--right", drive / "image_3" / left.name,
-                 "--calib", drive / "calib.txt", "--next-left", next_left, "--work-dir", out,
-                 "--runs", str(a.runs), "--json", "-"])
+                 "--calib", drive / "calib.txt", "--next-left", next_left,
+                 "--prev-left", prev, "--prev-right", drive / "image_3" / prev.name,
+                 "--work-dir", out, "--runs", str(a.runs), "--json", "-"])
         if r.returncode != 0:
             sys.exit(f"bench failed: {r.stderr}")
         b = json.loads(r.stdout)

@@ -565,6 +565,23 @@ TEST_CASE("bench times the odometry's cost per frame when given the next frame's
     CHECK(bad.code == 1);
     CHECK(bad.err.find("--next-left") != std::string::npos);
     CHECK(std::count(bad.err.begin(), bad.err.end(), '\n') == 1);
+    // With the frame before, the timed frame's tracks start from the drive's motion.
+    const std::string left = quote((kSample / "left.png").string());
+    const std::string right = quote((kSample / "right.png").string());
+    const Run primed = run(
+        bench + " --next-left " + left + " --prev-left " + left + " --prev-right " + right, dir);
+    REQUIRE(primed.code == 0);
+    CHECK(nlohmann::json::parse(primed.out)["odometry_ms"].get<double>() > 0.0);
+    for (const std::string& flags :
+         {" --next-left " + left + " --prev-left " + left,
+          std::string(" --prev-left ") + left + " --prev-right " + right,
+          " --next-left " + left + " --prev-left " + quote(other.string()) + " --prev-right " +
+              quote(other.string())}) {
+        const Run wrong = run(bench + flags, dir);
+        CHECK(wrong.code == 1);
+        CHECK(wrong.err.find("--prev-") != std::string::npos);
+        CHECK(std::count(wrong.err.begin(), wrong.err.end(), '\n') == 1);
+    }
 }
 
 TEST_CASE("the palette flag takes a palette file path as well as a bundled name",

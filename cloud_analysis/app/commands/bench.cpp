@@ -132,21 +132,32 @@ struct MatcherTimes {
 
 /// The odometry's cost per frame in a drive: the frame as batch --odometry hands it over
 /// (odometry_frame) and VisualOdometry::add from it to the next frame (its motion, the next
-/// frame's pyramid); wall and process CPU time (all threads), ms per run.
+/// frame's pyramid); wall and process CPU time (all threads), ms per run. With the frame
+/// before (`prev`), the odometry first moves from it, as a batch's does after its first frame.
 class OdometryTimes {
   public:
-    /// `r`: the frame analysed; `next_left`: the next frame's left image (same size).
-    OdometryTimes(const LoadedInputs& in, AnalyseResult r, ImageU8 next_left)
-        : in_(in), r_(std::move(r)), next_left_(std::move(next_left)) {
-        if (next_left_.width_px != in.left.width_px || next_left_.height_px != in.left.height_px) {
+    /// `r`: the frame analysed; `next_left`: the next frame's left image (same size); `prev`:
+    /// the frame before, analysed, when given.
+    OdometryTimes(const LoadedInputs& in, AnalyseResult r, ImageU8 next_left,
+                  std::optional<std::pair<LoadedInputs, AnalyseResult>> prev)
+        : in_(in), r_(std::move(r)), next_left_(std::move(next_left)), prev_(std::move(prev)) {
+        const auto differs = [&](const ImageU8& image) {
+            return image.width_px != in.left.width_px || image.height_px != in.left.height_px;
+        };
+        if (differs(next_left_)) {
             throw std::runtime_error(
                 "the next frame's left image differs in size from --left "
                 "(--next-left)");
+        }
+        if (prev_ && differs(prev_->first.left)) {
+            throw std::runtime_error(
+                "the frame before differs in size from --left (--prev-left, --prev-right)");
         }
     }
 
     void time(bool timed) {
         odometry::VisualOdometry vo(r_.camera, odometry::OdometryOptions{});
+        if (prev_) vo.add(odometry_frame(prev_->first.left, prev_->first, prev_->second));
         vo.add(odometry_frame(in_.left, in_, r_));
         const std::clock_t c0 = std::clock();
         const auto t0 = Clock::now();
@@ -164,6 +175,7 @@ class OdometryTimes {
     const LoadedInputs& in_;
     AnalyseResult r_;
     ImageU8 next_left_;
+    std::optional<std::pair<LoadedInputs, AnalyseResult>> prev_;
 };
 
 }  // namespace
@@ -188,10 +200,22 @@ CLI::App* add_bench_command(CLI::App& app, BenchArgs& a) {
     cmd->add_option("--next-left", a.next_left,
                     "the next frame's left image of a drive: also time the odometry's cost per "
                     "frame (batch --odometry) in the same process");
+    cmd->add_option("--prev-left", a.prev_left,
+                    "the frame before this one in the drive, left image: the odometry moves "
+                    "from it first, as in a batch after its first frame (with --next-left)");
+    cmd->add_option("--prev-right", a.prev_right,
+                    "the frame before's right image (--prev-left); that frame is analysed from "
+                    "its pair alone");
     return cmd;
 }
 
 int run_bench(const BenchArgs& a) {
+    if (a.prev_left.empty() != a.prev_right.empty()) {
+        throw std::runtime_error("--prev-left and --prev-right go together");
+    }
+    if (!a.prev_left.empty() && a.next_left.empty()) {
+        throw std::runtime_error("--prev-left needs --next-left (the odometry's frames)");
+    }
     if (!std::filesystem::is_directory(a.work_dir)) {
         throw std::runtime_error("cannot write output: no such folder (" + a.work_dir.string() +
                                  ", --work-dir)");
@@ -217,8 +241,26 @@ int run_bench(const BenchArgs& a) {
     std::optional<OdometryTimes> odometry_times;
     if (!a.next_left.empty()) {
         const LoadedRun& run = *rows.front().loaded;
+        std::optional<std::pair<LoadedInputs, AnalyseResult>> prev;
+        if (!a.prev_left.empty()) {
+            // The frame before has a pair and no class or instance image of its own.
+            AnalyseArgs before = rows.front().args;
+            before.paths.left = a.prev_left;
+            before.paths.right = a.prev_right;
+            before.paths.semantic.clear();
+            before.paths.instance.clear();
+            try {
+                LoadedRun p = load_run(before);
+                AnalyseResult r =
+                    analyse(p.inputs, p.fit.run_options(p.inputs.palette, false), matcher);
+                prev.emplace(std::move(p.inputs), std::move(r));
+            } catch (const std::exception& e) {
+                throw std::runtime_error(
+                    std::string("the frame before (--prev-left, --prev-right): ") + e.what());
+            }
+        }
         odometry_times.emplace(in, analyse(in, run.fit.run_options(in.palette, false), matcher),
-                               read_image(a.next_left));
+                               read_image(a.next_left), std::move(prev));
     }
     for (int i = 0; i < a.warmup + a.runs; ++i) {
         const bool timed = i >= a.warmup;

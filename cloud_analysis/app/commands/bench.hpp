@@ -22,6 +22,9 @@ struct BenchArgs {
     std::string json = "-";          ///< --json: result file ("-" = stdout)
     /// --next-left: the next frame's left image; also times the odometry's cost per frame.
     std::filesystem::path next_left;
+    /// --prev-left, --prev-right: the frame before this one in the drive; the odometry starts
+    /// from it, so the timed frame's tracks start from the drive's motion, as in a batch.
+    std::filesystem::path prev_left, prev_right;
 };
 
 /// Registers `bench` on app and binds its flags to args (which must outlive parsing).

@@ -78,6 +78,9 @@ void OdometryOptions::validate() const {
     if (track_levels < 0 || track_levels > 8) {
         throw std::invalid_argument("track_levels: must be in [0, 8]");
     }
+    if (predicted_track_levels < 0 || predicted_track_levels > 8) {
+        throw std::invalid_argument("predicted_track_levels: must be in [0, 8]");
+    }
     if (!(max_round_trip_px > 0.0)) throw std::invalid_argument("max_round_trip_px: must be > 0");
     if (!(max_stereo_gap_px > 0.0)) throw std::invalid_argument("max_stereo_gap_px: must be > 0");
     if (!(max_relative_depth_error > 0.0 && max_relative_depth_error < 1.0)) {
@@ -208,20 +211,33 @@ Landmarks landmarks_of(const OdometryFrame& frame, const VisualOdometry::Pyramid
 
 /// `points` of pyramid `from` tracked into pyramid `to` by pyramidal Lucas-Kanade; `ok` says
 /// which came back within max_round_trip_px of where they started and stay inside the image.
+/// `guess` (empty, or one pixel a point): where the previous motion puts each point; the
+/// tracks then start there and climb only predicted_track_levels levels, and each backward
+/// track starts where the guess's displacement, undone, takes its forward track.
 std::vector<cv::Point2f> tracked(const VisualOdometry::Pyramid& from,
                                  const VisualOdometry::Pyramid& to,
-                                 const std::vector<cv::Point2f>& points, int w, int h,
+                                 const std::vector<cv::Point2f>& points,
+                                 const std::vector<cv::Point2f>& guess, int w, int h,
                                  const OdometryOptions& options, std::vector<char>& ok) {
     ok.assign(points.size(), 0);
-    std::vector<cv::Point2f> forward, back;
+    std::vector<cv::Point2f> forward = guess, back;
     if (points.empty()) return forward;
+    const bool guessed = !guess.empty();
+    const int levels = guessed ? std::min(options.predicted_track_levels, options.track_levels)
+                               : options.track_levels;
+    const int flags = guessed ? cv::OPTFLOW_USE_INITIAL_FLOW : 0;
+    const cv::TermCriteria stop(cv::TermCriteria::COUNT | cv::TermCriteria::EPS, 30, 0.01);
     std::vector<std::uint8_t> ok_forward, ok_back;
     std::vector<float> error;
     const cv::Size window(options.track_window_px, options.track_window_px);
     cv::calcOpticalFlowPyrLK(from.levels, to.levels, points, forward, ok_forward, error, window,
-                             options.track_levels);
-    cv::calcOpticalFlowPyrLK(to.levels, from.levels, forward, back, ok_back, error, window,
-                             options.track_levels);
+                             levels, stop, flags);
+    if (guessed) {
+        back.resize(points.size());
+        for (std::size_t k = 0; k < points.size(); ++k) back[k] = forward[k] - guess[k] + points[k];
+    }
+    cv::calcOpticalFlowPyrLK(to.levels, from.levels, forward, back, ok_back, error, window, levels,
+                             stop, flags);
     for (std::size_t k = 0; k < points.size(); ++k) {
         const cv::Point2f& f = forward[k];
         ok[k] = ok_forward[k] && ok_back[k] &&
@@ -389,16 +405,58 @@ MotionFit fit_motion(const Correspondences& c, const StereoCamera& camera,
     return out;
 }
 
-/// estimate_motion with the two left images' pyramids built.
+/// Where the motion T_curr_prev takes each landmark lifted at offset_px, as a pixel of the
+/// current image; a point it puts behind the camera stays where it was.
+std::vector<cv::Point2f> predicted_pixels(const Landmarks& l, const StereoCamera& camera,
+                                          double offset_px, const Pose& T_curr_prev) {
+    std::vector<cv::Point2f> out;
+    out.reserve(l.corner.size());
+    const Eigen::Matrix3d R = T_curr_prev.topLeftCorner<3, 3>();
+    const Eigen::Vector3d t = T_curr_prev.topRightCorner<3, 1>();
+    for (std::size_t k = 0; k < l.corner.size(); ++k) {
+        const Eigen::Vector3d q = R * lifted(l.corner[k], l.disparity_px[k], camera, offset_px) + t;
+        if (!(q.z() > 0.0)) {
+            out.push_back(l.corner[k]);
+            continue;
+        }
+        out.emplace_back(static_cast<float>(camera.fx_px * q.x() / q.z() + camera.cx_px),
+                         static_cast<float>(camera.fy_px * q.y() / q.z() + camera.cy_px));
+    }
+    return out;
+}
+
+/// The motion expected between two frames (the last one), and the inliers it gave.
+struct Prediction {
+    Pose T_curr_prev;
+    int inliers = 0;
+};
+
+/// estimate_motion with the two left images' pyramids built. With `prediction`, the tracks
+/// start where its motion puts the corners.
 MotionFit motion(const OdometryFrame& prev, const VisualOdometry::Pyramid& prev_pyramid,
                  const ImageU8& curr_left, const VisualOdometry::Pyramid& curr_pyramid,
-                 const StereoCamera& camera, const OdometryOptions& options, double offset_px) {
+                 const StereoCamera& camera, const OdometryOptions& options, double offset_px,
+                 const std::optional<Prediction>& prediction = std::nullopt) {
     check_sizes(prev, curr_left);
     const Landmarks l = landmarks_of(prev, prev_pyramid, camera, options);
     std::vector<char> ok;
-    const std::vector<cv::Point2f> image = tracked(
-        prev_pyramid, curr_pyramid, l.corner, curr_left.width_px, curr_left.height_px, options, ok);
-    return fit_motion(correspondences(l, image, ok), camera, options, offset_px);
+    const auto fit = [&](const std::vector<cv::Point2f>& guess) {
+        const std::vector<cv::Point2f> image =
+            tracked(prev_pyramid, curr_pyramid, l.corner, guess, curr_left.width_px,
+                    curr_left.height_px, options, ok);
+        return fit_motion(correspondences(l, image, ok), camera, options, offset_px);
+    };
+    if (!prediction) return fit({});
+    // A motion that changed more than the few pixels the predicted tracks can climb (a car
+    // braking hard, a bump) loses most corners: fewer than half the last motion's inliers
+    // agree. Then the tracks are redone from scratch, and the fit with more inliers kept.
+    MotionFit guessed = fit(predicted_pixels(l, camera, offset_px, prediction->T_curr_prev));
+    if (guessed.estimate.valid && 2 * guessed.estimate.inliers >= prediction->inliers) {
+        return guessed;
+    }
+    MotionFit scratch = fit({});
+    return scratch.estimate.inliers > guessed.estimate.inliers || !guessed.estimate.valid ? scratch
+                                                                                          : guessed;
 }
 
 }  // namespace
@@ -450,8 +508,9 @@ Pose VisualOdometry::add(OdometryFrame frame) {
     if (frame.right.channels != 1) frame.right = grey_image(frame.right);
     auto pyramid = std::make_unique<Pyramid>(pyramid_of(grey_of(frame.left), options_));
     if (prev_) {
-        MotionFit fit = motion(*prev_, *prev_pyramid_, frame.left, *pyramid, camera_, options_,
-                               offset_.mean_px);
+        MotionFit fit = motion(
+            *prev_, *prev_pyramid_, frame.left, *pyramid, camera_, options_, offset_.mean_px,
+            last_.valid ? std::optional<Prediction>({velocity_, last_.inliers}) : std::nullopt);
         if (fit.estimate.valid && options_.estimate_disparity_offset) {
             if (const auto m = offset_from_parallax(fit.inliers, camera_, fit.estimate.T_curr_prev,
                                                     offset_.mean_px)) {

@@ -171,6 +171,30 @@ TEST_CASE("a rig's disparity offset is found from the motion's parallax and corr
     CHECK(z_fixed > driven_m * 1.02);
 }
 
+TEST_CASE("a drive that stops at once is followed: the tracks start again from scratch",
+          "[odometry]") {
+    const StereoCamera c = rig();
+    const cv::Mat tex = texture();
+    odometry::VisualOdometry vo(c, odometry::OdometryOptions{});
+    // 0.8 m a frame towards two walls (6 and 11 m), then standing still: the last motion puts
+    // the near wall's corners up to 15 px from where they are.
+    bool first = true;
+    for (const double z : {0.0, 0.8, 1.6, 2.4, 2.4, 2.4}) {
+        const TwoWallView view = view_of_two_walls(tex, z, c);
+        odometry::OdometryFrame frame;
+        frame.left = view.image;
+        frame.disparity = view.disparity;
+        const Pose T_world_curr = vo.add(frame);
+        CHECK(T_world_curr(2, 3) == Approx(z).margin(0.04));
+        if (!first) {
+            REQUIRE(vo.last_motion().valid);
+            CHECK(vo.last_motion().inliers >= 300);  // most of the corners, not a few
+        }
+        first = false;
+    }
+    CHECK(vo.last_motion().T_curr_prev.topRightCorner<3, 1>().norm() < 0.01);
+}
+
 TEST_CASE("a camera standing still says nothing of the disparity offset", "[odometry]") {
     const StereoCamera c = rig();
     const TwoWallView view = view_of_two_walls(texture(), 0.0, c);

@@ -33,12 +33,16 @@ using Pose = Eigen::Matrix4d;
 
 /// Settings of the odometry.
 struct OdometryOptions {
-    int max_corners = 1000;          ///< corners kept in the previous image, >= 10
-    double corner_cell_px = 32.0;    ///< corners are kept strongest first per square cell of this
-                                     ///< side, the same number in each: spread over the image, px,
-                                     ///< >= 4
-    int track_window_px = 7;         ///< Lucas-Kanade window side, px, odd, >= 5
-    int track_levels = 3;            ///< image pyramid levels above the image, [0, 8]
+    int max_corners = 1000;        ///< corners kept in the previous image, >= 10
+    double corner_cell_px = 32.0;  ///< corners are kept strongest first per square cell of this
+                                   ///< side, the same number in each: spread over the image, px,
+                                   ///< >= 4
+    int track_window_px = 7;       ///< Lucas-Kanade window side, px, odd, >= 5
+    int track_levels = 3;          ///< image pyramid levels above the image, [0, 8]
+    /// Levels climbed when the tracks start where the last motion puts the corners (a drive's
+    /// frames after its first motion): the change of motion between two frames moves a
+    /// corner by a few pixels, which one level above the image covers, [0, 8].
+    int predicted_track_levels = 1;
     double max_round_trip_px = 1.0;  ///< forward-backward track error kept, px, > 0
     double max_stereo_gap_px = 1.0;  ///< a corner's match across the pair: off its row, or
                                      ///< off the dense disparity, by at most this, px, > 0
