@@ -50,6 +50,9 @@ CLI::App* add_evaluate_tracks_command(CLI::App& app, EvaluateTracksArgs& a) {
     cmd->add_option("--max-velocity-error", a.bars.max_median_moving_velocity_error_mps,
                     "largest median velocity error of moving objects, m/s")
         ->group(bg);
+    cmd->add_option("--max-still-velocity-error", a.bars.max_median_still_velocity_error_mps,
+                    "largest median velocity error of still objects (parked cars), m/s")
+        ->group(bg);
     cmd->add_option("--max-heading-flips", a.bars.max_heading_flips, "most heading flips")
         ->group(bg);
     cmd->add_option("--max-size-spread", a.bars.max_parked_size_spread_m,

@@ -353,7 +353,8 @@ std::string describe(const TrackEvent& event) {
 
 bool TrackBars::any() const {
     return min_mota >= 0.0 || max_id_switches >= 0 || min_idf1 >= 0.0 ||
-           max_median_moving_velocity_error_mps >= 0.0 || max_heading_flips >= 0 ||
+           max_median_moving_velocity_error_mps >= 0.0 ||
+           max_median_still_velocity_error_mps >= 0.0 || max_heading_flips >= 0 ||
            max_parked_size_spread_m >= 0.0;
 }
 
@@ -390,6 +391,15 @@ std::vector<std::string> check_track_bars(const TrackEvaluation& evaluation,
                       "median velocity error of moving objects %.3f m/s > %.3f "
                       "(--max-velocity-error)",
                       v, bars.max_median_moving_velocity_error_mps);
+        missed.push_back(line);
+    }
+    const double still = median(score->static_velocity_errors_mps);
+    if (bars.max_median_still_velocity_error_mps >= 0.0 &&
+        still > bars.max_median_still_velocity_error_mps) {
+        std::snprintf(line, sizeof line,
+                      "median velocity error of still objects %.3f m/s > %.3f "
+                      "(--max-still-velocity-error)",
+                      still, bars.max_median_still_velocity_error_mps);
         missed.push_back(line);
     }
     if (bars.max_heading_flips >= 0 &&

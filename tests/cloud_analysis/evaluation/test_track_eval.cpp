@@ -133,6 +133,19 @@ TEST_CASE("heading flips and a parked car's changing size are counted", "[track_
           std::string::npos);
 }
 
+TEST_CASE("a parked car's track that drifts over the ground misses the still-speed bar",
+          "[track_eval]") {
+    auto frames = drive();
+    TrackBars bars;
+    bars.max_median_still_velocity_error_mps = 0.3;
+    CHECK(check_track_bars(evaluate_tracks(frames, TrackEvalOptions{}), bars).empty());
+    for (auto& f : frames) f.hypotheses[1].box.velocity = scene_schema::Velocity{0.3, -0.4};
+    const auto missed = check_track_bars(evaluate_tracks(frames, TrackEvalOptions{}), bars);
+    REQUIRE(missed.size() == 1);
+    CHECK(missed[0] ==
+          "median velocity error of still objects 0.500 m/s > 0.300 (--max-still-velocity-error)");
+}
+
 TEST_CASE("KITTI tracking labels give per-frame truth with velocities from positions",
           "[track_eval]") {
     const std::string text =

@@ -131,6 +131,9 @@ struct TrackBars {
     int max_id_switches = -1;
     double min_idf1 = -1.0;
     double max_median_moving_velocity_error_mps = -1.0;
+    /// Largest median speed error of still objects (a parked car's track should stand still
+    /// over the ground), m/s.
+    double max_median_still_velocity_error_mps = -1.0;
     int max_heading_flips = -1;
     double max_parked_size_spread_m = -1.0;
     /// True when at least one bar is on.
