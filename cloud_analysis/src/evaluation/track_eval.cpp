@@ -384,24 +384,19 @@ std::vector<std::string> check_track_bars(const TrackEvaluation& evaluation,
                       bars.min_idf1);
         missed.push_back(line);
     }
-    const double v = median(score->moving_velocity_errors_mps);
-    if (bars.max_median_moving_velocity_error_mps >= 0.0 &&
-        v > bars.max_median_moving_velocity_error_mps) {
-        std::snprintf(line, sizeof line,
-                      "median velocity error of moving objects %.3f m/s > %.3f "
-                      "(--max-velocity-error)",
-                      v, bars.max_median_moving_velocity_error_mps);
+    // A bar on the median velocity error of the moving or of the still objects.
+    const auto velocity_bar = [&](const std::vector<double>& errors, double bar, const char* which,
+                                  const char* flag) {
+        const double v = median(errors);
+        if (bar < 0.0 || v <= bar) return;
+        std::snprintf(line, sizeof line, "median velocity error of %s objects %.3f m/s > %.3f (%s)",
+                      which, v, bar, flag);
         missed.push_back(line);
-    }
-    const double still = median(score->static_velocity_errors_mps);
-    if (bars.max_median_still_velocity_error_mps >= 0.0 &&
-        still > bars.max_median_still_velocity_error_mps) {
-        std::snprintf(line, sizeof line,
-                      "median velocity error of still objects %.3f m/s > %.3f "
-                      "(--max-still-velocity-error)",
-                      still, bars.max_median_still_velocity_error_mps);
-        missed.push_back(line);
-    }
+    };
+    velocity_bar(score->moving_velocity_errors_mps, bars.max_median_moving_velocity_error_mps,
+                 "moving", "--max-velocity-error");
+    velocity_bar(score->static_velocity_errors_mps, bars.max_median_still_velocity_error_mps,
+                 "still", "--max-still-velocity-error");
     if (bars.max_heading_flips >= 0 &&
         score->heading_flips > static_cast<std::size_t>(bars.max_heading_flips)) {
         std::snprintf(line, sizeof line, "heading flips %zu > %d (--max-heading-flips)",
