@@ -14,7 +14,7 @@
 # usage: scripts/evaluate.sh [--no-build] [--build-dir DIR] [--kitti-root DIR] [--out DIR]
 #            [--parking-seeds "2 4 5 ... 12 23 ... 32"] [--kerbside-seeds "2 ... 9 23 ... 32"]
 #            [--pedestrian-seeds "2 ... 9"] [--held-out-seeds "13 14 15 16 17 18 19 20 21 22"]
-#            [--class-config FILE] [frames...]
+#            [--class-config FILE] [--analysis "FLAGS"] [frames...]
 #   --parking-seeds: parking streets (make-parking-scene.py), tuning data
 #   --kerbside-seeds: streets with kerbside clutter (make-parking-scene.py --kerbside)
 #   --pedestrian-seeds: kerbside streets with groups of people on the sidewalk
@@ -23,6 +23,7 @@
 #   --held-out-seeds: a parking, a kerbside and a pedestrian street each, never used to choose
 #                     a parameter; their totals are printed apart from the tuning scenes
 #   --class-config: per-class extractor settings for every analysis (to compare settings)
+#   --analysis: more flags for every analysis (e.g. "--matcher sgm", to compare settings)
 #   default frames: 000000_10 000001_10; default KITTI root: ../shared/data/kitti15
 set -euo pipefail
 source "$(dirname "${BASH_SOURCE[0]}")/common.sh"
@@ -46,7 +47,8 @@ while [ $# -gt 0 ]; do
         --pedestrian-seeds) pedestrian_seeds=$2; shift ;;
         --held-out-seeds) held_out_seeds=$2; shift ;;
         --class-config) analysis_args+=(--class-config "$2"); shift ;;
-        -h|--help) sed -n '2,17p' "$0"; exit 0 ;;
+        --analysis) read -r -a more <<<"$2"; analysis_args+=("${more[@]}"); shift ;;
+        -h|--help) sed -n '2,27p' "$0"; exit 0 ;;
         *) frames+=("$1") ;;
     esac
     shift
