@@ -103,7 +103,9 @@ std::vector<std::uint8_t> static_mask(const std::vector<std::uint16_t>& class_in
 
 /// Chains the motions of a drive's frames into poses T_world_camera, the world being the first
 /// frame's left camera (KITTI odometry's convention). A frame whose motion is not trusted
-/// moves as the one before it did (constant velocity).
+/// moves as the one before it did (constant velocity). After a trusted motion the next frame's
+/// tracks start where that motion puts the corners (OdometryOptions::predicted_track_levels);
+/// when fewer than half as many inliers agree, they are tracked again from scratch.
 class VisualOdometry {
   public:
     VisualOdometry(const StereoCamera& camera, const OdometryOptions& options);
