@@ -95,6 +95,18 @@ class Checker : public detail::CheckerBase {
         }
     }
 
+    void world(const json& value, const std::string& pointer) {
+        if (!object(value, pointer)) return;
+        for (const char* key : {"x", "y", "z"}) {
+            if (const json* v = required(value, pointer, key)) {
+                bounded(*v, at(pointer, key), -kMaxWorldPosition_m, kMaxWorldPosition_m);
+            }
+        }
+        if (const json* v = required(value, pointer, "theta")) {
+            bounded(*v, at(pointer, "theta"), -kMaxTheta_rad, kMaxTheta_rad);
+        }
+    }
+
     void velocity(const json& value, const std::string& pointer) {
         if (!object(value, pointer)) return;
         for (const char* key : {"vx", "vz"}) {
@@ -104,7 +116,7 @@ class Checker : public detail::CheckerBase {
         }
     }
 
-    void entity(const json& value, const std::string& pointer) {
+    void entity(const json& value, const std::string& pointer, bool posed) {
         if (!object(value, pointer)) return;
         for (const char* key : {"id", "class"}) {
             if (const json* v = required(value, pointer, key)) string(*v, at(pointer, key));
@@ -145,6 +157,13 @@ class Checker : public detail::CheckerBase {
         if (auto it = value.find("instance_id"); it != value.end()) {
             integer_in(*it, at(pointer, "instance_id"), 1.0, 4294967295.0);
         }
+        if (auto it = value.find("world"); it != value.end()) {
+            if (posed) {
+                world(*it, at(pointer, "world"));
+            } else {
+                fail(at(pointer, "world"), "needs frame.pose (the world is the drive's)");
+            }
+        }
     }
 
     void document(const json& value) {
@@ -152,7 +171,9 @@ class Checker : public detail::CheckerBase {
         if (const json* v = required(value, "", "schema_version")) {
             schema_version(*v, "/schema_version");
         }
-        if (const json* v = required(value, "", "frame")) frame(*v, "/frame");
+        const json* f = required(value, "", "frame");
+        if (f) frame(*f, "/frame");
+        const bool posed = f && f->is_object() && f->contains("pose");
         if (auto it = value.find("source"); it != value.end()) object(*it, "/source");
         const json* entities = required(value, "", "entities");
         if (!entities) return;
@@ -171,7 +192,7 @@ class Checker : public detail::CheckerBase {
         for (std::size_t i = 0; i < entities->size(); ++i) {
             const auto p = at("/entities", i);
             const json& e = (*entities)[i];
-            entity(e, p);
+            entity(e, p, posed);
             if (!e.is_object()) continue;
             auto id = e.find("id");
             if (id == e.end() || !id->is_string()) continue;
@@ -247,12 +268,28 @@ EntityDocument from_json(const json& j) {
         if (auto v = e.find("velocity"); v != e.end()) {
             entity.velocity = Velocity{v->at("vx").get<double>(), v->at("vz").get<double>()};
         }
-        entity.extra = without(e, {"id", "class", "class_id", "x", "y", "z", "theta", "W", "H", "L",
-                                   "point_count", "confidence", "method", "track_id", "velocity"});
+        // `world` is derived from the frame's pose: to_json writes it anew.
+        entity.extra =
+            without(e, {"id", "class", "class_id", "x", "y", "z", "theta", "W", "H", "L",
+                        "point_count", "confidence", "method", "track_id", "velocity", "world"});
         doc.entities.push_back(std::move(entity));
     }
     doc.extra = without(j, {"schema_version", "frame", "source", "entities"});
     return doc;
+}
+
+WorldPlacement world_placement(const std::array<double, 12>& T, const Entity& e) {
+    const auto turned = [&](double x, double y, double z, int row) {
+        const auto r = static_cast<std::size_t>(4 * row);
+        return T[r] * x + T[r + 1] * y + T[r + 2] * z;
+    };
+    WorldPlacement w;
+    w.x = turned(e.x, e.y, e.z, 0) + T[3];
+    w.y = turned(e.x, e.y, e.z, 1) + T[7];
+    w.z = turned(e.x, e.y, e.z, 2) + T[11];
+    const double hx = std::cos(e.theta), hz = -std::sin(e.theta);
+    w.theta = std::atan2(-turned(hx, 0.0, hz, 2), turned(hx, 0.0, hz, 0));
+    return w;
 }
 
 json to_json(const EntityDocument& doc) {
@@ -293,6 +330,10 @@ json to_json(const EntityDocument& doc) {
         if (e.method) o["method"] = *e.method;
         if (e.track_id) o["track_id"] = *e.track_id;
         if (e.velocity) o["velocity"] = {{"vx", e.velocity->vx_mps}, {"vz", e.velocity->vz_mps}};
+        if (doc.frame.pose) {
+            const WorldPlacement w = world_placement(*doc.frame.pose, e);
+            o["world"] = {{"x", w.x}, {"y", w.y}, {"z", w.z}, {"theta", w.theta}};
+        }
         merge_extra(o, e.extra);
         entities.push_back(std::move(o));
     }

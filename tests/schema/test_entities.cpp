@@ -1,5 +1,7 @@
 #include <catch2/catch.hpp>
 
+#include <array>
+#include <cmath>
 #include <filesystem>
 #include <fstream>
 #include <iostream>
@@ -328,4 +330,31 @@ TEST_CASE("read_file reads standard input for the path -", "[schema]") {
         std::cin.rdbuf(saved);
         CHECK(std::string(e.what()) == "-: /schema_version: must be a string");
     }
+}
+
+TEST_CASE("a frame with a pose gives every entity its box in the world, derived on write",
+          "[schema]") {
+    EntityDocument doc = small_document();
+    CHECK_FALSE(scene_schema::to_json(doc).at("entities").at(0).contains("world"));
+    // The camera turned 30 degrees about +y, 3 m along world x and 1 m up (y is down).
+    const double a = 30.0 * 3.14159265358979323846 / 180.0;
+    doc.frame.pose = std::array<double, 12>{std::cos(a),  0.0, std::sin(a), 3.0,   //
+                                            0.0,          1.0, 0.0,         -1.0,  //
+                                            -std::sin(a), 0.0, std::cos(a), 0.0};
+    const json world = scene_schema::to_json(doc).at("entities").at(0).at("world");
+    const auto& car = doc.entities.at(0);
+    CHECK(world.at("x").get<double>() == Approx(std::cos(a) * car.x + std::sin(a) * car.z + 3.0));
+    CHECK(world.at("y").get<double>() == Approx(car.y - 1.0));
+    CHECK(world.at("z").get<double>() == Approx(-std::sin(a) * car.x + std::cos(a) * car.z));
+    // A yaw about +y adds to the heading.
+    CHECK(world.at("theta").get<double>() == Approx(car.theta + a));
+    // Read back, the box moved by a tracker is written at its new place: never a stale copy.
+    EntityDocument read = scene_schema::parse(scene_schema::dump(doc));
+    read.entities.at(0).x += 1.0;
+    const json moved = scene_schema::to_json(read).at("entities").at(0).at("world");
+    CHECK(moved.at("x").get<double>() == Approx(world.at("x").get<double>() + std::cos(a)));
+    CHECK_FALSE(read.entities.at(0).extra.contains("world"));
+    // Without the pose there is no world to place it in.
+    read.frame.pose.reset();
+    CHECK_FALSE(scene_schema::to_json(read).at("entities").at(0).contains("world"));
 }

@@ -19,7 +19,7 @@
 namespace scene_schema {
 
 /// Major.minor.patch of the format this library writes; files with another major are refused.
-inline constexpr const char* kSchemaVersion = "1.2.0";
+inline constexpr const char* kSchemaVersion = "1.3.0";
 inline constexpr int kSchemaMajor = 1;
 
 /// The only coordinate convention of version 1: KITTI's rectified left camera.
@@ -36,9 +36,10 @@ inline constexpr double kMaxImageSide_px = 1e6;               ///< camera width 
 inline constexpr double kMaxPixelValue_px = 1e9;              ///< |fx|, |fy|, |cx|, |cy|
 inline constexpr double kMaxSpeed_mps = 1e3;                  ///< |vx|, |vz| (1.1)
 inline constexpr double kMaxTimestamp_s = 1e11;               ///< frame.timestamp (1.1)
-inline constexpr double kMaxTrackId = 2147483647.0;
-inline constexpr double kMaxPoseValue =
-    1e7;  ///< |pose entry| (1.2)           ///< track_id fits an int (1.1)
+inline constexpr double kMaxTrackId = 2147483647.0;           ///< track_id fits an int (1.1)
+inline constexpr double kMaxPoseValue = 1e7;                  ///< |pose entry| (1.2)
+/// |world x, y, z| (1.3): a pose's translation plus a box centre turned by its rotation.
+inline constexpr double kMaxWorldPosition_m = 2e7;
 
 /// A validation or read failure, located by a JSON pointer into the document.
 class SchemaError : public std::runtime_error {
@@ -103,6 +104,17 @@ struct Entity {
     std::optional<Velocity> velocity;      ///< tracked ground-plane velocity (1.1)
     nlohmann::json extra = nlohmann::json::object();  ///< unknown members, kept verbatim
 };
+
+/// An entity's box in the drive's world (1.3): its centre and heading carried by the frame's
+/// pose. Derived, never stored: to_json writes it for every entity of a frame with a pose.
+struct WorldPlacement {
+    double x = 0.0, y = 0.0, z = 0.0;  ///< box centre in the world frame, metres
+    double theta = 0.0;  ///< heading in the world frame, radians in [-pi, pi] (as `theta`)
+};
+
+/// Where `pose` (T_world_camera, row-major 3x4) puts an entity's box: the centre R p + t and
+/// the heading (cos theta, 0, -sin theta) turned by R, read back as a yaw about +y.
+WorldPlacement world_placement(const std::array<double, 12>& pose, const Entity& entity);
 
 /// A whole entity file.
 struct EntityDocument {
