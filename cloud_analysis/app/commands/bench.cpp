@@ -178,6 +178,24 @@ class OdometryTimes {
     std::optional<std::pair<LoadedInputs, AnalyseResult>> prev_;
 };
 
+/// The drive's frame before this one (--prev-left, --prev-right), loaded and analysed as
+/// `args` would be; it has a pair and no class or instance image of its own.
+std::pair<LoadedInputs, AnalyseResult> frame_before(const BenchArgs& a, AnalyseArgs args,
+                                                    DisparityMatcher& matcher) {
+    args.paths.left = a.prev_left;
+    args.paths.right = a.prev_right;
+    args.paths.semantic.clear();
+    args.paths.instance.clear();
+    try {
+        LoadedRun p = load_run(args);
+        AnalyseResult r = analyse(p.inputs, p.fit.run_options(p.inputs.palette, false), matcher);
+        return {std::move(p.inputs), std::move(r)};
+    } catch (const std::exception& e) {
+        throw std::runtime_error(std::string("the frame before (--prev-left, --prev-right): ") +
+                                 e.what());
+    }
+}
+
 }  // namespace
 
 CLI::App* add_bench_command(CLI::App& app, BenchArgs& a) {
@@ -242,23 +260,7 @@ int run_bench(const BenchArgs& a) {
     if (!a.next_left.empty()) {
         const LoadedRun& run = *rows.front().loaded;
         std::optional<std::pair<LoadedInputs, AnalyseResult>> prev;
-        if (!a.prev_left.empty()) {
-            // The frame before has a pair and no class or instance image of its own.
-            AnalyseArgs before = rows.front().args;
-            before.paths.left = a.prev_left;
-            before.paths.right = a.prev_right;
-            before.paths.semantic.clear();
-            before.paths.instance.clear();
-            try {
-                LoadedRun p = load_run(before);
-                AnalyseResult r =
-                    analyse(p.inputs, p.fit.run_options(p.inputs.palette, false), matcher);
-                prev.emplace(std::move(p.inputs), std::move(r));
-            } catch (const std::exception& e) {
-                throw std::runtime_error(
-                    std::string("the frame before (--prev-left, --prev-right): ") + e.what());
-            }
-        }
+        if (!a.prev_left.empty()) prev = frame_before(a, rows.front().args, matcher);
         odometry_times.emplace(in, analyse(in, run.fit.run_options(in.palette, false), matcher),
                                read_image(a.next_left), std::move(prev));
     }
