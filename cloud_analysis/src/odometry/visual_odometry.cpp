@@ -302,6 +302,12 @@ struct OffsetMeasurement {
     double variance_px2 = 0.0;
 };
 
+/// The pixel of the left image where camera point q (z > 0) is seen.
+Eigen::Vector2d image_point(const StereoCamera& camera, const Eigen::Vector3d& q) {
+    return {camera.fx_px * q.x() / q.z() + camera.cx_px,
+            camera.fy_px * q.y() / q.z() + camera.cy_px};
+}
+
 /// The reprojection residuals of the correspondences under the motion (axis-angle, translation)
 /// and disparity offset packed in x; false where a point would lie behind a camera.
 bool reprojection_residuals(const Correspondences& c, const StereoCamera& camera,
@@ -316,8 +322,9 @@ bool reprojection_residuals(const Correspondences& c, const StereoCamera& camera
         const Eigen::Vector3d q = R * p + x.segment<3>(3);
         if (!(q.z() > 0.0)) return false;
         const auto i = static_cast<Eigen::Index>(2 * k);
-        r[i] = camera.fx_px * q.x() / q.z() + camera.cx_px - double{c.image[k].x};
-        r[i + 1] = camera.fy_px * q.y() / q.z() + camera.cy_px - double{c.image[k].y};
+        const Eigen::Vector2d seen = image_point(camera, q);
+        r[i] = seen.x() - double{c.image[k].x};
+        r[i + 1] = seen.y() - double{c.image[k].y};
     }
     return true;
 }
@@ -419,8 +426,8 @@ std::vector<cv::Point2f> predicted_pixels(const Landmarks& l, const StereoCamera
             out.push_back(l.corner[k]);
             continue;
         }
-        out.emplace_back(static_cast<float>(camera.fx_px * q.x() / q.z() + camera.cx_px),
-                         static_cast<float>(camera.fy_px * q.y() / q.z() + camera.cy_px));
+        const Eigen::Vector2d seen = image_point(camera, q);
+        out.emplace_back(static_cast<float>(seen.x()), static_cast<float>(seen.y()));
     }
     return out;
 }
