@@ -8,7 +8,8 @@
 # KITTI's at 30 m, scored over the evaluator's 10 m bins within it (at least the first).
 # Prints one Markdown table.
 # usage: scripts/rig-loop.sh [--no-build] [--build-dir DIR] [--samples DIR] [--out DIR]
-#        [--rigs "kitti zed ..."] [--paths "labels stereo-only"]
+#        [--rigs "kitti zed ..."] [--paths "labels stereo-only"] [--analysis "FLAGS"]
+#   --analysis: more flags for every analysis (e.g. "--row-model partition", to compare settings)
 set -euo pipefail
 source "$(dirname "${BASH_SOURCE[0]}")/common.sh"
 
@@ -18,6 +19,7 @@ samples="$STEREOSCENE_ROOT/samples/rendered"
 out_dir=""
 rigs="kitti cityscapes argoverse zed realsense"
 paths="labels stereo-only"
+analysis=""
 while [ $# -gt 0 ]; do
     case "$1" in
         --no-build) build=0 ;;
@@ -26,7 +28,8 @@ while [ $# -gt 0 ]; do
         --out) out_dir=$2; shift ;;
         --rigs) rigs=$2; shift ;;
         --paths) paths=$2; shift ;;
-        -h|--help) sed -n '2,10p' "$0"; exit 0 ;;
+        --analysis) analysis=$2; shift ;;
+        -h|--help) sed -n '2,11p' "$0"; exit 0 ;;
         *) echo "rig-loop.sh: error: usage: unknown argument: $1 (see --help)" >&2; exit 2 ;;
     esac
     shift
@@ -58,9 +61,11 @@ for rig in $rigs; do
         for path in $paths; do
             base="$out_dir/$rig-$name-$path"
             flags=()
+            # shellcheck disable=SC2206 # the extra flags are split on purpose
+            [ -n "$analysis" ] && flags=($analysis)
             bars=("${labels_bars[@]}")
             if [ "$path" = stereo-only ]; then
-                flags=(--semantics geometry)
+                flags+=(--semantics geometry)
                 bars=("${stereo_bars[@]}")
             fi
             start=$(date +%s.%N)

@@ -249,6 +249,12 @@ void add_cloud_flags(CLI::App& cmd, AnalyseArgs& a) {
         ->check(CLI::IsMember({"instances", "centroid", "average", "variance"}))
         ->capture_default_str()
         ->group(cl);
+    cmd.add_option("--row-model", a.row_model,
+                   "how rows of parked things are cut: rules (valleys, then walks of the prior "
+                   "pitch) or partition (one optimisation over the row; docs/entities.md)")
+        ->check(CLI::IsMember({"rules", "partition"}))
+        ->capture_default_str()
+        ->group(cl);
     cmd.add_option("--class-config", a.class_config, "per-class settings JSON")->group(cl);
     cmd.add_flag("--fsync-clouds", a.fsync_clouds,
                  "also fsync the cloud files before renaming them (durable across a power loss; "
@@ -415,6 +421,7 @@ stereoscene::support::FileSync cloud_sync(const AnalyseArgs& a) {
 cloud_analysis::ExtractOptions extract_options(const AnalyseArgs& a) {
     cloud_analysis::ExtractOptions extract;
     extract.method = a.method;
+    extract.row_model = a.row_model;
     extract.classes = cloud_analysis::load_class_config(
         a.class_config.empty() ? cloud_analysis::default_class_config_path() : a.class_config);
     extract.validate();

@@ -337,6 +337,8 @@ void ExtractOptions::validate() const {
             "strip_beside_gap_m: must be >= 0");
     fail_if(!(fragment_height_fraction >= 0.0 && fragment_height_fraction <= 1.0),
             "fragment_height_fraction: must be in [0, 1]");
+    fail_if(row_model != "rules" && row_model != "partition",
+            "row_model: must be rules or partition");
     fail_if(!(min_height_fraction >= 0.0 && min_height_fraction < 1.0),
             "min_height_fraction: must be in [0, 1)");
     fail_if(!(min_face_share >= 0.0 && min_face_share < 1.0), "min_face_share: must be in [0, 1)");

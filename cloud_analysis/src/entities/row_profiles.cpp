@@ -51,51 +51,6 @@ double low_extent_m(const std::vector<std::size_t>& members, const std::vector<d
     return low;
 }
 
-/// The top profile of a blob along its length, in bins from the lowest along-coordinate.
-struct TopProfile {
-    std::vector<double> top;  ///< per bin, its points' 90 % height above the ground after a
-                              ///< closing over `closing` bins either side, metres; -1 unknown
-                              ///< (fewer than 3 points)
-    std::vector<int> count;   ///< points per bin
-};
-
-/// The top profile of the points idx (their along-coordinates `along`) in bins of bin_m from
-/// lo to hi.
-TopProfile top_profile(const std::vector<Eigen::Vector3f>& pts, const Indices& idx,
-                       const std::vector<double>& along, const GroundPlane& ground, double bin_m,
-                       double lo, double hi, int closing) {
-    constexpr double kTopQuantile = 0.9;
-    constexpr std::size_t kMinBinPoints = 3;
-    const int bins = static_cast<int>((hi - lo) / bin_m) + 1;
-    std::vector<std::vector<double>> heights(static_cast<std::size_t>(bins));
-    for (std::size_t k = 0; k < idx.size(); ++k) {
-        const int b = static_cast<int>((along[k] - lo) / bin_m);
-        if (b < 0 || b >= bins) continue;
-        heights[static_cast<std::size_t>(b)].push_back(ground.height(pts[idx[k]].cast<double>()));
-    }
-    std::vector<double> top(static_cast<std::size_t>(bins), -1.0);
-    for (int b = 0; b < bins; ++b) {
-        auto& h = heights[static_cast<std::size_t>(b)];
-        if (h.size() >= kMinBinPoints) top[static_cast<std::size_t>(b)] = quantile(h, kTopQuantile);
-    }
-    // Narrow dips (a sparse bin, a window's reflection) are noise, not the ends of two things:
-    // each known bin takes the highest known top within `closing` bins.
-    std::vector<double> closed = top;
-    for (int b = 0; b < bins; ++b) {
-        if (top[static_cast<std::size_t>(b)] < 0.0) continue;
-        for (int k = std::max(0, b - closing); k <= std::min(bins - 1, b + closing); ++k) {
-            closed[static_cast<std::size_t>(b)] =
-                std::max(closed[static_cast<std::size_t>(b)], top[static_cast<std::size_t>(k)]);
-        }
-    }
-    std::vector<int> count(static_cast<std::size_t>(bins));
-    for (int b = 0; b < bins; ++b) {
-        count[static_cast<std::size_t>(b)] =
-            static_cast<int>(heights[static_cast<std::size_t>(b)].size());
-    }
-    return {closed, count};
-}
-
 /// The cuts (along-coordinates) of a blob at the valleys of its top profile: a thing is a hump
 /// (a car's roof over its lower bonnet and boot), so where the top drops at least depth_m below
 /// the highest top on both sides within `reach` bins, and both those tops reach min_peak_m,
@@ -118,14 +73,7 @@ std::vector<double> valley_cuts(const TopProfile& profile, double lo, double bin
         double best_depth = 0.0, best_floor = 0.0;
         for (; b < bins; ++b) {
             const double t = top[static_cast<std::size_t>(b)];
-            double left = -1.0, right = -1.0;
-            for (int k = std::max(0, b - reach); k < b; ++k) {
-                left = std::max(left, top[static_cast<std::size_t>(k)]);
-            }
-            for (int k = b + 1; k <= std::min(bins - 1, b + reach); ++k) {
-                right = std::max(right, top[static_cast<std::size_t>(k)]);
-            }
-            const double peak = std::min(left, right);
+            const double peak = flanking_peak(top, b, reach);
             const bool valley = t >= 0.0 && peak >= min_peak_m && peak - t >= depth_m;
             if (!valley) {
                 if (best >= 0) break;
@@ -221,6 +169,55 @@ void snap_cuts_off_runs(const TopProfile& profile, double lo, double bin_m,
 }
 
 }  // namespace
+
+double flanking_peak(const std::vector<double>& top, int b, int reach) {
+    const int bins = static_cast<int>(top.size());
+    double left = -1.0, right = -1.0;
+    for (int k = std::max(0, b - reach); k < b; ++k) {
+        left = std::max(left, top[static_cast<std::size_t>(k)]);
+    }
+    for (int k = b + 1; k <= std::min(bins - 1, b + reach); ++k) {
+        right = std::max(right, top[static_cast<std::size_t>(k)]);
+    }
+    return std::min(left, right);
+}
+
+/// The top profile of the points idx (their along-coordinates `along`) in bins of bin_m from
+/// lo to hi.
+TopProfile top_profile(const std::vector<Eigen::Vector3f>& pts, const Indices& idx,
+                       const std::vector<double>& along, const GroundPlane& ground, double bin_m,
+                       double lo, double hi, int closing) {
+    constexpr double kTopQuantile = 0.9;
+    constexpr std::size_t kMinBinPoints = 3;
+    const int bins = static_cast<int>((hi - lo) / bin_m) + 1;
+    std::vector<std::vector<double>> heights(static_cast<std::size_t>(bins));
+    for (std::size_t k = 0; k < idx.size(); ++k) {
+        const int b = static_cast<int>((along[k] - lo) / bin_m);
+        if (b < 0 || b >= bins) continue;
+        heights[static_cast<std::size_t>(b)].push_back(ground.height(pts[idx[k]].cast<double>()));
+    }
+    std::vector<double> top(static_cast<std::size_t>(bins), -1.0);
+    for (int b = 0; b < bins; ++b) {
+        auto& h = heights[static_cast<std::size_t>(b)];
+        if (h.size() >= kMinBinPoints) top[static_cast<std::size_t>(b)] = quantile(h, kTopQuantile);
+    }
+    // Narrow dips (a sparse bin, a window's reflection) are noise, not the ends of two things:
+    // each known bin takes the highest known top within `closing` bins.
+    std::vector<double> closed = top;
+    for (int b = 0; b < bins; ++b) {
+        if (top[static_cast<std::size_t>(b)] < 0.0) continue;
+        for (int k = std::max(0, b - closing); k <= std::min(bins - 1, b + closing); ++k) {
+            closed[static_cast<std::size_t>(b)] =
+                std::max(closed[static_cast<std::size_t>(b)], top[static_cast<std::size_t>(k)]);
+        }
+    }
+    std::vector<int> count(static_cast<std::size_t>(bins));
+    for (int b = 0; b < bins; ++b) {
+        count[static_cast<std::size_t>(b)] =
+            static_cast<int>(heights[static_cast<std::size_t>(b)].size());
+    }
+    return {closed, count};
+}
 
 bool front_on_row(const std::vector<Eigen::Vector3f>& pts, const Indices& idx,
                   const OrientedBox& box, const ClassSettings& s, const GroundPlane& ground,

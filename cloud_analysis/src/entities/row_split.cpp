@@ -447,8 +447,9 @@ double height_spread(const std::vector<Eigen::Vector3f>& pts, const Indices& idx
 Split split_oversized(const std::vector<Eigen::Vector3f>& pts, const Indices& idx,
                       const OrientedBox& box, const ClassSettings& s,
                       const std::optional<GroundPlane>& ground, const ExtractOptions& options,
-                      bool truncated) {
+                      bool truncated, bool row_piece) {
     if (!s.has_prior()) return {{idx}, false, std::nullopt};
+    const bool partition = options.row_model == "partition";
     const double c = std::cos(box.theta), sn = std::sin(box.theta);
     if (std::optional<Split> widest = split_side_by_side(pts, idx, box, s)) return *widest;
     if (ground && options.row_low_fraction > 0.0 &&
@@ -459,14 +460,25 @@ Split split_oversized(const std::vector<Eigen::Vector3f>& pts, const Indices& id
         split.at_gaps = true;  // a row of distinct things, whatever the density at the cuts
         return split;
     }
-    if (ground && options.row_valley_depth_m > 0.0 &&
+    if (partition && ground && !row_piece &&
+        box.L_m > options.row_valley_min_length_fraction * s.prior_L_m) {
+        // Parked end to end: the row's partition, once.
+        const double centre = box.centre_m.x() * c - box.centre_m.z() * sn;
+        std::vector<Indices> parts =
+            partition_row(pts, idx, c, -sn, centre, box.L_m, s, *ground, options, truncated);
+        // One thing with what is no thing's left out is a partition too: it is fitted again.
+        if (parts.size() > 1 || (parts.size() == 1 && parts.front().size() < idx.size())) {
+            return {std::move(parts), false, std::nullopt, true};
+        }
+    }
+    if (!partition && ground && options.row_valley_depth_m > 0.0 &&
         box.L_m > options.row_valley_min_length_fraction * s.prior_L_m) {
         // Parked end to end: cut where the evidence says, at the valleys between the roofs.
         std::vector<Indices> parts = split_at_valleys(pts, idx, c, -sn, s, *ground, options);
         if (parts.size() > 1) return {std::move(parts), false, std::nullopt};
     }
     const double van_pitch = options.van_prior_L_m + options.row_gap_m;
-    if (ground && s.name == options.family_class && box.L_m > van_pitch &&
+    if (!partition && ground && s.name == options.family_class && box.L_m > van_pitch &&
         box.L_m <= s.split_factor * s.prior_L_m) {
         // Longer than a van and its gap, too short for a row's walk: a van and the car before or
         // after it (a small car's low end keeps the two under a van's height and their valley
@@ -480,7 +492,7 @@ Split split_oversized(const std::vector<Eigen::Vector3f>& pts, const Indices& id
             if (parts_van_or_roofs(pts, *cut, box, s, *ground, options)) return *cut;
         }
     }
-    if (box.L_m > s.split_factor * s.prior_L_m) {
+    if ((!partition || !ground) && box.L_m > s.split_factor * s.prior_L_m) {
         // Parked end to end: walk the gaps from the near end when there are gaps (the far end
         // is seen sparsely, so its extent is unreliable); touching things are cut evenly.
         std::optional<TallPitch> tall;

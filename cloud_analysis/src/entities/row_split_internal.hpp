@@ -23,6 +23,24 @@ struct Projection {
 Projection project(const std::vector<Eigen::Vector3f>& pts, const Indices& idx, double dir_x,
                    double dir_z);
 
+/// The top profile of a blob along its length, in bins from the lowest along-coordinate.
+struct TopProfile {
+    std::vector<double> top;  ///< per bin, its points' 90 % height above the ground after a
+                              ///< closing over `closing` bins either side, metres; -1 unknown
+                              ///< (fewer than 3 points)
+    std::vector<int> count;   ///< points per bin
+};
+
+/// The top profile of the points idx (their along-coordinates `along`) in bins of bin_m from
+/// lo to hi.
+TopProfile top_profile(const std::vector<Eigen::Vector3f>& pts, const Indices& idx,
+                       const std::vector<double>& along, const GroundPlane& ground, double bin_m,
+                       double lo, double hi, int closing);
+
+/// The lower of the highest tops of a top profile within `reach` bins before bin b and within
+/// `reach` bins after it (-1 where a side has none): how high a valley at b is flanked.
+double flanking_peak(const std::vector<double>& top, int b, int reach);
+
 /// Whether a long blob is a row of things side by side seen front-on (or from behind) rather
 /// than one thing seen side-on: its length along the box heading spans at least two prior
 /// widths, and across the heading, from the camera's side, its top stays below
@@ -40,5 +58,18 @@ bool front_on_row(const std::vector<Eigen::Vector3f>& pts, const Indices& idx,
 std::vector<Indices> split_at_valleys(const std::vector<Eigen::Vector3f>& pts, const Indices& idx,
                                       double dir_x, double dir_z, const ClassSettings& s,
                                       const GroundPlane& ground, const ExtractOptions& options);
+
+/// The things of a row parked end to end along (dir_x, dir_z) (ExtractOptions::row_model
+/// "partition"; docs/entities.md): the row (its fitted box, centred at `centre_along` and
+/// `length_m` long, and the points beyond its far end) is cut into pieces, each a thing or
+/// nothing, that maximise the sum of the things' length log-likelihoods, the evidence of the
+/// cuts that end them (valleys and gaps of the top profile) and the cost of the surface left
+/// to nothing: a dynamic programme over the cut sites. The things' points, nearest first;
+/// empty when the whole row is one thing. With `near_end_cut`, the image's edge cuts the
+/// row's near end.
+std::vector<Indices> partition_row(const std::vector<Eigen::Vector3f>& pts, const Indices& idx,
+                                   double dir_x, double dir_z, double centre_along, double length_m,
+                                   const ClassSettings& s, const GroundPlane& ground,
+                                   const ExtractOptions& options, bool near_end_cut);
 
 }  // namespace cloud_analysis::instances

@@ -133,8 +133,9 @@ void complete_candidate(Candidate& c, const std::vector<Eigen::Vector3f>& pts,
     c.range_m /= static_cast<double>(c.members.size());
 }
 
-/// Work items: points, split depth, shadow group, imposed heading.
-using WorkItem = std::tuple<Indices, int, std::size_t, std::optional<double>>;
+/// A piece to fit: its points, split depth, shadow group, imposed heading, and whether it is
+/// a piece of a row's partition (not cut along the row again).
+using WorkItem = std::tuple<Indices, int, std::size_t, std::optional<double>, bool>;
 
 /// What the steps of candidates_of_cluster share: its inputs, the box fit (each piece sets
 /// its heading and truncation), the work items left, the next group number and the
@@ -166,16 +167,16 @@ struct ClusterPieces {
             Indices piece;
             for (std::size_t k : c) piece.push_back(behind[k]);
             piece = drop_outliers(pts, piece, s, ground, options.outlier_margin_m);
-            work.emplace_back(std::move(piece), 0, next_group++, std::nullopt);
+            work.emplace_back(std::move(piece), 0, next_group++, std::nullopt, false);
         }
     }
 
     /// Queues the pieces of a split one level deeper; false when it did not split.
-    bool queue_pieces(Split split, int depth, std::size_t group) {
-        if (split.parts.size() < 2) return false;
+    bool queue_pieces(Split split, int depth, std::size_t group, bool row_piece) {
+        if (split.parts.empty() || (split.parts.size() < 2 && !split.row_pieces)) return false;
         for (auto& piece : split.parts) {
             work.emplace_back(std::move(piece), depth + 1, split.at_gaps ? group : next_group++,
-                              split.yaw_rad);
+                              split.yaw_rad, split.row_pieces || row_piece);
         }
         return true;
     }
@@ -184,7 +185,7 @@ struct ClusterPieces {
     /// a candidate.
     void fit_pieces() {
         while (!work.empty()) {
-            auto [part, depth, group, yaw] = std::move(work.back());
+            auto [part, depth, group, yaw, in_row] = std::move(work.back());
             work.pop_back();
             // A piece of a row (cut at clear gaps or at a front-on row's pitch) is a thing
             // because the row is: half the minimum suffices for its sparse far end.
@@ -199,8 +200,8 @@ struct ClusterPieces {
             const OrientedBox box = fit_upright_box(member_pts, ground, fit, axis);
             if (depth < 3 && !yaw &&
                 queue_pieces(split_oversized(pts, part, box, s, ground, options,
-                                             fit.truncation_xz.has_value()),
-                             depth, group)) {
+                                             fit.truncation_xz.has_value(), in_row),
+                             depth, group, in_row)) {
                 continue;
             }
             // A thing whose points all lie near the ground is mislabelled road, not an object.
@@ -214,8 +215,8 @@ struct ClusterPieces {
             // trimmed along the ray, its extents over seen surface): still more than one.
             if (depth < 4 && !yaw && s.has_prior() && c.box.L_m > s.split_factor * s.prior_L_m &&
                 queue_pieces(split_oversized(pts, c.members, c.box, s, ground, options,
-                                             fit.truncation_xz.has_value()),
-                             depth, group)) {
+                                             fit.truncation_xz.has_value(), in_row),
+                             depth, group, in_row)) {
                 continue;
             }
             complete_candidate(c, pts, member_pts, box.H_m, final_fit, s, ground, options);
@@ -243,7 +244,7 @@ std::vector<Candidate> candidates_of_cluster(const std::vector<Eigen::Vector3f>&
     Indices on_edge;
     members = off_depth_edges(pixels, grid, std::move(members), s, on_edge);
     members = drop_outliers(pts, members, s, ground, options.outlier_margin_m, &behind);
-    p.work = {{std::move(members), 0, cluster, std::nullopt}};
+    p.work = {{std::move(members), 0, cluster, std::nullopt, false}};
     if (behind.size() >= static_cast<std::size_t>(s.min_points)) {
         // What lies farther than a thing behind the nearest points of the cluster is smear or
         // another thing behind it, joined to it by smear: clustered again on its own, each
@@ -256,7 +257,9 @@ std::vector<Candidate> candidates_of_cluster(const std::vector<Eigen::Vector3f>&
     // first metre left to the van's piece); joined, they are fitted as one, not split again.
     std::vector<Indices> joined = join_faint_pieces(pts, p.candidates, s, options);
     if (!joined.empty()) {
-        for (Indices& part : joined) p.work.emplace_back(std::move(part), 4, cluster, std::nullopt);
+        for (Indices& part : joined) {
+            p.work.emplace_back(std::move(part), 4, cluster, std::nullopt, false);
+        }
         p.fit_pieces();
     }
     return std::move(p.candidates);

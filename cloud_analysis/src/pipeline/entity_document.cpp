@@ -47,7 +47,9 @@ scene_schema::EntityDocument entity_document(const LoadedInputs& in, const Analy
     cam.baseline_m = r.camera.baseline_m;
     doc.frame.camera = cam;
     nlohmann::json source = describe_run(in, run.analyse, run.tool_version);
-    source["extract"] = {{"method", extract.method}, {"class_config", run.class_config}};
+    source["extract"] = {{"method", extract.method},
+                         {"class_config", run.class_config},
+                         {"row_model", extract.row_model}};
     if (!run.rig.is_null()) source["rig"] = run.rig;
     if (!r.instances.empty()) {
         // Things of the instance image's objects were taken whole, the rest clustered.

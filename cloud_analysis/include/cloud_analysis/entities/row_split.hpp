@@ -19,6 +19,7 @@ struct Split {
     std::vector<Indices> parts;     ///< the pieces' points
     bool at_gaps = false;           ///< every cut in a clear gap
     std::optional<double> yaw_rad;  ///< heading imposed on the pieces (cars side by side)
+    bool row_pieces = false;        ///< the pieces of a row's partition: not cut along it again
 };
 
 /// Pieces of a thing whose box is much longer or wider than its prior (a parked row, or
@@ -26,7 +27,7 @@ struct Split {
 Split split_oversized(const std::vector<Eigen::Vector3f>& pts, const Indices& idx,
                       const OrientedBox& box, const ClassSettings& s,
                       const std::optional<GroundPlane>& ground, const ExtractOptions& options,
-                      bool truncated = false);
+                      bool truncated = false, bool row_piece = false);
 
 /// Pairs of pieces of one cluster each too faint to be a thing (seen over less than
 /// min_seen_area_m2) that lie end to end along the first one's heading (at most
