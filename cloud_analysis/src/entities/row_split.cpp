@@ -449,7 +449,10 @@ Split split_oversized(const std::vector<Eigen::Vector3f>& pts, const Indices& id
                       const std::optional<GroundPlane>& ground, const ExtractOptions& options,
                       bool truncated, bool row_piece) {
     if (!s.has_prior()) return {{idx}, false, std::nullopt};
-    const bool partition = options.row_model == "partition";
+    // The partition's length model is the size family's (cars and vans); other classes keep
+    // the rules.
+    const bool partition = options.row_model == "partition" && !options.family_class.empty() &&
+                           s.name == options.family_class;
     const double c = std::cos(box.theta), sn = std::sin(box.theta);
     if (std::optional<Split> widest = split_side_by_side(pts, idx, box, s)) return *widest;
     if (ground && options.row_low_fraction > 0.0 &&
