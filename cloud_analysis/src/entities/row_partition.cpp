@@ -239,7 +239,6 @@ std::vector<Indices> partition_row(const std::vector<Eigen::Vector3f>& pts, cons
     }
     const RowEvidence row = row_evidence(pts, idx, along, ground, lo, hi, options);
     const std::vector<CutSite> sites = cut_sites(row, s, options);
-    const bool family = !options.family_class.empty() && s.name == options.family_class;
     const double min_roof = options.row_valley_min_peak_fraction * s.prior_H_m;
     const auto min_points = static_cast<long>(std::max(s.min_points / 2, 1));
     const std::size_t n = sites.size();
@@ -277,10 +276,10 @@ std::vector<Indices> partition_row(const std::vector<Eigen::Vector3f>& pts, cons
             if (roof < min_roof || row.points(start_bin, end_bin) < min_points) continue;
             const bool at_near = near_is_lo ? i < 0 : last;
             const bool at_far = near_is_lo ? last : i < 0;
-            // A piece of the size-family class reaching a van's height is a van, of a van's
-            // length; any other, of its class's. Its length is what it holds of the row.
+            // A piece reaching a van's height is a van, of a van's length; any other, a car of
+            // its class's. Its length is what it holds of the row.
             const double mode =
-                family && roof >= options.van_min_height_m ? options.van_prior_L_m : s.prior_L_m;
+                roof >= options.van_min_height_m ? options.van_prior_L_m : s.prior_L_m;
             const double score = cut + length_score((last_seen - first_seen + 1) * row.bin_m,
                                                     at_far || (at_near && near_end_cut), mode);
             if (score > best[j]) {

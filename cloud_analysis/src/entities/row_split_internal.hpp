@@ -59,13 +59,13 @@ std::vector<Indices> split_at_valleys(const std::vector<Eigen::Vector3f>& pts, c
                                       double dir_x, double dir_z, const ClassSettings& s,
                                       const GroundPlane& ground, const ExtractOptions& options);
 
-/// The things of a row parked end to end along (dir_x, dir_z) (ExtractOptions::row_model
-/// "partition"; docs/entities.md): the row (its fitted box, centred at `centre_along` and
-/// `length_m` long, and the points beyond its far end) is cut into pieces, each a thing or
-/// nothing, that maximise the sum of the things' length log-likelihoods, the evidence of the
-/// cuts that end them (valleys and gaps of the top profile) and the cost of the surface left
-/// to nothing: a dynamic programme over the cut sites. The things' points, nearest first;
-/// empty when the whole row is one thing. With `near_end_cut`, the image's edge cuts the
+/// The things of a row of the size-family class (cars and vans) parked end to end along
+/// (dir_x, dir_z) (ExtractOptions::row_model "partition"; docs/entities.md): the row (its fitted
+/// box, centred at `centre_along` and `length_m` long, and the points beyond its far end) is cut
+/// into pieces, each a thing or nothing, that maximise the sum of the things' length
+/// log-likelihoods, the evidence of the cuts that end them (valleys and gaps of the top profile)
+/// and the cost of the surface left to nothing: a dynamic programme over the cut sites. The things'
+/// points; empty when the whole row is one thing. With `near_end_cut`, the image's edge cuts the
 /// row's near end.
 std::vector<Indices> partition_row(const std::vector<Eigen::Vector3f>& pts, const Indices& idx,
                                    double dir_x, double dir_z, double centre_along, double length_m,
