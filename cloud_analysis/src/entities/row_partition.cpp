@@ -42,38 +42,11 @@ struct CutSite {
 /// deepest bin's depth against `depth_m`, in kValleySigmaM.
 std::vector<CutSite> valley_sites(const TopProfile& profile, double bin_m, int reach,
                                   double depth_m, double min_peak_m) {
-    const std::vector<double>& top = profile.top;
-    const int bins = static_cast<int>(top.size());
-    std::vector<double> depth(top.size(), -1.0);
-    for (int b = 0; b < bins; ++b) {
-        const double t = top[static_cast<std::size_t>(b)];
-        if (t < 0.0) continue;
-        const double peak = flanking_peak(top, b, reach);
-        if (peak >= min_peak_m && peak - t >= kMinDipM)
-            depth[static_cast<std::size_t>(b)] = peak - t;
-    }
     std::vector<CutSite> sites;
-    for (int b = 0; b < bins;) {
-        if (depth[static_cast<std::size_t>(b)] < 0.0) {
-            ++b;
-            continue;
-        }
-        int deepest = b, end = b;
-        for (; end < bins && depth[static_cast<std::size_t>(end)] >= 0.0; ++end) {
-            if (depth[static_cast<std::size_t>(end)] > depth[static_cast<std::size_t>(deepest)]) {
-                deepest = end;
-            }
-        }
-        const double floor = top[static_cast<std::size_t>(deepest)];
-        const double half = floor + 0.5 * depth[static_cast<std::size_t>(deepest)];
-        int first = deepest, last = deepest;
-        while (first > 0 && top[static_cast<std::size_t>(first - 1)] < half) --first;
-        while (last + 1 < bins && top[static_cast<std::size_t>(last + 1)] < half) ++last;
-        const int at = static_cast<int>(std::lround(0.5 * (first + last)));
-        const double evidence =
-            (depth[static_cast<std::size_t>(deepest)] - depth_m) / kValleySigmaM;
+    for (const ValleyRun& run : valley_runs(profile.top, reach, kMinDipM, min_peak_m)) {
+        const int at = static_cast<int>(std::lround(0.5 * (run.first + run.last)));
+        const double evidence = (run.depth - depth_m) / kValleySigmaM;
         sites.push_back({(at + 0.5) * bin_m, std::clamp(evidence, -kValleyCap, kValleyCap)});
-        b = end;
     }
     return sites;
 }

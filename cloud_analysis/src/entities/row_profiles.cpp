@@ -60,46 +60,22 @@ double low_extent_m(const std::vector<std::size_t>& members, const std::vector<d
 /// min_piece_m to an end or to a deeper cut are dropped.
 std::vector<double> valley_cuts(const TopProfile& profile, double lo, double bin_m, int reach,
                                 double depth_m, double min_peak_m, double min_piece_m) {
-    const std::vector<double>& top = profile.top;
-    const int bins = static_cast<int>(top.size());
+    const int bins = static_cast<int>(profile.top.size());
     struct Valley {
         double at, depth;
     };
     std::vector<Valley> valleys;
-    int b = 0;
-    while (b < bins) {
-        // Deepest valley bin of a run of valley bins.
-        int best = -1;
-        double best_depth = 0.0, best_floor = 0.0;
-        for (; b < bins; ++b) {
-            const double t = top[static_cast<std::size_t>(b)];
-            const double peak = flanking_peak(top, b, reach);
-            const bool valley = t >= 0.0 && peak >= min_peak_m && peak - t >= depth_m;
-            if (!valley) {
-                if (best >= 0) break;
-                continue;
-            }
-            if (best < 0 || peak - t > best_depth) {
-                best = b;
-                best_depth = peak - t;
-                best_floor = t;
-            }
-        }
-        if (best < 0) break;
-        // The part of the valley below half its depth, unknown bins included.
-        const double half = best_floor + 0.5 * best_depth;
-        int first = best, last = best;
-        while (first > 0 && top[static_cast<std::size_t>(first - 1)] < half) --first;
-        while (last + 1 < bins && top[static_cast<std::size_t>(last + 1)] < half) ++last;
+    for (const ValleyRun& run : valley_runs(profile.top, reach, depth_m, min_peak_m)) {
+        const int first = run.first, last = run.last;
         // Cut at its emptiest bin (the gap), the one nearest its middle among equals.
         const double middle = 0.5 * (first + last);
-        int at = best;
+        int at = run.deepest;
         for (int k = first; k <= last; ++k) {
             const int nk = profile.count[static_cast<std::size_t>(k)];
             const int na = profile.count[static_cast<std::size_t>(at)];
             if (nk < na || (nk == na && std::abs(k - middle) < std::abs(at - middle))) at = k;
         }
-        valleys.push_back({lo + (at + 0.5) * bin_m, best_depth});
+        valleys.push_back({lo + (at + 0.5) * bin_m, run.depth});
     }
     // Deepest first, each kept when it leaves pieces of at least min_piece_m.
     std::sort(valleys.begin(), valleys.end(),
@@ -169,6 +145,40 @@ void snap_cuts_off_runs(const TopProfile& profile, double lo, double bin_m,
 }
 
 }  // namespace
+
+std::vector<ValleyRun> valley_runs(const std::vector<double>& top, int reach, double min_depth_m,
+                                   double min_peak_m) {
+    const int bins = static_cast<int>(top.size());
+    std::vector<ValleyRun> runs;
+    int b = 0;
+    while (b < bins) {
+        // Deepest valley bin of a run of valley bins.
+        int best = -1;
+        double best_depth = 0.0, best_floor = 0.0;
+        for (; b < bins; ++b) {
+            const double t = top[static_cast<std::size_t>(b)];
+            const double peak = flanking_peak(top, b, reach);
+            const bool valley = t >= 0.0 && peak >= min_peak_m && peak - t >= min_depth_m;
+            if (!valley) {
+                if (best >= 0) break;
+                continue;
+            }
+            if (best < 0 || peak - t > best_depth) {
+                best = b;
+                best_depth = peak - t;
+                best_floor = t;
+            }
+        }
+        if (best < 0) break;
+        // The part of the valley below half its depth, unknown bins included.
+        const double half = best_floor + 0.5 * best_depth;
+        int first = best, last = best;
+        while (first > 0 && top[static_cast<std::size_t>(first - 1)] < half) --first;
+        while (last + 1 < bins && top[static_cast<std::size_t>(last + 1)] < half) ++last;
+        runs.push_back({best, first, last, best_depth});
+    }
+    return runs;
+}
 
 double flanking_peak(const std::vector<double>& top, int b, int reach) {
     const int bins = static_cast<int>(top.size());

@@ -41,6 +41,20 @@ TopProfile top_profile(const std::vector<Eigen::Vector3f>& pts, const Indices& i
 /// `reach` bins after it (-1 where a side has none): how high a valley at b is flanked.
 double flanking_peak(const std::vector<double>& top, int b, int reach);
 
+/// A valley of a top profile: a run of bins whose top lies at least a depth below their
+/// flanking peaks (flanking_peak), both reaching a height.
+struct ValleyRun {
+    int deepest;   ///< its deepest bin (the first of equals)
+    int first;     ///< first and last bin of the run's part below half its depth, bins with
+    int last;      ///< no top included
+    double depth;  ///< the deepest bin's depth below its flanking peak, metres
+};
+
+/// The valleys of a top profile, in order: runs of bins with a top at least min_depth_m below
+/// their flanking peak within `reach` bins, that peak reaching min_peak_m.
+std::vector<ValleyRun> valley_runs(const std::vector<double>& top, int reach, double min_depth_m,
+                                   double min_peak_m);
+
 /// Whether a long blob is a row of things side by side seen front-on (or from behind) rather
 /// than one thing seen side-on: its length along the box heading spans at least two prior
 /// widths, and across the heading, from the camera's side, its top stays below
