@@ -21,8 +21,12 @@ constexpr double kValleySigmaM = 0.15;
 constexpr double kValleyCap = 3.0;
 /// A dip of the top profile shallower than this is no valley, metres.
 constexpr double kMinDipM = 0.1;
-/// The fewest bins without a top that make a gap between two things.
+/// The fewest bins seen too sparsely for a top (or for a face: kSparseFraction) that make a
+/// gap between two things.
 constexpr int kMinGapBins = 2;
+/// A bin holding less than this fraction of a typical bin's seen surface shows no thing's face
+/// there: a gap between two things seen through to what is behind them.
+constexpr double kSparseFraction = 0.1;
 /// What leaving out a metre of a typical thing's seen surface costs, in log-likelihood: a
 /// piece that holds no thing (a pole, a trunk, smear in a gap) is left out when it holds
 /// little.
@@ -68,8 +72,18 @@ struct RowEvidence {
     TopProfile profile;
     std::vector<long> points_before;        ///< points in the bins before each bin
     std::vector<double> seen_before;        ///< seen surface (sum of z^2) before each bin
+    std::vector<double> seen;               ///< per bin, its seen surface
     double typical_seen = 0.0;              ///< the median occupied bin's seen surface
     std::vector<int> next_seen, prev_seen;  ///< first bin with a top from b; last one before b
+    std::vector<double> gap_at_m;           ///< the middle of each gap inside the row
+    std::vector<int> gaps_before;           ///< gaps whose middle lies in the bins before b
+
+    /// The gaps whose middle lies inside bins (b0, b1): a thing holding one would be two.
+    int gaps_inside(int b0, int b1) const {
+        if (b1 <= b0 + 1) return 0;
+        return gaps_before[static_cast<std::size_t>(b1)] -
+               gaps_before[static_cast<std::size_t>(b0 + 1)];
+    }
 
     int bin_of(double at_m, bool end) const {
         return end ? bins : std::clamp(static_cast<int>(at_m / bin_m), 0, bins);
@@ -86,6 +100,35 @@ struct RowEvidence {
                typical_seen * bin_m;
     }
 };
+
+/// The row's gaps: runs of kMinGapBins bins or more inside it, each seen too sparsely for a top
+/// or holding under kSparseFraction of a typical bin's seen surface (what is behind two things
+/// seen between them).
+void find_gaps(RowEvidence& r) {
+    const double sparse = kSparseFraction * r.typical_seen;
+    const auto gap = [&](int b) {
+        return r.profile.top[static_cast<std::size_t>(b)] < 0.0 ||
+               r.seen[static_cast<std::size_t>(b)] < sparse;
+    };
+    r.gaps_before.assign(static_cast<std::size_t>(r.bins) + 1, 0);
+    std::vector<int> mid_count(static_cast<std::size_t>(r.bins), 0);
+    for (int b = 0; b < r.bins;) {
+        if (!gap(b)) {
+            ++b;
+            continue;
+        }
+        int end = b;
+        while (end < r.bins && gap(end)) ++end;
+        if (b > 0 && end < r.bins && end - b >= kMinGapBins) {
+            r.gap_at_m.push_back(0.5 * (b + end) * r.bin_m);
+            ++mid_count[static_cast<std::size_t>((b + end) / 2)];
+        }
+        b = end;
+    }
+    for (std::size_t b = 0; b < mid_count.size(); ++b) {
+        r.gaps_before[b + 1] = r.gaps_before[b] + mid_count[b];
+    }
+}
 
 RowEvidence row_evidence(const std::vector<Eigen::Vector3f>& pts, const Indices& idx,
                          const std::vector<double>& along, const GroundPlane& ground, double lo,
@@ -114,6 +157,7 @@ RowEvidence row_evidence(const std::vector<Eigen::Vector3f>& pts, const Indices&
         if (r.profile.top[b] >= 0.0) occupied.push_back(seen[b]);
     }
     if (!occupied.empty()) r.typical_seen = quantile(occupied, 0.5);
+    r.seen = seen;
     r.next_seen.assign(nb + 1, r.bins);
     r.prev_seen.assign(nb + 1, -1);
     for (int b = r.bins - 1; b >= 0; --b) {
@@ -123,6 +167,7 @@ RowEvidence row_evidence(const std::vector<Eigen::Vector3f>& pts, const Indices&
     for (std::size_t b = 1; b <= nb; ++b) {
         r.prev_seen[b] = r.profile.top[b - 1] >= 0.0 ? static_cast<int>(b) - 1 : r.prev_seen[b - 1];
     }
+    find_gaps(r);
     return r;
 }
 
@@ -135,19 +180,7 @@ std::vector<CutSite> cut_sites(const RowEvidence& row, const ClassSettings& s,
     std::vector<CutSite> sites =
         valley_sites(row.profile, row.bin_m, reach, options.row_valley_depth_m,
                      options.row_valley_min_peak_fraction * s.prior_H_m);
-    const std::vector<double>& top = row.profile.top;
-    for (int b = 0; b < row.bins;) {
-        if (top[static_cast<std::size_t>(b)] >= 0.0) {
-            ++b;
-            continue;
-        }
-        int end = b;
-        while (end < row.bins && top[static_cast<std::size_t>(end)] < 0.0) ++end;
-        if (b > 0 && end < row.bins && end - b >= kMinGapBins) {
-            sites.push_back({0.5 * (b + end) * row.bin_m, kValleyCap});
-        }
-        b = end;
-    }
+    for (const double at : row.gap_at_m) sites.push_back({at, kValleyCap});
     for (int b = 0; b < row.bins; ++b) sites.push_back({(b + 0.5) * row.bin_m, -kValleyCap});
     std::sort(sites.begin(), sites.end(),
               [](const CutSite& a, const CutSite& b) { return a.at_m < b.at_m; });
@@ -253,8 +286,9 @@ std::vector<Indices> partition_row(const std::vector<Eigen::Vector3f>& pts, cons
             // its class's. Its length is what it holds of the row.
             const double mode =
                 roof >= options.van_min_height_m ? options.van_prior_L_m : s.prior_L_m;
-            const double score = cut + length_score((last_seen - first_seen + 1) * row.bin_m,
-                                                    at_far || (at_near && near_end_cut), mode);
+            const double score = cut - kValleyCap * row.gaps_inside(start_bin, end_bin) +
+                                 length_score((last_seen - first_seen + 1) * row.bin_m,
+                                              at_far || (at_near && near_end_cut), mode);
             if (score > best[j]) {
                 best[j] = score;
                 from[j] = i;
