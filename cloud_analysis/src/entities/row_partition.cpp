@@ -71,6 +71,8 @@ struct RowEvidence {
     int bins = 0;
     TopProfile profile;
     std::vector<long> points_before;        ///< points in the bins before each bin
+    long below = 0, beyond = 0;             ///< points before the first bin, after the last
+    double first_m = 0.0, last_m = 0.0;     ///< the nearest and farthest point's along - lo
     std::vector<double> seen_before;        ///< seen surface (sum of z^2) before each bin
     std::vector<double> seen;               ///< per bin, its seen surface
     double typical_seen = 0.0;              ///< the median occupied bin's seen surface
@@ -137,6 +139,7 @@ RowEvidence row_evidence(const std::vector<Eigen::Vector3f>& pts, const Indices&
     r.lo = lo;
     r.bin_m = options.row_valley_bin_m;
     r.length_m = hi - lo;
+    r.last_m = r.length_m;
     const int closing = static_cast<int>(std::lround(options.row_valley_closing_m / r.bin_m));
     r.profile = top_profile(pts, idx, along, ground, r.bin_m, lo, hi, closing);
     r.bins = static_cast<int>(r.profile.top.size());
@@ -144,6 +147,10 @@ RowEvidence row_evidence(const std::vector<Eigen::Vector3f>& pts, const Indices&
     std::vector<double> seen(nb, 0.0);
     for (std::size_t k = 0; k < idx.size(); ++k) {
         const int b = static_cast<int>(std::floor((along[k] - lo) / r.bin_m));
+        r.first_m = std::min(r.first_m, along[k] - lo);
+        r.last_m = std::max(r.last_m, along[k] - lo);
+        r.below += b < 0 ? 1 : 0;
+        r.beyond += b >= r.bins ? 1 : 0;
         if (b < 0 || b >= r.bins) continue;
         const double z = pts[idx[k]].z();
         seen[static_cast<std::size_t>(b)] += z * z;
@@ -188,21 +195,28 @@ std::vector<CutSite> cut_sites(const RowEvidence& row, const ClassSettings& s,
     return sites;
 }
 
-/// The points of the thing pieces of the best partition (sites, from, thing: partition_row).
+/// The points of the thing pieces of the best partition (sites, from, thing: partition_row);
+/// `apart` whether every two things that meet do so where the evidence says (a gap or a
+/// valley), not merely at their lengths.
 std::vector<Indices> pieces_of(const std::vector<CutSite>& sites, const std::vector<long>& from,
                                const std::vector<char>& thing, const std::vector<double>& along,
-                               const Indices& idx, double lo) {
+                               const Indices& idx, double lo, bool& apart) {
     struct Piece {
         double begin, end;
     };
     std::vector<Piece> kept;
     const double inf = std::numeric_limits<double>::infinity();
     std::size_t count = 0;
+    apart = true;
     for (long j = static_cast<long>(sites.size()) - 1; j >= 0;
          j = from[static_cast<std::size_t>(j)]) {
         ++count;
         const long i = from[static_cast<std::size_t>(j)];
         if (!thing[static_cast<std::size_t>(j)]) continue;
+        if (i >= 0 && thing[static_cast<std::size_t>(i)] &&
+            !(sites[static_cast<std::size_t>(i)].evidence > 0.0)) {
+            apart = false;
+        }
         const bool last = j + 1 == static_cast<long>(sites.size());
         kept.push_back({i < 0 ? -inf : lo + sites[static_cast<std::size_t>(i)].at_m,
                         last ? inf : lo + sites[static_cast<std::size_t>(j)].at_m});
@@ -228,8 +242,9 @@ std::vector<Indices> pieces_of(const std::vector<CutSite>& sites, const std::vec
 std::vector<Indices> partition_row(const std::vector<Eigen::Vector3f>& pts, const Indices& idx,
                                    double dir_x, double dir_z, double centre_along, double length_m,
                                    const ClassSettings& s, const GroundPlane& ground,
-                                   const ExtractOptions& options, bool near_end_cut) {
+                                   const ExtractOptions& options, bool near_end_cut, bool& apart) {
     const double min_piece = options.row_valley_min_piece_m;
+    apart = false;
     if (idx.size() < 20 || length_m < 2.0 * min_piece) return {};
     const std::vector<double> along = project(pts, idx, dir_x, dir_z).along;
     // The profile spans the fitted box and the points beyond its far end (a sparse thing
@@ -278,8 +293,14 @@ std::vector<Indices> partition_row(const std::vector<Eigen::Vector3f>& pts, cons
             }
             const int first_seen = row.next_seen[static_cast<std::size_t>(start_bin)];
             const int last_seen = row.prev_seen[static_cast<std::size_t>(end_bin)];
-            if (first_seen >= end_bin || sites[j].at_m - start < min_piece) continue;
-            if (roof < min_roof || row.points(start_bin, end_bin) < min_points) continue;
+            // An end piece spans its points past the profile's end too.
+            const double span = (last ? std::max(sites[j].at_m, row.last_m) : sites[j].at_m) -
+                                (i < 0 ? std::min(start, row.first_m) : start);
+            if (first_seen >= end_bin || span < min_piece) continue;
+            // The end pieces also hold the points past the profile's ends.
+            const long held =
+                row.points(start_bin, end_bin) + (i < 0 ? row.below : 0) + (last ? row.beyond : 0);
+            if (roof < min_roof || held < min_points) continue;
             const bool at_near = near_is_lo ? i < 0 : last;
             const bool at_far = near_is_lo ? last : i < 0;
             // A piece reaching a van's height is a van, of a van's length; any other, a car of
@@ -296,7 +317,7 @@ std::vector<Indices> partition_row(const std::vector<Eigen::Vector3f>& pts, cons
             }
         }
     }
-    return pieces_of(sites, from, thing, along, idx, row.lo);
+    return pieces_of(sites, from, thing, along, idx, row.lo, apart);
 }
 
 }  // namespace cloud_analysis::instances

@@ -467,11 +467,12 @@ Split split_oversized(const std::vector<Eigen::Vector3f>& pts, const Indices& id
         box.L_m > options.row_valley_min_length_fraction * s.prior_L_m) {
         // Parked end to end: the row's partition, once.
         const double centre = box.centre_m.x() * c - box.centre_m.z() * sn;
+        bool apart = false;
         std::vector<Indices> parts =
-            partition_row(pts, idx, c, -sn, centre, box.L_m, s, *ground, options, truncated);
+            partition_row(pts, idx, c, -sn, centre, box.L_m, s, *ground, options, truncated, apart);
         // One thing with what is no thing's left out is a partition too: it is fitted again.
         if (parts.size() > 1 || (parts.size() == 1 && parts.front().size() < idx.size())) {
-            return {std::move(parts), false, std::nullopt, true};
+            return {std::move(parts), apart, std::nullopt, true};
         }
     }
     if (!partition && ground && options.row_valley_depth_m > 0.0 &&

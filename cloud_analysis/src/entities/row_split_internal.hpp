@@ -80,10 +80,11 @@ std::vector<Indices> split_at_valleys(const std::vector<Eigen::Vector3f>& pts, c
 /// log-likelihoods, the evidence of the cuts that end them (valleys and gaps of the top profile)
 /// and the cost of the surface left to nothing: a dynamic programme over the cut sites. The things'
 /// points; empty when the whole row is one thing. With `near_end_cut`, the image's edge cuts the
-/// row's near end.
+/// row's near end. `apart`: whether every two things that meet do so at a gap or a valley (the
+/// pieces are a row of distinct things, none the shadow of another).
 std::vector<Indices> partition_row(const std::vector<Eigen::Vector3f>& pts, const Indices& idx,
                                    double dir_x, double dir_z, double centre_along, double length_m,
                                    const ClassSettings& s, const GroundPlane& ground,
-                                   const ExtractOptions& options, bool near_end_cut);
+                                   const ExtractOptions& options, bool near_end_cut, bool& apart);
 
 }  // namespace cloud_analysis::instances

@@ -1651,3 +1651,26 @@ TEST_CASE("the row partition cuts where a row is seen through between two things
     CHECK(cars[0].point_count < 2232 + 31);
     CHECK(cars[1].point_count > cars[0].point_count + 400);
 }
+
+TEST_CASE("the row partition counts a sparse far car's points past the row's profile",
+          "[entities][split]") {
+    LabeledCloud cloud;
+    add_road(cloud);
+    // Two cars seen densely, 0.45 m apart, then 60 points (< 100, the car minimum; >= 50, the
+    // minimum of a row's piece) of a third, 1 m of it, past the 99.5 % of the row's points
+    // where its profile ends.
+    for (float y = 0.15f; y <= 1.65f; y += 0.05f) {
+        for (float z = 8.0f; z <= 12.2f; z += 0.05f) add_point(cloud, {-1.1f, y, z}, 2);
+        for (float z = 12.65f; z <= 16.85f; z += 0.05f) add_point(cloud, {-1.1f, y, z}, 2);
+    }
+    for (int i = 0; i < 10; ++i) {
+        for (int k = 0; k < 6; ++k) {
+            add_point(cloud, {-1.1f, 0.15f + 0.15f * static_cast<float>(i), 17.3f + 0.2f * k}, 2);
+        }
+    }
+    project_pixels(cloud);
+    std::vector<scene_schema::Entity> cars = cars_of(cloud, partition_options());
+    REQUIRE(cars.size() == 3);
+    std::sort(cars.begin(), cars.end(), [](const auto& a, const auto& b) { return a.z < b.z; });
+    CHECK(cars[2].z == Approx(17.3 + 2.1).margin(0.3));
+}
