@@ -144,7 +144,7 @@ RowEvidence row_evidence(const std::vector<Eigen::Vector3f>& pts, const Indices&
     r.profile = top_profile(pts, idx, along, ground, r.bin_m, lo, hi, closing);
     r.bins = static_cast<int>(r.profile.top.size());
     const auto nb = static_cast<std::size_t>(r.bins);
-    std::vector<double> seen(nb, 0.0);
+    r.seen.assign(nb, 0.0);
     for (std::size_t k = 0; k < idx.size(); ++k) {
         const int b = static_cast<int>(std::floor((along[k] - lo) / r.bin_m));
         r.first_m = std::min(r.first_m, along[k] - lo);
@@ -153,18 +153,17 @@ RowEvidence row_evidence(const std::vector<Eigen::Vector3f>& pts, const Indices&
         r.beyond += b >= r.bins ? 1 : 0;
         if (b < 0 || b >= r.bins) continue;
         const double z = pts[idx[k]].z();
-        seen[static_cast<std::size_t>(b)] += z * z;
+        r.seen[static_cast<std::size_t>(b)] += z * z;
     }
     r.points_before.assign(nb + 1, 0);
     r.seen_before.assign(nb + 1, 0.0);
     std::vector<double> occupied;
     for (std::size_t b = 0; b < nb; ++b) {
         r.points_before[b + 1] = r.points_before[b] + r.profile.count[b];
-        r.seen_before[b + 1] = r.seen_before[b] + seen[b];
-        if (r.profile.top[b] >= 0.0) occupied.push_back(seen[b]);
+        r.seen_before[b + 1] = r.seen_before[b] + r.seen[b];
+        if (r.profile.top[b] >= 0.0) occupied.push_back(r.seen[b]);
     }
     if (!occupied.empty()) r.typical_seen = quantile(occupied, 0.5);
-    r.seen = seen;
     r.next_seen.assign(nb + 1, r.bins);
     r.prev_seen.assign(nb + 1, -1);
     for (int b = r.bins - 1; b >= 0; --b) {
@@ -293,11 +292,10 @@ std::vector<Indices> partition_row(const std::vector<Eigen::Vector3f>& pts, cons
             }
             const int first_seen = row.next_seen[static_cast<std::size_t>(start_bin)];
             const int last_seen = row.prev_seen[static_cast<std::size_t>(end_bin)];
-            // An end piece spans its points past the profile's end too.
+            // The end pieces also span and hold the points past the profile's ends.
             const double span = (last ? std::max(sites[j].at_m, row.last_m) : sites[j].at_m) -
                                 (i < 0 ? std::min(start, row.first_m) : start);
             if (first_seen >= end_bin || span < min_piece) continue;
-            // The end pieces also hold the points past the profile's ends.
             const long held =
                 row.points(start_bin, end_bin) + (i < 0 ? row.below : 0) + (last ? row.beyond : 0);
             if (roof < min_roof || held < min_points) continue;
