@@ -1091,6 +1091,25 @@ TEST_CASE("a car and the front of the next one are cut at the valley between the
     CHECK(cars_of(o).size() == 1);
 }
 
+namespace {
+
+/// Two cars' sides at x = -1.1 seen densely (z 8-12.2 and 12.65-16.85 m, 0.45 m apart), then a
+/// third seen sparsely: `heights` rows of points from y = `y0` every `dy`, each `columns`
+/// points from z = 17.3 m every 0.2 m.
+void add_sparse_third_car(LabeledCloud& cloud, int heights, float y0, float dy, int columns) {
+    for (float y = 0.15f; y <= 1.65f; y += 0.05f) {
+        for (float z = 8.0f; z <= 12.2f; z += 0.05f) add_point(cloud, {-1.1f, y, z}, 2);
+        for (float z = 12.65f; z <= 16.85f; z += 0.05f) add_point(cloud, {-1.1f, y, z}, 2);
+    }
+    for (int i = 0; i < heights; ++i) {
+        for (int k = 0; k < columns; ++k) {
+            add_point(cloud, {-1.1f, y0 + dy * static_cast<float>(i), 17.3f + 0.2f * k}, 2);
+        }
+    }
+}
+
+}  // namespace
+
 TEST_CASE("the sparse far car of a parked row needs only half the class's minimum of points",
           "[entities][split]") {
     LabeledCloud cloud;
@@ -1098,15 +1117,7 @@ TEST_CASE("the sparse far car of a parked row needs only half the class's minimu
         for (float z = 3.0f; z <= 40.0f; z += 0.25f) add_point(cloud, {x, 1.65f, z}, 0);
     }
     // Two cars seen densely, 0.45 m apart, then 66 points (< 100, the car minimum) of a third.
-    for (float y = 0.15f; y <= 1.65f; y += 0.05f) {
-        for (float z = 8.0f; z <= 12.2f; z += 0.05f) add_point(cloud, {-1.1f, y, z}, 2);
-        for (float z = 12.65f; z <= 16.85f; z += 0.05f) add_point(cloud, {-1.1f, y, z}, 2);
-    }
-    for (int i = 0; i < 6; ++i) {
-        for (int k = 0; k < 11; ++k) {
-            add_point(cloud, {-1.1f, 0.3f + 0.25f * static_cast<float>(i), 17.3f + 0.2f * k}, 2);
-        }
-    }
+    add_sparse_third_car(cloud, 6, 0.3f, 0.25f, 11);
     project_pixels(cloud);
     const auto doc = extract_entities(cloud, test_palette(), StereoCamera{},
                                       options_with_bundled_config("instances"));
@@ -1659,15 +1670,7 @@ TEST_CASE("the row partition counts a sparse far car's points past the row's pro
     // Two cars seen densely, 0.45 m apart, then 60 points (< 100, the car minimum; >= 50, the
     // minimum of a row's piece) of a third, 1 m of it, past the 99.5 % of the row's points
     // where its profile ends.
-    for (float y = 0.15f; y <= 1.65f; y += 0.05f) {
-        for (float z = 8.0f; z <= 12.2f; z += 0.05f) add_point(cloud, {-1.1f, y, z}, 2);
-        for (float z = 12.65f; z <= 16.85f; z += 0.05f) add_point(cloud, {-1.1f, y, z}, 2);
-    }
-    for (int i = 0; i < 10; ++i) {
-        for (int k = 0; k < 6; ++k) {
-            add_point(cloud, {-1.1f, 0.15f + 0.15f * static_cast<float>(i), 17.3f + 0.2f * k}, 2);
-        }
-    }
+    add_sparse_third_car(cloud, 10, 0.15f, 0.15f, 6);
     project_pixels(cloud);
     std::vector<scene_schema::Entity> cars = cars_of(cloud, partition_options());
     REQUIRE(cars.size() == 3);
