@@ -410,15 +410,16 @@ void project_pixels(LabeledCloud& cloud) {
     }
 }
 
-/// split_oversized with the bundled car settings, the default options and no ground plane (and
-/// not cut by the image's edge) unless given.
+/// split_oversized with the bundled car settings, the default options with the cascade of rules
+/// (row_model "rules") and no ground plane (and not cut by the image's edge) unless given.
 instances::Split split_with_car_prior(const std::vector<Eigen::Vector3f>& pts,
                                       const instances::Indices& idx, const OrientedBox& box,
                                       const std::optional<GroundPlane>& ground = std::nullopt,
                                       bool truncated = false) {
     const auto config = load_class_config(std::string(STEREOSCENE_SOURCE_DIR) +
                                           "/assets/classes/entity_config.json");
-    const ExtractOptions options;
+    ExtractOptions options;
+    options.row_model = "rules";  // these tests check the cascade's cuts
     return instances::split_oversized(pts, idx, box, config.find("car"), ground, options,
                                       truncated);
 }
@@ -1551,6 +1552,7 @@ TEST_CASE("a van box longer than any van keeps its far end and a van's length",
         return out;
     };
     ExtractOptions o = options_with_bundled_config("instances");
+    o.row_model = "rules";  // the cascade keeps the blob whole (the partition cuts it at a van)
     const auto limited = nearest_van(o);
     REQUIRE(limited);
     CHECK(limited->L == Approx(o.van_prior_L_m).margin(1e-6));
