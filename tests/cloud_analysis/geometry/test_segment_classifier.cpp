@@ -76,7 +76,10 @@ fs::path trees_calling_vehicle(const std::string& name, double threshold, bool b
     for (int i = 0; i < n; ++i) {
         y.at<int>(i) = (x.at<float>(i, feature) > threshold) != below ? 1 : 0;
     }
+    // Every split weighs every feature: the trees learn the rule whatever state OpenCV's
+    // global generator (their bootstrap and feature draws) is left in by what ran before.
     auto trees = cv::ml::RTrees::create();
+    trees->setActiveVarCount(f);
     trees->setMaxDepth(3);
     trees->setMinSampleCount(2);
     trees->setTermCriteria({cv::TermCriteria::MAX_ITER, 15, 0});
