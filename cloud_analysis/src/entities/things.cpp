@@ -187,8 +187,9 @@ struct ClusterPieces {
         while (!work.empty()) {
             auto [part, depth, group, yaw, in_row] = std::move(work.back());
             work.pop_back();
-            // A piece of a row (cut at clear gaps or at a front-on row's pitch) is a thing
-            // because the row is: half the minimum suffices for its sparse far end.
+            // A piece of a row (cut at clear gaps, at a front-on row's pitch, or by the row's
+            // partition where every cut has evidence) is a thing because the row is: half the
+            // minimum suffices for its sparse far end.
             const bool row_piece = depth > 0 && group == cluster;
             const auto min_points =
                 static_cast<std::size_t>(row_piece ? s.min_points / 2 : s.min_points);
