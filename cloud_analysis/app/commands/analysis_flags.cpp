@@ -107,6 +107,12 @@ void add_rig_flags(CLI::App& cmd, AnalyseArgs& a, const std::string& sg) {
                  "keep every pixel setting as written for KITTI's focal length (721.5 px) "
                  "instead of scaling it to the rig's")
         ->group(sg);
+    cmd.add_option("--point-lattice", a.point_lattice,
+                   "things are taken on every N-th pixel of every N-th row (1, 2, 4 or 8); 0 = "
+                   "from the rig: the largest power of two up to fx / 721.5 (docs/cli.md)")
+        ->check(CLI::IsMember({0, 1, 2, 4, 8}))
+        ->capture_default_str()
+        ->group(sg);
 }
 
 /// The matcher's post-filters: left-right check, WLS, half-resolution matching.
@@ -359,6 +365,7 @@ void resolve_settings(AnalyseArgs& a, const CLI::App& cmd) {
     rig.scale_pixel_settings = !a.no_rig_scaling;
     rig.given.clear();
     if (cmd.count("--num-disparities") > 0) rig.given.insert("num_disparities");
+    if (a.point_lattice > 0) rig.given.insert("point_lattice_px");
     try {
         a.options.validate();
     } catch (const std::invalid_argument& e) {
@@ -422,6 +429,7 @@ cloud_analysis::ExtractOptions extract_options(const AnalyseArgs& a) {
     cloud_analysis::ExtractOptions extract;
     extract.method = a.method;
     extract.row_model = a.row_model;
+    if (a.point_lattice > 0) extract.point_lattice_px = a.point_lattice;
     extract.classes = cloud_analysis::load_class_config(
         a.class_config.empty() ? cloud_analysis::default_class_config_path() : a.class_config);
     extract.validate();

@@ -38,6 +38,7 @@ struct AnalyseArgs {
         drop_classes;             ///< --drop-classes (+ sky with --drop-sky): not in clouds
     bool drop_sky = false;        ///< --drop-sky
     bool no_rig_scaling = false;  ///< --no-rig-scaling: pixel settings as written for KITTI
+    int point_lattice = 0;        ///< --point-lattice: things' pixel lattice step, 0 = the rig's
     /// --vehicle-classifier: "default" (the project's model), "none" (the rules) or a file.
     std::string vehicle_classifier = "default";
     bool timings = false;

@@ -181,17 +181,21 @@ void size_classes(ClassPoints& out, const std::vector<char>& keep_pixels,
 }
 
 /// The second pass of points_by_class over the cloud's chunks (in parallel): each chunk writes
-/// its points of every class kept (columns by column_mask, depths by the selection) from slot
+/// its points of every class kept (columns by column_mask, the pixels of classes whose pixels
+/// are kept by `lattice`, depths by the selection) from slot
 /// end[c][k] on, and leaves end[c][k] past its last one.
 void write_points(ClassPoints& out, const LabeledCloud& cloud, const ClassSelection& selection,
-                  const std::vector<std::uint32_t>& column_mask, std::uint32_t width, bool grid,
-                  std::vector<std::vector<std::size_t>>& end) {
+                  const std::vector<std::uint32_t>& column_mask, std::uint32_t lattice,
+                  std::uint32_t width, bool grid, std::vector<std::vector<std::size_t>>& end) {
     const std::size_t classes = column_mask.size();
     auto& per_class = out.xyz_m;
     auto& per_class_pixels = out.pixel;
     const auto taken = [&](std::size_t i, std::uint16_t k, std::uint32_t& row_start) {
-        return column_mask[k] == 0 ||
-               (column_of(cloud.pixel[i], width, row_start) & column_mask[k]) == 0;
+        const bool on_lattice = lattice != 0 && selection.keep_pixels[k];
+        if (column_mask[k] == 0 && !on_lattice) return true;
+        const std::uint32_t u = column_of(cloud.pixel[i], width, row_start);
+        if (on_lattice && ((u | row_start / width) & lattice) != 0) return false;
+        return (u & column_mask[k]) == 0;
     };
     const double max_depth = selection.max_depth_m;
     const std::size_t chunks = end.size();
@@ -363,6 +367,9 @@ void ExtractOptions::validate() const {
     fail_if(!(row_valley_closing_m >= 0.0 && row_valley_closing_m <= 10.0),
             "row_valley_closing_m: must be in [0, 10] metres");
     fail_if(threads < 1, "threads: must be >= 1");
+    fail_if(point_lattice_px != 1 && point_lattice_px != 2 && point_lattice_px != 4 &&
+                point_lattice_px != 8,
+            "point_lattice_px: must be 1, 2, 4 or 8");
     fail_if(!(stuff_on_thing_fraction > 0.0 && stuff_on_thing_fraction <= 1.0),
             "stuff_on_thing_fraction: must be in (0, 1]");
 }
@@ -383,6 +390,7 @@ ClassSelection class_selection(const Palette& palette, const ExtractOptions& opt
         selection.column_mask.push_back(static_cast<std::uint32_t>(s.column_step) - 1);
         selection.keep_pixels.push_back(s.thing ? 1 : 0);
     }
+    selection.lattice_mask = static_cast<std::uint32_t>(options.point_lattice_px) - 1;
     return selection;
 }
 
@@ -408,7 +416,11 @@ ClassPoints points_by_class(const LabeledCloud& cloud, const ClassSelection& sel
     const bool has_pixels = cloud.pixel.size() == cloud.size();
     // Columns are thinned only when the cloud knows its pixels.
     std::vector<std::uint32_t> column_mask(classes, 0);
-    if (has_pixels && cloud.width_px > 0) column_mask = selection.column_mask;
+    std::uint32_t lattice = 0;
+    if (has_pixels && cloud.width_px > 0) {
+        column_mask = selection.column_mask;
+        lattice = selection.lattice_mask;
+    }
     out.weight.resize(classes);
     for (std::size_t k = 0; k < classes; ++k) out.weight[k] = std::size_t{column_mask[k]} + 1;
     const auto width = static_cast<std::uint32_t>(std::max(cloud.width_px, 1));
@@ -416,7 +428,7 @@ ClassPoints points_by_class(const LabeledCloud& cloud, const ClassSelection& sel
     const bool grid = take_grid(out, cloud, scan, has_pixels, width);
     size_classes(out, selection.keep_pixels, scan.start);
     std::vector<std::vector<std::size_t>> end = scan.start;
-    write_points(out, cloud, selection, column_mask, width, grid, end);
+    write_points(out, cloud, selection, column_mask, lattice, width, grid, end);
     close_gaps(out, selection.keep_pixels, scan.start, end);
     return out;
 }

@@ -432,22 +432,28 @@ std::vector<scene_schema::Entity> things_of_class(const ClassInfo& info,
         if (c.instance != 0) exact.push_back(c);
     }
     if (s.has_prior()) {
-        candidates = drop_strips(std::move(candidates), pixels, grid, options.min_width_px);
+        // Widths are counted in points a row: one for every point_lattice_px pixels.
+        const double lattice = options.point_lattice_px;
         candidates =
-            drop_strips_beside(std::move(candidates), pixels, grid, options.strip_beside_width_px,
-                               options.shadow_radius_px, options.strip_beside_gap_m);
+            drop_strips(std::move(candidates), pixels, grid, options.min_width_px / lattice);
+        candidates = drop_strips_beside(std::move(candidates), pixels, grid,
+                                        options.strip_beside_width_px / lattice,
+                                        options.shadow_radius_px, options.strip_beside_gap_m);
         candidates = suppress_shadows(std::move(candidates), pixels, grid, s.prior_W_m,
                                       options.shadow_fraction, options.shadow_radius_px);
     }
     candidates = suppress_nested(std::move(candidates));
     if (const double min_m2 = min_seen_area_m2(s, options); min_m2 > 0.0) {
         // Seen area at the points' own depths: a box completed beyond the image's edge lies
-        // nearer than the points it holds, one completed away from the camera farther.
+        // nearer than the points it holds, one completed away from the camera farther. Each
+        // point stands for its lattice cell (point_lattice_px each way).
+        const double lattice_fx = options.fx_px / options.point_lattice_px;
+        const double lattice_fy = options.fy_px / options.point_lattice_px;
         candidates.erase(std::remove_if(candidates.begin(), candidates.end(),
                                         [&](const Candidate& c) {
                                             return c.instance == 0 &&
-                                                   seen_area_m2(pts, c.members, options.fx_px,
-                                                                options.fy_px) < min_m2;
+                                                   seen_area_m2(pts, c.members, lattice_fx,
+                                                                lattice_fy) < min_m2;
                                         }),
                          candidates.end());
     }

@@ -97,7 +97,7 @@ const std::set<std::string>& rig_scaled_fields() {
         "column_bin_px", "min_cell_pixels", "green_window_px", "blend_rows", "edge_step_px",
         // entity extraction and the class config's per-class minimum
         "image_radius_px", "shadow_radius_px", "min_width_px", "strip_beside_width_px",
-        "min_points"};
+        "min_points", "point_lattice_px"};
     return fields;
 }
 
@@ -159,9 +159,18 @@ RigFit fit_to_rig(const AnalyseOptions& analyse, const ExtractOptions& extract,
         if (!given("shadow_radius_px")) e.shadow_radius_px = scaled_length(e.shadow_radius_px, s);
         if (!given("min_width_px")) e.min_width_px *= s;
         if (!given("strip_beside_width_px")) e.strip_beside_width_px *= s;
+        // Things are taken on a lattice of the largest power-of-two step (at most 8) that
+        // keeps at least the reference rig's pixels on an object: its points count n^2 pixels.
+        if (!given("point_lattice_px")) {
+            e.point_lattice_px = 1;
+            while (2 * e.point_lattice_px <= std::min(8.0, s)) e.point_lattice_px *= 2;
+        }
         if (!given("min_points")) {
-            e.classes.fallback.min_points = scaled_count(e.classes.fallback.min_points, s);
-            for (auto& c : e.classes.classes) c.min_points = scaled_count(c.min_points, s);
+            const auto scaled = [&](const ClassSettings& c) {
+                return scaled_count(c.min_points, c.thing ? s / e.point_lattice_px : s);
+            };
+            e.classes.fallback.min_points = scaled(e.classes.fallback);
+            for (auto& c : e.classes.classes) c.min_points = scaled(c);
         }
     }
     check_range_fits(camera.width_px, d);
@@ -175,6 +184,7 @@ nlohmann::json RigFit::describe(const LoadedInputs& in) const {
     nlohmann::json j;
     j["reference_fx"] = kReferenceFocalPx;
     j["scale"] = scale;
+    j["point_lattice_px"] = extract.point_lattice_px;
     j["min_depth_m"] = analyse.rig.min_depth_m;
     j["num_disparities"] = d.num_disparities;
     j["num_disparities_from"] = range_from_min_depth ? "min_depth" : "given";

@@ -164,25 +164,44 @@ TEST_CASE("reprojecting by class gives the split of the reprojected cloud, witho
     selection.max_depth_m = 30.0;  // below the reprojection's range: both limits apply
     ReprojectOptions options;
     options.max_range_m = 50.0;
-    for (const bool keep_void : {true, false}) {
-        options.keep_void = keep_void;
-        const LabeledCloud cloud = reproject(map, cam, grey, classes, options);
-        const ClassPoints want = points_by_class(cloud, selection, 2);
-        const ClassPoints got = reproject_by_class(map, cam, classes, options, selection);
-        CHECK(got.cloud_points == cloud.size());
-        CHECK(got.width_px == w);
-        CHECK(got.height_px == h);
-        CHECK(got.weight == std::vector<std::size_t>{1, 4, 2, 8});
-        CHECK(got.pixel == want.pixel);
-        REQUIRE(got.xyz_m.size() == 4);
-        for (std::size_t k = 0; k < 4; ++k) {
-            CHECK(got.xyz_m[k] == want.xyz_m[k]);  // the same floats, in pixel order
-            CHECK_FALSE(got.xyz_m[k].empty());
-            for (const auto& p : got.xyz_m[k]) CHECK(p.z() < 30.0f);
+    std::size_t stuff_points[2] = {0, 0};  // class 1 with every pixel, by keep_void
+    std::size_t thing_points[2] = {0, 0};  // class 0
+    for (const std::uint32_t lattice : {0u, 1u, 3u}) {
+        // The classes with pixels (0, 3) on every (lattice + 1)-th pixel of every such row.
+        selection.lattice_mask = lattice;
+        for (const bool keep_void : {true, false}) {
+            options.keep_void = keep_void;
+            const LabeledCloud cloud = reproject(map, cam, grey, classes, options);
+            const ClassPoints want = points_by_class(cloud, selection, 2);
+            const ClassPoints got = reproject_by_class(map, cam, classes, options, selection);
+            CHECK(got.cloud_points == cloud.size());
+            CHECK(got.width_px == w);
+            CHECK(got.height_px == h);
+            CHECK(got.weight == std::vector<std::size_t>{1, 4, 2, 8});
+            CHECK(got.pixel == want.pixel);
+            REQUIRE(got.xyz_m.size() == 4);
+            for (std::size_t k = 0; k < 4; ++k) {
+                CHECK(got.xyz_m[k] == want.xyz_m[k]);  // the same floats, in pixel order
+                CHECK_FALSE(got.xyz_m[k].empty());
+                for (const auto& p : got.xyz_m[k]) CHECK(p.z() < 30.0f);
+            }
+            CHECK(got.pixel[1].empty());
+            // Thinned columns and pixels of the kept points.
+            for (const std::uint32_t p : got.pixel[3]) CHECK(p % w % 8 == 0);
+            for (const std::uint32_t p : got.pixel[0]) {
+                CHECK(((p % w) & lattice) == 0);
+                CHECK(((p / w) & lattice) == 0);
+            }
+            // Stuff is not on the lattice; things lose about all but 1 / (lattice + 1)^2.
+            if (lattice == 0) {
+                stuff_points[keep_void] = got.xyz_m[1].size();
+                thing_points[keep_void] = got.xyz_m[0].size();
+            }
+            CHECK(got.xyz_m[1].size() == stuff_points[keep_void]);
+            const double share = 1.0 / ((lattice + 1.0) * (lattice + 1.0));
+            CHECK(static_cast<double>(got.xyz_m[0].size()) ==
+                  Approx(share * static_cast<double>(thing_points[keep_void])).epsilon(0.35));
         }
-        CHECK(got.pixel[1].empty());
-        // Thinned columns and pixels of the kept points.
-        for (const std::uint32_t p : got.pixel[3]) CHECK(p % w % 8 == 0);
     }
     ClassSelection bad = selection;
     bad.keep_pixels.pop_back();

@@ -77,6 +77,7 @@ TEST_CASE("pixel settings scale with the focal length, counts with its square", 
         CHECK(fit.analyse.reproject.depth_edge_rows == options.reproject.depth_edge_rows);
         CHECK(fit.extract.shadow_radius_px == extract.shadow_radius_px);
         CHECK(fit.extract.classes.find("car").min_points == extract.classes.find("car").min_points);
+        CHECK(fit.extract.point_lattice_px == 1);
     }
     SECTION("three times the focal length") {
         const RigFit fit = fit_to_rig(options, extract, rig(2400, 1000, 3 * 721.5377, 0.2));
@@ -90,19 +91,30 @@ TEST_CASE("pixel settings scale with the focal length, counts with its square", 
         CHECK(fit.analyse.geometry.edge_step_px == 3 * options.geometry.edge_step_px);
         CHECK(fit.extract.shadow_radius_px == 3 * extract.shadow_radius_px);
         CHECK(fit.extract.strip_beside_width_px == Approx(3 * extract.strip_beside_width_px));
+        // Things on every second pixel of every second row: their counts scale by (3 / 2)^2,
+        // stuff's (every pixel) by 3^2.
+        CHECK(fit.extract.point_lattice_px == 2);
         CHECK(fit.extract.classes.find("car").min_points ==
-              9 * extract.classes.find("car").min_points);
+              std::lround(2.25 * extract.classes.find("car").min_points));
+        CHECK(fit.extract.classes.find("building").min_points ==
+              9 * extract.classes.find("building").min_points);
+        CHECK(fit_to_rig(options, extract, rig(4000, 2000, 5 * 721.5377, 0.2))
+                  .extract.point_lattice_px == 4);
     }
     SECTION("a fifth of the focal length keeps lengths and counts at least 1") {
         const RigFit fit = fit_to_rig(options, extract, rig(621, 188, 721.5377 / 5, 0.54));
         CHECK(fit.analyse.geometry.min_cell_pixels == 1);
         CHECK(fit.analyse.geometry.edge_step_px == 1);
         CHECK(fit.extract.image_radius_px == 1);
+        CHECK(fit.extract.point_lattice_px == 1);
     }
     SECTION("settings the user gave stay as given") {
         AnalyseOptions given = options;
-        given.rig.given = {"depth_edge_rows", "min_points"};
-        const RigFit fit = fit_to_rig(given, extract, rig(2400, 1000, 3 * 721.5377, 0.2));
+        given.rig.given = {"depth_edge_rows", "min_points", "point_lattice_px"};
+        ExtractOptions every_pixel = extract;
+        every_pixel.point_lattice_px = 1;
+        const RigFit fit = fit_to_rig(given, every_pixel, rig(2400, 1000, 3 * 721.5377, 0.2));
+        CHECK(fit.extract.point_lattice_px == 1);
         CHECK(fit.analyse.reproject.depth_edge_rows == options.reproject.depth_edge_rows);
         CHECK(fit.extract.classes.find("car").min_points == extract.classes.find("car").min_points);
         CHECK(fit.extract.shadow_radius_px == 3 * extract.shadow_radius_px);
@@ -113,6 +125,7 @@ TEST_CASE("pixel settings scale with the focal length, counts with its square", 
         const RigFit fit = fit_to_rig(off, extract, rig(2400, 1000, 3 * 721.5377, 0.2));
         CHECK(fit.scale == 1.0);
         CHECK(fit.extract.shadow_radius_px == extract.shadow_radius_px);
+        CHECK(fit.extract.point_lattice_px == 1);
     }
 }
 

@@ -44,7 +44,10 @@ struct ClassSelection {
     /// column_step - 1 for a power-of-two step; 0 keeps every column.
     std::vector<std::uint32_t> column_mask;
     std::vector<char> keep_pixels;  ///< per palette class: record each point's pixel
-    double max_depth_m = 60.0;      ///< keep points with 0 < z < this, metres
+    /// The classes whose pixels are kept take pixels (u, v) with ((u | v) & lattice_mask) == 0:
+    /// lattice step - 1 for a power-of-two step; 0 keeps every pixel.
+    std::uint32_t lattice_mask = 0;
+    double max_depth_m = 60.0;  ///< keep points with 0 < z < this, metres
 };
 
 /// One point per pixel with a valid disparity within range, in the rectified left camera frame

@@ -69,6 +69,11 @@ struct ExtractOptions {
                                        ///< 0 = off (or without fx_px, fy_px)
     double fx_px = 0.0;                ///< the camera's focal lengths for min_face_share, px
     double fy_px = 0.0;
+    /// Things: the extractor takes the pixels on every point_lattice_px-th column of every
+    /// point_lattice_px-th row (1, 2, 4 or 8), each point standing for that cell's pixels. A
+    /// rig with a focal length several times KITTI's sees an object in several times more
+    /// pixels each way than the box fits need (fit_to_rig sets it).
+    int point_lattice_px = 1;
     double row_low_fraction = 0.7;    ///< a thing blob at least two prior widths long whose top
                                       ///< stays below this * its highest top for row_low_extent_m
                                       ///< across it from the camera's side (bonnets) is a row side
