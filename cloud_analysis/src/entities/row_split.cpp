@@ -455,7 +455,8 @@ Split split_oversized(const std::vector<Eigen::Vector3f>& pts, const Indices& id
                            s.name == options.family_class;
     const double c = std::cos(box.theta), sn = std::sin(box.theta);
     if (std::optional<Split> widest = split_side_by_side(pts, idx, box, s)) return *widest;
-    if (ground && options.row_low_fraction > 0.0 &&
+    // A piece of a row's partition is one thing parked along the row, not a row across it.
+    if (ground && options.row_low_fraction > 0.0 && !(partition && row_piece) &&
         front_on_row(pts, idx, box, s, *ground, options)) {
         // Side by side: cut along the box's length at the row's pitch; each piece heads across.
         Split split = split_along(pts, idx, c, -sn, box.L_m, s.prior_W_m + options.row_gap_m, true);

@@ -554,7 +554,8 @@ TEST_CASE("a car's points on a depth edge count as its points but do not lengthe
     // A car's right side (x = -1.1) from z 10 to 14.2, 0.15-1.5 m high, and beyond its far end,
     // up to z 15.0, the upper half of the next car's rear face as the matcher places it where
     // it shows over the first car's roof: between the two. Flagged as a depth edge, those points
-    // leave the box as the side alone makes it and still count as the car's.
+    // leave the box as the side alone makes it and still count as the car's. (Unflagged, the
+    // row partition leaves them out as no thing's; the cascade of rules boxes them with the car.)
     LabeledCloud cloud;
     add_road(cloud);
     for (float y = 0.15f; y <= 1.5f + 1e-4f; y += 0.05f) {
@@ -567,21 +568,30 @@ TEST_CASE("a car's points on a depth edge count as its points but do not lengthe
         for (float z = 14.2f; z < 15.0f; z += 0.05f) add_point(cloud, {-1.1f, 1.65f - y, z}, 2);
     }
     project_pixels(cloud);
-    const auto car_of = [](const LabeledCloud& c) {
-        const std::vector<scene_schema::Entity> cars = cars_of(c);
+    const auto car_of = [](const LabeledCloud& c, const std::string& row_model) {
+        ExtractOptions o = options_with_bundled_config("instances");
+        o.row_model = row_model;
+        const std::vector<scene_schema::Entity> cars = cars_of(c, o);
         REQUIRE(cars.size() == 1);
         return cars[0];
     };
-    const scene_schema::Entity own = car_of(alone);
-    const scene_schema::Entity smeared = car_of(cloud);
-    CHECK(smeared.L > own.L + 0.4);  // without the band, the box reaches over the edge's points
-    cloud.depth_edge.assign(2000 * 2000, 0);
-    for (std::size_t i = first_edge; i < cloud.size(); ++i) cloud.depth_edge[cloud.pixel[i]] = 1;
-    const scene_schema::Entity car = car_of(cloud);
-    CHECK(car.z == Approx(own.z).margin(0.01));
-    CHECK(car.L == Approx(own.L).margin(0.01));
-    CHECK(car.point_count == smeared.point_count);
-    CHECK(car.point_count > own.point_count);
+    for (const std::string row_model : {"partition", "rules"}) {
+        INFO(row_model);
+        LabeledCloud flagged = cloud;
+        const scene_schema::Entity own = car_of(alone, row_model);
+        if (row_model == "rules") {
+            // Without the band, the cascade's box reaches over the edge's points.
+            CHECK(car_of(cloud, row_model).L > own.L + 0.4);
+        }
+        flagged.depth_edge.assign(2000 * 2000, 0);
+        for (std::size_t i = first_edge; i < flagged.size(); ++i) {
+            flagged.depth_edge[flagged.pixel[i]] = 1;
+        }
+        const scene_schema::Entity car = car_of(flagged, row_model);
+        CHECK(car.z == Approx(own.z).margin(0.01));
+        CHECK(car.L == Approx(own.L).margin(0.01));
+        CHECK(car.point_count > own.point_count);
+    }
 }
 
 TEST_CASE("a thin strip of roof-line smear just above a nearer car is not a car",
@@ -1082,13 +1092,17 @@ TEST_CASE("a car and the front of the next one are cut at the valley between the
         std::sort(cars.begin(), cars.end(), [](const auto& a, const auto& b) { return a.z < b.z; });
         return cars;
     };
-    const auto cars = cars_of(o);
-    REQUIRE(cars.size() == 2);
-    // The first box ends at the gap, the second starts there (each within 0.3 m).
-    CHECK(cars[0].z - cars[0].L / 2.0 == Approx(10.0).margin(0.3));
-    CHECK(cars[0].z + cars[0].L / 2.0 == Approx(14.5).margin(0.3));
-    CHECK(cars[1].z - cars[1].L / 2.0 == Approx(14.8).margin(0.3));
-    o.row_valley_depth_m = 0.0;  // off: one box over both
+    for (const std::string row_model : {"partition", "rules"}) {
+        INFO(row_model);
+        o.row_model = row_model;
+        const auto cars = cars_of(o);
+        REQUIRE(cars.size() == 2);
+        // The first box ends at the gap, the second starts there (each within 0.3 m).
+        CHECK(cars[0].z - cars[0].L / 2.0 == Approx(10.0).margin(0.3));
+        CHECK(cars[0].z + cars[0].L / 2.0 == Approx(14.5).margin(0.3));
+        CHECK(cars[1].z - cars[1].L / 2.0 == Approx(14.8).margin(0.3));
+    }
+    o.row_valley_depth_m = 0.0;  // the cascade's valley cut off: one box over both
     CHECK(cars_of(o).size() == 1);
 }
 
