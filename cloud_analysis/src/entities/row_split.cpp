@@ -464,7 +464,7 @@ Split split_oversized(const std::vector<Eigen::Vector3f>& pts, const Indices& id
         split.at_gaps = true;  // a row of distinct things, whatever the density at the cuts
         return split;
     }
-    if (partition && ground && !row_piece &&
+    if (partition && ground && (!row_piece || box.L_m > s.split_factor * s.prior_L_m) &&
         box.L_m > options.row_valley_min_length_fraction * s.prior_L_m) {
         // Parked end to end: the row's partition, once.
         const double centre = box.centre_m.x() * c - box.centre_m.z() * sn;
