@@ -1145,6 +1145,37 @@ TEST_CASE("the sparse far car of a parked row needs only half the class's minimu
     CHECK(centres[2] == Approx(17.3 + 2.1).margin(0.3));
 }
 
+TEST_CASE("two sparse cars past the end of a dense row's profile are two cars",
+          "[entities][split]") {
+    LabeledCloud cloud;
+    for (float x = -6.0f; x <= 6.0f; x += 0.25f) {
+        for (float z = 3.0f; z <= 40.0f; z += 0.25f) add_point(cloud, {x, 1.65f, z}, 0);
+    }
+    // Two sides seen densely (26k points), then, 0.45 m apart, a side seen sparsely (300
+    // points) and a sparser one (under half a percent of the row: past its profile's end).
+    for (float y = 0.15f; y <= 1.65f; y += 0.05f) {
+        for (float z = 8.0f; z <= 12.2f; z += 0.01f) add_point(cloud, {-1.1f, y, z}, 2);
+        for (float z = 12.65f; z <= 16.85f; z += 0.01f) add_point(cloud, {-1.1f, y, z}, 2);
+    }
+    for (int i = 0; i < 7; ++i) {
+        for (int k = 0; k < 43; ++k) {
+            add_point(cloud, {-1.1f, 0.3f + 0.2f * static_cast<float>(i), 17.3f + 0.1f * k}, 2);
+        }
+    }
+    for (int i = 0; i < 4; ++i) {
+        for (int k = 0; k < 29; ++k) {
+            add_point(cloud, {-1.1f, 0.2f + 0.3f * static_cast<float>(i), 21.95f + 0.15f * k}, 2);
+        }
+    }
+    project_pixels(cloud);
+    std::vector<scene_schema::Entity> cars = cars_of(cloud);
+    std::sort(cars.begin(), cars.end(), [](const auto& a, const auto& b) { return a.z < b.z; });
+    REQUIRE(cars.size() == 4);
+    CHECK(cars[2].z == Approx(17.3 + 2.1).margin(0.6));
+    CHECK(cars[3].z == Approx(21.95 + 2.1).margin(0.6));
+    for (const auto& car : cars) CHECK(car.L < 5.0);
+}
+
 TEST_CASE("stuff points smeared onto a thing do not become a stuff entity on it",
           "[entities][stuff]") {
     Palette palette = test_palette();
