@@ -9,7 +9,7 @@
 # used to choose a parameter. Prints one Markdown table. Skipped (exit 0) without the models.
 # usage: scripts/evaluate-vehicle-models.sh [--no-build] [--build-dir DIR] [--out DIR]
 #            [--models DIR] [--dev-seeds "2 ..."] [--held-out-seeds "13 ..."]
-#            [--analysis "FLAGS"]   (more cloud-analysis flags, e.g. "--row-split partition")
+#            [--analysis "FLAGS"]   (more cloud-analysis flags, e.g. "--row-model partition")
 set -euo pipefail
 source "$(dirname "${BASH_SOURCE[0]}")/common.sh"
 
