@@ -382,6 +382,12 @@ double min_seen_area_m2(const ClassSettings& s, const ExtractOptions& options) {
     return options.min_face_share * s.prior_W_m * s.prior_H_m;
 }
 
+double thing_seen_area_m2(const std::vector<Eigen::Vector3f>& pts,
+                          const std::vector<std::size_t>& members, const ExtractOptions& options) {
+    const double cell = options.point_lattice_px;
+    return instances::seen_area_m2(pts, members, options.fx_px / cell, options.fy_px / cell);
+}
+
 ClassSelection class_selection(const Palette& palette, const ExtractOptions& options) {
     ClassSelection selection;
     selection.max_depth_m = options.max_range_m;

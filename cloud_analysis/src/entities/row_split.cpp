@@ -535,9 +535,7 @@ std::vector<Indices> join_faint_pieces(const std::vector<Eigen::Vector3f>& pts,
     std::vector<double> area(candidates.size());
     std::vector<char> joined(candidates.size(), 0);
     for (std::size_t i = 0; i < candidates.size(); ++i) {
-        // Each point stands for its lattice cell (point_lattice_px each way).
-        area[i] = seen_area_m2(pts, candidates[i].members, options.fx_px / options.point_lattice_px,
-                               options.fy_px / options.point_lattice_px);
+        area[i] = thing_seen_area_m2(pts, candidates[i].members, options);
     }
     const auto faint = [&](std::size_t i) { return area[i] < min_m2 && !joined[i]; };
     // 2-98 % extent of a piece along the unit direction (ax, az), and its median across.

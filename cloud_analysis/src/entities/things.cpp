@@ -445,15 +445,12 @@ std::vector<scene_schema::Entity> things_of_class(const ClassInfo& info,
     candidates = suppress_nested(std::move(candidates));
     if (const double min_m2 = min_seen_area_m2(s, options); min_m2 > 0.0) {
         // Seen area at the points' own depths: a box completed beyond the image's edge lies
-        // nearer than the points it holds, one completed away from the camera farther. Each
-        // point stands for its lattice cell (point_lattice_px each way).
-        const double lattice_fx = options.fx_px / options.point_lattice_px;
-        const double lattice_fy = options.fy_px / options.point_lattice_px;
+        // nearer than the points it holds, one completed away from the camera farther.
         candidates.erase(std::remove_if(candidates.begin(), candidates.end(),
                                         [&](const Candidate& c) {
                                             return c.instance == 0 &&
-                                                   seen_area_m2(pts, c.members, lattice_fx,
-                                                                lattice_fy) < min_m2;
+                                                   thing_seen_area_m2(pts, c.members, options) <
+                                                       min_m2;
                                         }),
                          candidates.end());
     }

@@ -70,8 +70,7 @@ scene_schema::Entity make_entity(const ClassInfo& info, const OrientedBox& box,
                                  std::size_t point_count, double confidence,
                                  const std::string& method);
 
-/// Square metres of surface the points `members` cover, each (z / fx) (z / fy) at its own depth
-/// (a point standing for n x n pixels: fx and fy divided by n).
+/// Square metres of surface the points `members` cover, each (z / fx) (z / fy) at its own depth.
 double seen_area_m2(const std::vector<Eigen::Vector3f>& pts, const Indices& members, double fx_px,
                     double fy_px);
 

@@ -125,6 +125,12 @@ struct ExtractOptions {
 /// no focal lengths).
 double min_seen_area_m2(const ClassSettings& s, const ExtractOptions& options);
 
+/// The seen area (square metres) of a thing's points `members` as the extractor takes them:
+/// each covers (z / fx_px) (z / fy_px) at its own depth times its lattice cell
+/// (point_lattice_px pixels each way).
+double thing_seen_area_m2(const std::vector<Eigen::Vector3f>& pts,
+                          const std::vector<std::size_t>& members, const ExtractOptions& options);
+
 /// Which points of each palette class the extractor takes: stuff on every column_step-th pixel
 /// column, pixels for things, depth within options.max_range_m.
 ClassSelection class_selection(const Palette& palette, const ExtractOptions& options);
