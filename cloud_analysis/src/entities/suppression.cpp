@@ -174,17 +174,13 @@ void turn_overlapping_objects(std::vector<Candidate>& candidates,
 double median_row_width_px(const Indices& members, const std::vector<std::uint32_t>& pixels,
                            const PixelGrid& grid) {
     if (!grid.valid() || members.empty()) return 0.0;
-    std::vector<std::uint32_t> rows;
-    rows.reserve(members.size());
-    for (std::size_t i : members)
-        rows.push_back(pixels[i] / static_cast<std::uint32_t>(grid.width_px));
-    std::sort(rows.begin(), rows.end());
+    // Points per image row, counted over the rows the members touch.
+    std::vector<std::uint32_t> count(static_cast<std::size_t>(grid.height_px), 0);
+    const auto width = static_cast<std::uint32_t>(grid.width_px);
+    for (std::size_t i : members) ++count[pixels[i] / width];
     std::vector<double> per_row;
-    for (std::size_t a = 0; a < rows.size();) {
-        std::size_t b = a;
-        while (b < rows.size() && rows[b] == rows[a]) ++b;
-        per_row.push_back(static_cast<double>(b - a));
-        a = b;
+    for (const std::uint32_t n : count) {
+        if (n > 0) per_row.push_back(static_cast<double>(n));
     }
     std::nth_element(per_row.begin(), per_row.begin() + per_row.size() / 2, per_row.end());
     return per_row[per_row.size() / 2];
@@ -208,6 +204,11 @@ std::vector<Candidate> drop_strips_beside(std::vector<Candidate> candidates,
                                           const PixelGrid& grid, double width_px, int radius_px,
                                           double min_gap_m) {
     if (!grid.valid() || width_px <= 0.0 || candidates.size() < 2) return candidates;
+    std::vector<char> narrow(candidates.size(), 0);
+    for (std::size_t k = 0; k < candidates.size(); ++k) {
+        narrow[k] = median_row_width_px(candidates[k].members, pixels, grid) < width_px ? 1 : 0;
+    }
+    if (std::find(narrow.begin(), narrow.end(), 1) == narrow.end()) return candidates;
     const auto width = static_cast<std::uint32_t>(grid.width_px);
     // Per candidate, per image row, its column extent (lo > hi: no pixels on the row).
     std::vector<std::vector<std::pair<int, int>>> extents(candidates.size());
@@ -224,7 +225,7 @@ std::vector<Candidate> drop_strips_beside(std::vector<Candidate> candidates,
     std::vector<bool> drop(candidates.size(), false);
     for (std::size_t k = 0; k < candidates.size(); ++k) {
         const Candidate& c = candidates[k];
-        if (median_row_width_px(c.members, pixels, grid) >= width_px) continue;
+        if (!narrow[k]) continue;
 
         for (std::size_t o = 0; o < candidates.size() && !drop[k]; ++o) {
             const Candidate& big = candidates[o];
