@@ -70,15 +70,18 @@ struct RowEvidence {
     double lo = 0.0, bin_m = 0.15, length_m = 0.0;
     int bins = 0;
     TopProfile profile;
-    std::vector<long> points_before;        ///< points in the bins before each bin
-    long below = 0, beyond = 0;             ///< points before the first bin, after the last
-    double first_m = 0.0, last_m = 0.0;     ///< the nearest and farthest point's along - lo
-    std::vector<double> seen_before;        ///< seen surface (sum of z^2) before each bin
-    std::vector<double> seen;               ///< per bin, its seen surface
-    double typical_seen = 0.0;              ///< the median occupied bin's seen surface
-    std::vector<int> next_seen, prev_seen;  ///< first bin with a top from b; last one before b
-    std::vector<double> gap_at_m;           ///< the middle of each gap inside the row
-    std::vector<int> gaps_before;           ///< gaps whose middle lies in the bins before b
+    std::vector<long> points_before;     ///< points in the bins before each bin
+    long below = 0, beyond = 0;          ///< points before the first bin, after the last
+    double first_m = 0.0, last_m = 0.0;  ///< the nearest and farthest point's along - lo
+    std::vector<double> seen_before;     ///< seen surface (sum of z^2) before each bin
+    std::vector<double> seen;            ///< per bin, its seen surface
+    double typical_seen = 0.0;           ///< the median occupied bin's seen surface
+    std::vector<int> next_seen;          ///< the first bin with a top from b on
+    /// The first bin from b on, and the last one before b, with a top and a face (at least
+    /// kSparseFraction of a typical bin's seen surface): a thing's length runs between its own.
+    std::vector<int> next_face, prev_face;
+    std::vector<double> gap_at_m;  ///< the middle of each gap inside the row
+    std::vector<int> gaps_before;  ///< gaps whose middle lies in the bins before b
 
     /// The gaps whose middle lies inside bins (b0, b1): a thing holding one would be two.
     int gaps_inside(int b0, int b1) const {
@@ -165,13 +168,18 @@ RowEvidence row_evidence(const std::vector<Eigen::Vector3f>& pts, const Indices&
     }
     if (!occupied.empty()) r.typical_seen = quantile(occupied, 0.5);
     r.next_seen.assign(nb + 1, r.bins);
-    r.prev_seen.assign(nb + 1, -1);
+    r.next_face.assign(nb + 1, r.bins);
+    r.prev_face.assign(nb + 1, -1);
+    const auto face = [&](std::size_t k) {
+        return r.profile.top[k] >= 0.0 && r.seen[k] >= kSparseFraction * r.typical_seen;
+    };
     for (int b = r.bins - 1; b >= 0; --b) {
         const auto k = static_cast<std::size_t>(b);
         r.next_seen[k] = r.profile.top[k] >= 0.0 ? b : r.next_seen[k + 1];
+        r.next_face[k] = face(k) ? b : r.next_face[k + 1];
     }
     for (std::size_t b = 1; b <= nb; ++b) {
-        r.prev_seen[b] = r.profile.top[b - 1] >= 0.0 ? static_cast<int>(b) - 1 : r.prev_seen[b - 1];
+        r.prev_face[b] = face(b - 1) ? static_cast<int>(b) - 1 : r.prev_face[b - 1];
     }
     find_gaps(r);
     return r;
@@ -291,7 +299,8 @@ std::vector<Indices> partition_row(const std::vector<Eigen::Vector3f>& pts, cons
                 thing[j] = 0;
             }
             const int first_seen = row.next_seen[static_cast<std::size_t>(start_bin)];
-            const int last_seen = row.prev_seen[static_cast<std::size_t>(end_bin)];
+            const int first_face = row.next_face[static_cast<std::size_t>(start_bin)];
+            const int last_face = row.prev_face[static_cast<std::size_t>(end_bin)];
             // The end pieces also span and hold the points past the profile's ends.
             const double span = (last ? std::max(sites[j].at_m, row.last_m) : sites[j].at_m) -
                                 (i < 0 ? std::min(start, row.first_m) : start);
@@ -306,7 +315,7 @@ std::vector<Indices> partition_row(const std::vector<Eigen::Vector3f>& pts, cons
             const double mode =
                 roof >= options.van_min_height_m ? options.van_prior_L_m : s.prior_L_m;
             const double score = cut - kValleyCap * row.gaps_inside(start_bin, end_bin) +
-                                 length_score((last_seen - first_seen + 1) * row.bin_m,
+                                 length_score(std::max(0, last_face - first_face + 1) * row.bin_m,
                                               at_far || (at_near && near_end_cut), mode);
             if (score > best[j]) {
                 best[j] = score;
