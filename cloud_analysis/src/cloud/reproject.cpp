@@ -168,14 +168,7 @@ StripePoints take_points(const RowReprojector& rows, const ClassSelection& selec
     const int h = rows.height();
     const std::size_t k_count = selection.column_mask.size();
     const double max_depth = selection.max_depth_m;
-    // The extractor's own tests on a point of class cls at column u (as points_by_class makes
-    // them on the cloud).
     const std::uint32_t lattice = selection.lattice_mask;
-    const auto selected = [&](int u, std::uint16_t cls, std::uint32_t v) {
-        return cls < k_count && (static_cast<std::uint32_t>(u) & selection.column_mask[cls]) == 0 &&
-               (!selection.keep_pixels[cls] ||
-                ((static_cast<std::uint32_t>(u) | v) & lattice) == 0);
-    };
     const auto in_depth = [&](const Eigen::Vector3f& p) {
         return p.z() > 0.0f && double{p.z()} < max_depth && p.allFinite();
     };
@@ -197,11 +190,17 @@ StripePoints take_points(const RowReprojector& rows, const ClassSelection& selec
             for (int v = first_row(s); v < first_row(s + 1); ++v) {
                 const std::size_t row = rows.row_start(v);
                 n[k_count] += rows.count_points(v);
-                const auto selected_here = [&](int u, std::uint16_t cls) {
-                    return selected(u, cls, static_cast<std::uint32_t>(v));
+                // The extractor's own tests on a point of class cls at column u of this row (as
+                // points_by_class makes them on the cloud).
+                const auto row_v = static_cast<std::uint32_t>(v);
+                const auto selected = [&](int u, std::uint16_t cls) {
+                    const auto column = static_cast<std::uint32_t>(u);
+                    return cls < k_count && (column & selection.column_mask[cls]) == 0 &&
+                           (lattice == 0 || !selection.keep_pixels[cls] ||
+                            ((column | row_v) & lattice) == 0);
                 };
                 rows.for_each_point(
-                    v, selected_here, [&](int u, double y_num, double w_h, std::uint16_t cls) {
+                    v, selected, [&](int u, double y_num, double w_h, std::uint16_t cls) {
                         const Eigen::Vector3f p = rows.point(u, y_num, w_h);
                         if (!in_depth(p)) return;
                         ++n[cls];

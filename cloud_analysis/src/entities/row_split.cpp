@@ -466,7 +466,8 @@ Split split_oversized(const std::vector<Eigen::Vector3f>& pts, const Indices& id
     }
     if (partition && ground && (!row_piece || box.L_m > s.split_factor * s.prior_L_m) &&
         box.L_m > options.row_valley_min_length_fraction * s.prior_L_m) {
-        // Parked end to end: the row's partition, once.
+        // Parked end to end: the row's partition, once per blob, and again for a piece that
+        // came out longer than a row's split length (it holds points past the profile's end).
         const double centre = box.centre_m.x() * c - box.centre_m.z() * sn;
         bool apart = false;
         std::vector<Indices> parts =
