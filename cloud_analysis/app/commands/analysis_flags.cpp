@@ -256,8 +256,9 @@ void add_cloud_flags(CLI::App& cmd, AnalyseArgs& a) {
         ->capture_default_str()
         ->group(cl);
     cmd.add_option("--row-model", a.row_model,
-                   "how rows of parked things are cut: rules (valleys, then walks of the prior "
-                   "pitch) or partition (one optimisation over the row; docs/entities.md)")
+                   "how rows of parked things are cut: partition (one optimisation over the row; "
+                   "docs/entities.md) or rules (the older cascade: valleys, then walks of the "
+                   "prior pitch)")
         ->check(CLI::IsMember({"rules", "partition"}))
         ->capture_default_str()
         ->group(cl);

@@ -27,7 +27,7 @@ struct AnalyseArgs {
     cloud_analysis::AnalyseOptions options;
     std::string preset = "tuned";
     std::string method = "instances";
-    std::string row_model = "rules";
+    std::string row_model = "partition";
     std::filesystem::path class_config;
     std::string entities;
     std::filesystem::path xyz, pcd, ply, disparity_png, disparity_kitti, gt_disparity;

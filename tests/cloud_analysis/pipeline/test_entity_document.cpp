@@ -40,7 +40,7 @@ TEST_CASE("the entity document names the frame, its camera and how it was made",
     CHECK(source.at("version") == "9.8.7");
     CHECK(source.at("extract").at("method") == "instances");
     CHECK(source.at("extract").at("class_config") == "my-classes.json");
-    CHECK(source.at("extract").at("row_model") == "rules");
+    CHECK(source.at("extract").at("row_model") == "partition");
     CHECK(source.at("palette") == describe_run(in, options, "9.8.7").at("palette"));
     CHECK_FALSE(doc.entities.empty());
     // The text is the checked dump of the document.

@@ -19,9 +19,9 @@ namespace cloud_analysis {
 /// Settings of extract_entities.
 struct ExtractOptions {
     std::string method = "instances";  ///< "instances" | "centroid" | "average" | "variance"
-    /// How a row of things parked end to end is cut: "rules" (valleys, then walks of the prior
-    /// pitch) or "partition" (one optimisation over the row: docs/entities.md).
-    std::string row_model = "rules";
+    /// How a row of things parked end to end is cut: "partition" (one optimisation over the row:
+    /// docs/entities.md) or "rules" (the older cascade: valleys, then walks of the prior pitch).
+    std::string row_model = "partition";
     ClassConfig classes;                   ///< per-class settings (load_class_config)
     GroundOptions ground;                  ///< RANSAC settings of the ground plane
     std::string clustering = "euclidean";  ///< things: "euclidean" (3D, hash grid) or "image"
