@@ -194,10 +194,9 @@ StripePoints take_points(const RowReprojector& rows, const ClassSelection& selec
                 // points_by_class makes them on the cloud).
                 const auto row_v = static_cast<std::uint32_t>(v);
                 const auto selected = [&](int u, std::uint16_t cls) {
-                    const auto column = static_cast<std::uint32_t>(u);
-                    return cls < k_count && (column & selection.column_mask[cls]) == 0 &&
-                           (lattice == 0 || !selection.keep_pixels[cls] ||
-                            ((column | row_v) & lattice) == 0);
+                    return cls < k_count &&
+                           pixel_taken(selection.column_mask[cls], selection.keep_pixels[cls] != 0,
+                                       lattice, static_cast<std::uint32_t>(u), row_v);
                 };
                 rows.for_each_point(
                     v, selected, [&](int u, double y_num, double w_h, std::uint16_t cls) {

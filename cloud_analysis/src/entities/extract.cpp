@@ -192,10 +192,9 @@ void write_points(ClassPoints& out, const LabeledCloud& cloud, const ClassSelect
     auto& per_class_pixels = out.pixel;
     const auto taken = [&](std::size_t i, std::uint16_t k, std::uint32_t& row_start) {
         const bool on_lattice = lattice != 0 && selection.keep_pixels[k];
-        if (column_mask[k] == 0 && !on_lattice) return true;
+        if (column_mask[k] == 0 && !on_lattice) return true;  // no pixel needed
         const std::uint32_t u = column_of(cloud.pixel[i], width, row_start);
-        if (on_lattice && ((u | row_start / width) & lattice) != 0) return false;
-        return (u & column_mask[k]) == 0;
+        return pixel_taken(column_mask[k], on_lattice, lattice, u, row_start / width);
     };
     const double max_depth = selection.max_depth_m;
     const std::size_t chunks = end.size();

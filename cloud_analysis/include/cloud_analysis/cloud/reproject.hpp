@@ -50,6 +50,14 @@ struct ClassSelection {
     double max_depth_m = 60.0;  ///< keep points with 0 < z < this, metres
 };
 
+/// ClassSelection's pixel rule: a point of a class at pixel (u, v) is taken when its column
+/// passes the class's column_mask and, for a class on the lattice (its pixels kept), both u
+/// and v pass the lattice mask.
+inline bool pixel_taken(std::uint32_t column_mask, bool on_lattice, std::uint32_t lattice_mask,
+                        std::uint32_t u, std::uint32_t v) {
+    return (u & column_mask) == 0 && (!on_lattice || ((u | v) & lattice_mask) == 0);
+}
+
 /// One point per pixel with a valid disparity within range, in the rectified left camera frame
 /// (x right, y down, z forward, metres), coloured from `left` (grey or RGB) and labelled from
 /// `classes` (an empty ClassImage labels everything void). Images must match the map's size.
