@@ -1,34 +1,39 @@
 #!/usr/bin/python3
-"""Trains the stereo-only path's vehicle classifier on rendered streets, and scores it.
+"""Trains one of the stereo-only path's segment classifiers on rendered streets, and scores it.
 
 The stereo-only path cuts the obstacles standing on the road into segments and measures each
 (`cloud-analysis --semantics geometry --segments-out`: its height, width, depth, colour,
 texture, how rough its surface is in disparity; docs/stereo-only.md). This script renders
 streets it may learn from, gives every segment nearer than --max-depth the truth's answer (a
-vehicle when most of its pixels are a car in the rendered instance image), and trains OpenCV's
-random trees (cv2.ml.RTrees, the depth chosen by 4-fold cross-validation over the training
-streets) to answer vehicle or not. It writes the model (--out) and prints, beside the rules'
-answers, its errors on data it never learnt from:
+vehicle when most of its pixels are a car in the rendered instance image; with --target person, a
+person when most are a person), and trains OpenCV's random trees (cv2.ml.RTrees, the depth
+chosen by 4-fold cross-validation over the training streets) to answer vehicle (person) or not.
+It writes the model (--out) and prints, beside the rules' answers, its errors on data it never
+learnt from:
 
 - held-out streets: the held-out seeds of scripts/street-seeds.sh (parking, kerbside and
   pedestrian streets as scripts/evaluate.sh renders them, cars in the class colour) and verge
   streets of their own seeds (scripts/make-verge-street.py, cars in the world's paints);
 - real frames, when ../shared/data is there: the KITTI frames with instance images, and the real
-  drive against the project's hand-drawn boxes (samples/labels-2d; a segment is a vehicle when
-  its image box overlaps a labelled vehicle's by IoU > 0.3).
+  drive against the project's hand-drawn boxes (samples/labels-2d; a segment is a vehicle or a
+  person when its image box overlaps a labelled one's by IoU > 0.3).
 
 Training data is rendered streets only, never a real image: the tuning seeds of
 scripts/street-seeds.sh and the extra tuning seeds 43-106 (parking and kerbside streets), each
 rendered twice, its cars in the world's paints (--paints world) and in the class colour, so that
 no colour tells a vehicle; and verge streets of seeds 1..--verge-streets in the world's paints.
+The person model learns instead of the extra tuning seeds and the development body from the
+pedestrian streets of --extra-pedestrian-seeds (50-89, seeds no evaluation renders), twice like
+the others.
 With --rigs, the tuning streets also through other rigs (scene-render sensors --preset), where
 the same street comes out in other segments, and the held-out streets through them are scored
 apart.
 
-usage: scripts/train-segment-classifier.py [--out FILE] [--work DIR] [--no-write] [--rigs "..."]
+usage: scripts/train-segment-classifier.py [--target vehicle|person] [--out FILE] [--work DIR] [--no-write] [--rigs "..."]
            [--verge-streets N] [--max-depth M] [--build-dir DIR] [--parking-seeds "2 4 ..."]
            [--kerbside-seeds ...] [--pedestrian-seeds ...] [--held-out-seeds ...]
-           [--extra-seeds "43 44 ..."] [--held-out-verge-seeds "101 102 ..."]
+           [--extra-seeds "43 44 ..."] [--extra-pedestrian-seeds "50 51 ..."]
+           [--held-out-verge-seeds "101 102 ..."]
 """
 import argparse
 import glob
@@ -45,7 +50,9 @@ from stereoscene_assets import class_ids, write_body_table
 
 ROOT = os.path.dirname(os.path.dirname(os.path.abspath(__file__)))
 SHARED = os.path.join(ROOT, "..", "shared", "data")
-CAR_LABEL_ID = class_ids("cityscapes")["car"]
+# Per target: the instance image's class of the target, and the rules' class name for it.
+TARGETS = {"vehicle": (class_ids("cityscapes")["car"], "car"),
+           "person": (class_ids("cityscapes")["person"], "person")}
 HELD_OUT_VERGE_SEEDS = range(101, 116)
 # The rigs of scene-render sensors --preset besides KITTI's (docs/cli.md "Any stereo rig"): the
 # same street seen at other resolutions, focal lengths and baselines is cut into other segments.
@@ -108,7 +115,8 @@ def segments(a, key, args):
     out = os.path.join(a.work, "segments", key)
     if not os.path.exists(out + ".json"):
         os.makedirs(os.path.dirname(out), exist_ok=True)
-        run([a.cloud_analysis] + args + ["--semantics", "geometry", "--vehicle-classifier",
+        run([a.cloud_analysis] + args + ["--semantics", "geometry", "--vehicle-classifier", "none",
+                                          "--person-classifier",
                                           "none", "--segments-out", out + ".tmp.json",
                                           "--segment-ids-out", out + ".png"])
         os.rename(out + ".tmp.json", out + ".json")
@@ -117,7 +125,8 @@ def segments(a, key, args):
 
 
 def rows_with_instances(a, name, root, frame):
-    """(name, features, vehicle in the truth, vehicle by the rules) of each near segment."""
+    """(name, features, the target in the truth, the target by the rules) of each near
+    segment."""
     segs, ids = segments(a, name, ["--kitti-root", root, "--frame", frame])
     truth = cv2.imread(os.path.join(root, "instance", frame + ".png"), cv2.IMREAD_UNCHANGED)
     if truth.shape != ids.shape:
@@ -125,11 +134,12 @@ def rows_with_instances(a, name, root, frame):
         # pixel starts at, as the analysis picks its labels.
         step = truth.shape[1] // ids.shape[1]
         truth = truth[::step, ::step][:ids.shape[0], :ids.shape[1]]
-    car = (truth.astype(np.int64) >> 8) == CAR_LABEL_ID
+    label_id, rules_class = TARGETS[a.target]
+    target = (truth.astype(np.int64) >> 8) == label_id
     pixels = np.bincount(ids.ravel(), minlength=len(segs) + 1)
-    cars = np.bincount(ids.ravel(), weights=car.ravel(), minlength=len(segs) + 1)
-    return [(name, s["features"], int(cars[s["index"] + 1] > 0.5 * pixels[s["index"] + 1]),
-             int(s["rules_class"] == "car")) for s in segs if s["depth_m"] < a.max_depth]
+    hits = np.bincount(ids.ravel(), weights=target.ravel(), minlength=len(segs) + 1)
+    return [(name, s["features"], int(hits[s["index"] + 1] > 0.5 * pixels[s["index"] + 1]),
+             int(s["rules_class"] == rules_class)) for s in segs if s["depth_m"] < a.max_depth]
 
 
 def iou(p, q):
@@ -143,7 +153,12 @@ def iou(p, q):
 
 def rows_of_real_drive(a, drive, labels_file):
     labels = json.load(open(labels_file))
-    boxes = {f["frame"]: [o["box"] for o in f["objects"]] for f in labels["frames"]}
+    # The 2D evaluator's categories (cloud_analysis/src/evaluation/labels_2d.cpp).
+    types = (("person", "pedestrian", "person_sitting") if a.target == "person" else
+             ("car", "van", "truck", "bus", "tram", "train"))
+    boxes = {f["frame"]: [o["box"] for o in f["objects"] if o["type"].lower() in types]
+             for f in labels["frames"]}
+    rules_class = TARGETS[a.target][1]
     rows = []
     for left in sorted(glob.glob(os.path.join(drive, "image_2", "*.png"))):
         frame = os.path.basename(left)[:-4]
@@ -155,9 +170,9 @@ def rows_of_real_drive(a, drive, labels_file):
                 continue
             u0, v0, u1, v1 = s["box_px"]
             box = [u0, v0, u1 + 1, v1 + 1]
-            vehicle = any(iou(box, b) > 0.3 for b in boxes.get(frame, []))
-            rows.append(("drive-" + frame, s["features"], int(vehicle),
-                         int(s["rules_class"] == "car")))
+            labelled = any(iou(box, b) > 0.3 for b in boxes.get(frame, []))
+            rows.append(("drive-" + frame, s["features"], int(labelled),
+                         int(s["rules_class"] == rules_class)))
     return rows
 
 
@@ -173,8 +188,8 @@ def train(rows, depth):
     return trees
 
 
-def vehicle_votes(trees, rows):
-    """Share of the trees calling each row a vehicle."""
+def target_votes(trees, rows):
+    """Share of the trees calling each row the target (a vehicle, a person)."""
     if not rows:
         return np.zeros(0)
     votes = trees.getVotes(np.array([r[1] for r in rows], np.float32), 0)
@@ -198,8 +213,9 @@ def street(name):
 
 
 def cross_validate(rows):
-    """The trees' depth with the fewest errors (false vehicles plus missed ones) over 4 folds by
-    street, a vehicle being what a majority of the trees call one; and the guesses it makes."""
+    """The trees' depth with the fewest errors (false targets plus missed ones) over 4 folds by
+    street, a vehicle (person) being what a majority of the trees call one; and the guesses it
+    makes."""
     names = sorted({street(r[0]) for r in rows})
     folds = [set(names[k::4]) for k in range(4)]
     best = None
@@ -208,31 +224,35 @@ def cross_validate(rows):
         for fold in folds:
             fit = [r for r in rows if street(r[0]) not in fold]
             test = [k for k, r in enumerate(rows) if street(r[0]) in fold]
-            votes[test] = vehicle_votes(train(fit, depth), [rows[k] for k in test])
+            votes[test] = target_votes(train(fit, depth), [rows[k] for k in test])
         n, fp, fn = errors(rows, votes > VOTE_THRESHOLD)
-        print(f"  depth {depth}: {fp} false vehicles, {fn} missed of {n} vehicle segments")
+        print(f"  depth {depth}: {fp} false, {fn} missed of {n} segments")
         if best is None or fp + fn < best[1]:
             best = (depth, fp + fn, votes > VOTE_THRESHOLD)
     return best[0], best[2]
 
 
-def write_model(manifest, trees, threshold, depth, rows, rigs):
-    """The trees beside their manifest (what they read, where a vehicle begins), each file
-    written whole."""
+def write_model(a, trees, threshold, depth, rows, rigs):
+    """The trees beside their manifest (what they read, where a vehicle or person begins), each
+    file written whole."""
+    manifest = a.out
     folder = os.path.dirname(os.path.abspath(manifest))
     os.makedirs(folder, exist_ok=True)
     model = os.path.splitext(os.path.basename(manifest))[0] + ".yml.gz"
     trees.save(os.path.join(folder, "." + model + ".tmp.yml.gz"))
     os.replace(os.path.join(folder, "." + model + ".tmp.yml.gz"), os.path.join(folder, model))
     names = sorted({street(r[0]) for r in rows})
-    doc = {"format": "stereoscene-vehicle-classifier", "version": 1, "model": model,
+    streets = ("the tuning streets and the extra pedestrian streets" if a.target == "person" else
+               "the tuning and extra tuning parking and kerbside streets")
+    doc = {"format": f"stereoscene-{a.target}-classifier", "version": 1, "model": model,
            "features": FEATURES, "vote_threshold": threshold,
-           "trained_on": f"{len(names)} rendered streets ({len(rows)} segments): the tuning "
-                         f"and extra tuning parking and kerbside streets in the world's paints "
-                         f"and the class colour, verge streets in the world's paints"
+           "trained_on": f"{len(names)} rendered streets ({len(rows)} segments): {streets} in "
+                         f"the world's paints and the class colour, verge streets in the world's "
+                         f"paints"
                          + (f"; the tuning streets through the {', '.join(rigs)} rigs"
                             if rigs else "") + f"; random trees of depth {depth}, 100 trees",
-           "command": "scripts/train-segment-classifier.py"}
+           "command": "scripts/train-segment-classifier.py"
+                      + (" --target person" if a.target == "person" else "")}
     with open(manifest + ".tmp", "w") as f:
         json.dump(doc, f, indent=1)
         f.write("\n")
@@ -242,9 +262,10 @@ def write_model(manifest, trees, threshold, depth, rows, rigs):
 
 def main():
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
-    ap.add_argument("--out", default=os.path.join(ROOT, "assets", "classifiers",
-                                                   "vehicle-segments.json"),
-                    help="the manifest to write; the trees go beside it (<name>.yml.gz)")
+    ap.add_argument("--target", choices=sorted(TARGETS), default="vehicle",
+                    help="what the trees answer: vehicle or not, person or not")
+    ap.add_argument("--out", help="the manifest to write; the trees go beside it (<name>.yml.gz)"
+                                  " (default: assets/classifiers/<target>-segments.json)")
     ap.add_argument("--no-write", action="store_true", help="score only; write no model")
     ap.add_argument("--work", default=os.path.join(ROOT, "build", "segment-classifier"),
                     help="renders and segment tables, kept for the next run")
@@ -261,6 +282,8 @@ def main():
     ap.add_argument("--no-development-body", dest="development_body", action="store_false",
                     help="leave out the tuning streets drawn with the Kenney sedan (learnt from "
                          "when ../shared/gltf-thirdparty is there)")
+    ap.add_argument("--extra-pedestrian-seeds", default=" ".join(str(s) for s in range(50, 90)),
+                    help="more pedestrian streets the person model learns from")
     ap.add_argument("--held-out-verge-seeds",
                     default=" ".join(str(s) for s in HELD_OUT_VERGE_SEEDS))
     ap.add_argument("--rigs", default="",
@@ -272,6 +295,8 @@ def main():
     ap.add_argument("--max-depth", type=float, default=45.0,
                     help="segments nearer than this (median depth) are learnt and scored, m")
     a = ap.parse_args()
+    if a.out is None:
+        a.out = os.path.join(ROOT, "assets", "classifiers", f"{a.target}-segments.json")
     a.cloud_analysis = os.path.join(a.build_dir, "cloud_analysis", "cloud-analysis")
     a.scene_render = os.path.join(a.build_dir, "scene_viewer", "scene-render")
     os.makedirs(a.work, exist_ok=True)
@@ -283,9 +308,14 @@ def main():
     seed_lists = {"parking-street": "parking_seeds", "kerbside": "kerbside_seeds",
                   "pedestrians": "pedestrian_seeds"}
     fit = []
-    extra = a.extra_seeds.split()
+    # The person model learns from more pedestrian streets instead of the extra parking and
+    # kerbside streets (cars seen over and over) and the development body (another car).
+    person = a.target == "person"
+    extra = [] if person else a.extra_seeds.split()
+    extra_pedestrians = a.extra_pedestrian_seeds.split() if person else []
     for kind, make in kinds:
-        street_seeds_of_kind = seeds[seed_lists[kind]] + (extra if kind != "pedestrians" else [])
+        street_seeds_of_kind = seeds[seed_lists[kind]] + (
+            extra if kind != "pedestrians" else extra_pedestrians)
         for s in street_seeds_of_kind:
             # Each street twice: its cars in the world's paints and in the class colour, so
             # that no colour tells a vehicle.
@@ -297,7 +327,7 @@ def main():
             a, name, render(a, name, ["make-verge-street.py"], s, "world"), "000000")
     # The development body of scripts/evaluate-vehicle-models.sh (its test bodies, the SUV and
     # the van, are never learnt from): the tuning streets once more with its cars.
-    table = body_table(a, "sedan") if a.development_body else None
+    table = body_table(a, "sedan") if a.development_body and not person else None
     if table:
         for kind, make in kinds:
             for s in seeds[seed_lists[kind]]:
@@ -314,7 +344,7 @@ def main():
                 fit += rows_with_instances(a, name, render(a, name, make, s, "world", None, rig),
                                            "000000")
     if len({r[2] for r in fit}) < 2:
-        sys.exit("train-segment-classifier: the training streets need vehicle and other "
+        sys.exit(f"train-segment-classifier: the training streets need {a.target} and other "
                  "segments to learn from")
     print(f"cross-validation over the {len({street(r[0]) for r in fit})} training streets "
           f"({len({r[0] for r in fit})} renders; 4 folds by street):")
@@ -361,18 +391,19 @@ def main():
                                                          "kitti_odometry_02.json"))
         checks.append(("real drive (20 frames, hand-drawn boxes)", rows, None))
 
-    print(f"\nsegments nearer than {a.max_depth:g} m, vehicle or not; trees of depth {depth}, a "
-          f"vehicle above {threshold:.2f} of their votes:\n")
-    print("| data | vehicle segments | rules: false vehicles | rules: missed | "
-          "trees: false vehicles | trees: missed |")
+    t = a.target
+    print(f"\nsegments nearer than {a.max_depth:g} m, {t} or not; trees of depth {depth}, a "
+          f"{t} above {threshold:.2f} of their votes:\n")
+    print(f"| data | {t} segments | rules: false {t}s | rules: missed | "
+          f"trees: false {t}s | trees: missed |")
     print("|---|---|---|---|---|---|")
     for label, rows, guess in checks:
-        guess = vehicle_votes(trees, rows) > threshold if guess is None else guess
+        guess = target_votes(trees, rows) > threshold if guess is None else guess
         n, rfp, rfn = errors(rows, [r[3] for r in rows])
         _, tfp, tfn = errors(rows, guess)
         print(f"| {label} | {n} | {rfp} | {rfn} | {tfp} | {tfn} |")
     if not a.no_write:
-        write_model(a.out, trees, threshold, depth, fit, rigs)
+        write_model(a, trees, threshold, depth, fit, rigs)
 
 
 if __name__ == "__main__":

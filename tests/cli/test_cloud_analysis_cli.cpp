@@ -690,7 +690,7 @@ TEST_CASE("the stereo-only segments are written as a table and an id image, or n
     CHECK_FALSE(fs::exists(out));
 }
 
-TEST_CASE("the vehicle classifier's votes are in the segments table, a bad classifier is refused",
+TEST_CASE("the classifiers' votes are in the segments table, a bad classifier is refused",
           "[cli][geometry]") {
     const auto dir = scratch("vehicle_classifier");
     const fs::path table = dir / "segments.json", out = dir / "entities.json";
@@ -701,21 +701,37 @@ TEST_CASE("the vehicle classifier's votes are in the segments table, a bad class
     for (const auto& s : nlohmann::json::parse(slurp(table))["segments"]) {
         REQUIRE(s["vehicle_votes"].is_number());
         CHECK(s["features"].size() == 25);
-        // A car is what a majority of the trees call a vehicle, whatever the rules said.
-        CHECK((s["class"] == "car") == (s["vehicle_votes"].get<double>() > 0.5));
+        // A car is what a majority of the trees call a vehicle, whatever the rules said; a person
+        // what is no car and a majority of the person trees call one.
+        const bool car = s["vehicle_votes"].get<double>() > 0.5;
+        CHECK((s["class"] == "car") == car);
+        CHECK(s["person_votes"].is_null() == car);
+        if (!car) CHECK((s["class"] == "person") == (s["person_votes"].get<double>() > 0.5));
     }
     // The rules alone: no votes.
-    const Run rules =
-        run(tool() + street_pair() + " -o - --vehicle-classifier none --segments-out " +
-                quote(table.string()),
-            dir);
+    const Run rules = run(tool() + street_pair() +
+                              " -o - --vehicle-classifier none --person-classifier none "
+                              "--segments-out " +
+                              quote(table.string()),
+                          dir);
     REQUIRE(rules.code == 0);
     for (const auto& s : nlohmann::json::parse(slurp(table))["segments"]) {
         CHECK(s["vehicle_votes"].is_null());
+        CHECK(s["person_votes"].is_null());
         CHECK(s["class"] == s["rules_class"]);
     }
-    // A classifier that is not there: a usage error naming the flag and the file, nothing written.
+    // A vehicle classifier given as the person classifier: refused by its format.
     fs::remove(out);
+    const fs::path vehicle_trees =
+        fs::path(STEREOSCENE_SOURCE_DIR) / "assets/classifiers/vehicle-segments.json";
+    const Run swapped = run(tool() + street_pair() + " -o " + quote(out.string()) +
+                                " --person-classifier " + quote(vehicle_trees.string()),
+                            dir);
+    CHECK(swapped.code == 2);
+    CHECK(swapped.err.find("--person-classifier") != std::string::npos);
+    CHECK(swapped.err.find("stereoscene-person-classifier") != std::string::npos);
+    CHECK_FALSE(fs::exists(out));
+    // A classifier that is not there: a usage error naming the flag and the file, nothing written.
     const Run bad = run(tool() + street_pair() + " -o " + quote(out.string()) +
                             " --vehicle-classifier " + quote((dir / "none.json").string()),
                         dir);

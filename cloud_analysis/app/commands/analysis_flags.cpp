@@ -85,6 +85,12 @@ void add_input_settings_flags(CLI::App& cmd, AnalyseArgs& a) {
                    "rendered streets; docs/stereo-only.md) or none (the rules decide)")
         ->capture_default_str()
         ->group(in);
+    cmd.add_option("--person-classifier", a.person_classifier,
+                   "--semantics geometry: the random trees that decide which segments that are "
+                   "no vehicle are persons (a cv::ml::RTrees file), default (the project's, "
+                   "trained on rendered streets; docs/stereo-only.md) or none (the rules decide)")
+        ->capture_default_str()
+        ->group(in);
     cmd.add_option("--palette", a.options.palette,
                    "semantic palette: cityscapes, carla, thesis or a palette JSON file")
         ->capture_default_str()
@@ -325,6 +331,23 @@ CLI::ValidationError flag_error(const CLI::App& cmd, const std::string& message)
     return CLI::ValidationError(cmd.get_name(), message);
 }
 
+/// The classifier a --vehicle-classifier or --person-classifier value names: none, the
+/// project's (default) or a manifest file; null for none.
+std::shared_ptr<const cloud_analysis::geometry::SegmentClassifier> load_classifier(
+    const std::string& flag, const std::string& value,
+    cloud_analysis::geometry::SegmentTarget target) {
+    using cloud_analysis::geometry::SegmentClassifier;
+    if (value == "none") return nullptr;
+    const std::filesystem::path file =
+        value == "default" ? cloud_analysis::geometry::default_segment_classifier_path(target)
+                           : std::filesystem::path(value);
+    try {
+        return SegmentClassifier::load(file, target);
+    } catch (const std::runtime_error& e) {
+        throw CLI::ValidationError(flag, e.what());
+    }
+}
+
 }  // namespace
 
 void resolve_settings(AnalyseArgs& a, const CLI::App& cmd) {
@@ -376,16 +399,12 @@ void resolve_settings(AnalyseArgs& a, const CLI::App& cmd) {
     // single frame given its semantic image.
     const bool geometry_may_run = a.options.semantics == "geometry" ||
                                   (a.options.semantics == "auto" && a.paths.semantic.empty());
-    if (geometry_may_run && a.vehicle_classifier != "none") {
-        const std::filesystem::path file =
-            a.vehicle_classifier == "default"
-                ? cloud_analysis::geometry::default_segment_classifier_path()
-                : std::filesystem::path(a.vehicle_classifier);
-        try {
-            a.options.geometry.classifier = cloud_analysis::geometry::SegmentClassifier::load(file);
-        } catch (const std::runtime_error& e) {
-            throw CLI::ValidationError("--vehicle-classifier", e.what());
-        }
+    if (geometry_may_run) {
+        using cloud_analysis::geometry::SegmentTarget;
+        a.options.geometry.classifier =
+            load_classifier("--vehicle-classifier", a.vehicle_classifier, SegmentTarget::vehicle);
+        a.options.geometry.person_classifier =
+            load_classifier("--person-classifier", a.person_classifier, SegmentTarget::person);
     }
     if (a.drop_sky) a.drop_classes.push_back("sky");
     if (!a.drop_classes.empty()) {

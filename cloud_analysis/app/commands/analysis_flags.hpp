@@ -41,6 +41,8 @@ struct AnalyseArgs {
     int point_lattice = 0;        ///< --point-lattice: things' pixel lattice step, 0 = the rig's
     /// --vehicle-classifier: "default" (the project's model), "none" (the rules) or a file.
     std::string vehicle_classifier = "default";
+    /// --person-classifier: "default" (the project's model), "none" (the rules) or a file.
+    std::string person_classifier = "default";
     bool timings = false;
     bool fsync_clouds = false;  ///< --fsync-clouds: the clouds are durable too
     bool warnings = true;       ///< print the inputs' warnings (bench: on its first run only)

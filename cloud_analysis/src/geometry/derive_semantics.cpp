@@ -306,12 +306,35 @@ void classify_vehicles(const SegmentClassifier& classifier, const Classes& cls,
     for (std::size_t s = 0; s < segments.size(); ++s) {
         if (!fresh[s]) continue;
         Segment& seg = segments[s];
-        seg.vehicle_votes = classifier.vehicle_votes(seg.features);
+        seg.vehicle_votes = classifier.votes(seg.features);
         const bool vehicle = seg.vehicle_votes > classifier.vote_threshold();
         if (vehicle && seg.class_index != cls.car) {
             seg.class_index = cls.car;
             seg.label = "car";
         } else if (!vehicle && seg.class_index == cls.car) {
+            seg.class_index = cls.other;
+            seg.label = "static";
+        }
+        segment_class[s] = seg.class_index;
+    }
+}
+
+/// The person classifier's call on each segment flagged `fresh` that is not a car: one more of
+/// its trees than its vote threshold call a person is a person, a person of the rules that it
+/// does not call one is static; the other classes stand.
+void classify_persons(const SegmentClassifier& classifier, const Classes& cls,
+                      const std::vector<char>& fresh, std::vector<Segment>& segments,
+                      std::vector<std::uint16_t>& segment_class) {
+    if (cls.person == kVoidClass) return;
+    for (std::size_t s = 0; s < segments.size(); ++s) {
+        Segment& seg = segments[s];
+        if (!fresh[s] || seg.class_index == cls.car) continue;
+        seg.person_votes = classifier.votes(seg.features);
+        const bool person = seg.person_votes > classifier.vote_threshold();
+        if (person && seg.class_index != cls.person) {
+            seg.class_index = cls.person;
+            seg.label = "person";
+        } else if (!person && seg.class_index == cls.person) {
             seg.class_index = cls.other;
             seg.label = "static";
         }
@@ -547,6 +570,9 @@ SceneGeometry derive_semantics(const DisparityMap& disparity, const StereoCamera
             out.segments[s].features = segment_features(out.segments[s], rig.fx, rig.fy);
         }
         if (o.classifier) classify_vehicles(*o.classifier, cls, fresh, out.segments, segment_class);
+        if (o.person_classifier) {
+            classify_persons(*o.person_classifier, cls, fresh, out.segments, segment_class);
+        }
     };
     judge(std::vector<char>(stats.size(), 1));
     if (o.classifier) split_rejected_rows(grid, parent, rig, w, o, stats, out.segments, judge);

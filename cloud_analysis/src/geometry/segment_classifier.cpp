@@ -41,10 +41,10 @@ std::filesystem::path model_file(const nlohmann::json& doc, const std::filesyste
     return manifest.parent_path() / name;
 }
 
-void check_manifest(const nlohmann::json& doc,
+void check_manifest(const nlohmann::json& doc, SegmentTarget target,
                     const std::function<std::runtime_error(std::string)>& fail) {
-    if (const auto problem =
-            scene_schema::format_header_problem(doc, "stereoscene-vehicle-classifier", 1)) {
+    const std::string format = "stereoscene-" + target_name(target) + "-classifier";
+    if (const auto problem = scene_schema::format_header_problem(doc, format, 1)) {
         throw fail(*problem);
     }
     const auto features = doc.find("features");
@@ -62,8 +62,12 @@ void check_manifest(const nlohmann::json& doc,
 
 }  // namespace
 
+std::string target_name(SegmentTarget target) {
+    return target == SegmentTarget::person ? "person" : "vehicle";
+}
+
 std::shared_ptr<const SegmentClassifier> SegmentClassifier::load(
-    const std::filesystem::path& manifest) {
+    const std::filesystem::path& manifest, SegmentTarget target) {
     const auto fail = [&](const std::string& reason) {
         return std::runtime_error(manifest.string() + ": " + reason);
     };
@@ -75,7 +79,7 @@ std::shared_ptr<const SegmentClassifier> SegmentClassifier::load(
     } catch (const scene_schema::SchemaError& e) {
         throw fail(e.rule());
     }
-    check_manifest(doc, fail);
+    check_manifest(doc, target, fail);
     const std::filesystem::path file = model_file(doc, manifest, fail);
     const auto bad_model = [&](const std::string& reason) {
         return std::runtime_error(file.string() + ": " + reason);
@@ -102,19 +106,19 @@ std::shared_ptr<const SegmentClassifier> SegmentClassifier::load(
 
 double SegmentClassifier::vote_threshold() const { return impl_->vote_threshold; }
 
-double SegmentClassifier::vehicle_votes(const std::vector<float>& features) const {
+double SegmentClassifier::votes(const std::vector<float>& features) const {
     const cv::Mat sample(1, static_cast<int>(features.size()), CV_32F,
                          const_cast<float*>(features.data()));
     cv::Mat votes;
     impl_->trees->getVotes(sample, votes, 0);
     // Row 0 names the classes, row 1 counts the trees voting for each.
-    double vehicle = 0.0, total = 0.0;
+    double target = 0.0, total = 0.0;
     for (int c = 0; c < votes.cols; ++c) {
         const double n = votes.at<int>(1, c);
         total += n;
-        if (votes.at<int>(0, c) == 1) vehicle += n;
+        if (votes.at<int>(0, c) == 1) target += n;
     }
-    return total > 0.0 ? vehicle / total : 0.0;
+    return total > 0.0 ? target / total : 0.0;
 }
 
 std::vector<float> segment_features(const Segment& s, double fx_px, double fy_px) {
@@ -148,8 +152,9 @@ std::vector<float> segment_features(const Segment& s, double fx_px, double fy_px
     return std::vector<float>(std::begin(values), std::end(values));
 }
 
-std::filesystem::path default_segment_classifier_path() {
-    return stereoscene::support::asset_dir() / "classifiers" / "vehicle-segments.json";
+std::filesystem::path default_segment_classifier_path(SegmentTarget target) {
+    return stereoscene::support::asset_dir() / "classifiers" /
+           (target_name(target) + "-segments.json");
 }
 
 }  // namespace cloud_analysis::geometry

@@ -45,8 +45,10 @@ std::string segments_json(const SceneGeometry& g, const std::string& frame_id) {
              {"disparity_spread", s.disparity_spread},
              {"rules_class", s.rules_label},
              {"features", s.features},
-             {"vehicle_votes", std::isfinite(s.vehicle_votes) ? nlohmann::json(s.vehicle_votes)
-                                                              : nlohmann::json()}});
+             {"vehicle_votes",
+              std::isfinite(s.vehicle_votes) ? nlohmann::json(s.vehicle_votes) : nlohmann::json()},
+             {"person_votes",
+              std::isfinite(s.person_votes) ? nlohmann::json(s.person_votes) : nlohmann::json()}});
     }
     const nlohmann::json doc = {{"frame", frame_id},
                                 {"ground",

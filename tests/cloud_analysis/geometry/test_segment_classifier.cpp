@@ -43,7 +43,7 @@ const Segment& segment_at(const SceneGeometry& g, const StereoCamera& c, std::pa
 }
 
 /// A classifier's manifest beside its model file `model` (JSON members as given, defaults
-/// otherwise).
+/// otherwise: a vehicle classifier).
 fs::path write_manifest(const fs::path& model, nlohmann::json doc = nlohmann::json::object()) {
     nlohmann::json full = {{"format", "stereoscene-vehicle-classifier"},
                            {"version", 1},
@@ -62,7 +62,8 @@ fs::path write_manifest(const fs::path& model, nlohmann::json doc = nlohmann::js
 /// over [0, 20] for widths), written with their manifest to files of the test's own; returns
 /// the manifest.
 fs::path trees_calling_vehicle(const std::string& name, double threshold, bool below,
-                               const std::string& file_name) {
+                               const std::string& file_name,
+                               const nlohmann::json& manifest = nlohmann::json::object()) {
     const int n = 400, f = static_cast<int>(kSegmentFeatureNames.size());
     cv::Mat x(n, f, CV_32F), y(n, 1, CV_32S);
     cv::RNG rng(7);
@@ -87,7 +88,7 @@ fs::path trees_calling_vehicle(const std::string& name, double threshold, bool b
     const fs::path file =
         fs::temp_directory_path() / ("stereoscene-" + std::to_string(::getpid()) + file_name);
     trees->save(file.string());
-    return write_manifest(file);
+    return write_manifest(file, manifest);
 }
 
 fs::path trees_calling_vehicle_above(double threshold, const std::string& name) {
@@ -182,6 +183,47 @@ TEST_CASE("the vehicle classifier decides which segments are cars, the rules' ca
     for (const fs::path& m : {never, always}) remove_trees(m);
 }
 
+TEST_CASE("the person classifier decides which segments that are no car are persons",
+          "[geometry][classifier]") {
+    const StereoCamera cam = test_rigs::kitti_rig();
+    const auto palette = cloud_analysis::load_palette("cityscapes");
+    // A person-wide board (0.8 m wide, 1.45 m high) at 8 m beside the car and the wall.
+    const auto disparity = render(
+        cam, 1.65, with_car_from_behind({{-12.0, -6.0, 14.0, 1.2}, {2.0, 2.8, 8.0, 1.45}}, 10.0));
+    const auto car_px = pixel_of(cam, 0.0, 0.8, 10.0), wall_px = pixel_of(cam, -9.0, 0.8, 14.0);
+    const auto person_px = pixel_of(cam, 2.4, 0.7, 8.0);
+    const nlohmann::json person_format = {{"format", "stereoscene-person-classifier"}};
+    GeometryOptions o;
+    SceneGeometry g = derive_semantics(disparity, cam, ImageU8{}, palette, o);
+    REQUIRE(class_at(g, palette, person_px.first, person_px.second) == "person");
+    CHECK(std::isnan(segment_at(g, cam, person_px).person_votes));
+    // Trees that call nothing a person: the rules' person is static.
+    const fs::path never =
+        trees_calling_vehicle("fill", 2.0, false, "-never-person.yml.gz", person_format);
+    o.person_classifier = SegmentClassifier::load(never, SegmentTarget::person);
+    g = derive_semantics(disparity, cam, ImageU8{}, palette, o);
+    CHECK(class_at(g, palette, person_px.first, person_px.second) == "static");
+    const Segment& not_person = segment_at(g, cam, person_px);
+    CHECK(not_person.rules_label == "person");
+    CHECK(not_person.person_votes < 0.5);
+    CHECK(class_at(g, palette, wall_px.first, wall_px.second) == "wall");
+    // Trees that call everything a person: every segment but the car (the car is asked of the
+    // vehicle classifier, or left to the rules, never of the person trees).
+    const fs::path always =
+        trees_calling_vehicle("fill", -1.0, false, "-always-person.yml", person_format);
+    o.person_classifier = SegmentClassifier::load(always, SegmentTarget::person);
+    g = derive_semantics(disparity, cam, ImageU8{}, palette, o);
+    CHECK(class_at(g, palette, person_px.first, person_px.second) == "person");
+    CHECK(class_at(g, palette, wall_px.first, wall_px.second) == "person");
+    CHECK(segment_at(g, cam, wall_px).rules_label == "wall");
+    CHECK(class_at(g, palette, car_px.first, car_px.second) == "car");
+    CHECK(std::isnan(segment_at(g, cam, car_px).person_votes));
+    // A person classifier is not a vehicle classifier, nor the other way round.
+    CHECK_THROWS_WITH(SegmentClassifier::load(always),
+                      Catch::EndsWith(": /format: must be \"stereoscene-vehicle-classifier\""));
+    for (const fs::path& m : {never, always}) remove_trees(m);
+}
+
 TEST_CASE("a long car of the rules that the trees reject is judged again vehicle by vehicle",
           "[geometry][classifier]") {
     const StereoCamera cam = test_rigs::kitti_rig();
@@ -265,13 +307,16 @@ TEST_CASE("a classifier that is missing, not a model or reads other features is 
     fs::remove_all(dir);
 }
 
-TEST_CASE("the project's classifier loads and reads the segments' features",
+TEST_CASE("the project's classifiers load and read the segments' features",
           "[geometry][classifier]") {
-    const auto classifier = SegmentClassifier::load(default_segment_classifier_path());
-    CHECK(classifier->vote_threshold() > 0.0);
-    CHECK(classifier->vote_threshold() < 1.0);
-    const std::vector<float> none(kSegmentFeatureNames.size(), 0.0f);
-    const double votes = classifier->vehicle_votes(none);
-    CHECK(votes >= 0.0);
-    CHECK(votes <= 1.0);
+    for (const SegmentTarget target : {SegmentTarget::vehicle, SegmentTarget::person}) {
+        const auto classifier =
+            SegmentClassifier::load(default_segment_classifier_path(target), target);
+        CHECK(classifier->vote_threshold() > 0.0);
+        CHECK(classifier->vote_threshold() < 1.0);
+        const std::vector<float> none(kSegmentFeatureNames.size(), 0.0f);
+        const double votes = classifier->votes(none);
+        CHECK(votes >= 0.0);
+        CHECK(votes <= 1.0);
+    }
 }

@@ -144,6 +144,8 @@ struct GeometryOptions {
     int threads = 2;                       ///< threads of the per-pixel passes, >= 1
     /// Decides which segments are vehicles (segment_classifier.hpp); null: the rules do.
     std::shared_ptr<const SegmentClassifier> classifier;
+    /// Decides which of the segments that are no vehicle are persons; null: the rules do.
+    std::shared_ptr<const SegmentClassifier> person_classifier;
     /// Throws std::invalid_argument naming the bad field.
     void validate() const;
 };
@@ -205,6 +207,9 @@ struct Segment {
     std::vector<float> features;    ///< what the classifier reads (segment_features())
     /// Share of the classifier's trees calling it a vehicle; NaN without a classifier.
     double vehicle_votes = std::numeric_limits<double>::quiet_NaN();
+    /// Share of the person classifier's trees calling it a person; NaN when not asked (no
+    /// person classifier, or a vehicle).
+    double person_votes = std::numeric_limits<double>::quiet_NaN();
 };
 
 /// What the geometry decided.
