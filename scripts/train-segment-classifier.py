@@ -29,7 +29,8 @@ With --rigs, the tuning streets also through other rigs (scene-render sensors --
 the same street comes out in other segments, and the held-out streets through them are scored
 apart.
 
-usage: scripts/train-segment-classifier.py [--target vehicle|person] [--out FILE] [--work DIR] [--no-write] [--rigs "..."]
+usage: scripts/train-segment-classifier.py [--target vehicle|person] [--out FILE] [--work DIR]
+           [--no-write] [--rigs "..."]
            [--verge-streets N] [--max-depth M] [--build-dir DIR] [--parking-seeds "2 4 ..."]
            [--kerbside-seeds ...] [--pedestrian-seeds ...] [--held-out-seeds ...]
            [--extra-seeds "43 44 ..."] [--extra-pedestrian-seeds "50 51 ..."]
