@@ -2,7 +2,8 @@
 """Benchmarks of cloud-analysis and scene-render (docs/performance.md); a benchmark, never a test.
 
 usage: scripts/bench.py --build BUILD_DIR [--out out/bench] [--runs 5] [--batch-frames 100]
-                        [--parts table,batch,presets,scaling,matchers] [--plots docs/images]
+                        [--parts table,batch,presets,scaling,matchers,odometry,profile]
+                        [--plots docs/images]
 
 table    per-stage medians of `cloud-analysis bench` (entities; entities + three clouds), for
          frames from memory (as from a camera: the stages after decoding) and from PNG files
@@ -18,6 +19,10 @@ scaling  time vs pixels (1/4, 1/2, 1, 2 x KITTI) and vs disparities (64..256); s
 matchers the project's census SGM (--matcher sgm) beside cv::StereoSGBM: both timed interleaved
          in one `cloud-analysis bench` process (wall and CPU ms), and their D1-all and car
          recall/precision from `evaluate`, on kitti15 and the rendered samples, per preset.
+odometry the real drive's batch with and without --odometry, and the odometry alone.
+profile  `perf record` over a batch of the real drive (stereo only) and of the KITTI frames
+         (semantic images): each stage's share of the CPU time and the top symbols (self time).
+         Only when asked (--parts profile) and perf is installed.
 Everything goes to OUT/bench.json and a Markdown table on stdout. Reads shared data in place.
 """
 import argparse
@@ -453,6 +458,127 @@ def part_odometry(a, tool, result):
           f"{errors['end_point_pct']:.2f} % of {errors['path_m']:.1f} m.")
 
 
+# Where a symbol's CPU time goes: the first stage whose pattern its shared object or name holds
+# (self time; std:: templates inlined into a stage count as that stage, the others as "other").
+PROFILE_STAGES = [
+    ("matcher (StereoSGBM, census SGM)", ("libopencv_calib3d", "DisparityMatcher", "stereo::",
+                                          "census", "sgm")),
+    ("PNG decoding", ("libdeflate", "libpng", "libz.so", "decode_png", "read_image", "imgcodecs")),
+    ("stereo-only classes (geometry, trees)", ("geometry::", "libopencv_ml")),
+    ("reprojection", ("reproject", "RowReprojector", "take_points", "depth_edge_band",
+                      "scan_chunks", "write_points", "points_by_class", "copy_to_classes")),
+    ("entities (clusters, boxes, rows)", ("instances::", "euclidean_clusters", "voxelize",
+                                          "CellTable", "fit_", "lshape", "weighted_", "quantile",
+                                          "select_two", "far_end", "closeness", "extract",
+                                          "suppress", "footprint", "dominant_face", "ground",
+                                          "count_near_plane", "classify_pixels", "row_")),
+    ("odometry and tracking", ("odometry::", "tracking::")),
+    ("entity file and clouds (format, write)", ("put_fixed", "xyz_lines", "format_", "json",
+                                                "entity_", "write_")),
+    ("kernel (I/O, page faults, threads)", ("[kernel]",)),
+    ("memory (memset, memmove, malloc)", ("memset", "memmove", "memcpy", "malloc", "free",
+                                          "_int_", "unlink_chunk", "_M_fill")),
+    ("loading the program and the trees", ("ld-linux", "FileStorage", "RTrees")),
+    ("thread pools (TBB, OpenCV parallel_for)", ("libtbb", "parallel_for", "ThreadPool",
+                                                 "TaskQueue")),
+]
+
+
+def profile_stage(dso, symbol):
+    text = dso + " " + symbol
+    for stage_name, patterns in PROFILE_STAGES:
+        if any(pat in text for pat in patterns):
+            return stage_name
+    return "other"
+
+
+def readable_symbol(symbol):
+    """A symbol short enough for a table: a lambda run by a thread pool (std::function) named
+    by the function it is written in, anonymous namespaces and template arguments left out."""
+    if symbol.startswith("std::_Function_handler"):
+        names = [n for n in re.findall(r"(\w+)\(", symbol)
+                 if n not in ("void", "for_each_chunk", "for_stripes", "parallel_for_")]
+        if names:
+            return f"(a thread's share of) {names[0]}"
+    symbol = symbol.replace("(anonymous namespace)::", "")
+    while True:
+        shorter = re.sub(r"<[^<>]*>", "", symbol)
+        if shorter == symbol:
+            break
+        symbol = shorter
+    return symbol if len(symbol) <= 70 else symbol[:67] + "..."
+
+
+def perf_profile(cmd, data):
+    """Self-time shares (percent) of `cmd` by stage and its top symbols, from `perf record`
+    (2999 samples a second per thread, all threads); None when it fails."""
+    r = run(["perf", "record", "-F", "2999", "-o", data, "--", *cmd])
+    if r.returncode != 0:
+        log(f"perf record failed: {r.stderr.strip()[-300:]}")
+        return None
+    rep = run(["perf", "report", "-i", data, "--no-children", "--sort", "dso,symbol",
+               "--stdio", "-g", "none"])
+    line = re.compile(r"^\s*([\d.]+)%\s+(\S+)\s+\[(.)\]\s+(.+?)\s*$")
+    stages, symbols = {}, {}
+    for text in rep.stdout.splitlines():
+        m = line.match(text)
+        if not m:
+            continue
+        share, dso, kind = float(m[1]), m[2], m[3]
+        symbol = re.split(r"\s{2,}", m[4].strip())[0]
+        dso = "[kernel]" if kind == "k" else dso
+        name = profile_stage(dso, symbol)
+        stages[name] = stages.get(name, 0.0) + share
+        symbol = "(no symbols: all of it)" if symbol.startswith("0x") else readable_symbol(symbol)
+        key = (dso, symbol, name)
+        symbols[key] = symbols.get(key, 0.0) + share
+    top = sorted(((v,) + k for k, v in symbols.items()), reverse=True)[:15]
+    return stages, top
+
+
+def part_profile(a, tool, result):
+    """Where a frame's CPU time goes, by `perf record` over whole batches (all threads): the
+    real drive from its stereo pairs alone and the KITTI frames with their semantic images."""
+    if run(["perf", "--version"]).returncode != 0:
+        log("perf not installed (Debian: linux-perf): profile rows skipped")
+        return
+    jobs = []
+    drive = KITTI.parent / "kitti_odometry_02"
+    out = a.out / "profile"
+    out.mkdir(parents=True, exist_ok=True)
+    if (drive / "image_2").is_dir():
+        lefts = sorted((drive / "image_2").glob("*.png"))
+        pairs = out / "pairs.txt"
+        pairs.write_text("".join(f"{p} {drive / 'image_3' / p.name}\n" for p in lefts))
+        jobs.append((f"real drive, stereo only, batch of its {len(lefts)} frames",
+                     [tool, "batch", "--pairs", pairs, "--calib", drive / "calib.txt",
+                      "--out-dir", out / "drive", "-q"]))
+    if (KITTI / "image_2").is_dir():
+        listing = out / "frames.txt"
+        listing.write_text("\n".join(KITTI_FRAMES[i % 2] for i in range(50)) + "\n")
+        jobs.append(("KITTI frames with semantic images, batch of 50 frames",
+                     [tool, "batch", "--kitti-root", KITTI, "--list", listing,
+                      "--out-dir", out / "kitti", "-q"]))
+    result["profile"] = []
+    for label, cmd in jobs:
+        got = perf_profile(cmd, out / "perf.data")
+        if got is None:
+            return
+        stages, symbols = got
+        result["profile"].append({"label": label, "stages": stages,
+                                  "top_symbols": [dict(zip(("percent", "dso", "symbol", "stage"),
+                                                           s)) for s in symbols]})
+        print(f"\n### CPU profile: {label}\n")
+        print("| stage | share of CPU time % |")
+        print("|---|---|")
+        for name, share in sorted(stages.items(), key=lambda kv: -kv[1]):
+            print(f"| {name} | {share:.1f} |")
+        print("\n| symbol (self time) | shared object | stage | % |")
+        print("|---|---|---|---|")
+        for share, dso, symbol, name in symbols:
+            print(f"| `{symbol}` | {dso} | {name} | {share:.1f} |")
+
+
 def main():
     p = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     p.add_argument("--build", type=pathlib.Path, required=True)
@@ -497,6 +623,8 @@ def main():
         part_matchers(a, tool, result)
     if "odometry" in parts:
         part_odometry(a, tool, result)
+    if "profile" in parts:
+        part_profile(a, tool, result)
     result["load_average_at_end"] = os.getloadavg()
     (a.out / "bench.json").write_text(json.dumps(result, indent=1) + "\n")
     log(f"wrote {a.out / 'bench.json'}")
