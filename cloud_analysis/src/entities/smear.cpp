@@ -126,6 +126,8 @@ void give_back_edge_points(const std::vector<Eigen::Vector3f>& pts, const Indice
     std::vector<Footprint> footprints;
     footprints.reserve(candidates.size());
     for (const Candidate& c : candidates) footprints.push_back(footprint_of(c.box));
+    // Per candidate: its members before the edge points it takes (0: none taken).
+    std::vector<std::size_t> had(candidates.size(), 0);
     std::vector<char> grown(candidates.size(), 0);
     for (std::size_t i : on_edge) {
         double best = kEdgePointReach;
@@ -138,11 +140,19 @@ void give_back_edge_points(const std::vector<Eigen::Vector3f>& pts, const Indice
             }
         }
         if (to == candidates.size()) continue;
+        if (!grown[to]) had[to] = candidates[to].members.size();
         candidates[to].members.push_back(i);
         grown[to] = 1;
     }
     for (std::size_t k = 0; k < candidates.size(); ++k) {
-        if (grown[k]) std::sort(candidates[k].members.begin(), candidates[k].members.end());
+        if (!grown[k]) continue;
+        auto& m = candidates[k].members;
+        const auto middle = m.begin() + static_cast<std::ptrdiff_t>(had[k]);
+        if (std::is_sorted(m.begin(), middle) && std::is_sorted(middle, m.end())) {
+            std::inplace_merge(m.begin(), middle, m.end());  // the same order, in linear time
+        } else {
+            std::sort(m.begin(), m.end());
+        }
     }
 }
 
