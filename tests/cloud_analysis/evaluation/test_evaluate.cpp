@@ -327,7 +327,7 @@ TEST_CASE("an entity on a GT car without GT points matches by KITTI's 2D criteri
     CHECK(evaluate_cars(entities, {few}, CarMatchOptions{}, &cam).fallback_matched == 1);
 }
 
-TEST_CASE("kitti15 000000_10: the red car's pixels on the van in front are dropped",
+TEST_CASE("a ground-truth car's pixels that lie on a nearer car in front of it count as occluded",
           "[evaluate][kitti]") {
     const std::filesystem::path root =
         std::filesystem::path(STEREOSCENE_SHARED_DATA_DIR) / "kitti15";
