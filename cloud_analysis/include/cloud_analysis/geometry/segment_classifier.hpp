@@ -1,10 +1,10 @@
 #pragma once
 
 /// Whether an obstacle segment of the stereo-only path is a vehicle, or a person, learnt instead
-/// of ruled:
-/// OpenCV's random trees (Breiman, "Random Forests", Machine Learning 45, 2001) over what stereo
-/// and the left image measure of the segment (segment_features()). Trained on rendered streets
-/// only, never on a real image (scripts/train-segment-classifier.py; docs/stereo-only.md).
+/// of ruled: OpenCV's random trees (Breiman, "Random Forests", Machine Learning 45, 2001) over
+/// what stereo and the left image measure of the segment (segment_features()), one model for
+/// each question. Trained on rendered streets only, never on a real image
+/// (scripts/train-segment-classifier.py [--target person]; docs/stereo-only.md).
 
 #include <array>
 #include <filesystem>
