@@ -297,45 +297,33 @@ void drop_leaning_cars(const Classes& cls, const GeometryOptions& o, const std::
     }
 }
 
-/// The classifier's call on each segment flagged `fresh` (GeometryOptions::classifier): one more of
-/// its trees than its vote threshold call a vehicle is a car (the rules' car bands kept), a car of
-/// the rules that it does not call one is static; the rules' other classes stand.
-void classify_vehicles(const SegmentClassifier& classifier, const Classes& cls,
+/// What a segment classifier decides (GeometryOptions::classifier, ::person_classifier): the
+/// class it gives the segments its trees call the target, that class's label, and the member of
+/// Segment that keeps the trees' share.
+struct Decision {
+    std::uint16_t target;
+    const char* label;
+    double Segment::*votes;
+};
+
+/// A classifier's call on each segment flagged `fresh`, but those of class `asked_elsewhere`: one
+/// more of its trees than its vote threshold call the target makes it the target's class (the
+/// rules' car bands kept), a segment of that class it does not call one is static (`other`); the
+/// rules' other classes stand.
+void classify_segments(const SegmentClassifier& classifier, const Decision& d,
+                       std::optional<std::uint16_t> asked_elsewhere, std::uint16_t other,
                        const std::vector<char>& fresh, std::vector<Segment>& segments,
                        std::vector<std::uint16_t>& segment_class) {
     for (std::size_t s = 0; s < segments.size(); ++s) {
-        if (!fresh[s]) continue;
         Segment& seg = segments[s];
-        seg.vehicle_votes = classifier.votes(seg.features);
-        const bool vehicle = seg.vehicle_votes > classifier.vote_threshold();
-        if (vehicle && seg.class_index != cls.car) {
-            seg.class_index = cls.car;
-            seg.label = "car";
-        } else if (!vehicle && seg.class_index == cls.car) {
-            seg.class_index = cls.other;
-            seg.label = "static";
-        }
-        segment_class[s] = seg.class_index;
-    }
-}
-
-/// The person classifier's call on each segment flagged `fresh` that is not a car: one more of
-/// its trees than its vote threshold call a person is a person, a person of the rules that it
-/// does not call one is static; the other classes stand.
-void classify_persons(const SegmentClassifier& classifier, const Classes& cls,
-                      const std::vector<char>& fresh, std::vector<Segment>& segments,
-                      std::vector<std::uint16_t>& segment_class) {
-    if (cls.person == kVoidClass) return;
-    for (std::size_t s = 0; s < segments.size(); ++s) {
-        Segment& seg = segments[s];
-        if (!fresh[s] || seg.class_index == cls.car) continue;
-        seg.person_votes = classifier.votes(seg.features);
-        const bool person = seg.person_votes > classifier.vote_threshold();
-        if (person && seg.class_index != cls.person) {
-            seg.class_index = cls.person;
-            seg.label = "person";
-        } else if (!person && seg.class_index == cls.person) {
-            seg.class_index = cls.other;
+        if (!fresh[s] || seg.class_index == asked_elsewhere) continue;
+        seg.*d.votes = classifier.votes(seg.features);
+        const bool called = seg.*d.votes > classifier.vote_threshold();
+        if (called && seg.class_index != d.target) {
+            seg.class_index = d.target;
+            seg.label = d.label;
+        } else if (!called && seg.class_index == d.target) {
+            seg.class_index = other;
             seg.label = "static";
         }
         segment_class[s] = seg.class_index;
@@ -569,9 +557,14 @@ SceneGeometry derive_semantics(const DisparityMap& disparity, const StereoCamera
             out.segments[s].rules_label = out.segments[s].label;
             out.segments[s].features = segment_features(out.segments[s], rig.fx, rig.fy);
         }
-        if (o.classifier) classify_vehicles(*o.classifier, cls, fresh, out.segments, segment_class);
-        if (o.person_classifier) {
-            classify_persons(*o.person_classifier, cls, fresh, out.segments, segment_class);
+        // Vehicles first; people among the segments that are no vehicle.
+        if (o.classifier) {
+            classify_segments(*o.classifier, {cls.car, "car", &Segment::vehicle_votes},
+                              std::nullopt, cls.other, fresh, out.segments, segment_class);
+        }
+        if (o.person_classifier && cls.person != kVoidClass) {
+            classify_segments(*o.person_classifier, {cls.person, "person", &Segment::person_votes},
+                              cls.car, cls.other, fresh, out.segments, segment_class);
         }
     };
     judge(std::vector<char>(stats.size(), 1));
