@@ -57,13 +57,13 @@ fs::path write_manifest(const fs::path& model, nlohmann::json doc = nlohmann::js
     return manifest;
 }
 
-/// Random trees over the segment features that call a vehicle whatever has feature `name` above
-/// `threshold` (below it when `below`), trained on features spread over [-2, 3] (the feature
-/// over [0, 20] for widths), written with their manifest to files of the test's own; returns
-/// the manifest.
-fs::path trees_calling_vehicle(const std::string& name, double threshold, bool below,
-                               const std::string& file_name,
-                               const nlohmann::json& manifest = nlohmann::json::object()) {
+/// Random trees over the segment features that call the target (a vehicle, or what `manifest`'s
+/// format names) whatever has feature `name` above `threshold` (below it when `below`), trained
+/// on features spread over [-2, 3] (the feature over [0, 20] for widths), written with their
+/// manifest to files of the test's own; returns the manifest.
+fs::path trees_calling_target(const std::string& name, double threshold, bool below,
+                              const std::string& file_name,
+                              const nlohmann::json& manifest = nlohmann::json::object()) {
     const int n = 400, f = static_cast<int>(kSegmentFeatureNames.size());
     cv::Mat x(n, f, CV_32F), y(n, 1, CV_32S);
     cv::RNG rng(7);
@@ -91,8 +91,8 @@ fs::path trees_calling_vehicle(const std::string& name, double threshold, bool b
     return write_manifest(file, manifest);
 }
 
-fs::path trees_calling_vehicle_above(double threshold, const std::string& name) {
-    return trees_calling_vehicle("fill", threshold, false, name);
+fs::path trees_calling_above(double threshold, const std::string& name) {
+    return trees_calling_target("fill", threshold, false, name);
 }
 
 void remove_trees(const fs::path& manifest) {
@@ -163,7 +163,7 @@ TEST_CASE("the vehicle classifier decides which segments are cars, the rules' ca
     const auto car_px = pixel_of(cam, 0.0, 0.8, 10.0), wall_px = pixel_of(cam, -9.0, 0.8, 14.0);
     GeometryOptions o;
     // Trees that call nothing a vehicle (no segment fills more than all of its box).
-    const fs::path never = trees_calling_vehicle_above(2.0, "-never.yml.gz");
+    const fs::path never = trees_calling_above(2.0, "-never.yml.gz");
     o.classifier = SegmentClassifier::load(never);
     SceneGeometry g = derive_semantics(disparity, cam, ImageU8{}, palette, o);
     CHECK(class_at(g, palette, car_px.first, car_px.second) == "static");
@@ -173,7 +173,7 @@ TEST_CASE("the vehicle classifier decides which segments are cars, the rules' ca
     CHECK(not_car.vehicle_votes < 0.5);
     CHECK(class_at(g, palette, wall_px.first, wall_px.second) == "wall");
     // Trees that call everything a vehicle.
-    const fs::path always = trees_calling_vehicle_above(-1.0, "-always.yml");
+    const fs::path always = trees_calling_above(-1.0, "-always.yml");
     o.classifier = SegmentClassifier::load(always);
     g = derive_semantics(disparity, cam, ImageU8{}, palette, o);
     CHECK(class_at(g, palette, car_px.first, car_px.second) == "car");
@@ -199,7 +199,7 @@ TEST_CASE("the person classifier decides which segments that are no car are pers
     CHECK(std::isnan(segment_at(g, cam, person_px).person_votes));
     // Trees that call nothing a person: the rules' person is static.
     const fs::path never =
-        trees_calling_vehicle("fill", 2.0, false, "-never-person.yml.gz", person_format);
+        trees_calling_target("fill", 2.0, false, "-never-person.yml.gz", person_format);
     o.person_classifier = SegmentClassifier::load(never, SegmentTarget::person);
     g = derive_semantics(disparity, cam, ImageU8{}, palette, o);
     CHECK(class_at(g, palette, person_px.first, person_px.second) == "static");
@@ -210,7 +210,7 @@ TEST_CASE("the person classifier decides which segments that are no car are pers
     // Trees that call everything a person: every segment but the car (the car is asked of the
     // vehicle classifier, or left to the rules, never of the person trees).
     const fs::path always =
-        trees_calling_vehicle("fill", -1.0, false, "-always-person.yml", person_format);
+        trees_calling_target("fill", -1.0, false, "-always-person.yml", person_format);
     o.person_classifier = SegmentClassifier::load(always, SegmentTarget::person);
     g = derive_semantics(disparity, cam, ImageU8{}, palette, o);
     CHECK(class_at(g, palette, person_px.first, person_px.second) == "person");
@@ -238,7 +238,7 @@ TEST_CASE("a long car of the rules that the trees reject is judged again vehicle
     const auto disparity = render(cam, 1.65, row);
     GeometryOptions o;
     // Trees that call a vehicle only what is at most 6 m long.
-    const fs::path short_things = trees_calling_vehicle("width_m", 6.0, true, "-short.yml.gz");
+    const fs::path short_things = trees_calling_target("width_m", 6.0, true, "-short.yml.gz");
     o.classifier = SegmentClassifier::load(short_things);
     const SceneGeometry g = derive_semantics(disparity, cam, ImageU8{}, palette, o);
     for (const double x : {-4.4, 0.0, 4.4}) {
