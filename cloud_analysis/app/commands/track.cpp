@@ -51,6 +51,9 @@ CLI::App* add_track_command(CLI::App& app, TrackArgs& a) {
     cmd->add_flag("!--no-smooth", o.smooth,
                   "write each frame with the filter's state then, not smoothed over the frames "
                   "held after it (--lag)");
+    cmd->add_flag("!--no-hindsight", o.hindsight,
+                  "do not report, in the frames held (--lag), the tracks still in the newest "
+                  "frame where those frames saw something at their place (docs/tracking.md)");
     cmd->add_option("--max-gap", o.tracker.max_gap_s,
                     "a longer gap between frames restarts the tracker, s")
         ->capture_default_str();

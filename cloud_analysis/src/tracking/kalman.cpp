@@ -143,4 +143,24 @@ double GroundKalman::mahalanobis2(double x_m, double z_m) const {
         innovation);
 }
 
+namespace {
+
+/// The filter's settings without acceleration (validate needs some: a millionth of a g).
+KalmanOptions without_acceleration(KalmanOptions o) {
+    o.acceleration_sigma_mps2 = 1e-5;
+    return o;
+}
+
+}  // namespace
+
+StillHypothesis::StillHypothesis(double x_m, double z_m, const KalmanOptions& options)
+    : fit_(x_m, z_m, without_acceleration(options)) {}
+
+bool StillHypothesis::consistent() const {
+    constexpr double kChiSquare2Dof99 = 9.2103;  // -2 ln 0.01
+    const Eigen::Matrix2d P = fit_.covariance().bottomRightCorner<2, 2>();
+    const Eigen::Vector2d v(fit_.vx_mps(), fit_.vz_mps());
+    return v.dot(P.inverse() * v) <= kChiSquare2Dof99;
+}
+
 }  // namespace cloud_analysis::tracking

@@ -102,7 +102,10 @@ scene_schema::SequenceIndex read_frames(const fs::path& input) {
 
 SequenceTracker::SequenceTracker(std::string id, double fps, const SequenceTrackOptions& options,
                                  std::function<void(const std::string&)> warn)
-    : tracker_(with_history(options)), warn_(std::move(warn)), fps_(fps) {
+    : tracker_options_(with_history(options)),
+      tracker_(tracker_options_),
+      warn_(std::move(warn)),
+      fps_(fps) {
     if (!(fps > 0.0 && fps <= 1000.0)) throw std::invalid_argument("fps must be in (0, 1000]");
     written_.id = std::move(id);
     written_.fps = fps;
@@ -119,6 +122,7 @@ scene_schema::EntityDocument SequenceTracker::track(const scene_schema::EntityDo
     TrackerFrameStats stats;
     const auto start = std::chrono::steady_clock::now();
     scene_schema::EntityDocument tracked = tracker_.update(doc, t, &stats);
+    last_pose_ = doc.frame.pose;
     report_.track_ms +=
         std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - start).count();
     if (stats.restarted) ++report_.restarts;
@@ -162,6 +166,9 @@ SequenceTrackReport track_files(const scene_schema::SequenceIndex& index,
     SequenceTracker sequence(index.id, index.fps.value_or(options.fps), options, warn);
     HeldFrames held;
     const auto write_oldest = [&] {
+        if (options.hindsight) {
+            place_still_objects(held.front().doc, sequence.hindsight(), sequence.tracker_options());
+        }
         if (options.smooth) smooth_frame(held.front(), sequence);
         scene_schema::write_file(held.front().doc, out_dir / held.front().file);
         held.pop_front();

@@ -67,24 +67,30 @@ void TrackerOptions::validate() const {
 
 Tracker::Tracker(TrackerOptions options) : options_(std::move(options)) { options_.validate(); }
 
-void Tracker::carry(const std::array<double, 12>& T_world_prev,
-                    const std::array<double, 12>& T_world_curr) {
+GroundMotion ground_motion(const std::array<double, 12>& T_world_from,
+                           const std::array<double, 12>& T_world_to) {
     const auto matrix = [](const std::array<double, 12>& a) {
         Eigen::Matrix4d T = Eigen::Matrix4d::Identity();
         for (int k = 0; k < 12; ++k) T(k / 4, k % 4) = a[static_cast<std::size_t>(k)];
         return T;
     };
-    const Eigen::Matrix4d T_curr_prev = matrix(T_world_curr).inverse() * matrix(T_world_prev);
-    // The ground-plane part: the yaw about +y (a car's camera pitches and rolls little), and
-    // the translation in x and z; y moves by the vertical translation.
-    const double yaw = std::atan2(T_curr_prev(0, 2), T_curr_prev(0, 0));
-    Eigen::Matrix2d R;
-    R << std::cos(yaw), std::sin(yaw), -std::sin(yaw), std::cos(yaw);
-    const Eigen::Vector2d t(T_curr_prev(0, 3), T_curr_prev(2, 3));
+    const Eigen::Matrix4d T_to_from = matrix(T_world_to).inverse() * matrix(T_world_from);
+    GroundMotion m;
+    m.yaw_rad = std::atan2(T_to_from(0, 2), T_to_from(0, 0));
+    m.R << std::cos(m.yaw_rad), std::sin(m.yaw_rad), -std::sin(m.yaw_rad), std::cos(m.yaw_rad);
+    m.t = Eigen::Vector2d(T_to_from(0, 3), T_to_from(2, 3));
+    m.dy_m = T_to_from(1, 3);
+    return m;
+}
+
+void Tracker::carry(const std::array<double, 12>& T_world_prev,
+                    const std::array<double, 12>& T_world_curr) {
+    const GroundMotion m = ground_motion(T_world_prev, T_world_curr);
     for (Track& track : tracks_) {
-        track.motion.change_frame(R, t);
-        track.theta_rad += yaw;
-        track.y_m += T_curr_prev(1, 3);
+        track.motion.change_frame(m.R, m.t);
+        track.still.change_frame(m.R, m.t);
+        track.theta_rad += m.yaw_rad;
+        track.y_m += m.dy_m;
     }
 }
 
@@ -96,7 +102,10 @@ void Tracker::reset() {
 }
 
 void Tracker::predict(double dt_s) {
-    for (Track& t : tracks_) t.motion.predict(dt_s);
+    for (Track& t : tracks_) {
+        t.motion.predict(dt_s);
+        t.still.predict(dt_s);
+    }
 }
 
 void Tracker::associate(const scene_schema::EntityDocument& frame, std::vector<int>& track_of) {
@@ -203,7 +212,12 @@ bool absorb(Track& t, const scene_schema::Entity& e, const TrackerOptions& o) {
 }
 
 Track born(const scene_schema::Entity& e, std::int64_t id, const TrackerOptions& o) {
-    Track t{id, e.class_name, e.class_id, e.confidence, GroundKalman(e.x, e.z, o.kalman)};
+    Track t{id,
+            e.class_name,
+            e.class_id,
+            e.confidence,
+            GroundKalman(e.x, e.z, o.kalman),
+            StillHypothesis(e.x, e.z, o.kalman)};
     t.y_m = e.y;
     t.theta_rad = wrap_angle(e.theta);
     t.W = t.sum_W = e.W;
@@ -251,20 +265,6 @@ scene_schema::Entity predicted(const Track& t, const TrackerOptions& o,
     return e;
 }
 
-/// Whether any corner of a track's footprint lies in front of `camera` and within its image's
-/// columns: a track predicted wholly outside the view cannot be seen there, and nothing in the
-/// frame speaks for it. Without a camera, in view.
-bool in_view(const Track& t, const std::optional<scene_schema::CameraIntrinsics>& camera) {
-    if (!camera || !(camera->fx_px > 0.0) || camera->width_px <= 0) return true;
-    constexpr double kNearestM = 0.5;  // in front of the camera, not at its centre
-    const auto corners = BoxAxes(t.theta_rad).corners(t.motion.x_m(), t.motion.z_m(), t.L, t.W);
-    return std::any_of(corners.begin(), corners.end(), [&](const Eigen::Vector2d& p) {
-        if (!(p.y() > kNearestM)) return false;
-        const double u = camera->fx_px * p.x() / p.y() + camera->cx_px;
-        return u >= 0.0 && u <= static_cast<double>(camera->width_px);
-    });
-}
-
 /// Whether a still track missed in `frame` is seen in part there (TrackerOptions::
 /// support_frames): an entity of a support class, not matched to a track of the track's class
 /// (a car passing over a parked car's place is no piece of it), has its centre on the track's
@@ -272,12 +272,7 @@ bool in_view(const Track& t, const std::optional<scene_schema::CameraIntrinsics>
 bool seen_in_part(const Track& t, const TrackerOptions& o,
                   const scene_schema::EntityDocument& frame, const std::vector<int>& track_of,
                   const std::vector<Track>& tracks) {
-    if (o.support_frames <= 0 || !t.confirmed || t.hits < o.coast_min_hits ||
-        t.seen_in_part >= o.support_frames) {
-        return false;
-    }
-    if (!velocity_known(t, o) ||
-        std::hypot(t.motion.vx_mps(), t.motion.vz_mps()) > o.still_max_speed_mps) {
+    if (o.support_frames <= 0 || t.seen_in_part >= o.support_frames || !is_still(t, o)) {
         return false;
     }
     const BoxAxes axes(t.theta_rad);
@@ -299,6 +294,23 @@ bool seen_in_part(const Track& t, const TrackerOptions& o,
 }
 
 }  // namespace
+
+bool is_still(const Track& t, const TrackerOptions& o) {
+    return t.confirmed && t.hits >= o.coast_min_hits && velocity_known(t, o) &&
+           std::hypot(t.motion.vx_mps(), t.motion.vz_mps()) <= o.still_max_speed_mps;
+}
+
+bool footprint_in_view(double x_m, double z_m, double theta_rad, double L_m, double W_m,
+                       const std::optional<scene_schema::CameraIntrinsics>& camera) {
+    if (!camera || !(camera->fx_px > 0.0) || camera->width_px <= 0) return true;
+    constexpr double kNearestM = 0.5;  // in front of the camera, not at its centre
+    const auto corners = BoxAxes(theta_rad).corners(x_m, z_m, L_m, W_m);
+    return std::any_of(corners.begin(), corners.end(), [&](const Eigen::Vector2d& p) {
+        if (!(p.y() > kNearestM)) return false;
+        const double u = camera->fx_px * p.x() / p.y() + camera->cx_px;
+        return u >= 0.0 && u <= static_cast<double>(camera->width_px);
+    });
+}
 
 double Tracker::advance_clock(double timestamp_s, TrackerFrameStats& s) {
     double dt = 0.0;
@@ -324,6 +336,7 @@ void Tracker::take_detections(const scene_schema::EntityDocument& frame, std::ve
         if (track_of[i] >= 0) {
             Track& t = tracks_[track_of[i]];
             t.motion.update(e.x, e.z);
+            t.still.update(e.x, e.z);
             if (absorb(t, e, options_)) s.turned.push_back(t.id);
             t.confidence = e.confidence;
             ++t.hits;
@@ -383,7 +396,9 @@ void Tracker::age_tracks(const scene_schema::EntityDocument& frame,
             continue;
         }
         if (!hit[k] && (in_part || t.misses <= options_.coast_frames) &&
-            t.hits >= options_.coast_min_hits && in_view(t, frame.frame.camera)) {
+            t.hits >= options_.coast_min_hits &&
+            footprint_in_view(t.motion.x_m(), t.motion.z_m(), t.theta_rad, t.L, t.W,
+                              frame.frame.camera)) {
             out.entities.push_back(predicted(t, options_, out));
             ++s.reported;
             ++s.coasted;

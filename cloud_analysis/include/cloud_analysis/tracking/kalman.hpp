@@ -85,4 +85,32 @@ class GroundKalman {
     KalmanStep step_;  ///< the step being built: its transition and prediction so far
 };
 
+/// The hypothesis that an object stands still, tested on a straight-line fit of all its
+/// measured positions: the filter above without acceleration (a constant velocity over the
+/// whole track, least squares under a weak prior), whose velocity is zero within its own
+/// uncertainty at 99 % (chi-square with 2 degrees of freedom). A parked car seen far away is
+/// still though its velocity is known only to a few m/s; a car driving slowly for a second
+/// near by is not, though the tracker's own filter (which lets it accelerate) cannot yet tell.
+class StillHypothesis {
+  public:
+    /// Starts from a first measured position.
+    StillHypothesis(double x_m, double z_m, const KalmanOptions& options);
+    void predict(double dt_s) { fit_.predict(dt_s); }
+    void update(double x_m, double z_m) { fit_.update(x_m, z_m); }
+    void change_frame(const Eigen::Matrix2d& R, const Eigen::Vector2d& t) {
+        fit_.change_frame(R, t);
+    }
+    /// Whether the fitted velocity is zero within its 99 % ellipse.
+    bool consistent() const;
+    /// The larger std of the fitted velocity's components, m/s.
+    double velocity_sigma_mps() const {
+        return std::sqrt(std::max(fit_.covariance()(2, 2), fit_.covariance()(3, 3)));
+    }
+    /// The fitted position now, metres.
+    Eigen::Vector2d position_m() const { return {fit_.x_m(), fit_.z_m()}; }
+
+  private:
+    GroundKalman fit_;
+};
+
 }  // namespace cloud_analysis::tracking

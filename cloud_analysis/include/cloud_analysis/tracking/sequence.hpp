@@ -11,6 +11,7 @@
 #include <set>
 #include <string>
 
+#include "cloud_analysis/tracking/hindsight.hpp"
 #include "cloud_analysis/tracking/tracker.hpp"
 #include "scene_schema/sequence.hpp"
 
@@ -24,13 +25,18 @@ struct SequenceTrackOptions {
     /// within that many frames, that its box was reported facing backwards is turned round in
     /// the held frames too (no heading flip in the output), and a track confirmed after
     /// min_hits detections is reported in the held frames of its earlier ones as well (an
-    /// object is followed from its first detection). 0 writes each frame at once.
-    int lag_frames = 15;
+    /// object is followed from its first detection), and the still objects of the newest frame
+    /// are placed in them (`hindsight`). 0 writes each frame at once.
+    int lag_frames = 30;
     /// Whether each held frame is written with its tracks' smoothed positions and velocities:
     /// the filter's states given the frames after it, up to the newest held (fixed-lag
     /// Rauch-Tung-Striebel smoothing; a car first seen far is placed by what its nearer
     /// views showed). Off, each frame keeps the filter's state as it was then.
     bool smooth = true;
+    /// Whether each held frame also reports the tracks still in the newest frame where it saw
+    /// something at their place (hindsight.hpp: a parked car first seen far, merged with its
+    /// neighbour or lost, placed where its nearer views put it).
+    bool hindsight = true;
     /// Throws std::invalid_argument naming the bad field.
     void validate() const;
 };
@@ -81,6 +87,10 @@ class SequenceTracker {
     std::optional<Eigen::Vector4d> smoothed(std::int64_t id, std::int64_t frame) const {
         return tracker_.smoothed(id, frame);
     }
+    /// What the newest frame tracked knows of its still objects (hindsight_of).
+    Hindsight hindsight() const { return hindsight_of(tracker_, tracker_options_, last_pose_); }
+    /// The tracker's settings.
+    const TrackerOptions& tracker_options() const { return tracker_options_; }
     /// Tracks the last track() turned round by pi (see TrackerFrameStats::turned).
     const std::vector<std::int64_t>& turned() const { return turned_; }
     /// Tracks the last track() confirmed after earlier hits (see TrackerFrameStats::confirmed).
@@ -93,7 +103,9 @@ class SequenceTracker {
     SequenceTrackReport report() const;
 
   private:
+    TrackerOptions tracker_options_;
     Tracker tracker_;
+    std::optional<std::array<double, 12>> last_pose_;  ///< of the last frame tracked
     std::function<void(const std::string&)> warn_;
     double fps_;
     scene_schema::SequenceIndex written_;

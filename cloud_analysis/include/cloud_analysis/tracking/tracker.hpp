@@ -57,8 +57,10 @@ struct TrackerOptions {
     /// pieces the stereo-only rules call static, wall or person. It is reported at its
     /// prediction for up to support_frames such frames in a row; 0 turns this off.
     int support_frames = 10;
-    double still_max_speed_mps = 0.5;  ///< see support_frames, m/s
-    double support_margin_m = 0.5;     ///< see support_frames, metres
+    /// Under this speed a track is still (support_frames); a still object placed in hindsight
+    /// (hindsight.hpp) must have its fitted velocity known to this std as well, m/s.
+    double still_max_speed_mps = 0.5;
+    double support_margin_m = 0.5;  ///< see support_frames, metres
     std::vector<std::string> support_classes{"car",   "truck",   "bus",        "person",
                                              "rider", "bicycle", "motorcycle", "static",
                                              "wall",  "fence",   "pole"};
@@ -118,6 +120,7 @@ struct Track {
     int class_id = 0;                  ///< its class id
     double confidence = 1.0;           ///< of its last detection
     GroundKalman motion;               ///< position and velocity in the ground plane
+    StillHypothesis still;             ///< its hits as those of one still point (hindsight)
     double y_m = 0.0;                  ///< smoothed box centre height (camera y), metres
     double theta_rad = 0.0;            ///< smoothed heading
     double W = 1.0, H = 1.0, L = 1.0;  ///< held (or running mean) size, metres
@@ -132,6 +135,31 @@ struct Track {
     /// Before confirmation: the entity ids of its hits, oldest first, one a frame.
     std::vector<std::string> tentative_entity_ids{};
 };
+
+/// How the ground plane moves from one camera of a drive into another: a point's (x, z) in the
+/// first camera is (R (x, z) + t) in the second, its y grows by dy and headings by yaw_rad (a
+/// car's camera pitches and rolls little, so only the yaw about +y is kept).
+struct GroundMotion {
+    double yaw_rad = 0.0;
+    Eigen::Matrix2d R = Eigen::Matrix2d::Identity();
+    Eigen::Vector2d t = Eigen::Vector2d::Zero();
+    double dy_m = 0.0;
+};
+
+/// The ground motion from camera `T_world_from` into camera `T_world_to` (both T_world_camera,
+/// row-major 3x4, frame.pose).
+GroundMotion ground_motion(const std::array<double, 12>& T_world_from,
+                           const std::array<double, 12>& T_world_to);
+
+/// Whether a track is a still object: confirmed, hit at least coast_min_hits times, its
+/// velocity known (std at most max_velocity_sigma_mps) and under still_max_speed_mps.
+bool is_still(const Track& t, const TrackerOptions& o);
+
+/// Whether any corner of a footprint (centre x, z, heading, length, width, in `camera`'s
+/// coordinates) lies in front of the camera and within its image's columns. Without a camera,
+/// in view.
+bool footprint_in_view(double x_m, double z_m, double theta_rad, double L_m, double W_m,
+                       const std::optional<scene_schema::CameraIntrinsics>& camera);
 
 /// The tracker's state across frames. Feed frames in capture order.
 class Tracker {
