@@ -48,14 +48,7 @@ void report_on(const StillObject& o, scene_schema::Entity& e) {
 /// A new entity for `o`, its id unused in `frame`.
 scene_schema::Entity added(const StillObject& o, const scene_schema::EntityDocument& frame) {
     scene_schema::Entity e;
-    const std::string base = "track-" + std::to_string(o.id);
-    e.id = base;
-    for (int k = 2;
-         std::any_of(frame.entities.begin(), frame.entities.end(),
-                     [&](const scene_schema::Entity& other) { return other.id == e.id; });
-         ++k) {
-        e.id = base + "-" + std::to_string(k);
-    }
+    e.id = track_entity_id(o.id, frame);
     e.class_name = o.class_name;
     e.class_id = o.class_id;
     e.confidence = 0.5 * o.confidence;

@@ -249,13 +249,7 @@ void report(const Track& t, const TrackerOptions& o, scene_schema::Entity& e) {
 scene_schema::Entity predicted(const Track& t, const TrackerOptions& o,
                                const scene_schema::EntityDocument& frame) {
     scene_schema::Entity e;
-    e.id = "track-" + std::to_string(t.id);
-    for (int k = 2;
-         std::any_of(frame.entities.begin(), frame.entities.end(),
-                     [&](const scene_schema::Entity& other) { return other.id == e.id; });
-         ++k) {
-        e.id = "track-" + std::to_string(t.id) + "-" + std::to_string(k);
-    }
+    e.id = track_entity_id(t.id, frame);
     e.class_name = t.class_name;
     e.class_id = t.class_id;
     e.confidence = t.confidence * std::pow(0.5, t.misses + (t.seen_in_part > 0 ? 1 : 0));
@@ -294,6 +288,17 @@ bool seen_in_part(const Track& t, const TrackerOptions& o,
 }
 
 }  // namespace
+
+std::string track_entity_id(std::int64_t track_id, const scene_schema::EntityDocument& frame) {
+    const std::string base = "track-" + std::to_string(track_id);
+    std::string id = base;
+    for (int k = 2; std::any_of(frame.entities.begin(), frame.entities.end(),
+                                [&](const scene_schema::Entity& other) { return other.id == id; });
+         ++k) {
+        id = base + "-" + std::to_string(k);
+    }
+    return id;
+}
 
 bool is_still(const Track& t, const TrackerOptions& o) {
     return t.confirmed && t.hits >= o.coast_min_hits && velocity_known(t, o) &&

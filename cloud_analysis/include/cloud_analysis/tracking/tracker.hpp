@@ -155,6 +155,10 @@ GroundMotion ground_motion(const std::array<double, 12>& T_world_from,
 /// velocity known (std at most max_velocity_sigma_mps) and under still_max_speed_mps.
 bool is_still(const Track& t, const TrackerOptions& o);
 
+/// The id of an entity a track adds to `frame` (a prediction, a still object in hindsight):
+/// "track-<id>", or "track-<id>-<k>" with the smallest k >= 2 that `frame` does not use yet.
+std::string track_entity_id(std::int64_t track_id, const scene_schema::EntityDocument& frame);
+
 /// Whether any corner of a footprint (centre x, z, heading, length, width, in `camera`'s
 /// coordinates) lies in front of the camera and within its image's columns. Without a camera,
 /// in view.
