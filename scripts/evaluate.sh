@@ -189,7 +189,7 @@ PY
 
 # The real drive against the hand-drawn 2D boxes (skipped without ../shared/data).
 "$STEREOSCENE_ROOT/scripts/evaluate-real-drive.sh" --no-build --build-dir "$build_dir" \
-    --out "$out_dir/real-drive"
+    --out "$out_dir/real-drive" -- "${analysis_args[@]}"
 
 if [ ! -d "$kitti_root/disp_occ_0" ] || [ ! -d "$kitti_root/instance" ]; then
     echo "evaluate.sh: no KITTI data at $kitti_root (needs image_2 image_3 semantic_rgb disp_occ_0 instance calib); KITTI checks skipped" >&2
