@@ -52,8 +52,8 @@ CLI::App* add_track_command(CLI::App& app, TrackArgs& a) {
                   "write each frame with the filter's state then, not smoothed over the frames "
                   "held after it (--lag)");
     cmd->add_flag("!--no-hindsight", o.hindsight,
-                  "do not report, in the frames held (--lag), the tracks still in the newest "
-                  "frame where those frames saw something at their place (docs/tracking.md)");
+                  "do not place, in the frames held (--lag), the tracks still in the newest "
+                  "frame where those frames' cameras see their place (docs/cli.md)");
     cmd->add_option("--max-gap", o.tracker.max_gap_s,
                     "a longer gap between frames restarts the tracker, s")
         ->capture_default_str();

@@ -5,7 +5,7 @@
 /// has come near it; and as it does not move, its place in the drive's world is the same in the
 /// frames before. A fixed-lag writer (track_files) therefore reports, in the frames it still
 /// holds, every track that is still in the newest frame (its positions those of one still point,
-/// StillHypothesis) wherever that frame's camera saw its place: a box of its class there becomes
+/// StillHypothesis) wherever that frame's camera sees its place: a box of its class there becomes
 /// the track's, at the track's place, or the track is added; and a box of another track on it (a
 /// box that merges it with its neighbour, or a row's box sliding along with the camera) is no
 /// object of its own. The frames' poses (frame.pose, `batch --odometry`) carry the place from

@@ -5,6 +5,8 @@
 /// (Bar-Shalom, Li & Kirubarajan 2001, "discrete white noise acceleration" model), as in
 /// AB3DMOT (Weng et al. 2020) restricted to the ground plane.
 
+#include <algorithm>
+#include <cmath>
 #include <deque>
 #include <vector>
 

@@ -33,8 +33,8 @@ struct SequenceTrackOptions {
     /// Rauch-Tung-Striebel smoothing; a car first seen far is placed by what its nearer
     /// views showed). Off, each frame keeps the filter's state as it was then.
     bool smooth = true;
-    /// Whether each held frame also reports the tracks still in the newest frame where it saw
-    /// something at their place (hindsight.hpp: a parked car first seen far, merged with its
+    /// Whether each held frame also reports the tracks still in the newest frame where its
+    /// camera sees their place (hindsight.hpp: a parked car first seen far, merged with its
     /// neighbour or lost, placed where its nearer views put it).
     bool hindsight = true;
     /// Throws std::invalid_argument naming the bad field.
