@@ -6,21 +6,9 @@
 
 #include <Eigen/LU>
 
-#include "cloud_analysis/support/box_axes.hpp"
-
 namespace cloud_analysis::tracking {
 
 namespace {
-
-/// Whether (x, z) lies on the footprint of a box (centre cx, cz, heading, length, width) grown
-/// by `margin` on every side.
-bool on_footprint(double x, double z, double cx, double cz, double theta, double L, double W,
-                  double margin) {
-    const BoxAxes axes(theta);
-    const double dx = x - cx, dz = z - cz;
-    return std::abs(axes.along(dx, dz)) <= 0.5 * L + margin &&
-           std::abs(axes.across(dx, dz)) <= 0.5 * W + margin;
-}
 
 /// `o` carried into the camera `m` leads to.
 StillObject carried(StillObject o, const GroundMotion& m) {

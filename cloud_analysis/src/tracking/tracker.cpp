@@ -269,7 +269,6 @@ bool seen_in_part(const Track& t, const TrackerOptions& o,
     if (o.support_frames <= 0 || t.seen_in_part >= o.support_frames || !is_still(t, o)) {
         return false;
     }
-    const BoxAxes axes(t.theta_rad);
     for (std::size_t i = 0; i < frame.entities.size(); ++i) {
         const auto& e = frame.entities[i];
         if (!in(o.support_classes, e.class_name) ||
@@ -277,10 +276,8 @@ bool seen_in_part(const Track& t, const TrackerOptions& o,
              tracks[static_cast<std::size_t>(track_of[i])].class_name == t.class_name)) {
             continue;
         }
-        const double dx = e.x - t.motion.x_m(), dz = e.z - t.motion.z_m();
-        const double along = axes.along(dx, dz), across = axes.across(dx, dz);
-        if (std::abs(along) <= 0.5 * t.L + o.support_margin_m &&
-            std::abs(across) <= 0.5 * t.W + o.support_margin_m) {
+        if (on_footprint(e.x, e.z, t.motion.x_m(), t.motion.z_m(), t.theta_rad, t.L, t.W,
+                         o.support_margin_m)) {
             return true;
         }
     }
@@ -303,6 +300,14 @@ std::string track_entity_id(std::int64_t track_id, const scene_schema::EntityDoc
 bool is_still(const Track& t, const TrackerOptions& o) {
     return t.confirmed && t.hits >= o.coast_min_hits && velocity_known(t, o) &&
            std::hypot(t.motion.vx_mps(), t.motion.vz_mps()) <= o.still_max_speed_mps;
+}
+
+bool on_footprint(double x_m, double z_m, double cx_m, double cz_m, double theta_rad, double L_m,
+                  double W_m, double margin_m) {
+    const BoxAxes axes(theta_rad);
+    const double dx = x_m - cx_m, dz = z_m - cz_m;
+    return std::abs(axes.along(dx, dz)) <= 0.5 * L_m + margin_m &&
+           std::abs(axes.across(dx, dz)) <= 0.5 * W_m + margin_m;
 }
 
 bool footprint_in_view(double x_m, double z_m, double theta_rad, double L_m, double W_m,

@@ -159,6 +159,11 @@ bool is_still(const Track& t, const TrackerOptions& o);
 /// "track-<id>", or "track-<id>-<k>" with the smallest k >= 2 that `frame` does not use yet.
 std::string track_entity_id(std::int64_t track_id, const scene_schema::EntityDocument& frame);
 
+/// Whether (x, z) lies on the footprint of a box (centre cx, cz, heading, length, width) grown
+/// by `margin_m` on every side.
+bool on_footprint(double x_m, double z_m, double cx_m, double cz_m, double theta_rad, double L_m,
+                  double W_m, double margin_m);
+
 /// Whether any corner of a footprint (centre x, z, heading, length, width, in `camera`'s
 /// coordinates) lies in front of the camera and within its image's columns. Without a camera,
 /// in view.
