@@ -125,7 +125,10 @@ scene_schema::EntityDocument SequenceTracker::track(const scene_schema::EntityDo
     last_pose_ = doc.frame.pose;
     report_.track_ms +=
         std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - start).count();
-    if (stats.restarted) ++report_.restarts;
+    if (stats.restarted) {
+        ++report_.restarts;
+        restart_frame_ = tracker_.frame_number();
+    }
     turned_ = std::move(stats.turned);
     confirmed_ = std::move(stats.confirmed);
     for (const auto& e : tracked.entities) {
@@ -166,7 +169,8 @@ SequenceTrackReport track_files(const scene_schema::SequenceIndex& index,
     SequenceTracker sequence(index.id, index.fps.value_or(options.fps), options, warn);
     HeldFrames held;
     const auto write_oldest = [&] {
-        if (options.hindsight) {
+        // The tracks of a restarted tracker say nothing of the frames before the restart.
+        if (options.hindsight && held.front().number >= sequence.restart_frame()) {
             place_still_objects(held.front().doc, sequence.hindsight(), sequence.tracker_options());
         }
         if (options.smooth) smooth_frame(held.front(), sequence);

@@ -233,3 +233,39 @@ TEST_CASE("track_files reports a parked car in the frames before it was first se
     }
     fs::remove_all(root);
 }
+
+TEST_CASE("track_files places no still object before a restart of the tracker", "[tracking]") {
+    // The same drive with a 2 s gap after frame 9 (the tracker restarts at frame 10): the car
+    // first seen at frame 12 is placed in frames 10 and 11, not in the frames before the gap.
+    namespace fs = std::filesystem;
+    const auto root = fs::temp_directory_path() / "cloud_analysis_tracking_hindsight_gap";
+    fs::remove_all(root);
+    fs::create_directories(root / "in");
+    fs::create_directories(root / "out");
+    scene_schema::SequenceIndex index;
+    index.id = "gap";
+    const int frames = 40;
+    for (int i = 0; i < frames; ++i) {
+        const double camera_z = 0.8 * i;
+        std::vector<Entity> seen;
+        if (i >= 12) seen.push_back(car("car-" + std::to_string(i), 3.0, 30.0 - camera_z));
+        const std::string file = "f" + std::to_string(i) + ".json";
+        scene_schema::write_file(frame_at(camera_z, seen), root / "in" / file);
+        index.frames.push_back({i, file, 0.1 * i + (i >= 10 ? 2.0 : 0.0), {}});
+    }
+    scene_schema::write_sequence_file(index, root / "in" / "sequence.json");
+    const auto report = track_files(index, root / "in" / "sequence.json", root / "out",
+                                    SequenceTrackOptions{}, [](const std::string&) {});
+    CHECK(report.restarts == 1);
+    const auto later = scene_schema::read_file(root / "out" / "f20.json");
+    REQUIRE(later.entities.size() == 1);
+    REQUIRE(later.entities.front().track_id);
+    const std::int64_t id = *later.entities.front().track_id;
+    for (int i = 0; i < 12; ++i) {
+        CAPTURE(i);
+        const auto doc =
+            scene_schema::read_file(root / "out" / ("f" + std::to_string(i) + ".json"));
+        CHECK((with_track(doc, id) != nullptr) == (i >= 10));
+    }
+    fs::remove_all(root);
+}

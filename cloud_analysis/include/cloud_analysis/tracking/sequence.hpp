@@ -91,6 +91,8 @@ class SequenceTracker {
     Hindsight hindsight() const { return hindsight_of(tracker_, tracker_options_, last_pose_); }
     /// The tracker's settings.
     const TrackerOptions& tracker_options() const { return tracker_options_; }
+    /// The frame_number() of the last restart's frame (0 before any).
+    std::int64_t restart_frame() const { return restart_frame_; }
     /// Tracks the last track() turned round by pi (see TrackerFrameStats::turned).
     const std::vector<std::int64_t>& turned() const { return turned_; }
     /// Tracks the last track() confirmed after earlier hits (see TrackerFrameStats::confirmed).
@@ -106,6 +108,7 @@ class SequenceTracker {
     TrackerOptions tracker_options_;
     Tracker tracker_;
     std::optional<std::array<double, 12>> last_pose_;  ///< of the last frame tracked
+    std::int64_t restart_frame_ = 0;                   ///< see restart_frame()
     std::function<void(const std::string&)> warn_;
     double fps_;
     scene_schema::SequenceIndex written_;
