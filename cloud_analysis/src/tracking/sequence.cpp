@@ -169,8 +169,11 @@ SequenceTrackReport track_files(const scene_schema::SequenceIndex& index,
     SequenceTracker sequence(index.id, index.fps.value_or(options.fps), options, warn);
     HeldFrames held;
     const auto write_oldest = [&] {
-        // The tracks of a restarted tracker say nothing of the frames before the restart.
-        if (options.hindsight && held.front().number >= sequence.restart_frame()) {
+        // Frames before the newest, back to the last restart of the tracker (whose tracks say
+        // nothing of the frames before it).
+        const std::int64_t number = held.front().number;
+        if (options.hindsight && number >= sequence.restart_frame() &&
+            number < sequence.frame_number()) {
             place_still_objects(held.front().doc, sequence.hindsight(), sequence.tracker_options());
         }
         if (options.smooth) smooth_frame(held.front(), sequence);
