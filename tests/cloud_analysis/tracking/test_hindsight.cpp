@@ -69,6 +69,25 @@ Hindsight known_at(double camera_z_m, double z_m) {
     return h;
 }
 
+/// A camera driving at 8 m/s for 40 frames (10 a second) past a car parked 30 m ahead of its
+/// start that the detector finds only from frame 12 on (20 m away), written to `folder` as
+/// f<i>.json with its sequence index; frames from 10 on are `gap_s` later (a gap in time).
+scene_schema::SequenceIndex write_parked_car_drive(const std::filesystem::path& folder,
+                                                   double gap_s) {
+    scene_schema::SequenceIndex index;
+    index.id = "parked-car";
+    for (int i = 0; i < 40; ++i) {
+        const double camera_z = 0.8 * i;
+        std::vector<Entity> seen;
+        if (i >= 12) seen.push_back(car("car-" + std::to_string(i), 3.0, 30.0 - camera_z));
+        const std::string file = "f" + std::to_string(i) + ".json";
+        scene_schema::write_file(frame_at(camera_z, seen), folder / file);
+        index.frames.push_back({i, file, 0.1 * i + (i >= 10 ? gap_s : 0.0), {}});
+    }
+    scene_schema::write_sequence_file(index, folder / "sequence.json");
+    return index;
+}
+
 const Entity* with_track(const EntityDocument& doc, std::int64_t id) {
     const auto it = std::find_if(doc.entities.begin(), doc.entities.end(),
                                  [&](const Entity& e) { return e.track_id == id; });
@@ -196,18 +215,7 @@ TEST_CASE("track_files reports a parked car in the frames before it was first se
     const auto root = fs::temp_directory_path() / "cloud_analysis_tracking_hindsight";
     fs::remove_all(root);
     fs::create_directories(root / "in");
-    scene_schema::SequenceIndex index;
-    index.id = "hindsight";
-    const int frames = 40;
-    for (int i = 0; i < frames; ++i) {
-        const double camera_z = 0.8 * i;
-        std::vector<Entity> seen;
-        if (i >= 12) seen.push_back(car("car-" + std::to_string(i), 3.0, 30.0 - camera_z));
-        const std::string file = "f" + std::to_string(i) + ".json";
-        scene_schema::write_file(frame_at(camera_z, seen), root / "in" / file);
-        index.frames.push_back({i, file, 0.1 * i, {}});
-    }
-    scene_schema::write_sequence_file(index, root / "in" / "sequence.json");
+    const scene_schema::SequenceIndex index = write_parked_car_drive(root / "in", 0.0);
     for (const bool hindsight : {true, false}) {
         SequenceTrackOptions o;
         o.hindsight = hindsight;
@@ -242,18 +250,7 @@ TEST_CASE("track_files places no still object before a restart of the tracker", 
     fs::remove_all(root);
     fs::create_directories(root / "in");
     fs::create_directories(root / "out");
-    scene_schema::SequenceIndex index;
-    index.id = "gap";
-    const int frames = 40;
-    for (int i = 0; i < frames; ++i) {
-        const double camera_z = 0.8 * i;
-        std::vector<Entity> seen;
-        if (i >= 12) seen.push_back(car("car-" + std::to_string(i), 3.0, 30.0 - camera_z));
-        const std::string file = "f" + std::to_string(i) + ".json";
-        scene_schema::write_file(frame_at(camera_z, seen), root / "in" / file);
-        index.frames.push_back({i, file, 0.1 * i + (i >= 10 ? 2.0 : 0.0), {}});
-    }
-    scene_schema::write_sequence_file(index, root / "in" / "sequence.json");
+    const scene_schema::SequenceIndex index = write_parked_car_drive(root / "in", 2.0);
     const auto report = track_files(index, root / "in" / "sequence.json", root / "out",
                                     SequenceTrackOptions{}, [](const std::string&) {});
     CHECK(report.restarts == 1);
