@@ -102,10 +102,7 @@ scene_schema::SequenceIndex read_frames(const fs::path& input) {
 
 SequenceTracker::SequenceTracker(std::string id, double fps, const SequenceTrackOptions& options,
                                  std::function<void(const std::string&)> warn)
-    : tracker_options_(with_history(options)),
-      tracker_(tracker_options_),
-      warn_(std::move(warn)),
-      fps_(fps) {
+    : tracker_(with_history(options)), warn_(std::move(warn)), fps_(fps) {
     if (!(fps > 0.0 && fps <= 1000.0)) throw std::invalid_argument("fps must be in (0, 1000]");
     written_.id = std::move(id);
     written_.fps = fps;
@@ -122,7 +119,6 @@ scene_schema::EntityDocument SequenceTracker::track(const scene_schema::EntityDo
     TrackerFrameStats stats;
     const auto start = std::chrono::steady_clock::now();
     scene_schema::EntityDocument tracked = tracker_.update(doc, t, &stats);
-    last_pose_ = doc.frame.pose;
     report_.track_ms +=
         std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - start).count();
     if (stats.restarted) {
@@ -168,13 +164,15 @@ SequenceTrackReport track_files(const scene_schema::SequenceIndex& index,
     options.validate();
     SequenceTracker sequence(index.id, index.fps.value_or(options.fps), options, warn);
     HeldFrames held;
+    // What the newest frame knows of its still objects, taken once per frame tracked.
+    Hindsight known;
     const auto write_oldest = [&] {
         // Frames before the newest, back to the last restart of the tracker (whose tracks say
         // nothing of the frames before it).
         const std::int64_t number = held.front().number;
         if (options.hindsight && number >= sequence.restart_frame() &&
             number < sequence.frame_number()) {
-            place_still_objects(held.front().doc, sequence.hindsight(), sequence.tracker_options());
+            place_still_objects(held.front().doc, known, sequence.tracker_options());
         }
         if (options.smooth) smooth_frame(held.front(), sequence);
         scene_schema::write_file(held.front().doc, out_dir / held.front().file);
@@ -193,6 +191,7 @@ SequenceTrackReport track_files(const scene_schema::SequenceIndex& index,
         held.push_back(HeldFrame{sequence.track(doc, f.index, f.file, f.timestamp_s), f.file,
                                  sequence.frame_number()});
         report_earlier(held, sequence.confirmed());
+        if (options.hindsight) known = sequence.hindsight();
         // A track the motion turned round faced backwards in the frames still held as well.
         for (const std::int64_t id : sequence.turned()) {
             for (std::size_t k = 0; k + 1 < held.size(); ++k) {

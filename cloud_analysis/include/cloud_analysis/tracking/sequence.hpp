@@ -88,9 +88,11 @@ class SequenceTracker {
         return tracker_.smoothed(id, frame);
     }
     /// What the newest frame tracked knows of its still objects (hindsight_of).
-    Hindsight hindsight() const { return hindsight_of(tracker_, tracker_options_, last_pose_); }
+    Hindsight hindsight() const {
+        return hindsight_of(tracker_, tracker_.options(), tracker_.last_pose());
+    }
     /// The tracker's settings.
-    const TrackerOptions& tracker_options() const { return tracker_options_; }
+    const TrackerOptions& tracker_options() const { return tracker_.options(); }
     /// The frame_number() of the last restart's frame (0 before any).
     std::int64_t restart_frame() const { return restart_frame_; }
     /// Tracks the last track() turned round by pi (see TrackerFrameStats::turned).
@@ -105,10 +107,8 @@ class SequenceTracker {
     SequenceTrackReport report() const;
 
   private:
-    TrackerOptions tracker_options_;
     Tracker tracker_;
-    std::optional<std::array<double, 12>> last_pose_;  ///< of the last frame tracked
-    std::int64_t restart_frame_ = 0;                   ///< see restart_frame()
+    std::int64_t restart_frame_ = 0;  ///< see restart_frame()
     std::function<void(const std::string&)> warn_;
     double fps_;
     scene_schema::SequenceIndex written_;

@@ -193,6 +193,12 @@ class Tracker {
     /// Live tracks (confirmed or not).
     const std::vector<Track>& tracks() const { return tracks_; }
 
+    /// The tracker's settings.
+    const TrackerOptions& options() const { return options_; }
+
+    /// The pose of the last frame update() took (frame.pose), when it had one.
+    const std::optional<std::array<double, 12>>& last_pose() const { return last_pose_; }
+
     /// The number of the last frame update() took (1 for the first; restarts keep counting).
     std::int64_t frame_number() const { return frame_number_; }
 
